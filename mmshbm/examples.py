@@ -1,0 +1,103 @@
+"""Small models with closed-form answers, for tests, benchmarks and teaching.
+
+:class:`OneDofOscillator` is the one-DOF analogue of the beam with impact: a mass ``m`` on
+a spring ``k1`` to ground, a massless node joined to the mass by a spring ``k2``, and a
+rigid stop ``gap`` away on the positive side of the node. DOFs: ``q = [x_mass, x_node]``.
+Its backbone is known in closed form (``period``), which is the project's sharpest
+ground truth for the harmonic-balance and shooting solvers.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import _validate as check
+from .model import Model
+
+__all__ = ["OneDofOscillator", "one_dof_oscillator"]
+
+
+@dataclass(frozen=True)
+class OneDofOscillator:
+    """Mass–spring oscillator whose massless node hits a stop.
+
+    Parameters
+    ----------
+    m : float
+        Mass (kg).
+    k1 : float
+        Spring from the mass to ground (N/m).
+    k2 : float
+        Spring from the mass to the massless contact node (N/m).
+    gap : float
+        Distance (m) from the node's rest position to the stop, on the + side.
+    """
+
+    m: float = 1.0
+    k1: float = 1.0
+    k2: float = 4.0
+    gap: float = 1.0
+
+    def __post_init__(self):
+        for name in ("m", "k1", "k2"):
+            check.positive(name, getattr(self, name))
+        check.non_negative("gap", self.gap)
+
+    @property
+    def omega_open(self) -> float:
+        """ω1 = √(k1/m), rad/s: the contact open."""
+        return float(np.sqrt(self.k1 / self.m))
+
+    @property
+    def omega_closed(self) -> float:
+        """ω2 = √((k1+k2)/m), rad/s: the node held at the stop."""
+        return float(np.sqrt((self.k1 + self.k2) / self.m))
+
+    @property
+    def contact_stiffness(self) -> float:
+        """Static stiffness seen at the node (N/m): k1 k2 / (k1 + k2)."""
+        return self.k1 * self.k2 / (self.k1 + self.k2)
+
+    def model(self) -> Model:
+        """The oscillator as a :class:`Model` built with ``Model.from_matrices``."""
+        M = np.array([[self.m, 0.0], [0.0, 0.0]])
+        K = np.array([[self.k1 + self.k2, -self.k2], [-self.k2, self.k2]])
+        return Model.from_matrices(M, K, contact_dof=1, gap=self.gap, stop_side=+1,
+                                   description={"kind": "OneDofOscillator", "m": self.m, "k1": self.k1,
+                                                "k2": self.k2, "gap": self.gap})
+
+    def period(self, amplitude) -> np.ndarray:
+        """Closed-form period (s) of the free motion of largest excursion ``amplitude`` (m)
+        away from the stop (DESIGN.md section 4, item 2).
+
+        T = (2/ω1) arccos(−g0/A) + (2/ω2) arccos(k1 g0 / ((k1+k2) B)) for A > g0,
+        B = √((k1 g0/(k1+k2))² + (ω1/ω2)² (A² − g0²)); T = 2π/ω1 for A <= g0.
+        """
+        A = np.asarray(amplitude, dtype=float)
+        if np.any(~np.isfinite(A)) or np.any(A < 0):
+            raise ValueError(f"amplitude must be finite and >= 0, got {amplitude!r}")
+        w1, w2, g0 = self.omega_open, self.omega_closed, self.gap
+        k1, k2 = self.k1, self.k2
+        T_lin = 2 * np.pi / w1
+        with np.errstate(invalid="ignore", divide="ignore"):
+            Ac = np.maximum(A, g0)
+            B = np.sqrt((k1 * g0 / (k1 + k2)) ** 2 + (w1 / w2) ** 2 * (Ac**2 - g0**2))
+            ratio = np.where(B > 0, k1 * g0 / ((k1 + k2) * np.where(B > 0, B, 1.0)), 1.0)
+            T = 2 / w1 * np.arccos(np.clip(-g0 / np.where(Ac > 0, Ac, 1.0), -1, 1)) \
+                + 2 / w2 * np.arccos(np.clip(ratio, -1, 1))
+        return np.where(A > g0, T, T_lin)
+
+    def frequency(self, amplitude) -> np.ndarray:
+        """Closed-form backbone: frequency (Hz) at ``amplitude`` (m)."""
+        return 1.0 / self.period(amplitude)
+
+    def zero_gap_frequency(self) -> float:
+        """Limit of the backbone for amplitude → ∞ (Hz): 1 / (π/ω1 + π/ω2)."""
+        return 1.0 / (np.pi / self.omega_open + np.pi / self.omega_closed)
+
+
+def one_dof_oscillator(m: float = 1.0, k1: float = 1.0, k2: float = 4.0, gap: float = 1.0) -> Model:
+    """Shorthand for ``OneDofOscillator(m, k1, k2, gap).model()``."""
+    return OneDofOscillator(m, k1, k2, gap).model()
