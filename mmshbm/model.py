@@ -18,6 +18,7 @@ Sign convention: ``stop_side = +1`` puts the stop at ``q[contact_dof] = +gap``, 
 from __future__ import annotations
 
 import json
+import zipfile
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -124,9 +125,12 @@ class Model:
         """
         path = Path(path)
         try:
-            with np.load(path, allow_pickle=False) as f:
+            loaded = np.load(path, allow_pickle=False)
+            if not hasattr(loaded, "files"):
+                raise ValueError("not an .npz archive (it holds a single array)")
+            with loaded as f:
                 data = {k: f[k] for k in f.files}
-        except (OSError, ValueError) as err:
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile) as err:
             raise ValueError(f"cannot read model file {str(path)!r}: {err}") from None
 
         def matrix(name):
@@ -271,8 +275,7 @@ class Model:
         if n > n_l:
             raise ValueError(f"n must be <= the number of DOFs with mass ({n_l}), got {n}")
         if n_l <= _DENSE_EIG_LIMIT or n > n_l // 2:
-            lam, phi = la.eigh(self.reduced_stiffness.toarray(), b["M_ll"].toarray(),
-                               subset_by_index=(0, n - 1))
+            lam, phi = _lowest_eigenpairs_dense(self.reduced_stiffness.toarray(), b["M_ll"].toarray(), n)
         else:
             lam, phi = spla.eigsh(self.reduced_stiffness, k=n, M=b["M_ll"], sigma=0.0, which="LM")
             order = np.argsort(lam)
@@ -301,14 +304,27 @@ class Model:
             K_red = sub.reduced_stiffness
         else:
             K_red = b["K_ll"]
-        lam = la.eigh(K_red.toarray(), b["M_ll"].toarray(), eigvals_only=True,
-                      subset_by_index=(0, 0))[0]
+        lam = _lowest_eigenpairs_dense(K_red.toarray(), b["M_ll"].toarray(), 1)[0][0]
         f_closed = np.sqrt(lam) / (2 * np.pi)
         return 2.0 / (1.0 / f_open + 1.0 / f_closed)
 
     def __repr__(self) -> str:
         return (f"Model(n_dof={self.n_dof}, massless={self.c.tolist()}, contact_dof={self.contact_dof}, "
                 f"gap={self.gap:g}, stop_side={self.stop_side:+d})")
+
+
+def _lowest_eigenpairs_dense(K: np.ndarray, M: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The ``n`` smallest eigenpairs of ``K φ = λ M φ`` (K, M dense, symmetric positive definite).
+
+    Solved in the inverted form ``M φ = μ K φ`` for the ``n`` largest ``μ = 1/λ``: the direct
+    form loses relative accuracy of order eps·λ_max/λ_min in the lowest λ, which on a fine
+    beam mesh reaches 1e-5 in the first frequency. Returns ``λ`` ascending, shape (n,), and
+    mass-normalised ``φ`` (``φᵀ M φ = I``), shape (N, n).
+    """
+    N = K.shape[0]
+    mu, phi = la.eigh(M, K, subset_by_index=(N - n, N - 1))
+    mu, phi = mu[::-1], phi[:, ::-1]
+    return 1.0 / mu, phi / np.sqrt(mu)  # eigh gives φᵀ K φ = I, so φᵀ M φ = diag(μ)
 
 
 def _require_positive_definite(A, what: str) -> None:

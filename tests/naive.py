@@ -1,0 +1,98 @@
+"""Plain-loop, dense references for the finite-element matrices of the beam.
+
+Nothing here imports :mod:`mmshbm.fe`: the element matrices are rebuilt from the
+Timoshenko equations themselves (shape functions = exact static solution, integrated by
+Gauss quadrature) and assembled with explicit Python loops into dense arrays, so that the
+vectorised closed-form code can be asserted against them.
+
+Conventions match :mod:`mmshbm.fe`: local DOFs ``[w1, θ1, w2, θ2]``, θ = dw/dx in the
+Euler–Bernoulli limit, shear strain γ = dw/dx − θ, global order ``[w0, θ0, w1, θ1, ...]``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def iie_coefficients(L: float, E: float, G: float, A: float, I: float, kappa: float) -> np.ndarray:
+    """Polynomial coefficients of the interdependent-interpolation shape functions.
+
+    The element's static homogeneous solution has w = a0 + a1 x + a2 x² + a3 x³ and
+    θ = b0 + b1 x + b2 x². The Timoshenko equations without load,
+    (κGA (w' − θ))' = 0 and E I θ'' + κGA (w' − θ) = 0, hold for every x when
+    3 a3 = b2, 2 a2 = b1 and 2 E I b2 + κGA (a1 − b0) = 0; the four nodal values fix the
+    rest. Returns C, shape (7, 4): column k holds (a0..a3, b0..b2) for unit nodal DOF k.
+    """
+    kGA = kappa * G * A
+    S = np.zeros((7, 7))
+    S[0, 3], S[0, 6] = 3.0, -1.0
+    S[1, 2], S[1, 5] = 2.0, -1.0
+    S[2, 1], S[2, 4], S[2, 6] = kGA, -kGA, 2.0 * E * I
+    S[3, 0] = 1.0                                   # w(0)
+    S[4, 4] = 1.0                                   # θ(0)
+    S[5, :4] = [1.0, L, L**2, L**3]                 # w(L)
+    S[6, 4:] = [1.0, L, L**2]                       # θ(L)
+    rhs = np.zeros((7, 4))
+    rhs[3:, :] = np.eye(4)
+    return np.linalg.solve(S, rhs)
+
+
+def iie_shape_functions(x, L, E, G, A, I, kappa):
+    """w and θ shape functions and their x-derivatives at points ``x`` (m): four (m, 4) arrays."""
+    C = iie_coefficients(L, E, G, A, I, kappa)
+    x = np.asarray(x, dtype=float)
+    P = np.stack([np.ones_like(x), x, x**2, x**3], axis=1)
+    dP = np.stack([np.zeros_like(x), np.ones_like(x), 2 * x, 3 * x**2], axis=1)
+    return P @ C[:4], P[:, :3] @ C[4:], dP @ C[:4], dP[:, :3] @ C[4:]
+
+
+def element_by_quadrature(L, E, G, rho, A, I, kappa, n_gauss=6):
+    """Dense (4, 4) stiffness and mass of one element by Gauss quadrature of
+
+        K = ∫ E I θ'ᵀθ' + κGA γᵀγ dx,      M = ∫ ρA wᵀw + ρI θᵀθ dx
+
+    with the shape functions of :func:`iie_shape_functions` (exact for degree <= 11)."""
+    xg, wg = np.polynomial.legendre.leggauss(n_gauss)
+    K = np.zeros((4, 4))
+    M = np.zeros((4, 4))
+    for xq, wq in zip(xg, wg, strict=True):
+        x = np.array([(xq + 1.0) * L / 2.0])
+        Nw, Nt, dNw, dNt = (a[0] for a in iie_shape_functions(x, L, E, G, A, I, kappa))
+        gamma = dNw - Nt
+        weight = wq * L / 2.0
+        for i in range(4):
+            for j in range(4):
+                K[i, j] += weight * (E * I * dNt[i] * dNt[j] + kappa * G * A * gamma[i] * gamma[j])
+                M[i, j] += weight * (rho * A * Nw[i] * Nw[j] + rho * I * Nt[i] * Nt[j])
+    return K, M
+
+
+def assemble_loop(element_matrices) -> np.ndarray:
+    """Dense global matrix of a chain of 2-node elements, by explicit loops.
+
+    ``element_matrices`` is a sequence of (4, 4) arrays, element ``e`` joining nodes e and
+    e + 1; the result has shape (2 n_e + 2, 2 n_e + 2), order ``[w0, θ0, w1, θ1, ...]``."""
+    n_e = len(element_matrices)
+    A = np.zeros((2 * n_e + 2, 2 * n_e + 2))
+    for e, Ae in enumerate(element_matrices):
+        dofs = [2 * e, 2 * e + 1, 2 * e + 2, 2 * e + 3]
+        for i in range(4):
+            for j in range(4):
+                A[dofs[i], dofs[j]] += Ae[i][j]
+    return A
+
+
+def beam_matrices(lengths, E, G, rho, A, I, kappa, clamped=True):
+    """Dense (M, K) of a beam with the given element lengths, root first.
+
+    Element matrices by :func:`element_by_quadrature`, assembled by :func:`assemble_loop`;
+    ``clamped`` deletes the root's rows and columns ``w0, θ0``."""
+    Ks, Ms = [], []
+    for L in lengths:
+        Ke, Me = element_by_quadrature(L, E, G, rho, A, I, kappa)
+        Ks.append(Ke)
+        Ms.append(Me)
+    K, M = assemble_loop(Ks), assemble_loop(Ms)
+    if clamped:
+        K, M = K[2:, 2:], M[2:, 2:]
+    return M, K
