@@ -1,0 +1,250 @@
+"""Numba kernels of the alternating frequency-time evaluation.
+
+Kernels take plain contiguous float64 arrays and know nothing of models; the public
+functions validate shapes and call the private ``_kernel`` versions, which the solvers
+call directly in their inner loops. All kernels that call each other live in this one
+file: numba's on-disk cache does not see edits to a callee in another module.
+
+Proximal contact law (Signorini, λ >= 0 the contact force, g the gap, r > 0):
+
+    λ = prox_{R+}(λ − r g)  ⇔  R = λ − max(0, λ − r g) = 0,
+
+whose zeros are exactly the pairs with 0 <= g ⊥ λ >= 0, whatever r. The active set
+s = [λ − r g > 0] gives the semismooth derivative ∂R/∂λ = 1 − s, ∂R/∂g = r s.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["proximal_contact", "cosine_product_matrix", "JIT_OPTIONS"]
+
+#: One place for the compilation flags of every kernel: cached, no GIL, fast math
+#: without the flags that assume no NaN/inf (a NaN must propagate to Newton's checks).
+JIT_OPTIONS = dict(cache=True, nogil=True, fastmath={"nsz", "arcp", "contract", "afn"})
+
+
+@njit(**JIT_OPTIONS)
+def _proximal_contact(lam, g, r, R, active):
+    """In place: R_j = λ_j − max(0, λ_j − r g_j), active_j = (λ_j − r g_j > 0)."""
+    for j in range(lam.shape[0]):
+        trial = lam[j] - r * g[j]
+        if trial > 0.0:
+            R[j] = r * g[j]
+            active[j] = 1.0
+        else:
+            R[j] = lam[j]
+            active[j] = 0.0
+
+
+def proximal_contact(lam: np.ndarray, g: np.ndarray, r: float) -> tuple[np.ndarray, np.ndarray]:
+    """Residual of the proximal contact law on a time grid.
+
+    Parameters
+    ----------
+    lam : ndarray, shape (N,)
+        Contact force samples λ(τ_j) (N), positive pushing away from the stop.
+    g : ndarray, shape (N,)
+        Gap samples g_N(τ_j) (m).
+    r : float
+        Proximal parameter (N/m), > 0.
+
+    Returns
+    -------
+    R : ndarray, shape (N,)
+        λ − max(0, λ − r g) (N); zero exactly where 0 <= g ⊥ λ >= 0.
+    active : ndarray, shape (N,)
+        1.0 where λ − r g > 0 (contact closed), else 0.0.
+    """
+    lam = np.ascontiguousarray(lam, dtype=np.float64)
+    g = np.ascontiguousarray(g, dtype=np.float64)
+    if lam.ndim != 1 or lam.shape != g.shape:
+        raise ValueError(f"lam and g must be 1-D of equal length, got {lam.shape} and {g.shape}")
+    if not r > 0:
+        raise ValueError(f"r must be positive, got {r!r}")
+    R = np.empty_like(lam)
+    active = np.empty_like(lam)
+    _proximal_contact(lam, g, float(r), R, active)
+    return R, active
+
+
+@njit(**JIT_OPTIONS)
+def _cosine_product_matrix(S, H, P):
+    """P[m, k] = c_m/2 (S[|m−k| mod N] + S[(m+k) mod N]), c_0 = 1, c_m = 2.
+
+    With S_p = (1/N) Σ_j s_j cos pτ_j this is the cosine coefficient m of s(τ)·cos kτ.
+    """
+    N = S.shape[0]
+    for m in range(H + 1):
+        cm = 0.5 if m == 0 else 1.0
+        for k in range(H + 1):
+            d = m - k if m >= k else k - m
+            P[m, k] = cm * (S[d % N] + S[(m + k) % N])
+
+
+def cosine_product_matrix(S: np.ndarray, harmonics: int) -> np.ndarray:
+    """Matrix (H+1, H+1) of the cosine projection of s(τ)·cos kτ from the aliased cosine
+    spectrum ``S`` (shape (N,), see :meth:`HarmonicTransform.cosine_spectrum`)."""
+    S = np.ascontiguousarray(S, dtype=np.float64)
+    if S.ndim != 1 or S.shape[0] < 2 * harmonics + 1:
+        raise ValueError(f"S must be 1-D with at least 2H+1 = {2 * harmonics + 1} samples, got {S.shape}")
+    P = np.empty((harmonics + 1, harmonics + 1))
+    _cosine_product_matrix(S, int(harmonics), P)
+    return P
+
+
+@njit(**JIT_OPTIONS)
+def _mmshbm_jacobian(P, D, dF, w, r, ci, J):
+    """Jacobian of the cosine-only MMS-HBM residual (unscaled), in place.
+
+    P  : (H+1, H+1) cosine product matrix of the active set s(τ)
+    D  : (H+1, n_c, n_c) condensed dynamic stiffness D_k
+    dF : (H+1, n_c) ∂(D_k a_k)/∂Ω
+    w  : (n_c,) contact direction (λ = w·f_c, g = gap + w·q_c)
+    r  : proximal parameter
+    ci : index of the contact DOF inside c
+    J  : ((H+1) n_c, (H+1) n_c + 1) output; rows m*n_c + i, columns k*n_c + j, last Ω.
+    """
+    H1 = D.shape[0]
+    n_c = D.shape[1]
+    n = H1 * n_c
+    for row in range(n):
+        for col in range(n + 1):
+            J[row, col] = 0.0
+    for m in range(H1):
+        # linear rows of the massless DOFs other than the contact: f_i,m = (D_m a_m)_i
+        for i in range(n_c):
+            if i == ci:
+                continue
+            for j in range(n_c):
+                J[m * n_c + i, m * n_c + j] = D[m, i, j]
+            J[m * n_c + i, n] = dF[m, i]
+        # contact row: proj_m[(1 − s) λ + s r g]
+        row = m * n_c + ci
+        dOmega = 0.0
+        for k in range(H1):
+            p_active = P[m, k]
+            p_open = (1.0 if m == k else 0.0) - p_active
+            lam_k = 0.0
+            for i in range(n_c):
+                lam_k += w[i] * dF[k, i]
+            dOmega += p_open * lam_k
+            for j in range(n_c):
+                wd = 0.0
+                for i in range(n_c):
+                    wd += w[i] * D[k, i, j]
+                J[row, k * n_c + j] = p_open * wd + r * p_active * w[j]
+        J[row, n] = dOmega
+
+
+# ---------------------------------------------------------------------------- banded LU
+# Row band layout: A[i, j] is stored at AB[i, j − i + kl] for −kl <= j − i <= 2kl
+# (half bandwidth kl on both sides; the extra kl columns hold the fill-in of partial
+# pivoting). A symmetric FE matrix pair K, M renumbered by RCM fits with kl small.
+
+
+@njit(**JIT_OPTIONS)
+def _band_solve(Kb, Mb, kl, w2, B, AB, X):
+    """Solve (K − w2 M) X = B by band LU with partial pivoting; returns 0 or, if a pivot
+    is exactly zero, its 1-based column (the matrix is singular).
+
+    Kb, Mb : (n, 3kl+1) row band layout (fill columns zero); B, X : (n, m); AB : work (n, 3kl+1).
+    """
+    n = Kb.shape[0]
+    width = Kb.shape[1]
+    m = B.shape[1]
+    for i in range(n):
+        for c in range(width):
+            AB[i, c] = Kb[i, c] - w2 * Mb[i, c]
+        for q in range(m):
+            X[i, q] = B[i, q]
+    for j in range(n):
+        last_row = j + kl if j + kl < n else n - 1
+        p = j
+        best = abs(AB[j, kl])
+        for i in range(j + 1, last_row + 1):
+            v = abs(AB[i, j - i + kl])
+            if v > best:
+                best = v
+                p = i
+        if best == 0.0:
+            return j + 1
+        last_col = j + 2 * kl if j + 2 * kl < n else n - 1
+        if p != j:
+            for c in range(j, last_col + 1):
+                tmp = AB[j, c - j + kl]
+                AB[j, c - j + kl] = AB[p, c - p + kl]
+                AB[p, c - p + kl] = tmp
+            for q in range(m):
+                tmp = X[j, q]
+                X[j, q] = X[p, q]
+                X[p, q] = tmp
+        pivot = AB[j, kl]
+        for i in range(j + 1, last_row + 1):
+            factor = AB[i, j - i + kl] / pivot
+            if factor == 0.0:
+                continue
+            AB[i, j - i + kl] = 0.0
+            for c in range(j + 1, last_col + 1):
+                AB[i, c - i + kl] -= factor * AB[j, c - j + kl]
+            for q in range(m):
+                X[i, q] -= factor * X[j, q]
+    for i in range(n - 1, -1, -1):
+        last_col = i + 2 * kl if i + 2 * kl < n else n - 1
+        for q in range(m):
+            acc = X[i, q]
+            for c in range(i + 1, last_col + 1):
+                acc -= AB[i, c - i + kl] * X[c, q]
+            X[i, q] = acc / AB[i, kl]
+    return 0
+
+
+@njit(**JIT_OPTIONS)
+def _band_quadratic_form(Mb, kl, Z, out):
+    """out = Zᵀ M Z for symmetric M in row band layout; Z (n, m), out (m, m)."""
+    n = Z.shape[0]
+    m = Z.shape[1]
+    for p in range(m):
+        for q in range(m):
+            out[p, q] = 0.0
+    for i in range(n):
+        j0 = i - kl if i - kl > 0 else 0
+        j1 = i + kl + 1 if i + kl + 1 < n else n
+        for j in range(j0, j1):
+            mij = Mb[i, j - i + kl]
+            if mij == 0.0:
+                continue
+            for p in range(m):
+                zp = Z[i, p] * mij
+                for q in range(m):
+                    out[p, q] += zp * Z[j, q]
+
+
+@njit(**JIT_OPTIONS)
+def _condensed_stiffness(Kb, Mb, kl, K_lc, K_cc, omega, harmonics, D, dD, AB, Z, ZMZ, derivative):
+    """D_k = K_cc − K_lcᵀ (K − (kΩ)² M)⁻¹ K_lc and ∂D_k/∂Ω = −2k²Ω ZᵀMZ for k = 1..H.
+
+    D, dD : (H+1, n_c, n_c) outputs (row 0 untouched); AB, Z, ZMZ: work arrays.
+    Returns 0, or k·(n+1) + column for the first singular harmonic k.
+    """
+    n = Kb.shape[0]
+    n_c = K_lc.shape[1]
+    for k in range(1, harmonics + 1):
+        wk = k * omega
+        info = _band_solve(Kb, Mb, kl, wk * wk, K_lc, AB, Z)
+        if info != 0:
+            return k * (n + 1) + info
+        for p in range(n_c):
+            for q in range(n_c):
+                acc = K_cc[p, q]
+                for i in range(n):
+                    acc -= K_lc[i, p] * Z[i, q]
+                D[k, p, q] = acc
+        if derivative:
+            _band_quadratic_form(Mb, kl, Z, ZMZ)
+            scale = -2.0 * k * k * omega
+            for p in range(n_c):
+                for q in range(n_c):
+                    dD[k, p, q] = scale * ZMZ[p, q]
+    return 0
