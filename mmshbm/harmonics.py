@@ -82,11 +82,14 @@ class HarmonicTransform:
         if self.use_fftw:
             self._time = pyfftw.empty_aligned((n, N), dtype="float64")
             self._freq = pyfftw.empty_aligned((n, N // 2 + 1), dtype="complex128")
-            # planning with FFTW_MEASURE overwrites the buffers: plan first, fill after
+            # FFTW_ESTIMATE, not FFTW_MEASURE: measured planning picks algorithms by
+            # timing, so round-off (and hence a branch near a resonance) would differ
+            # from run to run; estimated plans are deterministic, and at these sizes
+            # the difference in speed is within noise.
             self._forward = pyfftw.FFTW(self._time, self._freq, axes=(-1,), direction="FFTW_FORWARD",
-                                        flags=("FFTW_MEASURE",), threads=1)
+                                        flags=("FFTW_ESTIMATE",), threads=1)
             self._backward = pyfftw.FFTW(self._freq, self._time, axes=(-1,), direction="FFTW_BACKWARD",
-                                         flags=("FFTW_MEASURE", "FFTW_DESTROY_INPUT"), threads=1)
+                                         flags=("FFTW_ESTIMATE", "FFTW_DESTROY_INPUT"), threads=1)
         else:
             self._time = np.empty((n, N))
             self._freq = np.empty((n, N // 2 + 1), dtype=complex)

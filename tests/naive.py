@@ -96,3 +96,50 @@ def beam_matrices(lengths, E, G, rho, A, I, kappa, clamped=True):
     if clamped:
         K, M = K[2:, 2:], M[2:, 2:]
     return M, K
+
+
+# ---------------------------------------------------------------------------------------
+# Plain references for the harmonic transforms, the contact kernels and the condensation.
+# DFT-matrix transforms, Python loops and dense solves: slow and obviously right.
+
+
+def synthesis_matrix(H: int, N: int) -> np.ndarray:
+    """E (N, 2H+1): x = E @ [c0, c1, s1, ..., cH, sH] at τ_j = 2πj/N."""
+    tau = 2 * np.pi * np.arange(N) / N
+    E = np.ones((N, 2 * H + 1))
+    for k in range(1, H + 1):
+        E[:, 2 * k - 1] = np.cos(k * tau)
+        E[:, 2 * k] = np.sin(k * tau)
+    return E
+
+
+def projection(x: np.ndarray, H: int) -> np.ndarray:
+    """Discrete Fourier projection of samples x (N,) on harmonics 0..H (NLvib order)."""
+    N = len(x)
+    E = synthesis_matrix(H, N)
+    weights = np.full(2 * H + 1, 2.0 / N)
+    weights[0] = 1.0 / N
+    return weights * (E.T @ x)
+
+
+def proximal_contact_loop(lam, g, r):
+    """R = λ − max(0, λ − r g) and the active set, by a Python loop."""
+    R = np.empty(len(lam))
+    active = np.empty(len(lam))
+    for j in range(len(lam)):
+        R[j] = lam[j] - max(0.0, lam[j] - r * g[j])
+        active[j] = 1.0 if lam[j] - r * g[j] > 0 else 0.0
+    return R, active
+
+
+def condensed_stiffness_dense(model, omega: float, H: int):
+    """D_k and ∂D_k/∂Ω for k = 0..H by dense solves; shapes (H+1, n_c, n_c)."""
+    b = model.blocks
+    K, M = b["K_ll"].toarray(), b["M_ll"].toarray()
+    K_lc, K_cc = b["K_lc"], b["K_cc"]
+    D, dD = [], []
+    for k in range(H + 1):
+        Z = np.linalg.solve(K - (k * omega) ** 2 * M, K_lc)
+        D.append(K_cc - K_lc.T @ Z)
+        dD.append(-2 * k**2 * omega * Z.T @ M @ Z)
+    return np.array(D), np.array(dD)
