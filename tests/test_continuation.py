@@ -1,0 +1,111 @@
+"""The path follower on problems with known answers, and its failure behaviour."""
+
+import math
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from mmshbm.continuation import ContinuationOptions, continue_branch
+
+
+class Circle:
+    """x² + y² = ρ² in (x, y): one equation, two unknowns; folds in y at x = ±ρ."""
+
+    n_unknowns = 2
+
+    def __init__(self, radius=1.0, sparse=False, wall=None):
+        self.radius, self.sparse, self.wall = radius, sparse, wall
+        self.evaluations = 0
+
+    def evaluate(self, u, jacobian=True):
+        self.evaluations += 1
+        if self.wall is not None and u[0] > self.wall:
+            raise ArithmeticError("beyond the wall")
+        R = np.array([u @ u - self.radius**2])
+        if not jacobian:
+            return R
+        J = 2 * u[None, :]
+        return R, (sp.csr_matrix(J) if self.sparse else J)
+
+    def monitor(self, u):
+        return {"x": float(u[0]), "y": float(u[1])}
+
+
+@pytest.mark.parametrize("sparse", [False, True])
+def test_follows_a_circle_and_stops_on_a_bound(sparse):
+    p = Circle(sparse=sparse)
+    res = continue_branch(p, np.array([0.0, -1.0]), np.array([1.0, 0.0]),
+                          ContinuationOptions(ds=0.1, ds_max=0.3, bounds={"x": (-0.5, 2.0)}))
+    radius = np.hypot(res.u[:, 0], res.u[:, 1])
+    np.testing.assert_allclose(radius, 1.0, atol=1e-10)
+    # counter-clockwise from the bottom, over the top (a fold: dy/ds = x changes sign
+    # there) down to x = -0.5 on the upper half
+    assert res.status == "bound:x"
+    assert res.records["x"][-1] == pytest.approx(-0.5, abs=1e-9)
+    assert res.records["y"][-1] > 0
+    folds = [i for name, i in res.special_points if name == "fold"]
+    assert len(folds) == 1
+    assert res.records["x"][folds[0] - 1] > 0 > res.records["x"][folds[0]]
+    assert res.special_points[-1] == ("endpoint", len(res.u) - 1)
+    assert len(res.residual_histories) == len(res.u)
+
+
+def test_step_grows_when_newton_is_easy():
+    res = continue_branch(Circle(radius=100.0), np.array([0.0, -100.0]), np.array([1.0, 0.0]),
+                          ContinuationOptions(ds=0.01, ds_max=5.0, max_steps=40))
+    assert res.status == "max_steps"
+    assert res.step_size[-1] > 10 * res.step_size[1]
+
+
+def test_failure_halves_the_step_and_keeps_every_point():
+    p = Circle(wall=0.6)
+    res = continue_branch(p, np.array([0.0, -1.0]), np.array([1.0, 0.0]),
+                          ContinuationOptions(ds=0.2, ds_min=1e-4, max_steps=100))
+    assert res.status.startswith("ds_min")
+    assert "beyond the wall" in res.status
+    assert len(res.u) >= 3
+    assert res.records["x"][-1] <= 0.6
+    assert res.records["x"][-1] > 0.6 - 1e-3  # it crept up to the wall by halving
+    np.testing.assert_allclose(np.hypot(*res.u.T), 1.0, atol=1e-10)
+
+
+def test_interrupt_returns_the_points_so_far():
+    seen = []
+
+    def callback(u, rec):
+        seen.append(u)
+        if len(seen) == 5:
+            raise KeyboardInterrupt
+
+    res = continue_branch(Circle(), np.array([0.0, -1.0]), np.array([1.0, 0.0]), callback=callback)
+    assert res.status == "interrupted"
+    assert len(res.u) == 5
+
+
+def test_start_failure_is_a_status_not_an_exception():
+    res = continue_branch(Circle(wall=-1.0), np.array([0.0, -1.0]), np.array([1.0, 0.0]))
+    assert res.status.startswith("start failed")
+    assert len(res.u) == 0
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"ds": -1.0}, "ds must be positive"),
+    ({"ds": 3.0, "ds_max": 2.0}, "ds_min <= ds <= ds_max"),
+    ({"max_steps": 0}, "max_steps must be >= 1"),
+    ({"max_newton": 2.5}, "max_newton must be an integer"),
+    ({"newton_tol": float("nan")}, "newton_tol must be finite"),
+    ({"max_angle": 4.0}, "max_angle must be <= pi"),
+    ({"bounds": {"amplitude": (1.0, 0.5)}}, "lo < hi"),
+    ({"bounds": {"amplitude": 3.0}}, "pair"),
+])
+def test_options_are_validated(kwargs, match):
+    with pytest.raises((ValueError, TypeError), match=match):
+        ContinuationOptions(**kwargs)
+
+
+def test_angle_guard_rejects_jumps():
+    opts = ContinuationOptions(ds=0.5, max_angle=math.radians(5), ds_max=0.5, max_steps=20, corner_ds=1e-6)
+    res = continue_branch(Circle(), np.array([0.0, -1.0]), np.array([1.0, 0.0]), opts)
+    # consecutive tangents on a unit circle differ by the arc angle = step length
+    assert np.all(res.step_size[1:] <= math.radians(5) * 1.01)
