@@ -4,15 +4,38 @@ A :class:`Branch` is a struct of arrays, one entry per converged point, plus the
 saying why the branch stopped, the special points, and the metadata needed to redo the
 run. Per-point time signals, contact force and harmonic content come from the solver
 object that computed the branch (``branch.solver``), which knows the model.
+
+Files. :meth:`Branch.save` writes one ``.npz`` archive: every array of the branch
+(bit-identical on reload) plus one JSON string, ``metadata``, holding the model's
+description, method, H, N, solver and continuation options, versions, status and special
+points; models that their description cannot rebuild (user matrices) also store ``M`` and
+``K``. :meth:`Branch.load` reads it back and, if asked, rebuilds the model and the solver,
+so that time signals work again; :meth:`Branch.rerun` redoes the run from the file alone.
 """
 
 from __future__ import annotations
 
+import json
+import logging
+import os
+import platform
+import tempfile
+import zipfile
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Branch"]
+__all__ = ["Branch", "load", "rebuild_model"]
+
+log = logging.getLogger(__name__)
+
+#: the ``format`` entry of a saved branch, and the layout version of the file
+BRANCH_FORMAT = "mmshbm.Branch"
+FORMAT_VERSION = 1
+#: per-point arrays of a branch, in file order
+ARRAY_FIELDS = ("frequency", "amplitude", "energy", "contact_force_max", "newton_iterations", "step_size",
+                "states")
 
 
 @dataclass(eq=False)
@@ -47,7 +70,16 @@ class Branch:
     metadata : dict
         Model description, solver options, versions, timings.
     solver : object
-        The problem object that computed the branch (not saved).
+        The problem object that computed the branch (not saved; :meth:`attach_solver`
+        rebuilds it, and the per-point methods do so on demand).
+    residual_histories : list of ndarray
+        Corrector residual norms per Newton iteration, per point.
+    model : Model or None
+        The structure, when known without the solver (e.g. loaded from a file that stores
+        its matrices); :meth:`get_model` returns it, building it if needed.
+    records : dict of str to ndarray
+        Further monitored quantities, one array per name with first axis n_points (e.g.
+        shooting's ``floquet_max``); saved and loaded with the branch.
     """
 
     frequency: np.ndarray
@@ -64,6 +96,8 @@ class Branch:
     metadata: dict = field(default_factory=dict)
     solver: object = field(default=None, repr=False)
     residual_histories: list = field(default_factory=list, repr=False)
+    model: object = field(default=None, repr=False)
+    records: dict = field(default_factory=dict, repr=False)
 
     def __len__(self) -> int:
         return len(self.frequency)
@@ -76,8 +110,155 @@ class Branch:
     # ------------------------------------------------------------------ per point
     def _require_solver(self):
         if self.solver is None:
-            raise RuntimeError("this branch has no solver attached (loaded without its model?)")
+            try:
+                self.attach_solver()
+            except ValueError as err:
+                raise RuntimeError(f"this branch has no solver attached and none can be rebuilt: {err}") \
+                    from None
         return self.solver
+
+    # ------------------------------------------------------------------ model and solver
+    def get_model(self):
+        """The :class:`~mmshbm.model.Model` of this branch: the attached one, the solver's,
+        or rebuilt from ``metadata["model"]`` (a beam's or oscillator's description) and
+        cached in :attr:`model`.
+
+        Raises
+        ------
+        ValueError
+            If the description cannot rebuild the model and no model is attached.
+        """
+        if self.model is None and self.solver is not None and hasattr(self.solver, "model"):
+            self.model = self.solver.model
+        if self.model is None:
+            self.model = rebuild_model(self.metadata.get("model", {}), self.metadata.get("model_gap"))
+        return self.model
+
+    def attach_solver(self, **method_options):
+        """Rebuild the solver that computed this branch and attach it (:attr:`solver`).
+
+        Uses :func:`mmshbm.api.make_problem` with the method and method options recorded in
+        ``metadata`` (``method_options`` given here override them), on :meth:`get_model`.
+
+        Returns
+        -------
+        object
+            The solver (continuation problem), also stored in :attr:`solver`.
+
+        Raises
+        ------
+        ValueError
+            If the model cannot be rebuilt, or the rebuilt solver's unknowns do not match
+            :attr:`states`.
+        """
+        from .api import make_problem
+
+        options = {**dict(self.metadata.get("method_options", {})), **method_options}
+        if self.method != "shooting":
+            options.setdefault("harmonics", self.harmonics)
+        solver = make_problem(self.get_model(), self.method, **options)
+        n = getattr(solver, "n_unknowns", None)
+        if n is not None and self.states.ndim == 2 and len(self) and self.states.shape[1] != n:
+            raise ValueError(f"the rebuilt {self.method} solver has {n} unknowns but the branch's states "
+                             f"have {self.states.shape[1]}: the options do not match the run")
+        self.solver = solver
+        return solver
+
+    def rerun(self, **overrides) -> Branch:
+        """Redo the run from the metadata alone (model, method, H, amplitudes, solver and
+        continuation options); keyword arguments of :func:`mmshbm.backbone` override them.
+
+        Returns
+        -------
+        Branch
+            The new branch; with no overrides it repeats this one.
+        """
+        from .api import backbone
+
+        meta = self.metadata
+        kwargs = {**dict(meta.get("continuation", {})), **dict(meta.get("method_options", {}))}
+        kwargs.setdefault("harmonics", meta.get("harmonics", self.harmonics))
+        for name in ("max_amplitude", "start_amplitude"):
+            if name in meta:
+                kwargs[name] = meta[name]
+        kwargs["method"] = self.method
+        kwargs.update(overrides)
+        return backbone(self.get_model(), **kwargs)
+
+    # ------------------------------------------------------------------ files
+    def save(self, path) -> Path:
+        """Write the branch to ``path`` (a ``.npz`` archive, written exactly there).
+
+        The archive holds every per-point array (:data:`ARRAY_FIELDS`, bit-identical on
+        reload), the residual histories, and ``metadata``: a JSON string with the format
+        name and version, status, method, H, special points, the run's metadata (model
+        description, method and continuation options, versions, timing), and the model's
+        gap, contact DOF and stop side. When the model's description cannot rebuild it (a
+        user :class:`~mmshbm.model.Model`, or a model whose matrices differ from its
+        description's), ``M`` and ``K`` are stored too (CSR parts, ``model_M_data``, ...).
+
+        Returns
+        -------
+        pathlib.Path
+            The path written.
+        """
+        arrays, meta = branch_payload(self)
+        meta = {"format": BRANCH_FORMAT, "format_version": FORMAT_VERSION, **meta,
+                "saved_with": versions()}
+        return write_archive(path, arrays, meta)
+
+    @classmethod
+    def load(cls, path, attach_solver: bool = False) -> Branch:
+        """Read a branch written by :meth:`save`.
+
+        Parameters
+        ----------
+        path : str or Path
+            The ``.npz`` file.
+        attach_solver : bool
+            Also rebuild the model and solver now (otherwise the per-point methods do it
+            on first use).
+
+        Raises
+        ------
+        ValueError
+            If the file is missing, unreadable, or not a saved branch.
+        """
+        arrays, meta = read_archive(path)
+        if meta.get("format") != BRANCH_FORMAT:
+            raise ValueError(f"{str(path)!r} is not a saved mmshbm Branch (format {meta.get('format')!r})")
+        branch = branch_from_payload(arrays, meta)
+        if attach_solver:
+            branch.attach_solver()
+        return branch
+
+    def to_csv(self, path) -> Path:
+        """Write the per-point table to ``path`` (CSV, one header line, full precision):
+        ``frequency_hz, amplitude_m, energy_j, contact_force_max_n, newton_iterations,
+        step_size``, then one column per one-dimensional entry of :attr:`records`.
+
+        Returns
+        -------
+        pathlib.Path
+            The path written.
+        """
+        path = Path(path)
+        n = len(self)
+        names = ["frequency_hz", "amplitude_m", "energy_j", "contact_force_max_n", "newton_iterations",
+                 "step_size"]
+        cols = [self.frequency, self.amplitude, self.energy, self.contact_force_max, self.newton_iterations,
+                self.step_size]
+        fmt = ["%.17g"] * 4 + ["%d", "%.17g"]
+        for name, value in self.records.items():
+            value = np.asarray(value)
+            if value.ndim == 1 and len(value) == n and value.dtype.kind in "biuf":
+                names.append(name)
+                cols.append(value)
+                fmt.append("%.17g")
+        table = np.column_stack(cols) if n else np.empty((0, len(names)))
+        path.parent.mkdir(parents=True, exist_ok=True)
+        np.savetxt(path, table, delimiter=",", fmt=fmt, comments="", header=",".join(names))
+        return path
 
     def time_signals(self, point: int, dofs=None, n_samples: int = 256):
         """Displacements of ``dofs`` over one period at branch point ``point``.
@@ -127,3 +308,201 @@ class Branch:
         return (f"Branch(method={self.method!r}, H={self.harmonics}, points={len(self)}, "
                 f"frequency={self.frequency[0]:.4g}..{self.frequency[-1]:.4g} Hz, "
                 f"amplitude up to {self.amplitude.max():.3g} m, status={self.status!r})")
+
+
+# ---------------------------------------------------------------------- models
+def rebuild_model(description: dict, gap: float | None = None):
+    """Rebuild a :class:`~mmshbm.model.Model` from its ``description``.
+
+    Parameters
+    ----------
+    description : dict
+        ``model.description`` of a :class:`~mmshbm.fe.beam.TimoshenkoBeam` model
+        (``kind = "TimoshenkoBeam"``) or of :class:`~mmshbm.examples.OneDofOscillator`.
+    gap : float, optional
+        The model's gap (m) if it differs from the description's (``Model.with_gap``).
+
+    Raises
+    ------
+    ValueError
+        For any other kind of description (user matrices: store them in the file).
+    """
+    kind = description.get("kind") if isinstance(description, dict) else None
+    if kind == "TimoshenkoBeam":
+        from .fe.beam import TimoshenkoBeam
+
+        model = TimoshenkoBeam.rebuild(description)
+    elif kind == "OneDofOscillator":
+        from .examples import OneDofOscillator
+
+        try:
+            model = OneDofOscillator(*(description[k] for k in ("m", "k1", "k2", "gap"))).model()
+        except KeyError as err:
+            raise ValueError(f"description lacks the entry {err.args[0]!r}") from None
+    else:
+        raise ValueError(f"a model of kind {kind!r} cannot be rebuilt from its description "
+                         "(save it with its matrices)")
+    if gap is not None and float(gap) != model.gap:
+        model = model.with_gap(float(gap))
+    return model
+
+
+def _same_model(a, b) -> bool:
+    """True when two models have identical matrices, contact DOF, stop side and gap."""
+    if a.M.shape != b.M.shape or (a.contact_dof, a.stop_side, a.gap) != (b.contact_dof, b.stop_side, b.gap):
+        return False
+    return all((A != B).nnz == 0 for A, B in ((a.M, b.M), (a.K, b.K)))
+
+
+def _model_arrays(model) -> dict:
+    out = {}
+    for name, A in (("M", model.M.tocsr()), ("K", model.K.tocsr())):
+        out.update({f"model_{name}_data": A.data, f"model_{name}_indices": A.indices,
+                    f"model_{name}_indptr": A.indptr, f"model_{name}_shape": np.array(A.shape)})
+    return out
+
+
+def _model_from_arrays(arrays: dict, info: dict):
+    import scipy.sparse as sp
+
+    from .model import Model
+
+    mats = []
+    for name in ("M", "K"):
+        d, i, p, shape = (arrays[f"model_{name}_{q}"] for q in ("data", "indices", "indptr", "shape"))
+        mats.append(sp.csr_matrix((d, i, p), shape=tuple(int(v) for v in shape)))
+    return Model.from_matrices(mats[0], mats[1], int(info["contact_dof"]), float(info["gap"]),
+                               int(info["stop_side"]), dict(info.get("description", {})))
+
+
+# ---------------------------------------------------------------------- payloads
+def versions() -> dict:
+    """Versions of Python and of the numerical packages (for file metadata)."""
+    import numba
+    import scipy
+
+    from . import __version__
+
+    return {"mmshbm": __version__, "python": platform.python_version(), "numpy": np.__version__,
+            "scipy": scipy.__version__, "numba": numba.__version__}
+
+
+def branch_payload(branch: Branch, prefix: str = "") -> tuple[dict, dict]:
+    """Split a branch into (arrays, JSON-able metadata) for an archive; array keys get
+    ``prefix``."""
+    arrays = {f"{prefix}{name}": np.asarray(getattr(branch, name)) for name in ARRAY_FIELDS}
+    hist = [np.asarray(h, dtype=float).ravel() for h in branch.residual_histories]
+    arrays[f"{prefix}residual_histories"] = np.concatenate(hist) if hist else np.empty(0)
+    arrays[f"{prefix}residual_history_lengths"] = np.array([len(h) for h in hist], dtype=np.int64)
+    names = []
+    for name, value in dict(branch.records).items():
+        if not isinstance(name, str) or not name:
+            raise TypeError(f"record names must be non-empty strings, got {name!r}")
+        arrays[f"{prefix}record__{name}"] = np.asarray(value)
+        names.append(name)
+
+    description = dict(branch.metadata.get("model", {}))
+    model = branch.model if branch.model is not None else getattr(branch.solver, "model", None)
+    info = {"description": description, "matrices": False}
+    if model is not None:
+        info.update(gap=float(model.gap), contact_dof=int(model.contact_dof), stop_side=int(model.stop_side),
+                    description=dict(model.description))
+        try:
+            rebuilt = rebuild_model(model.description, model.gap)
+            store = not _same_model(rebuilt, model)
+        except ValueError:
+            store = True
+        if store:
+            arrays.update({f"{prefix}{k}": v for k, v in _model_arrays(model).items()})
+            info["matrices"] = True
+    else:
+        gap = branch.metadata.get("model_gap", description.get("gap"))
+        info["gap"] = None if gap is None else float(gap)
+        if description.get("kind") not in ("TimoshenkoBeam", "OneDofOscillator"):
+            log.warning("saving a branch whose model can neither be rebuilt from its description nor "
+                        "was attached: the file cannot redo the run")
+    meta = {"status": branch.status, "method": branch.method, "harmonics": int(branch.harmonics),
+            "special_points": [[str(name), int(i)] for name, i in branch.special_points],
+            "metadata": branch.metadata, "model": info, "records": names}
+    return arrays, meta
+
+
+def branch_from_payload(arrays: dict, meta: dict, prefix: str = "") -> Branch:
+    """Inverse of :func:`branch_payload`."""
+    try:
+        fields_ = {name: arrays[f"{prefix}{name}"] for name in ARRAY_FIELDS}
+        flat = arrays[f"{prefix}residual_histories"]
+        lengths = arrays[f"{prefix}residual_history_lengths"]
+        info = meta["model"]
+        status, method, harmonics = meta["status"], meta["method"], int(meta["harmonics"])
+        special = [(str(name), int(i)) for name, i in meta["special_points"]]
+        metadata = dict(meta["metadata"])
+        records = {str(name): arrays[f"{prefix}record__{name}"] for name in meta.get("records", [])}
+    except (KeyError, TypeError, ValueError) as err:
+        raise ValueError(f"malformed branch record: missing or bad entry {err}") from None
+    histories = np.split(flat, np.cumsum(lengths)[:-1]) if len(lengths) else []
+    if info.get("gap") is not None and info["gap"] != metadata.get("model", {}).get("gap"):
+        metadata["model_gap"] = info["gap"]  # Model.with_gap: the description's gap is stale
+    model = _model_from_arrays({k[len(prefix):]: v for k, v in arrays.items() if k.startswith(prefix)},
+                               info) if info.get("matrices") else None
+    return Branch(**fields_, status=status, method=method, harmonics=harmonics, special_points=special,
+                  metadata=metadata, residual_histories=list(histories), model=model, records=records)
+
+
+def write_archive(path, arrays: dict, meta: dict) -> Path:
+    """Write ``arrays`` and the JSON ``meta`` to the ``.npz`` file ``path`` (atomically)."""
+    path = Path(path)
+    if "metadata" in arrays:
+        raise ValueError("'metadata' is reserved for the JSON record")
+    text = json.dumps(meta, allow_nan=True, default=_json_default)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            np.savez(f, **arrays, metadata=np.array(text))
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def read_archive(path) -> tuple[dict, dict]:
+    """Read an archive written by :func:`write_archive`: (arrays, metadata dict)."""
+    path = Path(path)
+    try:
+        with np.load(path, allow_pickle=False) as f:
+            data = {k: f[k] for k in f.files}
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, AttributeError) as err:
+        raise ValueError(f"cannot read {str(path)!r}: {err}") from None
+    if "metadata" not in data:
+        raise ValueError(f"{str(path)!r} is not an mmshbm results file (no metadata record)")
+    try:
+        meta = json.loads(str(data.pop("metadata")))
+    except json.JSONDecodeError as err:
+        raise ValueError(f"{str(path)!r} has a corrupt metadata record: {err}") from None
+    if not isinstance(meta, dict):
+        raise ValueError(f"{str(path)!r} has a corrupt metadata record")
+    return data, meta
+
+
+def load(path, attach_solver: bool = False):
+    """Read a saved :class:`Branch` or :class:`~mmshbm.studies.Study`, whichever the file holds."""
+    _, meta = read_archive(path)
+    if meta.get("format") == BRANCH_FORMAT:
+        return Branch.load(path, attach_solver=attach_solver)
+    from .studies import STUDY_FORMAT, Study
+
+    if meta.get("format") == STUDY_FORMAT:
+        return Study.load(path, attach_solver=attach_solver)
+    raise ValueError(f"{str(path)!r} holds neither a Branch nor a Study (format {meta.get('format')!r})")
+
+
+def _json_default(obj):
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, Path):
+        return str(obj)
+    raise TypeError(f"cannot store {type(obj).__name__} in the metadata")

@@ -1,0 +1,699 @@
+"""Convergence studies: grids of backbone runs, frequency tables and observed rates.
+
+A study runs :func:`mmshbm.backbone` over a grid — harmonics × elements × method × any
+model parameter (a beam field such as ``gap`` or ``E``, the mesh ``grading``) or solver
+option — and collects the branches in a :class:`Study`. :meth:`Study.table` tabulates
+the frequency at chosen amplitudes, :meth:`Study.convergence` fits observed convergence
+rates in H and in the number of elements.
+
+The reference of a convergence fit is the finest run of its series (largest H, or most
+elements), not the exact solution: the rates say how fast the runs approach the finest
+one, and a rate fitted on two points is a two-point slope. Compare with
+:mod:`mmshbm.exact` for errors against the truth.
+
+Runs go through any :class:`concurrent.futures.Executor`: a local process pool by
+default, in-process when ``executor`` is None or ``"serial"``, or a Dask cluster's
+executor (``dask.distributed.Client.get_executor()``, or ``executor="dask"`` for a local
+cluster). Workers receive only picklable run descriptions (:class:`RunSpec`: beam data or
+model file or matrices, H, method, options) and return branches without their solver;
+the solver is rebuilt on the parent side when a per-point method needs it.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import itertools
+import logging
+import math
+import multiprocessing
+import time
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass, field, fields, replace
+from pathlib import Path
+
+import numpy as np
+
+from . import _validate as check
+from .results import Branch, branch_from_payload, branch_payload, read_archive, versions, write_archive
+
+__all__ = ["run_study", "figure2_study", "Study", "RunSpec", "FrequencyTable", "ConvergenceFit",
+           "STUDY_FORMAT"]
+
+log = logging.getLogger(__name__)
+
+STUDY_FORMAT = "mmshbm.Study"
+FORMAT_VERSION = 1
+#: grid coordinates that are not parameters
+_AXES = ("method", "elements", "harmonics")
+
+
+# ---------------------------------------------------------------------- runs
+@dataclass(frozen=True)
+class RunSpec:
+    """Everything a worker needs for one run; picklable, no solver or model objects.
+
+    Attributes
+    ----------
+    index : int
+        Position of the run in the study.
+    coords : dict
+        The run's grid coordinates, e.g. ``{"method": "mmshbm", "elements": 21,
+        "harmonics": 5, "gap": 0.001}``.
+    source : dict
+        How to build the model: ``{"beam": {TimoshenkoBeam fields}, "n_elements": n,
+        "grading": g}``, ``{"file": path, "gap": g or None}`` (a :meth:`Model.save_npz`
+        file) or ``{"matrices": {CSR parts}, "contact_dof", "gap", "stop_side",
+        "description"}``.
+    harmonics : int
+        H.
+    method : str
+        "mmshbm", "penalty" or "shooting".
+    max_amplitude : float or None
+        Largest amplitude, in m (``unit="m"``) or in gaps of the run's model.
+    unit : {"m", "gap"}
+        Unit of ``max_amplitude``.
+    options : dict
+        Further keyword arguments of :func:`mmshbm.backbone`.
+    """
+
+    index: int
+    coords: dict
+    source: dict
+    harmonics: int
+    method: str
+    max_amplitude: float | None
+    unit: str
+    options: dict
+
+
+def build_model(source: dict):
+    """The :class:`~mmshbm.model.Model` described by a :attr:`RunSpec.source`."""
+    from .model import Model
+
+    if "beam" in source:
+        from .fe.beam import TimoshenkoBeam
+
+        return TimoshenkoBeam(**source["beam"]).model(source["n_elements"], source["grading"])
+    if "file" in source:
+        model = Model.from_npz(source["file"])
+    elif "matrices" in source:
+        import scipy.sparse as sp
+
+        parts, mats = source["matrices"], []
+        for name in ("M", "K"):
+            d, i, p, shape = (parts[f"{name}_{q}"] for q in ("data", "indices", "indptr", "shape"))
+            mats.append(sp.csr_matrix((d, i, p), shape=tuple(int(v) for v in shape)))
+        model = Model.from_matrices(mats[0], mats[1], source["contact_dof"], source["gap"],
+                                    source["stop_side"], source.get("description"))
+    else:
+        raise ValueError(f"unknown model source with keys {sorted(source)}")
+    gap = source.get("gap")
+    return model if gap is None or gap == model.gap else model.with_gap(gap)
+
+
+def execute(spec: RunSpec) -> Branch:
+    """Run one grid point (this is what workers execute); the branch comes back without
+    its solver, which holds unpicklable FFT plans."""
+    from .api import backbone
+
+    model = build_model(spec.source)
+    max_amplitude = spec.max_amplitude
+    if max_amplitude is not None and spec.unit == "gap":
+        max_amplitude *= model.gap
+    branch = backbone(model, harmonics=spec.harmonics, method=spec.method, max_amplitude=max_amplitude,
+                      **spec.options)
+    branch.solver = None
+    return branch
+
+
+# ---------------------------------------------------------------------- study
+@dataclass(eq=False)
+class Study:
+    """The branches of a grid of runs.
+
+    Attributes
+    ----------
+    runs : list of dict
+        Grid coordinates of each run (``method``, ``elements`` for beams, ``harmonics``,
+        and every varied parameter).
+    branches : list of Branch
+        One per run, same order; solvers are rebuilt on demand.
+    metadata : dict
+        Grid definition, executor, wall time (s), versions.
+    """
+
+    runs: list
+    branches: list
+    metadata: dict = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return len(self.runs)
+
+    def __iter__(self) -> Iterator[tuple[dict, Branch]]:
+        return iter(zip(self.runs, self.branches, strict=True))
+
+    def select(self, **coords) -> list[tuple[dict, Branch]]:
+        """The (coordinates, branch) pairs whose coordinates match all of ``coords``."""
+        return [(r, b) for r, b in self if all(r.get(k) == v for k, v in coords.items())]
+
+    def branch(self, **coords) -> Branch:
+        """The one branch matching ``coords`` (e.g. ``harmonics=5, elements=21``).
+
+        Raises
+        ------
+        KeyError
+            If no run or several runs match.
+        """
+        found = self.select(**coords)
+        if len(found) != 1:
+            raise KeyError(f"{len(found)} runs match {coords}; coordinates are {self.axes}")
+        return found[0][1]
+
+    @property
+    def axes(self) -> list[str]:
+        """Names of the grid coordinates, in table order."""
+        names = [a for a in _AXES if any(a in r for r in self.runs)]
+        return names + [k for k in (self.runs[0] if self.runs else {}) if k not in names]
+
+    # ------------------------------------------------------------------ tables
+    def table(self, amplitudes, unit: str = "gap") -> FrequencyTable:
+        """Frequency (Hz) of every run at ``amplitudes``.
+
+        Parameters
+        ----------
+        amplitudes : sequence of float, shape (n_amplitudes,)
+            Tip amplitudes, in m (``unit="m"``) or in multiples of each run's gap.
+        unit : {"gap", "m"}
+
+        Returns
+        -------
+        FrequencyTable
+            ``frequency`` has shape (n_runs, n_amplitudes); NaN where a branch never
+            reaches the amplitude. The first crossing along the branch is used
+            (:meth:`Branch.frequency_at`).
+        """
+        amps = _amplitudes(amplitudes)
+        unit = _unit(unit)
+        f = np.array([[b.frequency_at(a * (_gap(b) if unit == "gap" else 1.0)) for a in amps]
+                      for b in self.branches]).reshape(len(self), len(amps))
+        return FrequencyTable(axes=self.axes, runs=[dict(r) for r in self.runs], amplitudes=amps, unit=unit,
+                              frequency=f, status=[b.status for b in self.branches])
+
+    def convergence(self, amplitudes, unit: str = "gap") -> list[ConvergenceFit]:
+        """Observed convergence rates in H and in the number of elements.
+
+        For every series of runs that differ only in ``harmonics`` (or only in
+        ``elements``) and every amplitude, the reference is the series' finest run (the
+        largest H or most elements) — not the exact solution — and the rate p is minus
+        the least-squares slope of log|f − f_ref| against log H (or log n_elements) over
+        the other runs, so that |f − f_ref| ∝ H^(−p). Runs whose difference is below
+        1e-12 f_ref or NaN are left out; fewer than two remaining runs give p = NaN.
+
+        Returns
+        -------
+        list of ConvergenceFit
+        """
+        table = self.table(amplitudes, unit)
+        fits = []
+        for vary in ("harmonics", "elements"):
+            others = [a for a in self.axes if a != vary]
+            groups: dict[tuple, list[int]] = {}
+            for i, r in enumerate(self.runs):
+                if vary in r:
+                    groups.setdefault(tuple(_hashable(r.get(a)) for a in others), []).append(i)
+            for idx in groups.values():
+                values = np.array([self.runs[i][vary] for i in idx], dtype=float)
+                if len(set(values)) < 2:
+                    continue
+                order = np.argsort(values)
+                idx = [idx[j] for j in order]
+                values = values[order]
+                fixed = {a: self.runs[idx[0]].get(a) for a in others if a in self.runs[idx[0]]}
+                for j, amp in enumerate(table.amplitudes):
+                    fits.append(ConvergenceFit.fit(vary, fixed, float(amp), table.unit, values,
+                                                   table.frequency[idx, j]))
+        return fits
+
+    def report(self, amplitudes, unit: str = "gap") -> str:
+        """Text: the frequency table and the convergence rates (what the CLI prints)."""
+        parts = [self.table(amplitudes, unit).to_text()]
+        fits = self.convergence(amplitudes, unit)
+        if fits:
+            parts.append(format_convergence(fits))
+        return "\n\n".join(parts)
+
+    def to_csv(self, path, amplitudes, unit: str = "gap") -> Path:
+        """Write :meth:`table` to ``path`` (CSV)."""
+        return self.table(amplitudes, unit).to_csv(path)
+
+    # ------------------------------------------------------------------ files
+    def save(self, path) -> Path:
+        """Write the study to one ``.npz`` archive: every branch's arrays (keys
+        ``run<i>__<name>``) and a JSON ``metadata`` record with the runs' coordinates,
+        each branch's metadata (enough to redo it) and the study's metadata."""
+        arrays, records = {}, []
+        for i, b in enumerate(self.branches):
+            a, m = branch_payload(b, prefix=f"run{i}__")
+            arrays.update(a)
+            records.append(m)
+        meta = {"format": STUDY_FORMAT, "format_version": FORMAT_VERSION, "runs": self.runs,
+                "branches": records, "metadata": self.metadata, "saved_with": versions()}
+        return write_archive(path, arrays, meta)
+
+    @classmethod
+    def load(cls, path, attach_solver: bool = False) -> Study:
+        """Read a study written by :meth:`save` (solvers rebuilt now if ``attach_solver``,
+        otherwise on demand)."""
+        arrays, meta = read_archive(path)
+        if meta.get("format") != STUDY_FORMAT:
+            raise ValueError(f"{str(path)!r} is not a saved mmshbm Study (format {meta.get('format')!r})")
+        try:
+            runs, records = list(meta["runs"]), list(meta["branches"])
+        except (KeyError, TypeError):
+            raise ValueError(f"{str(path)!r}: malformed study record") from None
+        branches = [branch_from_payload(arrays, m, prefix=f"run{i}__") for i, m in enumerate(records)]
+        if attach_solver:
+            for b in branches:
+                b.attach_solver()
+        return cls(runs=runs, branches=branches, metadata=dict(meta.get("metadata", {})))
+
+    def __repr__(self) -> str:
+        status = sum(b.completed for b in self.branches)
+        return f"Study({len(self)} runs over {self.axes}, {status} completed)"
+
+
+@dataclass
+class FrequencyTable:
+    """Frequency (Hz) of each run at chosen amplitudes.
+
+    Attributes
+    ----------
+    axes : list of str
+        Coordinate names (columns before the frequencies).
+    runs : list of dict
+        Coordinates per row.
+    amplitudes : ndarray, shape (n_amplitudes,)
+    unit : {"gap", "m"}
+        Unit of ``amplitudes``.
+    frequency : ndarray, shape (n_runs, n_amplitudes)
+        Hz; NaN where the branch never reaches the amplitude.
+    status : list of str
+        Each branch's status.
+    """
+
+    axes: list
+    runs: list
+    amplitudes: np.ndarray
+    unit: str
+    frequency: np.ndarray
+    status: list
+
+    def _amp_label(self, a: float) -> str:
+        return f"f_at_{a:g}{'gap' if self.unit == 'gap' else 'm'}_hz"
+
+    def to_csv(self, path) -> Path:
+        """Write the table (one header line; frequencies with 10 significant digits)."""
+        path = Path(path)
+        header = [*self.axes, *(self._amp_label(a) for a in self.amplitudes), "status"]
+        lines = [",".join(header)]
+        for r, f, s in zip(self.runs, self.frequency, self.status, strict=True):
+            lines.append(",".join([*(str(r.get(a, "")) for a in self.axes),
+                                   *("nan" if not np.isfinite(x) else f"{x:.10g}" for x in f), s]))
+        path.write_text("\n".join(lines) + "\n")
+        return path
+
+    def to_text(self) -> str:
+        """A fixed-width text table."""
+        unit = "gaps" if self.unit == "gap" else "m"
+        head = [*self.axes, *(f"A={a:g}" for a in self.amplitudes), "status"]
+        rows = [[*(str(r.get(a, "")) for a in self.axes),
+                 *(f"{x:.3f}" if np.isfinite(x) else "-" for x in f), s]
+                for r, f, s in zip(self.runs, self.frequency, self.status, strict=True)]
+        widths = [max(len(h), *(len(row[i]) for row in rows)) if rows else len(h) for i, h in enumerate(head)]
+        fmt = "  ".join(f"{{:>{w}}}" for w in widths)
+        title = f"Frequency (Hz) at tip amplitude A ({unit}); '-' = not reached"
+        return "\n".join([title, fmt.format(*head), *(fmt.format(*row) for row in rows)])
+
+    def __str__(self) -> str:
+        return self.to_text()
+
+
+@dataclass
+class ConvergenceFit:
+    """Observed convergence of one series of runs at one amplitude.
+
+    Attributes
+    ----------
+    vary : {"harmonics", "elements"}
+        The refined quantity.
+    fixed : dict
+        The other coordinates of the series.
+    amplitude : float
+        The amplitude (in ``unit``) the frequencies are taken at.
+    unit : {"gap", "m"}
+    values : ndarray, shape (n,)
+        H or element counts, ascending; the last is the reference.
+    frequency : ndarray, shape (n,)
+        Frequencies (Hz) at ``amplitude``.
+    difference : ndarray, shape (n,)
+        |f − f_ref| (Hz); 0 for the reference.
+    rate : float
+        p in |f − f_ref| ∝ value^(−p), least squares in log–log over the non-reference
+        runs; NaN with fewer than two usable runs.
+    n_fit : int
+        Number of runs in the fit.
+    """
+
+    vary: str
+    fixed: dict
+    amplitude: float
+    unit: str
+    values: np.ndarray
+    frequency: np.ndarray
+    difference: np.ndarray
+    rate: float
+    n_fit: int
+
+    @classmethod
+    def fit(cls, vary, fixed, amplitude, unit, values, frequency) -> ConvergenceFit:
+        values = np.asarray(values, dtype=float)
+        frequency = np.asarray(frequency, dtype=float)
+        diff = np.abs(frequency - frequency[-1])
+        use = np.isfinite(diff[:-1]) & (diff[:-1] > 1e-12 * abs(frequency[-1]))
+        if not np.isfinite(frequency[-1]):
+            use[:] = False
+        rate = float("nan")
+        if use.sum() >= 2:
+            slope = np.polyfit(np.log(values[:-1][use]), np.log(diff[:-1][use]), 1)[0]
+            rate = float(-slope)
+        return cls(vary, dict(fixed), amplitude, unit, values, frequency, diff, rate, int(use.sum()))
+
+    @property
+    def reference(self) -> float:
+        """The finest value of the series (the reference run)."""
+        return float(self.values[-1])
+
+
+def format_convergence(fits: Sequence[ConvergenceFit]) -> str:
+    """Text table of convergence fits."""
+    lines = ["Observed convergence rate p, |f - f_ref| ~ x^(-p), x = H or elements; reference = the finest "
+             "run of each series (not the exact solution); p from a log-log least-squares fit "
+             "(two points: a two-point slope)"]
+    head = ("vary", "fixed", "A", "x", "|f - f_ref| (Hz)", "p")
+    rows = []
+    for fit in fits:
+        fixed = " ".join(f"{k}={v}" for k, v in fit.fixed.items())
+        xs = ",".join(f"{v:g}" for v in fit.values)
+        diffs = ",".join("nan" if not np.isfinite(d) else f"{d:.3g}" for d in fit.difference[:-1])
+        unit = "gap" if fit.unit == "gap" else "m"
+        rows.append((fit.vary, fixed, f"{fit.amplitude:g} {unit}", xs, diffs,
+                     "-" if math.isnan(fit.rate) else f"{fit.rate:.2f}"))
+    widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(head)]
+    fmt = "  ".join(f"{{:<{w}}}" for w in widths)
+    return "\n".join([lines[0], fmt.format(*head), *(fmt.format(*r) for r in rows)])
+
+
+# ---------------------------------------------------------------------- running
+def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
+              elements: Sequence[int] | None = None, methods: Sequence[str] = ("mmshbm",),
+              params: Mapping[str, Sequence] | None = None, grading: float = 10.0,
+              max_amplitude: float | None = None, unit: str = "m", executor="process", workers: int = 2,
+              verbose: bool = False, **options) -> Study:
+    """Run :func:`mmshbm.backbone` over a grid and collect the branches.
+
+    Parameters
+    ----------
+    beam : TimoshenkoBeam, optional
+        The beam (default :func:`mmshbm.default_beam`); not with ``model``.
+    model : Model or path, optional
+        A user model instead of a beam: a :class:`~mmshbm.model.Model` (its matrices are
+        sent to the workers) or a ``.npz`` file of :meth:`Model.save_npz` (its path is
+        sent). ``elements`` does not apply; ``params`` may vary ``gap`` only.
+    harmonics : sequence of int
+        Values of H.
+    elements : sequence of int, optional
+        Element counts of the beam (default (8, 21)).
+    methods : sequence of str
+        Methods of :func:`mmshbm.backbone`.
+    params : mapping of str to sequence, optional
+        Further grid axes: beam fields (``gap`` (m), ``E`` (Pa), ``rho`` (kg/m³), ...),
+        ``grading``, or any option of :func:`mmshbm.backbone` (e.g. ``n_samples``,
+        ``penalty_stiffness``).
+    grading : float
+        Mesh grading of the beam (when not varied).
+    max_amplitude : float, optional
+        Largest amplitude per run, in m (``unit="m"``) or gaps (``unit="gap"``); default
+        10 gaps.
+    unit : {"m", "gap"}
+        Unit of ``max_amplitude``.
+    executor : "process", "serial", None, "dask", concurrent.futures.Executor or dask Client
+        Where the runs go: a local process pool of ``workers`` processes (default), this
+        process (None / "serial"), a local Dask cluster ("dask"), or any executor
+        (e.g. ``client.get_executor()``; not shut down here).
+    workers : int
+        Processes of the pool or local Dask cluster.
+    verbose : bool
+        Progress bar (tqdm; also hidden when not on a terminal).
+    **options
+        Passed to every :func:`mmshbm.backbone` call (continuation and method options).
+
+    Returns
+    -------
+    Study
+        Runs in grid order (method, elements, harmonics, then ``params`` in the given
+        order), whatever order they finished in.
+
+    Raises
+    ------
+    ValueError, TypeError
+        For a bad grid, executor or option; a run's own input error is re-raised.
+    """
+    specs = grid_specs(beam, model=model, harmonics=harmonics, elements=elements, methods=methods,
+                       params=params, grading=grading, max_amplitude=max_amplitude, unit=unit, **options)
+    workers = check.integer("workers", workers, minimum=1)
+    t0 = time.perf_counter()
+    branches, kind = _run_all(specs, executor, workers, verbose)
+    elapsed = time.perf_counter() - t0
+    parent_models = _parent_models(model, specs)
+    for spec, branch in zip(specs, branches, strict=True):
+        if parent_models is not None:
+            branch.model = parent_models[spec.index]
+    grid = {"harmonics": [int(h) for h in harmonics], "methods": list(methods),
+            "params": {k: list(v) for k, v in dict(params or {}).items()}, "options": options,
+            "max_amplitude": max_amplitude, "unit": unit}
+    if model is None:
+        grid["elements"] = [int(n) for n in (elements or (8, 21))]
+        grid["grading"] = grading
+    log.info("study: %d runs in %.2f s (%s)", len(specs), elapsed, kind)
+    return Study(runs=[dict(s.coords) for s in specs], branches=branches,
+                 metadata={"grid": grid, "executor": kind, "workers": workers, "elapsed_s": elapsed,
+                           "model_file": str(model) if isinstance(model, str | Path) else None})
+
+
+def grid_specs(beam=None, *, model=None, harmonics=(1, 3, 5), elements=None, methods=("mmshbm",),
+               params=None, grading=10.0, max_amplitude=None, unit="m", **options) -> list[RunSpec]:
+    """The :class:`RunSpec` list of :func:`run_study` (validated, nothing computed)."""
+    from .api import METHODS
+    from .fe.beam import TimoshenkoBeam, default_beam
+    from .model import Model
+
+    unit = _unit(unit)
+    if max_amplitude is not None:
+        max_amplitude = check.positive("max_amplitude", max_amplitude)
+    hs = _int_list("harmonics", harmonics, 1)
+    for m in _list("methods", methods):
+        if m not in METHODS:
+            raise ValueError(f"unknown method {m!r}; choose from {sorted(METHODS)}")
+    params = dict(params or {})
+    for name, values in params.items():
+        if name in _AXES:
+            raise ValueError(f"{name!r} is a grid axis of its own, not a parameter")
+        params[name] = _list(f"params[{name!r}]", values)
+    beam_fields = {f.name for f in fields(TimoshenkoBeam)}
+
+    if model is not None:
+        if beam is not None:
+            raise ValueError("pass either beam or model, not both")
+        if elements is not None:
+            raise ValueError("elements applies to beams only, not to a user model")
+        bad = [k for k in params if k in (beam_fields | {"grading"}) - {"gap"}]
+        if bad:
+            raise ValueError(f"a user model can vary only 'gap' of its own parameters, got {bad}")
+        if isinstance(model, str | Path):
+            if not Path(model).is_file():
+                raise ValueError(f"model file {str(model)!r} does not exist")
+            base = {"file": str(Path(model).resolve())}
+        elif isinstance(model, Model):
+            base = _matrix_source(model)
+        else:
+            raise TypeError(f"model must be an mmshbm.Model or a .npz path, got {type(model).__name__}")
+        axes = [("method", list(methods)), ("harmonics", hs)]
+    else:
+        beam = default_beam() if beam is None else beam
+        if not isinstance(beam, TimoshenkoBeam):
+            raise TypeError(f"beam must be a TimoshenkoBeam, got {type(beam).__name__}")
+        check.positive("grading", grading)
+        ns = _int_list("elements", (8, 21) if elements is None else elements, 1)
+        axes = [("method", list(methods)), ("elements", ns), ("harmonics", hs)]
+    axes += list(params.items())
+
+    specs = []
+    for index, combo in enumerate(itertools.product(*(v for _, v in axes))):
+        coords = dict(zip((k for k, _ in axes), combo, strict=True))
+        run_options = dict(options)
+        if model is not None:
+            source = dict(base)
+            if "gap" in coords:
+                source["gap"] = check.non_negative("gap", coords["gap"])
+        else:
+            changes = {k: v for k, v in coords.items() if k in beam_fields}
+            try:
+                run_beam = replace(beam, **changes)
+            except (TypeError, ValueError) as err:
+                raise ValueError(f"bad beam parameter in {changes}: {err}") from None
+            source = {"beam": {f.name: getattr(run_beam, f.name) for f in fields(TimoshenkoBeam)},
+                      "n_elements": coords["elements"], "grading": float(coords.get("grading", grading))}
+        for k, v in coords.items():
+            if k not in _AXES and k not in beam_fields and k != "grading":
+                run_options[k] = v
+        specs.append(RunSpec(index=index, coords=coords, source=source, harmonics=coords["harmonics"],
+                             method=coords["method"], max_amplitude=max_amplitude, unit=unit,
+                             options=run_options))
+    return specs
+
+
+def figure2_study(beam=None, harmonics=(1, 3, 5), elements=(8, 21), executor="process", workers: int = 2,
+                  verbose: bool = False, **options) -> Study:
+    """The runs of the seed paper's Figure 2: H in {1, 3, 5} × {8, 21} elements, MMS-HBM,
+    up to 10 gaps (see :func:`mmshbm.plotting.plot_figure2`)."""
+    return run_study(beam, harmonics=harmonics, elements=elements, executor=executor, workers=workers,
+                     verbose=verbose, **options)
+
+
+def _run_all(specs: list[RunSpec], executor, workers: int, verbose: bool) -> tuple[list[Branch], str]:
+    from tqdm.auto import tqdm
+
+    pool, close, kind = _open_executor(executor, workers)
+    out: list[Branch | None] = [None] * len(specs)
+    bar = tqdm(total=len(specs), desc="study", unit="run", disable=None if verbose else True, leave=False)
+    try:
+        if pool is None:
+            for spec in specs:
+                out[spec.index] = execute(spec)
+                _progress(bar, spec, out[spec.index])
+        else:
+            futures = {pool.submit(execute, spec): spec for spec in specs}
+            try:
+                for fut in cf.as_completed(futures):
+                    spec = futures[fut]
+                    out[spec.index] = fut.result()
+                    _progress(bar, spec, out[spec.index])
+            except BaseException:
+                for fut in futures:
+                    fut.cancel()
+                raise
+    finally:
+        bar.close()
+        if close is not None:
+            close()
+    return out, kind
+
+
+def _progress(bar, spec: RunSpec, branch: Branch) -> None:
+    log.debug("run %d %s: %r", spec.index, spec.coords, branch)
+    bar.set_postfix_str(" ".join(f"{k}={v}" for k, v in spec.coords.items()), refresh=False)
+    bar.update(1)
+
+
+def _open_executor(executor, workers: int):
+    """(executor or None, closer or None, description) for the ``executor`` argument."""
+    if executor is None or executor == "serial":
+        return None, None, "serial"
+    if executor == "process":
+        pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+        return pool, pool.shutdown, f"process pool ({workers} workers)"
+    if executor == "dask":
+        try:
+            from dask.distributed import Client, LocalCluster
+        except ImportError:
+            raise ValueError("executor='dask' needs dask: pip install 'mmshbm[dask]'") from None
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                               dashboard_address=None)
+        client = Client(cluster)
+
+        def close():
+            client.close()
+            cluster.close()
+
+        return client.get_executor(), close, f"dask local cluster ({workers} workers)"
+    if isinstance(executor, cf.Executor):
+        return executor, None, type(executor).__name__
+    if hasattr(executor, "get_executor"):  # a dask.distributed.Client
+        address = getattr(getattr(executor, "scheduler", None), "address", "")
+        return executor.get_executor(), None, f"dask client {address}".strip()
+    raise TypeError("executor must be 'process', 'serial', None, 'dask', a concurrent.futures.Executor "
+                    f"or a dask Client, got {executor!r}")
+
+
+def _parent_models(model, specs: list[RunSpec]):
+    """For user models: the Model of each run on the parent side (so that saved files
+    carry the matrices); None for beams (their description rebuilds them)."""
+    if model is None:
+        return None
+    cache: dict = {}
+    out = {}
+    for s in specs:
+        key = s.source.get("gap")
+        if key not in cache:
+            cache[key] = build_model(s.source)
+        out[s.index] = cache[key]
+    return out
+
+
+def _matrix_source(model) -> dict:
+    mats = {}
+    for name, A in (("M", model.M.tocsr()), ("K", model.K.tocsr())):
+        mats.update({f"{name}_data": A.data, f"{name}_indices": A.indices, f"{name}_indptr": A.indptr,
+                     f"{name}_shape": np.array(A.shape)})
+    return {"matrices": mats, "contact_dof": int(model.contact_dof), "gap": float(model.gap),
+            "stop_side": int(model.stop_side), "description": dict(model.description)}
+
+
+def _gap(branch: Branch) -> float:
+    meta = branch.metadata
+    gap = meta.get("model_gap", meta.get("model", {}).get("gap"))
+    if gap is None and branch.model is not None:
+        gap = branch.model.gap
+    if gap is None or not gap > 0:
+        raise ValueError("amplitudes in gaps need a model with a positive gap; use unit='m'")
+    return float(gap)
+
+
+def _unit(unit: str) -> str:
+    if unit not in ("m", "gap"):
+        raise ValueError(f"unit must be 'm' or 'gap', got {unit!r}")
+    return unit
+
+
+def _amplitudes(amplitudes) -> np.ndarray:
+    amps = np.atleast_1d(np.asarray(amplitudes, dtype=float))
+    if amps.ndim != 1 or len(amps) == 0 or not np.all(np.isfinite(amps)) or np.any(amps <= 0):
+        raise ValueError(f"amplitudes must be positive finite numbers, got {amplitudes!r}")
+    return amps
+
+
+def _list(name: str, values) -> list:
+    if isinstance(values, str | bytes) or not isinstance(values, Sequence | np.ndarray):
+        raise TypeError(f"{name} must be a sequence of values, got {values!r}")
+    values = list(values)
+    if not values:
+        raise ValueError(f"{name} is empty")
+    return [v.item() if isinstance(v, np.generic) else v for v in values]
+
+
+def _int_list(name: str, values, minimum: int) -> list[int]:
+    return [check.integer(name, v, minimum=minimum) for v in _list(name, values)]
+
+
+def _hashable(v):
+    return tuple(v) if isinstance(v, list) else v
