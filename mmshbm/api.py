@@ -3,10 +3,14 @@
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import importlib
+import inspect
 import logging
 import platform
 import time
+from collections.abc import Mapping
+from pathlib import Path
 
 import numpy as np
 
@@ -31,7 +35,16 @@ _CONTINUATION_FIELDS = {f.name for f in dataclasses.fields(ContinuationOptions)}
 
 def make_problem(model: Model, method: str = "mmshbm", **options):
     """Build the continuation problem of ``method`` on ``model`` (``options`` go to its
-    constructor)."""
+    constructor).
+
+    Raises
+    ------
+    ValueError
+        For an unknown method name.
+    TypeError
+        For an option the method's constructor does not take (named, with the nearest
+        valid name).
+    """
     if not isinstance(method, str) or method not in METHODS:
         raise ValueError(f"unknown method {method!r}; choose one of {sorted(METHODS)}")
     module, cls = METHODS[method].split(":")
@@ -39,12 +52,42 @@ def make_problem(model: Model, method: str = "mmshbm", **options):
         problem_class = getattr(importlib.import_module(module), cls)
     except ImportError as err:  # pragma: no cover - a baseline not installed
         raise ValueError(f"method {method!r} is not available: {err}") from None
+    _check_option_names(method, problem_class, options)
     return problem_class(model, **options)
+
+
+def method_options(method: str) -> list[str]:
+    """Names of the options the constructor of ``method``'s problem takes (besides the model)."""
+    module, cls = METHODS[method].split(":")
+    problem_class = getattr(importlib.import_module(module), cls)
+    params = list(inspect.signature(problem_class).parameters.values())[1:]
+    return [p.name for p in params if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
+
+
+def _check_option_names(method: str, problem_class, options: dict) -> None:
+    params = list(inspect.signature(problem_class).parameters.values())[1:]
+    if any(p.kind == p.VAR_KEYWORD for p in params):
+        return
+    valid = [p.name for p in params if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
+    unknown = [k for k in options if k not in valid]
+    if unknown:
+        everything = sorted(set(valid) | _CONTINUATION_FIELDS | set(_BACKBONE_ARGUMENTS))
+        hints = []
+        for name in unknown:
+            close = difflib.get_close_matches(name, everything, n=1)
+            hints.append(f"{name!r}" + (f" (did you mean {close[0]!r}?)" if close else ""))
+        raise TypeError(f"unknown option{'s' if len(unknown) > 1 else ''} {', '.join(hints)} for method "
+                        f"{method!r}; method options: {valid}; continuation options: "
+                        f"{sorted(_CONTINUATION_FIELDS)}")
+
+
+_BACKBONE_ARGUMENTS = ("harmonics", "method", "max_amplitude", "start_amplitude", "bounds", "verbose",
+                       "callback", "checkpoint", "resume")
 
 
 def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_amplitude: float | None = None,
              *, start_amplitude: float | None = None, bounds: dict | None = None, verbose: bool = False,
-             callback=None, **options) -> Branch:
+             callback=None, checkpoint=None, resume=None, **options) -> Branch:
     """Compute a nonlinear mode (backbone curve) of ``model``.
 
     Parameters
@@ -66,19 +109,40 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
         Show a progress bar (tqdm) with Ω, amplitude, ds and Newton iterations.
     callback : callable(u, record), optional
         Called with every converged point.
+    checkpoint : str or Path, optional
+        Write every converged point to this file as it comes (JSON lines, see
+        :mod:`mmshbm.checkpoint`); a killed or interrupted run leaves a valid file.
+    resume : str or Path, optional
+        Go on from the last point of this checkpoint file, with its tangent and step:
+        the result equals the uninterrupted run point for point. The model, method, H,
+        N and method options must be those of the file; continuation options and
+        bounds may differ (e.g. a larger ``max_steps`` extends a finished run). Pass
+        the same path as ``checkpoint`` to keep appending to it.
     **options
         Continuation options (:class:`ContinuationOptions`: ``ds``, ``ds_min``,
         ``ds_max``, ``max_steps``, ``newton_tol``, ``max_newton``, ...) and method options
         (MMS-HBM: ``n_samples``, ``r``, ``mode``, ``backend``; penalty:
-        ``penalty_stiffness``; shooting: ``steps_per_period``).
+        ``penalty_stiffness``; shooting: ``steps_per_period``). A name that is neither
+        raises TypeError.
 
     Returns
     -------
     Branch
         Every converged point, with ``status`` saying why the branch stopped.
+
+    Raises
+    ------
+    TypeError, ValueError
+        For bad input, naming the offending argument and value.
     """
     if not isinstance(model, Model):
         raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
+    if not isinstance(method, str) or method not in METHODS:
+        raise ValueError(f"unknown method {method!r}; choose one of {sorted(METHODS)}")
+    if method != "shooting":
+        check.integer("harmonics", harmonics, minimum=1)
+    if callback is not None and not callable(callback):
+        raise TypeError(f"callback must be callable, got {type(callback).__name__} {callback!r}")
     gap = model.gap
     if max_amplitude is None:
         if gap == 0:
@@ -91,6 +155,8 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     if start_amplitude >= max_amplitude:
         raise ValueError(f"start_amplitude ({start_amplitude:g} m) must be below max_amplitude "
                          f"({max_amplitude:g} m)")
+    if bounds is not None and not isinstance(bounds, Mapping):
+        raise TypeError(f"bounds must be a dict name -> (lo, hi), got {type(bounds).__name__} {bounds!r}")
     cont = {k: options.pop(k) for k in list(options) if k in _CONTINUATION_FIELDS}
     all_bounds = {"amplitude": (0.0, max_amplitude)}
     for name, bound in dict(bounds or {}).items():
@@ -99,7 +165,27 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     copts = ContinuationOptions(**cont)
     if method != "shooting":
         options["harmonics"] = harmonics
+    checkpoint = _path_argument("checkpoint", checkpoint)
+    resume = _path_argument("resume", resume)
     problem = make_problem(model, method, **options)
+    header = _checkpoint_header(model, method, problem, options)
+
+    state, restored, previous = None, [], None
+    if resume is not None:
+        from .checkpoint import read_checkpoint
+
+        previous = read_checkpoint(resume)
+        _check_resumable(previous.header, header, resume)
+        state = previous.state()
+        restored = previous.points
+        log.info("resuming %s from point %d of %s", method, len(restored) - 1, resume)
+    writer = None
+    if checkpoint is not None:
+        from .checkpoint import CheckpointWriter
+
+        writer = CheckpointWriter(checkpoint, {**header, "continuation": _jsonable(dataclasses.asdict(copts)),
+                                               "start_amplitude": start_amplitude,
+                                               "max_amplitude": max_amplitude}, restored)
 
     progress = None
     if verbose:
@@ -108,11 +194,20 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
         progress = tqdm(desc=f"{method} backbone", unit="pt", total=copts.max_steps + 1, leave=False)
     t0 = time.perf_counter()
     try:
-        res = continue_branch(problem, problem.linear_point(start_amplitude), problem.initial_tangent(),
-                              copts, callback=callback, progress=progress)
+        if previous is not None and _finished(previous, copts):
+            res = _finished_result(state, previous.terminal)
+        else:
+            res = continue_branch(problem, None if state else problem.linear_point(start_amplitude),
+                                  None if state else problem.initial_tangent(), copts, callback=callback,
+                                  progress=progress, resume=state,
+                                  on_point=writer.point if writer is not None else None)
+        if writer is not None:
+            writer.end(res.status)
     finally:
         if progress is not None:
             progress.close()
+        if writer is not None:
+            writer.close()
     elapsed = time.perf_counter() - t0
     rec = res.records
     n = len(res.u)
@@ -127,19 +222,85 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
         if len(above) and above[0] > 0:
             special.insert(1, ("grazing", int(above[0])))
     log.info("%s backbone: %d points, status %s, %.3f s", method, n, res.status, elapsed)
+    metadata = {
+        "model": model.description, "method": method, "harmonics": int(getattr(problem, "H", 0)),
+        "n_samples": int(getattr(problem, "N", 0)), "max_amplitude": max_amplitude,
+        "start_amplitude": start_amplitude, "method_options": _jsonable(options),
+        "continuation": _jsonable(dataclasses.asdict(copts)), "elapsed_s": elapsed,
+        "python": platform.python_version(), "numpy": np.__version__,
+    }
+    if checkpoint is not None:
+        metadata["checkpoint"] = str(checkpoint)
+    if resume is not None:
+        metadata["resumed_from"] = str(resume)
+        metadata["resumed_points"] = len(restored)
+    extra = {}
+    if _BRANCH_HAS_RECORDS:
+        extra["records"] = {k: v for k, v in rec.items() if k not in _BRANCH_COLUMNS}
     return Branch(
         frequency=column("frequency"), amplitude=amp, energy=column("energy"),
         contact_force_max=column("contact_force_max"), newton_iterations=res.newton_iterations,
         step_size=res.step_size, states=res.u, status=res.status, method=method,
-        harmonics=int(getattr(problem, "H", 0)), special_points=special,
-        metadata={
-            "model": model.description, "method": method, "harmonics": int(getattr(problem, "H", 0)),
-            "n_samples": int(getattr(problem, "N", 0)), "max_amplitude": max_amplitude,
-            "start_amplitude": start_amplitude, "method_options": _jsonable(options),
-            "continuation": _jsonable(dataclasses.asdict(copts)), "elapsed_s": elapsed,
-            "python": platform.python_version(), "numpy": np.__version__,
-        },
-        solver=problem, residual_histories=res.residual_histories)
+        harmonics=int(getattr(problem, "H", 0)), special_points=special, metadata=metadata,
+        solver=problem, residual_histories=res.residual_histories, **extra)
+
+
+_BRANCH_COLUMNS = ("frequency", "amplitude", "energy", "contact_force_max")
+_BRANCH_HAS_RECORDS = "records" in {f.name for f in dataclasses.fields(Branch)}
+
+
+def _path_argument(name: str, value) -> Path | None:
+    if value is None:
+        return None
+    if not isinstance(value, str | Path) or str(value) == "":
+        raise TypeError(f"{name} must be a file path (str or Path), got {type(value).__name__} {value!r}")
+    return Path(value)
+
+
+def _checkpoint_header(model: Model, method: str, problem, options: dict) -> dict:
+    """What fixes the branch: a resumed run must agree on all of it."""
+    from .checkpoint import model_fingerprint
+
+    resolved = {}
+    for attr in ("H", "N", "r", "mode", "penalty_stiffness", "steps_per_period"):
+        value = getattr(problem, attr, None)
+        if isinstance(value, int | float | np.number) and not isinstance(value, bool):
+            resolved[attr] = value.item() if isinstance(value, np.generic) else value
+    return {"method": method, "n_unknowns": int(problem.n_unknowns), "model": model_fingerprint(model),
+            "model_description": model.description, "solver": resolved,
+            "method_options": _jsonable({k: v for k, v in options.items()
+                                         if k not in ("harmonics", "n_samples", "r", "mode")})}
+
+
+def _check_resumable(stored: dict, current: dict, path) -> None:
+    for key in ("method", "n_unknowns", "model", "solver", "method_options"):
+        if stored.get(key) != current[key]:
+            what = "the model's matrices, contact DOF, gap or stop side" if key == "model" else key
+            raise ValueError(f"cannot resume from {str(path)!r}: {what} differ(s) from this run "
+                             f"(file: {stored.get(key)!r}, now: {current[key]!r})")
+
+
+def _finished(previous, copts: ContinuationOptions) -> bool:
+    """True when the file's branch ended on a bound that still applies."""
+    terminal = previous.terminal
+    if not terminal or not terminal.startswith("bound:"):
+        return terminal == "start outside bounds"
+    name = terminal.split(":", 1)[1]
+    stored = previous.header.get("continuation", {}).get("bounds", {}).get(name)
+    now = dict(copts.bounds).get(name)
+    return stored is not None and now is not None and [float(b) for b in stored] == [float(b) for b in now]
+
+
+def _finished_result(state, status):
+    from .continuation import ContinuationResult
+
+    recs = state.records
+    return ContinuationResult(
+        u=np.array(state.u), records={k: np.array([r[k] for r in recs]) for k in recs[0]},
+        newton_iterations=np.array(state.newton_iterations, dtype=int),
+        step_size=np.array(state.step_size, dtype=float), residual_histories=state.residual_histories,
+        special_points=list(state.special_points) + [("endpoint", len(state.u) - 1)], status=status,
+        tangent=state.tangent, next_ds=state.ds, steps=state.steps)
 
 
 def _jsonable(d: dict) -> dict:

@@ -30,7 +30,8 @@ import scipy.sparse.linalg as spla
 
 from . import _validate as check
 
-__all__ = ["ContinuationOptions", "ContinuationProblem", "ContinuationResult", "continue_branch", "newton"]
+__all__ = ["ContinuationOptions", "ContinuationProblem", "ContinuationResult", "ContinuationState",
+           "continue_branch", "newton"]
 
 log = logging.getLogger(__name__)
 
@@ -125,7 +126,7 @@ class ContinuationResult:
     u : ndarray, shape (n_points, n)
         Scaled unknowns per point.
     records : dict[str, ndarray]
-        Monitored quantities per point (each shape (n_points,)).
+        Monitored quantities per point (each shape (n_points,) or (n_points, ...)).
     newton_iterations : ndarray of int, shape (n_points,)
     step_size : ndarray, shape (n_points,)
         Arclength step that led to each point (0 for the first).
@@ -136,6 +137,12 @@ class ContinuationResult:
     status : str
         Why the branch stopped: "max_steps", "bound:<name>", "ds_min: ...",
         "interrupted", "start failed: ...".
+    tangent : ndarray, shape (n,) or None
+        Unit tangent at the last point (None if no point converged).
+    next_ds : float
+        The step the driver would have tried next.
+    steps : int
+        Continuation steps taken (points after the first).
     """
 
     u: np.ndarray
@@ -145,6 +152,44 @@ class ContinuationResult:
     residual_histories: list
     special_points: list
     status: str
+    tangent: np.ndarray | None = None
+    next_ds: float = math.nan
+    steps: int = 0
+
+
+@dataclass
+class ContinuationState:
+    """Everything the driver needs to go on from its last accepted point, as if it had
+    never stopped (what a checkpoint file stores; see :mod:`mmshbm.checkpoint`).
+
+    Attributes
+    ----------
+    u : list of ndarray, each shape (n,)
+        Scaled unknowns of the points so far.
+    records : list of dict
+        Monitored quantities per point.
+    newton_iterations : list of int
+    step_size : list of float
+    residual_histories : list of ndarray
+    special_points : list of (str, int)
+        Special points so far (no "endpoint").
+    tangent : ndarray, shape (n,)
+        Unit tangent at the last point.
+    ds : float
+        The step to try next.
+    steps : int
+        Continuation steps taken so far.
+    """
+
+    u: list
+    records: list
+    newton_iterations: list
+    step_size: list
+    residual_histories: list
+    special_points: list
+    tangent: np.ndarray
+    ds: float
+    steps: int
 
 
 class _Failure(Exception):
@@ -164,7 +209,9 @@ def newton(problem: ContinuationProblem, u: np.ndarray, tangent: np.ndarray, u_p
     for it in range(max_iter + 1):
         try:
             R, J = problem.evaluate(u, jacobian=True)
-        except (ArithmeticError, np.linalg.LinAlgError, ValueError) as err:
+        except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError) as err:
+            # ArithmeticError includes condense.SingularDynamicStiffness (kΩ on a pole);
+            # RuntimeError is what SuperLU raises for an exactly singular matrix
             raise _Failure(f"residual failed: {err}") from None
         arc = float(tangent @ (u - u_pred))
         norm = max(float(np.max(np.abs(R))) if R.size else 0.0, abs(arc))
@@ -211,7 +258,8 @@ def _tangent(J, t_prev: np.ndarray) -> np.ndarray:
 def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray,
                     options: ContinuationOptions | None = None,
                     callback: Callable[[np.ndarray, dict], None] | None = None,
-                    progress=None) -> ContinuationResult:
+                    progress=None, *, resume: ContinuationState | None = None,
+                    on_point: Callable[[dict], None] | None = None) -> ContinuationResult:
     """Follow the branch of ``problem`` from ``u0`` in the direction ``t0``.
 
     Parameters
@@ -223,63 +271,99 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
         Initial direction; the first tangent is oriented along it.
     options : ContinuationOptions
     callback : callable(u, record), optional
-        Called with every accepted point (e.g. to checkpoint it).
+        Called with every accepted point.
     progress : tqdm-like, optional
         Object with ``update(1)`` and ``set_postfix(**kw)``.
+    resume : ContinuationState, optional
+        Go on from this state (``u0`` and ``t0`` are then ignored): the points it holds
+        are kept, and the rest of the branch is the one an uninterrupted run computes,
+        point for point (the driver is deterministic given u, tangent, ds and steps).
+    on_point : callable(dict), optional
+        Called with the full driver state of every accepted point (keys ``index``,
+        ``u``, ``tangent``, ``ds``, ``ds_next``, ``steps``, ``newton``, ``history``,
+        ``record``, ``special`` (special points at this index), ``status`` (the
+        terminal status if this point ends the branch, else None)); a checkpoint
+        writer. Exceptions other than KeyboardInterrupt propagate.
 
     Returns
     -------
     ContinuationResult
-        Never raises for a failing branch: the status says why it stopped.
+        Never raises for a failing branch: the status says why it stopped. Raises
+        ValueError if ``options.bounds`` names a quantity the problem does not monitor.
     """
     opt = options or ContinuationOptions()
-    t0 = np.asarray(t0, dtype=float)
-    t0 = t0 / np.linalg.norm(t0)
-    us, recs, nits, dss, hists, special = [], [], [], [], [], [("start", 0)]
+    if resume is None:
+        us, recs, nits, dss, hists, special = [], [], [], [], [], [("start", 0)]
+    else:
+        us = [np.asarray(v, dtype=float) for v in resume.u]
+        recs, nits, dss = list(resume.records), list(resume.newton_iterations), list(resume.step_size)
+        hists = list(resume.residual_histories)
+        special = [tuple(sp_) for sp_ in resume.special_points if sp_[0] != "endpoint"]
+        if not us:
+            raise ValueError("resume holds no point")
+    state = {"t": None, "ds": opt.ds, "steps": 0}
 
-    def accept(u, nit, ds, hist):
-        rec = problem.monitor(u)
+    def accept(u, nit, ds, hist, rec, t, ds_next, steps, new_special=(), terminal=None):
         us.append(u.copy())
         recs.append(rec)
         nits.append(nit)
         dss.append(ds)
         hists.append(hist)
+        special.extend(new_special)
+        state.update(t=t, ds=ds_next, steps=steps)
+        if on_point is not None:
+            on_point({"index": len(us) - 1, "u": u, "tangent": t, "ds": ds, "ds_next": ds_next,
+                      "steps": steps, "newton": nit, "history": hist, "record": rec,
+                      "special": list(new_special), "status": terminal})
         if callback is not None:
             callback(u, rec)
         if progress is not None:
             progress.update(1)
             progress.set_postfix({k: f"{v:.4g}" for k, v in rec.items() if k in ("frequency", "amplitude")}
                                  | {"ds": f"{ds:.2g}", "newton": nit})
-        return rec
 
     def result(status):
         special.append(("endpoint", len(us) - 1))
         keys = recs[0].keys() if recs else ()
         return ContinuationResult(
             u=np.array(us), records={k: np.array([r[k] for r in recs]) for k in keys},
-            newton_iterations=np.array(nits, dtype=int), step_size=np.array(dss),
-            residual_histories=hists, special_points=special, status=status)
+            newton_iterations=np.array(nits, dtype=int), step_size=np.array(dss, dtype=float),
+            residual_histories=hists, special_points=special, status=status, tangent=state["t"],
+            next_ds=float(state["ds"]), steps=int(state["steps"]))
 
     try:
-        u, nit, hist, J = newton(problem, np.asarray(u0, dtype=float), t0, np.asarray(u0, dtype=float),
-                                 opt.newton_tol, opt.max_newton, opt.step_tol)
-        t = _tangent(J, t0)
-    except _Failure as err:
-        return result(f"start failed: {err}")
-    accept(u, nit, 0.0, hist)
-    if _outside(recs[-1], opt.bounds):
-        return result("start outside bounds")
-
-    ds = opt.ds
-    status = "max_steps"
-    try:
-        step = 0
+        if resume is None:
+            t0 = np.asarray(t0, dtype=float)
+            t0 = t0 / np.linalg.norm(t0)
+            try:
+                u, nit, hist, J = newton(problem, np.asarray(u0, dtype=float), t0,
+                                         np.asarray(u0, dtype=float), opt.newton_tol, opt.max_newton,
+                                         opt.step_tol)
+                t = _tangent(J, t0)
+                rec = _monitor(problem, u)
+            except _Failure as err:
+                return result(f"start failed: {err}")
+            _check_bound_names(opt.bounds, rec)
+            outside = _outside(rec, opt.bounds)
+            terminal = "start outside bounds" if outside else None
+            accept(u, nit, 0.0, hist, rec, t, opt.ds, 0, terminal=terminal)
+            if terminal:
+                return result(terminal)
+            ds, step = opt.ds, 0
+        else:
+            u = us[-1]
+            t = np.asarray(resume.tangent, dtype=float)
+            ds, step = float(resume.ds), int(resume.steps)
+            state.update(t=t, ds=ds, steps=step)
+            _check_bound_names(opt.bounds, recs[-1])
+        status = "max_steps"
         while step < opt.max_steps:
             try:
                 u_new, nit, hist, J = _corrector(problem, u, t, ds, opt)
                 t_new = _tangent(J, t)
                 if t_new @ t < math.cos(opt.max_angle) and ds > opt.corner_ds:
                     raise _Failure("tangent turned too far")
+                rec = _monitor(problem, u_new)
             except _Failure as err:
                 ds *= 0.5
                 log.debug("step failed (%s); ds -> %g", err, ds)
@@ -288,23 +372,39 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
                     break
                 continue
             step += 1
-            rec = problem.monitor(u_new)
             crossed = _outside(rec, opt.bounds)
             if crossed:
-                u_new, nit, hist = _refine_onto_bound(problem, u, t, ds, crossed, recs[-1], rec, opt,
-                                                      (u_new, nit, hist))
-                accept(u_new, nit, ds, hist)
-                special.append((f"bound:{crossed[0]}", len(us) - 1))
+                u_new, nit, hist, rec, t_new = _refine_onto_bound(problem, u, t, ds, crossed, recs[-1], rec,
+                                                                  opt, (u_new, nit, hist, rec, t_new))
                 status = f"bound:{crossed[0]}"
+                accept(u_new, nit, ds, hist, rec, t_new, ds, step, [(status, len(us))], terminal=status)
                 break
+            new_special = []
             if t_new[-1] * t[-1] < 0 and min(abs(t_new[-1]), abs(t[-1])) > 1e-6:
-                special.append(("fold", len(us)))
-            accept(u_new, nit, ds, hist)
-            u, t = u_new, t_new
+                new_special.append(("fold", len(us)))
+            ds_prev = ds
             ds = min(opt.ds_max, ds * (1 + opt.growth * ((opt.max_newton - nit) / opt.max_newton) ** 2))
+            accept(u_new, nit, ds_prev, hist, rec, t_new, ds, step, new_special)
+            u, t = u_new, t_new
     except KeyboardInterrupt:
         status = "interrupted"
     return result(status)
+
+
+def _monitor(problem, u) -> dict:
+    """``problem.monitor(u)``; a numerical failure (e.g. a singular factorisation in the
+    recovery) makes the step fail instead of the run."""
+    try:
+        return problem.monitor(u)
+    except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError) as err:
+        raise _Failure(f"monitor failed: {err}") from None
+
+
+def _check_bound_names(bounds, rec: dict) -> None:
+    unknown = sorted(set(dict(bounds)) - set(rec))
+    if unknown:
+        raise ValueError(f"bounds on unknown quantit{'y' if len(unknown) == 1 else 'ies'} "
+                         f"{', '.join(map(repr, unknown))}; the problem monitors {sorted(rec)}")
 
 
 def _corrector(problem, u, t, ds, opt):
@@ -329,7 +429,9 @@ def _outside(rec: dict, bounds) -> tuple | None:
 
 
 def _refine_onto_bound(problem, u, t, ds, crossed, rec_prev, rec_new, opt, fallback):
-    """Secant iteration in the arclength s ∈ (0, ds) for monitor[name](s) = bound."""
+    """Secant iteration in the arclength s ∈ (0, ds) for monitor[name](s) = bound.
+
+    Returns (u, newton iterations, residual history, record, tangent) of the best point."""
     name, target = crossed
     s0, f0 = 0.0, rec_prev[name] - target
     s1, f1 = ds, rec_new[name] - target
@@ -340,11 +442,13 @@ def _refine_onto_bound(problem, u, t, ds, crossed, rec_prev, rec_new, opt, fallb
         s = s1 - f1 * (s1 - s0) / (f1 - f0)
         s = min(max(s, 1e-3 * ds), ds)
         try:
-            u_s, nit, hist, _ = _corrector(problem, u, t, s, opt)
+            u_s, nit, hist, J = _corrector(problem, u, t, s, opt)
+            rec = _monitor(problem, u_s)
+            t_s = _tangent(J, t)
         except _Failure:
             break
-        f = problem.monitor(u_s)[name] - target
-        best = (u_s, nit, hist)
+        f = rec[name] - target
+        best = (u_s, nit, hist, rec, t_s)
         if abs(f) <= 1e-10 * max(abs(target), 1e-300) or abs(s - s1) < 1e-14:
             break
         s0, f0, s1, f1 = s1, f1, s, f
