@@ -67,8 +67,10 @@ def square_matrix(name: str, A) -> sp.csr_matrix:
     if A.shape[0] == 0:
         raise ValueError(f"{name} is empty")
     if not np.all(np.isfinite(A.data)):
-        bad = np.argwhere(~np.isfinite(A.toarray()))[0]
-        raise ValueError(f"{name} has a non-finite entry {A[bad[0], bad[1]]} at {tuple(bad)}")
+        coo = A.tocoo()
+        k = int(np.flatnonzero(~np.isfinite(coo.data))[0])
+        i, j = int(coo.row[k]), int(coo.col[k])
+        raise ValueError(f"{name} has a non-finite entry {float(coo.data[k])} at {(i, j)}")
     A.eliminate_zeros()
     A.sort_indices()
     return A
@@ -82,5 +84,6 @@ def symmetric(name: str, A: sp.csr_matrix, rtol: float = 1e-10) -> None:
     if worst > rtol * scale:
         i, j = np.unravel_index(np.argmax(asym.toarray()), A.shape)
         raise ValueError(
-            f"{name} must be symmetric: {name}[{i},{j}] = {A[i, j]!r} but {name}[{j},{i}] = {A[j, i]!r}"
+            f"{name} must be symmetric: {name}[{i},{j}] = {float(A[i, j])!r} but "
+            f"{name}[{j},{i}] = {float(A[j, i])!r}"
         )

@@ -30,11 +30,14 @@ failed step.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
+from . import _validate as check
 from .kernels import _band_quadratic_form, _band_solve, _condensed_stiffness
 from .model import Model
 
@@ -58,6 +61,8 @@ class Condensation:
     """
 
     def __init__(self, model: Model, backend: str = "auto"):
+        if not isinstance(model, Model):
+            raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
         if backend not in ("auto", "banded", "splu"):
             raise ValueError(f"backend must be 'auto', 'banded' or 'splu', got {backend!r}")
         b = model.blocks
@@ -133,7 +138,9 @@ class Condensation:
         dD : ndarray, shape (H+1, n_c, n_c), only if ``derivative``
             ∂D_k/∂Ω (N·s/m ...).
         """
-        H = harmonics
+        H = check.integer("harmonics", harmonics, minimum=0)
+        if not math.isfinite(omega):
+            raise ValueError(f"omega must be finite, got {omega!r}")
         n_c = self.n_c
         D = np.empty((H + 1, n_c, n_c))
         dD = np.zeros((H + 1, n_c, n_c)) if derivative else None

@@ -81,6 +81,9 @@ class MMSHBMProblem:
         self.model = model
         self.H, self.N = check_harmonics(harmonics, n_samples)
         self.mode = check.integer("mode", mode, minimum=1)
+        if self.mode > len(model.l):
+            raise ValueError(f"mode must be <= the number of DOFs with mass ({len(model.l)}), "
+                             f"got {self.mode}")
         self.cond = Condensation(model, backend)
         self.n_c = len(model.c)
         self.ci = model.contact_index
@@ -122,6 +125,8 @@ class MMSHBMProblem:
     # ------------------------------------------------------------------ unknowns
     def unpack(self, u: np.ndarray) -> tuple[np.ndarray, float]:
         """Scaled unknowns -> (cosine coefficients a (H+1, n_c) in m/rad, Ω in rad/s)."""
+        if np.shape(u) != (self.n_unknowns,):
+            raise ValueError(f"u must have shape ({self.n_unknowns},), got {np.shape(u)}")
         x = u * self.colscale
         return x[:-1].reshape(self.H + 1, self.n_c), float(x[-1])
 
@@ -198,6 +203,7 @@ class MMSHBMProblem:
     def time_signals(self, u: np.ndarray, dofs=None, n_samples: int = 256):
         """(t (n_samples,) in s, q (n_dofs, n_samples)) over one period for ``dofs``
         (all DOFs when None)."""
+        n_samples = check.integer("n_samples", n_samples, minimum=1)
         a, omega = self.unpack(u)
         Q = self.coefficients(u)
         if dofs is not None:
@@ -212,6 +218,7 @@ class MMSHBMProblem:
 
     def contact_force(self, u: np.ndarray, n_samples: int = 256):
         """(t (n_samples,) in s, λ (n_samples,) in N) over one period."""
+        n_samples = check.integer("n_samples", n_samples, minimum=1)
         a, omega = self.unpack(u)
         tau = 2 * np.pi * np.arange(n_samples) / n_samples
         _, _, lam = self.contact_signals(u, tau)
@@ -219,7 +226,9 @@ class MMSHBMProblem:
 
     def harmonic_content(self, u: np.ndarray, dof: int | None = None) -> np.ndarray:
         """|Q_k| for k = 0..H of ``dof`` (default the contact DOF); shape (H+1,)."""
-        dof = self.model.contact_dof if dof is None else int(dof)
+        dof = self.model.contact_dof if dof is None else check.integer("dof", dof)
+        if not 0 <= dof < self.model.n_dof:
+            raise ValueError(f"dof must be in [0, {self.model.n_dof - 1}], got {dof}")
         Q = self.coefficients(u)[dof]
         return np.concatenate([[abs(Q[0])], np.hypot(Q[1::2], Q[2::2])])
 

@@ -124,14 +124,17 @@ class Model:
         override the file. :meth:`save_npz` writes this format.
         """
         path = Path(path)
+        where = f"model file {str(path)!r}"
         try:
+            if path.is_file() and not zipfile.is_zipfile(path):
+                raise ValueError("not an .npz archive")
             loaded = np.load(path, allow_pickle=False)
             if not hasattr(loaded, "files"):
                 raise ValueError("not an .npz archive (it holds a single array)")
             with loaded as f:
                 data = {k: f[k] for k in f.files}
         except (OSError, ValueError, EOFError, zipfile.BadZipFile) as err:
-            raise ValueError(f"cannot read model file {str(path)!r}: {err}") from None
+            raise ValueError(f"cannot read {where}: {err}") from None
 
         def matrix(name):
             if name in data:
@@ -139,23 +142,38 @@ class Model:
             parts = [f"{name}_{p}" for p in ("data", "indices", "indptr", "shape")]
             if all(p in data for p in parts):
                 d, i, p, s = (data[q] for q in parts)
-                return sp.csr_matrix((d, i, p), shape=tuple(int(v) for v in s))
-            raise ValueError(f"model file {str(path)!r} has no matrix {name!r} (keys: {sorted(data)})")
+                try:
+                    A = sp.csr_matrix((d, i, p), shape=tuple(int(v) for v in s))
+                    A.check_format(full_check=True)
+                except (TypeError, ValueError, IndexError) as err:
+                    raise ValueError(f"{where}: the CSR parts of {name!r} are malformed: {err}") from None
+                return A
+            raise ValueError(f"{where} has no matrix {name!r} (keys: {sorted(data)})")
 
-        def scalar(name, given, cast):
+        def scalar(name, given):
             if given is not None:
                 return given
             if name not in data:
-                raise ValueError(f"model file {str(path)!r} has no {name!r}; pass {name}=...")
-            return cast(data[name])
+                raise ValueError(f"{where} has no {name!r}; pass {name}=...")
+            value = data[name]
+            if value.ndim != 0 or value.dtype.kind not in "biuf":
+                raise ValueError(f"{where}: {name!r} must be a single number, got {value!r}")
+            return value.item()
 
-        description = json.loads(str(data["description"])) if "description" in data else {}
+        description = {}
+        if "description" in data:
+            try:
+                description = json.loads(str(data["description"]))
+            except json.JSONDecodeError as err:
+                raise ValueError(f"{where}: 'description' is not valid JSON ({err})") from None
+            if not isinstance(description, dict):
+                raise ValueError(f"{where}: 'description' must be a JSON object, got {description!r}")
         return cls.from_matrices(
             matrix("M"),
             matrix("K"),
-            scalar("contact_dof", contact_dof, int),
-            scalar("gap", gap, float),
-            scalar("stop_side", stop_side, int) if (stop_side is not None or "stop_side" in data) else 1,
+            scalar("contact_dof", contact_dof),
+            scalar("gap", gap),
+            scalar("stop_side", stop_side) if (stop_side is not None or "stop_side" in data) else 1,
             description,
         )
 

@@ -27,6 +27,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import _validate as check
+
 __all__ = ["shear_parameter", "stiffness", "mass", "element_matrices", "shape_functions"]
 
 
@@ -59,7 +61,8 @@ def stiffness(L, E: float, G: float, A: float, I: float, kappa: float) -> np.nda
 
     Units: N/m (w–w), N (w–θ), N·m/rad (θ–θ). Parameters as in :func:`shear_parameter`.
     """
-    L = np.atleast_1d(np.asarray(L, dtype=float))
+    L = _lengths(L)
+    _constants(E=E, G=G, A=A, I=I, kappa=kappa)
     phi = shear_parameter(L, E, G, A, I, kappa)
     c = E * I / ((1.0 + phi) * L**3)
     K = np.empty(L.shape + (4, 4))
@@ -97,7 +100,8 @@ def mass(L, E: float, G: float, rho: float, A: float, I: float, kappa: float) ->
     Units: kg (w–w), kg·m (w–θ), kg·m² (θ–θ). ``rho`` in kg/m³, other parameters as in
     :func:`shear_parameter`.
     """
-    L = np.atleast_1d(np.asarray(L, dtype=float))
+    L = _lengths(L)
+    _constants(E=E, G=G, rho=rho, A=A, I=I, kappa=kappa)
     p = shear_parameter(L, E, G, A, I, kappa)
     p2 = p * p
     T = np.empty(L.shape + (4, 4))
@@ -188,6 +192,25 @@ def shape_functions(xi, L: float, phi: float) -> tuple[np.ndarray, np.ndarray]:
         3 * x2 - (2 - phi) * x,
     ], axis=-1)
     return N_w, N_t
+
+
+def _lengths(L) -> np.ndarray:
+    """Element lengths as a 1-D float array, checked finite and > 0."""
+    try:
+        L = np.atleast_1d(np.asarray(L, dtype=float))
+    except (TypeError, ValueError):
+        raise TypeError(f"element lengths L must be numbers, got {L!r}") from None
+    bad = np.flatnonzero(~(np.isfinite(L) & (L > 0)))
+    if L.ndim != 1 or bad.size:
+        where = f"L[{bad[0]}] = {float(L.ravel()[bad[0]])!r}" if bad.size else f"shape {L.shape}"
+        raise ValueError(f"element lengths L must be a 1-D array of finite lengths > 0 (m), got {where}")
+    return L
+
+
+def _constants(**values) -> None:
+    """Section and material constants must be finite and > 0."""
+    for name, value in values.items():
+        check.positive(name, value)
 
 
 def _mirror(A: np.ndarray) -> None:

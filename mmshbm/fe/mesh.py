@@ -45,5 +45,10 @@ def graded_lengths(length: float, n_elements: int, grading: float = 1.0) -> np.n
 
 def node_coordinates(lengths) -> np.ndarray:
     """Node positions (m) from element lengths: shape (n_e + 1,), starting at 0."""
-    lengths = np.asarray(lengths, dtype=float)
+    lengths = np.atleast_1d(np.asarray(lengths, dtype=float))
+    bad = np.flatnonzero(~(np.isfinite(lengths) & (lengths > 0)))
+    if lengths.ndim != 1 or bad.size:
+        where = (f"lengths[{bad[0]}] = {float(lengths.ravel()[bad[0]])!r}" if bad.size
+                 else f"shape {lengths.shape}")
+        raise ValueError(f"element lengths must be a 1-D array of finite values > 0 (m), got {where}")
     return np.concatenate([[0.0], np.cumsum(lengths)])
