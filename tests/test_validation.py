@@ -242,3 +242,92 @@ def table() -> str:
 
 if __name__ == "__main__":  # pragma: no cover
     sys.stdout.write(table() + "\n")
+
+
+# ---------------------------------------------------------------------------- failing Newton
+def converged(problem, states, tol=1e-8):
+    """Largest scaled residual over the states (the real problem, no failure injection)."""
+    return max(float(np.max(np.abs(problem.evaluate(u, jacobian=False)))) for u in states)
+
+
+def test_exact_pole_at_the_start_is_a_status_not_a_crash():
+    """k2 = 3 k1: the closed-contact frequency ω2 = 2 rad/s is exactly twice the linear
+    one, so D_2(Ω) has a pole on the whole linear part of the backbone and the
+    factorisation of K_ll − (2Ω)² M_ll is exactly singular at the first point."""
+    from mmshbm.condense import SingularDynamicStiffness
+
+    model = OneDofOscillator(1.0, 1.0, 3.0, 0.1).model()
+    p = MMSHBMProblem(model, 3)
+    assert p.unpack(p.linear_point(0.05))[1] == 1.0  # Ω exactly ω1, 2Ω exactly ω2
+    with pytest.raises(SingularDynamicStiffness, match=r"harmonic 2 of Ω sits on an eigenfrequency"):
+        p.evaluate(p.linear_point(0.05))
+    br = mmshbm.backbone(model, harmonics=3)
+    assert len(br) == 0
+    assert br.status.startswith("start failed") and "harmonic 2 of Ω" in br.status
+
+
+class PoleWindow:
+    """The MMS-HBM problem of the oscillator, whose condensation raises the genuine
+    SingularDynamicStiffness within a relative ``width`` of the pole 2Ω = ω2 (as a
+    factorisation with a pivot threshold would)."""
+
+    def __init__(self, width):
+        from mmshbm.condense import SingularDynamicStiffness
+
+        self.osc = OneDofOscillator(1.0, 1.0, 4.0, 1.0)
+        self.problem = MMSHBMProblem(self.osc.model(), 3)
+        self.pole = self.osc.omega_closed / 2
+        self.hits = 0
+        real = self.problem.cond.dynamic_stiffness
+
+        def dynamic_stiffness(omega, harmonics, derivative=True):
+            if abs(omega - self.pole) < width * self.pole:
+                self.hits += 1
+                raise SingularDynamicStiffness(f"K_ll - (2·{omega:.6g} rad/s)^2 M_ll is singular")
+            return real(omega, harmonics, derivative)
+
+        self.problem.cond.dynamic_stiffness = dynamic_stiffness
+        self.reference = MMSHBMProblem(self.osc.model(), 3)
+
+    def run(self):
+        from mmshbm.continuation import ContinuationOptions, continue_branch
+
+        p = self.problem
+        return continue_branch(p, p.linear_point(0.5), p.initial_tangent(),
+                               ContinuationOptions(bounds={"amplitude": (0.0, 10.0)}))
+
+
+def test_a_singular_step_is_halved_and_the_branch_goes_on():
+    case = PoleWindow(2e-3)
+    res = case.run()
+    assert case.hits >= 1  # an iterate met the singular factorisation
+    assert res.status == "bound:amplitude"
+    omega = 2 * np.pi * res.records["frequency"]
+    assert omega.min() < case.pole < omega.max()  # the branch crossed kΩ = ω2
+    assert converged(case.reference, res.u) < 1e-8
+    f_exact = case.osc.frequency(res.records["amplitude"])
+    assert np.max(np.abs(res.records["frequency"] / f_exact - 1)) < 2e-2  # H = 3 truncation error ~1 %
+
+
+def test_a_singular_region_stops_the_branch_with_every_converged_point():
+    width = 5e-3
+    case = PoleWindow(width)
+    res = case.run()
+    assert res.status.startswith("ds_min: step size fell below 1e-07")
+    assert "is singular" in res.status
+    omega = 2 * np.pi * res.records["frequency"]
+    assert len(res.u) > 5 and omega.max() < case.pole
+    # halving crept up to the edge of the singular region
+    assert omega.max() > case.pole * (1 - width) * (1 - 1e-4)
+    assert converged(case.reference, res.u) < 1e-8
+    assert res.special_points[-1] == ("endpoint", len(res.u) - 1)
+
+
+def test_ds_min_status_through_backbone_keeps_the_branch():
+    """A step budget that Newton cannot meet: max_newton=1 fails every corrector off the
+    linear part; the Branch still holds the converged points and says why."""
+    model = OneDofOscillator(1.0, 1.0, 4.0, 1.0).model()
+    br = mmshbm.backbone(model, harmonics=3, max_newton=1, ds_min=1e-3)
+    assert br.status.startswith("ds_min") and "no convergence in 1 iterations" in br.status
+    assert len(br) >= 2 and not br.completed
+    assert converged(br.solver, br.states) < 1e-8
