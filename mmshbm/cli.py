@@ -47,7 +47,7 @@ class _StderrHandler(logging.StreamHandler):
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message):  # one line, no usage dump
-        raise _Usage(f"{self.prog}: {message}")
+        raise _Usage(f"{self.prog}: error: {message}")
 
 
 def _out(args) -> Path:
@@ -59,6 +59,15 @@ def _out(args) -> Path:
 def _wrote(*paths) -> None:
     for p in paths:
         print(f"wrote {p}")
+
+
+def _measured(args):
+    """The measured backbone of ``--measured``, read before any computation (None without)."""
+    if not getattr(args, "measured", None):
+        return None
+    from .measured import load_measured
+
+    return load_measured(args.measured)
 
 
 def _progress(args) -> bool:
@@ -102,6 +111,7 @@ def cmd_backbone(args) -> int:
     from .api import backbone
     from .plotting import plot_backbone, plot_frequency_energy
 
+    measured = _measured(args)
     model = _model(args)
     max_amp = args.max_amplitude * model.gap if args.max_amplitude else None
     extra = {}
@@ -117,7 +127,7 @@ def cmd_backbone(args) -> int:
     files = [branch.to_csv(out / "backbone.csv"), branch.save(out / "backbone.npz")]
     if len(branch):
         files += [out / "backbone.png", out / "frequency_energy.png"]
-        plot_backbone(branch, measured=args.measured, model=model, path=files[-2])
+        plot_backbone(branch, measured=measured, model=model, path=files[-2])
         plot_frequency_energy(branch, path=files[-1])
     print(repr(branch))
     _wrote(*files)
@@ -129,6 +139,7 @@ def cmd_study(args) -> int:
     from .plotting import plot_backbone, plot_figure2
 
     params = _params(args.param)
+    measured = _measured(args)
     marks = tuple(args.amplitudes) if args.amplitudes else _DEFAULT_MARKS
     executor = None if args.executor == "serial" else args.executor
     common = {"executor": executor, "workers": args.workers, "verbose": _progress(args)}
@@ -161,9 +172,9 @@ def cmd_study(args) -> int:
     files.append(text)
     png = out / f"{name}.png"
     if args.figure2 or _has_grid(study):
-        plot_figure2(study, marks=marks, measured=args.measured, path=png)
+        plot_figure2(study, marks=marks, measured=measured, path=png)
     else:
-        plot_backbone(study.branches, measured=args.measured, path=png)
+        plot_backbone(study.branches, measured=measured, path=png)
     files.append(png)
     print(report)
     print(repr(study))
@@ -241,6 +252,7 @@ def cmd_plot(args) -> int:
     from .results import Branch, load
 
     data = load(args.file)
+    measured = _measured(args)
     out = _out(args)
     stem = Path(args.file).stem
     kinds = set(args.kind)
@@ -252,9 +264,9 @@ def cmd_plot(args) -> int:
         if "backbone" in kinds:
             path = out / f"{stem}_backbone.png"
             if _has_grid(data):
-                plotting.plot_figure2(data, marks=marks, measured=args.measured, path=path)
+                plotting.plot_figure2(data, marks=marks, measured=measured, path=path)
             else:
-                plotting.plot_backbone(data.branches, measured=args.measured, path=path)
+                plotting.plot_backbone(data.branches, measured=measured, path=path)
             files.append(path)
         if "energy" in kinds:
             files.append(out / f"{stem}_energy.png")
@@ -268,7 +280,7 @@ def cmd_plot(args) -> int:
     pts = plotting.points_at(branch, [m * gap for m in marks]) if gap > 0 else [len(branch) - 1]
     if "backbone" in kinds:
         files.append(out / f"{stem}_backbone.png")
-        plotting.plot_backbone(branch, measured=args.measured, marks=[(0, p) for p in pts], path=files[-1])
+        plotting.plot_backbone(branch, measured=measured, marks=[(0, p) for p in pts], path=files[-1])
     if "energy" in kinds:
         files.append(out / f"{stem}_energy.png")
         plotting.plot_frequency_energy(branch, path=files[-1])

@@ -59,8 +59,7 @@ def _as_list(branches) -> list:
 
 
 def _gap(branch) -> float:
-    meta = branch.metadata
-    gap = meta.get("model_gap", meta.get("model", {}).get("gap"))
+    gap = branch.gap
     if gap is None:
         try:
             gap = branch.get_model().gap

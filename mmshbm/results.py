@@ -107,6 +107,16 @@ class Branch:
         """True when the branch ended on a requested bound or the step budget."""
         return self.status.startswith("bound:") or self.status == "max_steps"
 
+    @property
+    def gap(self) -> float | None:
+        """The model's gap (m): of the attached model or solver, else from the metadata
+        (``model_gap``, then the description's ``gap``); None when unknown."""
+        model = self.model if self.model is not None else getattr(self.solver, "model", None)
+        if model is not None:
+            return float(model.gap)
+        gap = self.metadata.get("model_gap", dict(self.metadata.get("model", {})).get("gap"))
+        return None if gap is None else float(gap)
+
     # ------------------------------------------------------------------ per point
     def _require_solver(self):
         if self.solver is None:

@@ -26,6 +26,7 @@ import itertools
 import logging
 import math
 import multiprocessing
+import threading
 import time
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, fields, replace
@@ -111,9 +112,21 @@ def build_model(source: dict):
     return model if gap is None or gap == model.gap else model.with_gap(gap)
 
 
+#: one run at a time per process: the cached FFTW plans (mmshbm.harmonics) own their
+#: buffers and are not thread-safe, so thread executors (a ThreadPoolExecutor, a Dask
+#: worker with several threads) would mix runs' numbers; processes are unaffected
+_RUN_LOCK = threading.Lock()
+
+
 def execute(spec: RunSpec) -> Branch:
     """Run one grid point (this is what workers execute); the branch comes back without
-    its solver, which holds unpicklable FFT plans."""
+    its solver, which holds unpicklable FFT plans. Runs in threads of one process are
+    serialised (see ``_RUN_LOCK``)."""
+    with _RUN_LOCK:
+        return _execute(spec)
+
+
+def _execute(spec: RunSpec) -> Branch:
     from .api import backbone
 
     model = build_model(spec.source)
@@ -660,10 +673,7 @@ def _matrix_source(model) -> dict:
 
 
 def _gap(branch: Branch) -> float:
-    meta = branch.metadata
-    gap = meta.get("model_gap", meta.get("model", {}).get("gap"))
-    if gap is None and branch.model is not None:
-        gap = branch.model.gap
+    gap = branch.gap
     if gap is None or not gap > 0:
         raise ValueError("amplitudes in gaps need a model with a positive gap; use unit='m'")
     return float(gap)

@@ -1,0 +1,119 @@
+"""Plots: headless, files written, and the drawn data are the branch's numbers."""
+
+import sys
+
+import numpy as np
+import pytest
+from matplotlib.figure import Figure
+
+import mmshbm
+from mmshbm import plotting, studies
+from mmshbm.measured import MeasuredBackbone
+
+
+@pytest.fixture(scope="module")
+def branch():
+    return mmshbm.backbone(mmshbm.default_beam().model(6), harmonics=3, max_amplitude=6e-3)
+
+
+def _vlines(ax):
+    """x positions of the vertical reference lines (axvline: two equal x data)."""
+    return [ln.get_xdata()[0] for ln in ax.get_lines()
+            if len(ln.get_xdata()) == 2 and ln.get_xdata()[0] == ln.get_xdata()[1]]
+
+
+def test_backbone_data_and_reference_lines(branch, tmp_path):
+    model = branch.get_model()
+    fig = plotting.plot_backbone(branch, path=tmp_path / "b.png")
+    assert isinstance(fig, Figure) and (tmp_path / "b.png").stat().st_size > 10_000
+    ax = fig.axes[0]
+    curve = ax.get_lines()[0]
+    np.testing.assert_array_equal(curve.get_xdata(), branch.frequency)
+    np.testing.assert_allclose(curve.get_ydata(), branch.amplitude / model.gap, rtol=1e-15)
+    xs = _vlines(ax)
+    f = model.linear_frequencies(3)
+    assert f[0] in xs and model.zero_gap_frequency() in xs
+    lo, hi = branch.frequency.min(), branch.frequency.max()
+    expected = {fk / n for fk in f[1:] for n in range(2, 11) if 0.97 * lo <= fk / n <= 1.03 * hi}
+    assert expected and expected <= set(xs)
+
+
+def test_several_branches_and_measured_overlay(branch, tmp_path):
+    other = mmshbm.backbone(mmshbm.default_beam().model(6), harmonics=1, max_amplitude=6e-3)
+    meas = MeasuredBackbone.from_arrays([50.0, 55.0], [2e-3, 4e-3], source="lab")
+    fig = plotting.plot_backbone([branch, other], labels=["a", "b"], measured=meas, reference_lines=False)
+    lines = fig.axes[0].get_lines()
+    assert [ln.get_label() for ln in lines[:3]] == ["a", "b", "measured (lab)"]
+    np.testing.assert_allclose(lines[2].get_ydata(), [2.0, 4.0])
+    with pytest.raises(ValueError):
+        plotting.plot_backbone([branch], labels=["a", "b"])
+    with pytest.raises(ValueError):
+        plotting.plot_backbone([])
+
+
+def test_frequency_energy(branch):
+    fig = plotting.plot_frequency_energy(branch)
+    np.testing.assert_allclose(fig.axes[0].get_lines()[0].get_ydata(), np.log10(branch.energy))
+
+
+def test_time_signals_are_the_branch_signals(branch, tmp_path):
+    pts = plotting.points_at(branch, [1.5e-3, 4e-3])
+    assert branch.amplitude[pts[0]] >= 1.5e-3 > branch.amplitude[pts[0] - 1]
+    fig = plotting.plot_time_signals(branch, pts, path=tmp_path / "t.png")
+    model = branch.get_model()
+    assert len(fig.axes) == len(model.c) == 2  # tip deflection and tip rotation
+    t, q = branch.time_signals(pts[1], dofs=[int(d) for d in model.c], n_samples=256)
+    for ax, qd in zip(fig.axes, q, strict=True):
+        np.testing.assert_allclose(ax.get_lines()[1].get_ydata()[:-1], 1e3 * qd)
+    assert "deflection" in fig.axes[0].get_ylabel() and "rotation" in fig.axes[1].get_ylabel()
+
+
+def test_contact_force_and_harmonics(branch, tmp_path):
+    i = len(branch) - 1
+    fig = plotting.plot_contact_force(branch, [i], path=tmp_path / "f.png")
+    lam = branch.contact_force(i, 512)[1]
+    np.testing.assert_allclose(fig.axes[0].get_lines()[0].get_ydata()[:-1], lam)
+    assert lam.max() == pytest.approx(branch.contact_force_max[i], rel=0.05)
+    fig = plotting.plot_harmonic_content(branch, i, path=tmp_path / "h.png")
+    heights = [p.get_height() for p in fig.axes[0].patches]
+    np.testing.assert_allclose(heights, 1e3 * branch.harmonic_content(i))
+    assert len(heights) == branch.harmonics + 1
+
+
+def test_figure2_layout(tmp_path):
+    st = studies.run_study(harmonics=(1, 3), elements=(4, 6), executor="serial", max_amplitude=4.0,
+                           unit="gap")
+    fig = plotting.plot_figure2(st, marks=(1.5, 3.0), path=tmp_path / "fig2.png")
+    left, top, middle, bottom = fig.axes
+    assert len(left.get_legend().get_texts()) >= 4
+    assert "deflection" in top.get_ylabel() and "rotation" in middle.get_ylabel()
+    assert "contact force" in bottom.get_ylabel()
+    assert len(bottom.get_lines()) == 2  # one per marked point
+    marked = st.branch(harmonics=3, elements=6)
+    f_lin = marked.get_model().linear_frequencies(1)[0]
+    assert f_lin in _vlines(left)  # reference lines of the marked run's model
+
+
+def test_headless_no_pyplot_state(branch):
+    before = len(sys.modules["matplotlib.pyplot"].get_fignums()) if "matplotlib.pyplot" in sys.modules else 0
+    plotting.plot_backbone(branch)
+    plotting.plot_contact_force(branch, [0])
+    after = len(sys.modules["matplotlib.pyplot"].get_fignums()) if "matplotlib.pyplot" in sys.modules else 0
+    assert after == before
+
+
+def test_plotting_never_imports_pyplot(tmp_path):
+    import subprocess
+
+    code = ("import sys, mmshbm, mmshbm.plotting as p; "
+            "b = mmshbm.backbone(mmshbm.OneDofOscillator().model(), harmonics=3, max_amplitude=2.0); "
+            f"p.plot_backbone(b, path={str(tmp_path / 'o.png')!r}); "
+            "assert 'matplotlib.pyplot' not in sys.modules")
+    env = {"MPLBACKEND": "", "PATH": "/usr/bin:/bin", "HOME": str(tmp_path)}
+    subprocess.run([sys.executable, "-c", code], check=True, env=env, timeout=120)
+    assert (tmp_path / "o.png").is_file()
+
+
+def test_point_index_checks(branch):
+    with pytest.raises(IndexError):
+        plotting.plot_contact_force(branch, [len(branch)])
