@@ -249,7 +249,12 @@ class Study:
 
     def report(self, amplitudes, unit: str = "gap") -> str:
         """Text: the frequency table and the convergence rates (what the CLI prints)."""
-        parts = [self.table(amplitudes, unit).to_text()]
+        table = self.table(amplitudes, unit)
+        parts = [table.to_text()]
+        if {"harmonics", "elements"} <= set(self.axes):
+            pivot = table.pivot_text()
+            if pivot:
+                parts.append(pivot)
         fits = self.convergence(amplitudes, unit)
         if fits:
             parts.append(format_convergence(fits))
@@ -346,6 +351,57 @@ class FrequencyTable:
         fmt = "  ".join(f"{{:>{w}}}" for w in widths)
         title = f"Frequency (Hz) at tip amplitude A ({unit}); '-' = not reached"
         return "\n".join([title, fmt.format(*head), *(fmt.format(*row) for row in rows)])
+
+    def pivot(self, amplitude_index: int = 0, rows: str = "elements", columns: str = "harmonics") -> tuple:
+        """The frequencies at one amplitude as a matrix over two coordinates.
+
+        Runs that differ in any other coordinate must not collide (one value per cell).
+
+        Returns
+        -------
+        row_values : list, shape (n_rows,)
+        column_values : list, shape (n_columns,)
+        frequency : ndarray, shape (n_rows, n_columns)
+            Hz; NaN for missing runs or amplitudes not reached.
+
+        Raises
+        ------
+        ValueError
+            If ``rows`` or ``columns`` is not a coordinate, or two runs fall in one cell.
+        """
+        for name in (rows, columns):
+            if name not in self.axes:
+                raise ValueError(f"{name!r} is not a coordinate of the table; it has {self.axes}")
+        rv = sorted({r[rows] for r in self.runs})
+        cv = sorted({r[columns] for r in self.runs})
+        f = np.full((len(rv), len(cv)), np.nan)
+        seen = set()
+        for r, row in zip(self.runs, self.frequency, strict=True):
+            cell = (rv.index(r[rows]), cv.index(r[columns]))
+            if cell in seen:
+                raise ValueError(f"several runs have {rows}={r[rows]}, {columns}={r[columns]}: select first")
+            seen.add(cell)
+            f[cell] = row[amplitude_index]
+        return rv, cv, f
+
+    def pivot_text(self, rows: str = "elements", columns: str = "harmonics") -> str:
+        """Text matrices (one per amplitude) of :meth:`pivot`, e.g. elements × H; empty
+        when other coordinates vary too."""
+        unit = "gaps" if self.unit == "gap" else "m"
+        blocks = []
+        for j, a in enumerate(self.amplitudes):
+            try:
+                rv, cv, f = self.pivot(j, rows, columns)
+            except ValueError:
+                return ""
+            head = [f"{rows} \\ {columns}", *(str(c) for c in cv)]
+            body = [[str(r), *(f"{x:.3f}" if np.isfinite(x) else "-" for x in fr)]
+                    for r, fr in zip(rv, f, strict=True)]
+            widths = [max(len(h), *(len(b[i]) for b in body)) for i, h in enumerate(head)]
+            fmt = "  ".join(f"{{:>{w}}}" for w in widths)
+            blocks.append("\n".join([f"f (Hz) at A = {a:g} {unit}", fmt.format(*head),
+                                     *(fmt.format(*b) for b in body)]))
+        return "\n\n".join(blocks)
 
     def __str__(self) -> str:
         return self.to_text()

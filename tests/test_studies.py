@@ -61,6 +61,22 @@ def test_table_is_frequency_at_amplitude(serial):
     assert np.isnan(serial.table([5.0]).frequency).all()  # beyond max_amplitude: not reached
 
 
+def test_pivot_matrix(serial):
+    table = serial.table([1.5, 2.5])
+    rows, cols, f = table.pivot(1)
+    assert (rows, cols) == ([4, 6], [1, 3])
+    assert f[1, 0] == serial.branch(elements=6, harmonics=1).frequency_at(2.5 * 1e-3)
+    assert "f (Hz) at A = 2.5 gaps" in serial.report([1.5, 2.5])
+    with pytest.raises(ValueError, match="gap"):
+        table.pivot(0, rows="gap")
+
+
+def test_progress_bar_off_when_not_a_terminal(capsys):
+    studies.run_study(harmonics=(1,), elements=(4,), executor="serial", verbose=True, max_amplitude=2.0,
+                      unit="gap")
+    assert capsys.readouterr().err == ""  # pytest's stderr is not a terminal
+
+
 def test_convergence_rate_recovers_a_known_power_law():
     H = np.array([1.0, 2.0, 4.0, 8.0, 64.0])
     f = 50.0 + 3.0 * H**-2.5
