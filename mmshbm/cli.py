@@ -257,7 +257,7 @@ def cmd_plot(args) -> int:
     stem = Path(args.file).stem
     kinds = set(args.kind)
     if "all" in kinds:
-        kinds = {"backbone", "energy", "signals", "force", "harmonics"}
+        kinds = {"backbone", "energy", "peak_force", "signals", "force", "harmonics"}
     marks = tuple(args.points) if args.points else _DEFAULT_MARKS
     files = []
     if not isinstance(data, Branch):  # a study
@@ -268,9 +268,13 @@ def cmd_plot(args) -> int:
             else:
                 plotting.plot_backbone(data.branches, measured=measured, path=path)
             files.append(path)
+        styles = plotting.study_styles(data.runs)
         if "energy" in kinds:
             files.append(out / f"{stem}_energy.png")
-            plotting.plot_frequency_energy(data.branches, path=files[-1])
+            plotting.plot_frequency_energy(data.branches, styles=styles, path=files[-1])
+        if "peak_force" in kinds:
+            files.append(out / f"{stem}_peak_force.png")
+            plotting.plot_peak_contact_force(data.branches, measured=measured, styles=styles, path=files[-1])
         _wrote(*files)
         return 0
     branch = data
@@ -284,6 +288,9 @@ def cmd_plot(args) -> int:
     if "energy" in kinds:
         files.append(out / f"{stem}_energy.png")
         plotting.plot_frequency_energy(branch, path=files[-1])
+    if "peak_force" in kinds:
+        files.append(out / f"{stem}_peak_force.png")
+        plotting.plot_peak_contact_force(branch, measured=measured, path=files[-1])
     if "signals" in kinds:
         files.append(out / f"{stem}_signals.png")
         plotting.plot_time_signals(branch, pts, path=files[-1])
@@ -380,7 +387,7 @@ def build_parser() -> argparse.ArgumentParser:
     out_option(p)
     p.add_argument("file", help="a .npz written by Branch.save / Study.save (backbone, study)")
     p.add_argument("--kind", nargs="+", default=["all"],
-                   choices=["all", "backbone", "energy", "signals", "force", "harmonics"])
+                   choices=["all", "backbone", "energy", "peak_force", "signals", "force", "harmonics"])
     p.add_argument("--points", type=float, nargs="+", default=None,
                    help="amplitudes (gaps) of the marked points (default 1.5 3 6)")
     p.add_argument("--measured", default=None, help="measured backbone CSV to overlay")

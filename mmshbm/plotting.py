@@ -13,6 +13,8 @@ own axes. Every function returns the figure.
   rotation) over one period at chosen points.
 - :func:`plot_contact_force`: λ(t) over one period at chosen points.
 - :func:`plot_harmonic_content`: bar chart of |Q_k| at one point.
+- :func:`plot_peak_contact_force`: largest contact force against frequency, with the
+  measured peak forces.
 - :func:`plot_figure2`: the seed paper's Figure 2 layout from a study.
 """
 
@@ -26,7 +28,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 __all__ = ["plot_backbone", "plot_frequency_energy", "plot_time_signals", "plot_contact_force",
-           "plot_harmonic_content", "plot_figure2", "points_at", "branch_label", "dof_label"]
+           "plot_harmonic_content", "plot_figure2", "plot_peak_contact_force", "study_styles", "points_at",
+           "branch_label", "dof_label"]
 
 log = logging.getLogger(__name__)
 
@@ -138,8 +141,8 @@ def _reference_lines(ax, model, fmin, fmax, modes, max_order) -> None:
                 ax.axvline(f, color="C3", ls="-.", lw=0.8, alpha=0.7,
                            label=None if labelled else "internal resonance $f_k/n$")
                 labelled = True
-                ax.annotate(f"$f_{k}/{order}$", xy=(f, 1.0), xycoords=("data", "axes fraction"),
-                            xytext=(2, -2), textcoords="offset points", ha="left", va="top", fontsize=8,
+                ax.annotate(f"$f_{k}/{order}$", xy=(f, 0.0), xycoords=("data", "axes fraction"),
+                            xytext=(2, 3), textcoords="offset points", ha="left", va="bottom", fontsize=8,
                             color="C3")
 
 
@@ -230,22 +233,53 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
 
 
 def plot_frequency_energy(branches, labels: Sequence[str] | None = None, *, ax=None, path=None,
-                          title: str | None = None) -> Figure:
-    """Frequency–energy plot: log10 of the mechanical energy (J) against frequency (Hz)."""
+                          title: str | None = None, styles: Sequence[dict] | None = None) -> Figure:
+    """Frequency–energy plot: log10 of the mechanical energy (J) against frequency (Hz);
+    ``styles`` are line keyword arguments per branch."""
     branches = _as_list(branches)
     if not branches:
         raise ValueError("no branches to plot")
     fig, ax = _figure(ax, (6.4, 4.6))
     labels = list(labels) if labels is not None else [branch_label(b) for b in branches]
-    for b, label in zip(branches, labels, strict=True):
+    for i, (b, label) in enumerate(zip(branches, labels, strict=True)):
+        style = {"lw": 1.4} | (dict(styles[i]) if styles is not None else {})
         with np.errstate(divide="ignore", invalid="ignore"):
-            ax.plot(b.frequency, np.log10(b.energy), label=label, lw=1.4)
+            ax.plot(b.frequency, np.log10(b.energy), label=label, **style)
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel("log$_{10}$(energy / J)")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     if title:
         ax.set_title(title)
+    return _finish(fig, path)
+
+
+def plot_peak_contact_force(branches, labels: Sequence[str] | None = None, *, measured=None, ax=None,
+                            path=None, styles: Sequence[dict] | None = None) -> Figure:
+    """Largest contact force per period (N) against frequency (Hz), with the measured
+    peak forces overlaid when the measured backbone has them."""
+    branches = _as_list(branches)
+    if not branches:
+        raise ValueError("no branches to plot")
+    fig, ax = _figure(ax, (6.4, 4.6))
+    labels = list(labels) if labels is not None else [branch_label(b) for b in branches]
+    for i, (b, label) in enumerate(zip(branches, labels, strict=True)):
+        style = {"lw": 1.4} | (dict(styles[i]) if styles is not None else {})
+        ax.plot(b.frequency, b.contact_force_max, label=label, **style)
+    if measured is not None:
+        if not hasattr(measured, "frequency"):
+            from .measured import load_measured
+
+            measured = load_measured(measured)
+        if measured.contact_force is None:
+            log.info("the measured backbone has no contact force column")
+        else:
+            ax.plot(measured.frequency, measured.contact_force, "o", mfc="none", mec="k", ms=5,
+                    label=f"measured{f' ({measured.source})' if measured.source else ''}")
+    ax.set_xlabel("frequency (Hz)")
+    ax.set_ylabel("peak contact force (N)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
     return _finish(fig, path)
 
 
@@ -359,6 +393,18 @@ def plot_harmonic_content(branch, point: int, dof: int | None = None, *, log_sca
 
 
 # ---------------------------------------------------------------------- Figure 2
+def study_styles(runs: Sequence[dict]) -> list[dict]:
+    """Line styles for the runs of a study: colour by H, solid for the most elements,
+    dashed (or dotted, with three or more meshes) for fewer."""
+    elements = sorted({r.get("elements") for r in runs if r.get("elements") is not None})
+    styles = []
+    for r in runs:
+        finest = not elements or r.get("elements") == elements[-1]
+        ls = "-" if finest else ("--" if len(elements) < 3 else ":")
+        styles.append({"color": _H_COLORS.get(r.get("harmonics"), None), "ls": ls, "lw": 1.5})
+    return styles
+
+
 def plot_figure2(study, *, marks: Sequence[float] = (1.5, 3.0, 6.0), marked: dict | None = None,
                  measured=None, path=None, title: str | None = None) -> Figure:
     """The seed paper's Figure 2 layout from a study over H and elements.
@@ -389,12 +435,7 @@ def plot_figure2(study, *, marks: Sequence[float] = (1.5, 3.0, 6.0), marked: dic
         best = max(range(len(runs)), key=lambda i: (runs[i].get("harmonics", 0), runs[i].get("elements", 0)))
         marked = {k: runs[best][k] for k in ("method", "harmonics", "elements") if k in runs[best]}
     mb = study.branch(**marked)
-    elements = sorted({r.get("elements") for r in runs if r.get("elements") is not None})
-    styles = []
-    for r in runs:
-        finest = not elements or r.get("elements") == elements[-1]
-        ls = "-" if finest else ("--" if len(elements) < 3 else ":")
-        styles.append({"color": _H_COLORS.get(r.get("harmonics"), None), "ls": ls, "lw": 1.5})
+    styles = study_styles(runs)
     # order: the marked run last so that it is drawn on top
     order = sorted(range(len(runs)), key=lambda i: study.branches[i] is mb)
     branches = [study.branches[i] for i in order]

@@ -127,7 +127,7 @@ def test_plot_saved_branch(tmp_path):
     assert main(["backbone", *SMALL, "--out", str(tmp_path)]) == 0
     argv = ["plot", str(tmp_path / "backbone.npz"), "--points", "1.5", "2.5", "--out", str(tmp_path)]
     assert main(argv) == 0
-    for kind in ("backbone", "energy", "signals", "contact_force", "harmonics"):
+    for kind in ("backbone", "energy", "peak_force", "signals", "contact_force", "harmonics"):
         assert (tmp_path / f"backbone_{kind}.png").stat().st_size > 0, kind
 
 

@@ -70,3 +70,14 @@ def test_overlay_from_path(tmp_path):
     meas = [ln for ln in fig.axes[0].get_lines() if ln.get_label().startswith("measured")]
     assert len(meas) == 1
     np.testing.assert_allclose(meas[0].get_ydata(), [1.5, 1.8])  # gap = 1 m
+
+
+def test_peak_force_overlay(tmp_path):
+    from mmshbm.plotting import plot_peak_contact_force
+
+    b = mmshbm.backbone(mmshbm.OneDofOscillator().model(), harmonics=3, max_amplitude=2.0)
+    path = _write(tmp_path, "frequency,amplitude,contact_force\n0.17,1.5,0.4\n0.18,1.8,\n")
+    fig = plot_peak_contact_force(b, measured=path, path=tmp_path / "p.png")
+    model_line, meas = fig.axes[0].get_lines()
+    np.testing.assert_array_equal(model_line.get_ydata(), b.contact_force_max)
+    np.testing.assert_array_equal(meas.get_ydata(), [0.4, np.nan])
