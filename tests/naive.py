@@ -143,3 +143,38 @@ def condensed_stiffness_dense(model, omega: float, H: int):
         D.append(K_cc - K_lc.T @ Z)
         dD.append(-2 * k**2 * omega * Z.T @ M @ Z)
     return np.array(D), np.array(dD)
+
+
+def mmshbm_full_residual(problem, A, B, omega):
+    """The MMS-HBM residual with the full (cosine and sine) Fourier ansatz, by DFT matrices
+    and a Python loop over the samples: nothing of the production AFT path is used but the
+    condensed dynamic stiffness D_k(Ω).
+
+    ``A``, ``B``: cosine and sine coefficients (H+1, n_c) of the massless DOFs (B[0] is
+    ignored), Ω in rad/s. Returns the residual (2H+1, n_c) in NLvib order (c0, c1, s1, ...)
+    and unscaled units (N): F_k at the DOFs other than the contact DOF, the projection of
+    λ − max(0, λ − r g_N) at the contact DOF.
+    """
+    H, N, r, w, ci = problem.H, problem.N, problem.r, problem.w, problem.ci
+    D = problem.cond.dynamic_stiffness(omega, H, derivative=False)
+    Q = np.zeros((2 * H + 1, len(w)))  # NLvib-ordered coefficients of q_c
+    Q[0], Q[1::2], Q[2::2] = A[0], A[1:], B[1:]
+    F = np.zeros_like(Q)
+    F[0] = D[0] @ Q[0]
+    for k in range(1, H + 1):
+        F[2 * k - 1] = D[k] @ Q[2 * k - 1]
+        F[2 * k] = D[k] @ Q[2 * k]
+    E = synthesis_matrix(H, N)
+    lam = E @ (F @ w)
+    g = problem.gap + E @ (Q @ w)
+    R_t, _ = proximal_contact_loop(lam, g, r)
+    R = F.copy()
+    R[:, ci] = projection(R_t, H)
+    return R
+
+
+def shift_coefficients(A, B, theta):
+    """Cosine/sine coefficients (H+1, n) of x(τ + θ) from those of x(τ)."""
+    k = np.arange(A.shape[0])[:, None]
+    c, s = np.cos(k * theta), np.sin(k * theta)
+    return A * c + B * s, -A * s + B * c
