@@ -1,24 +1,20 @@
-"""Numba kernels of the shooting baseline: banded SPD algebra and the trapezoidal step.
+"""Numba kernels of the shooting baseline: banded SPD algebra and the time step.
 
 Kernels take plain contiguous float64 arrays and know nothing of models. Symmetric band
 matrices use LAPACK's *lower* band storage: ``ab[d, j] = A[j + d, j]`` for
 ``0 <= d <= p`` (``p`` the half-bandwidth), shape (p+1, n). Sets of tangent vectors are
 stored one vector per *row* (shape (m, n)), so that each vector is contiguous.
 
-The step is the trapezoidal rule (Newmark average acceleration, β = 1/4, γ = 1/2) for
+The step (:func:`_integrate`) is the trapezoidal rule for
 
-    M q'' + K q = λ(q) a,    λ(q) = k_c max(0, −(gap + a·q)),
+    M q'' + K q = λ(q) a,    λ(q) = k_c max(0, −h(q)),    h(q) = gap + a·q,
 
-written in the acceleration form (only ``M`` is multiplied per step):
-
-    w       = (4/h²) q_k + (4/h) v_k + acc_k
-    S q_k+1 = M w + λ_k+1 a,                         S = (4/h²) M + K
-    acc_k+1 = (4/h²)(q_k+1 − q_k) − (4/h) v_k − acc_k
-    v_k+1   = v_k + (h/2)(acc_k + acc_k+1).
-
-The contact force at the new step solves the scalar piecewise-linear equation exactly:
-with y = S⁻¹ M w, z = S⁻¹ a and α = a·z > 0, the free gap is h_f = gap + a·y and
-λ_k+1 = k_c max(0, −h_f) / (1 + k_c α) (the massless node's scalar LCP).
+with the contact force either at both ends of the step (plain trapezoidal rule) or
+averaged exactly along the step (averaged vector field, energy conserving). Either way the
+force at the step's end is implicit; it depends on the state only through the scalar free
+gap, so with y the contact-free predictor, z = S⁻¹ a and α = a·z the new free gap is the
+root of the scalar piecewise-smooth equation h1 = h_y + α F(h0, h1), solved in closed form
+(:func:`_contact_root`).
 """
 
 from __future__ import annotations
@@ -95,87 +91,149 @@ def _band_symv(ab, x, out):
 
 
 @njit(**JIT_OPTIONS)
-def _trapezoid(Sf, Mb, a, z, alpha, kc, gap, h, n_steps, q, v, acc, dq, dv, da, dh, Q, V, LAM):
-    """Integrate ``n_steps`` trapezoidal steps of size ``h`` (s), in place.
+def _force_sum(h0, h1, kc, avf):
+    """The step's contact force sum F (N) and its derivatives (F, ∂F/∂h0, ∂F/∂h1).
+
+    Trapezoidal rule (avf False): F = λ(h0) + λ(h1), λ(h) = k_c max(0, −h).
+    Averaged vector field (avf True): F = 2 k_c ∫₀¹ max(0, −(h0 + s(h1 − h0))) ds, the exact
+    mean of the force along the straight path between the two states, a C¹ function.
+    """
+    if not avf:
+        f0 = kc if h0 < 0.0 else 0.0
+        f1 = kc if h1 < 0.0 else 0.0
+        return -f0 * h0 - f1 * h1, -f0, -f1
+    if h0 >= 0.0 and h1 >= 0.0:
+        return 0.0, 0.0, 0.0
+    if h0 <= 0.0 and h1 <= 0.0:
+        return -kc * (h0 + h1), -kc, -kc
+    if h1 < 0.0:  # h0 > 0 > h1
+        d = h0 - h1
+        return kc * h1 * h1 / d, -kc * h1 * h1 / (d * d), kc * h1 * (2.0 * h0 - h1) / (d * d)
+    d = h1 - h0  # h0 < 0 < h1
+    return kc * h0 * h0 / d, kc * h0 * (2.0 * h1 - h0) / (d * d), -kc * h0 * h0 / (d * d)
+
+
+@njit(**JIT_OPTIONS)
+def _contact_root(h0, hy, ak, avf):
+    """The free gap h1 at the step's end: the root of h1 = hy + α F(h0, h1) (ak = α k_c)."""
+    if not avf:
+        ht = hy + (ak * (-h0) if h0 < 0.0 else 0.0)
+        return ht if ht >= 0.0 else ht / (1.0 + ak)
+    if h0 >= 0.0:
+        if hy >= 0.0:
+            return hy
+        A = 1.0 + ak
+        b = h0 + hy
+        disc = math.sqrt(b * b - 4.0 * A * h0 * hy)
+        if b > 0.0:
+            return 2.0 * h0 * hy / (b + disc)
+        return (b - disc) / (2.0 * A)
+    if hy <= ak * h0:
+        return (hy - ak * h0) / (1.0 + ak)
+    b = hy + h0
+    C = hy * h0 - ak * h0 * h0
+    disc = math.sqrt((hy - h0) * (hy - h0) + 4.0 * ak * h0 * h0)
+    if b >= 0.0:
+        return 0.5 * (b + disc)
+    return C / (0.5 * (b - disc))
+
+
+@njit(**JIT_OPTIONS)
+def _integrate(Sf, Pb, Mb, Kb, a, z, alpha, kc, gap, h, n_steps, avf, q, v, dq, dv, dh, Q, V, LAM):
+    """Integrate ``n_steps`` steps of size ``h`` (s), in place.
+
+    One step (F the contact force sum of :func:`_force_sum`, h_k = gap + a·q_k):
+
+        S q1 = P q0 + (4/h) M v0 + F(h0, h1) a,   S = (4/h²) M + K,  P = (4/h²) M − K
+        v1   = (2/h)(q1 − q0) − v0
 
     Parameters
     ----------
-    Sf : (p+1, n) band Cholesky factor of S = (4/h²) M + K.
-    Mb : (p+1, n) lower band storage of M.
+    Sf : (p+1, n) band Cholesky factor of S.
+    Pb, Mb, Kb : (p+1, n) lower band storage of P, M and K.
     a, z : (n,) contact direction (free gap = gap + a·q) and S⁻¹ a; alpha = a·z.
     kc, gap : condensed contact stiffness (N/m), gap (m).
-    q, v, acc : (n,) state at the start, overwritten with the state at the end.
-    dq, dv, da : (m, n) tangent vectors (derivatives of q, v, acc with respect to m
-        parameters), propagated in place; m may be 0.
-    dh : (m,) derivative of h with respect to each parameter.
-    Q, V : (n_steps+1, n) and LAM (n_steps+1,): the trajectory and contact force at
-        every step, written when Q has rows (pass (0, n) arrays to skip).
+    avf : averaged-vector-field force (True) or trapezoidal rule (False).
+    q, v : (n,) state at the start, overwritten with the state at the end.
+    dq, dv : (m, n) tangent vectors (derivatives of q, v with respect to m parameters),
+        propagated in place; m may be 0.
+    dh : (m,) derivative of the step size h with respect to each parameter.
+    Q, V : (n_steps+1, n) and LAM (n_steps+1,): the states and the contact force
+        k_c max(0, −h_k) at every step, written when Q has rows (else pass (0, n) arrays).
 
-    Returns the number of steps with the contact closed.
+    Returns the number of steps that end with the contact closed.
     """
     n = q.shape[0]
     m = dq.shape[0]
     store = Q.shape[0] > 0
     w = np.empty(n)
     y = np.empty(n)
+    t = np.empty(n)
     qn = np.empty(n)
-    accn = np.empty(n)
     c1 = 4.0 / (h * h)
     c2 = 4.0 / h
     c3 = 8.0 / (h * h * h)
-    beta = kc / (1.0 + kc * alpha)
+    c5 = 2.0 / h
+    c6 = 2.0 / (h * h)
+    ak = alpha * kc
     closed = 0
+    h0 = gap
+    for i in range(n):
+        h0 += a[i] * q[i]
     if store:
-        g = gap
         for i in range(n):
             Q[0, i] = q[i]
             V[0, i] = v[i]
-            g += a[i] * q[i]
-        LAM[0] = kc * max(0.0, -g)
+        LAM[0] = kc * max(0.0, -h0)
     for k in range(n_steps):
+        _band_symv(Pb, q, y)
         for i in range(n):
-            w[i] = c1 * q[i] + c2 * v[i] + acc[i]
-        _band_symv(Mb, w, y)
+            w[i] = c2 * v[i]
+        _band_symv(Mb, w, t)
+        for i in range(n):
+            y[i] += t[i]
         _band_solve(Sf, y)
-        hf = gap
+        hy = gap
         for i in range(n):
-            hf += a[i] * y[i]
-        active = hf < 0.0
-        lam = -beta * hf if active else 0.0
-        if active:
+            hy += a[i] * y[i]
+        h1 = _contact_root(h0, hy, ak, avf)
+        F, F0, F1 = _force_sum(h0, h1, kc, avf)
+        if h1 < 0.0:
             closed += 1
         for i in range(n):
-            qn[i] = y[i] + lam * z[i]
-            accn[i] = c1 * (qn[i] - q[i]) - c2 * v[i] - acc[i]
-        # tangents: (S + k_c s a aᵀ) dq' = M w', Sherman–Morrison with z
+            qn[i] = y[i] + F * z[i]
+        # tangents: (S − F1 a aᵀ) dq1 = M(c1 dq0 + c2 dv0 + e(c3 (q1 − q0) − c1 v0)) − K dq0 + F0 (a·dq0) a
+        sm = F1 / (1.0 - F1 * alpha)
         for col in range(m):
             e = dh[col]
+            ad = 0.0
             for i in range(n):
-                w[i] = c1 * dq[col, i] + c2 * dv[col, i] + da[col, i] + e * (c3 * (qn[i] - q[i]) - c1 * v[i])
+                w[i] = c1 * dq[col, i] + c2 * dv[col, i] + e * (c3 * (qn[i] - q[i]) - c1 * v[i])
+                ad += a[i] * dq[col, i]
             _band_symv(Mb, w, y)
+            _band_symv(Kb, dq[col], t)
+            for i in range(n):
+                y[i] += F0 * ad * a[i] - t[i]
             _band_solve(Sf, y)
-            if active:
+            if F1 != 0.0:
                 ay = 0.0
                 for i in range(n):
                     ay += a[i] * y[i]
-                ay *= beta
+                ay *= sm
                 for i in range(n):
-                    y[i] -= ay * z[i]
+                    y[i] += ay * z[i]
             for i in range(n):
-                dan = c1 * (y[i] - dq[col, i]) - c2 * dv[col, i] - da[col, i] \
-                    + e * (c1 * v[i] - c3 * (qn[i] - q[i]))
-                dv[col, i] += 0.5 * h * (da[col, i] + dan) + 0.5 * e * (acc[i] + accn[i])
-                da[col, i] = dan
+                dv[col, i] = c5 * (y[i] - dq[col, i]) - dv[col, i] - e * c6 * (qn[i] - q[i])
                 dq[col, i] = y[i]
         for i in range(n):
-            v[i] += 0.5 * h * (acc[i] + accn[i])
+            v[i] = (2.0 / h) * (qn[i] - q[i]) - v[i]
             q[i] = qn[i]
-            acc[i] = accn[i]
+        h0 = h1
         if store:
             for i in range(n):
                 Q[k + 1, i] = q[i]
                 V[k + 1, i] = v[i]
-            LAM[k + 1] = lam
+            LAM[k + 1] = kc * max(0.0, -h1)
     return closed
 
 

@@ -67,7 +67,7 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 from .. import _validate as check
 from ..mms_hbm import _refined_max
 from ..model import Model
-from ._shooting_kernels import _band_cholesky, _band_solve, _band_solve_rows, _trapezoid
+from ._shooting_kernels import _band_cholesky, _band_solve, _integrate
 
 __all__ = ["ShootingProblem", "DEFAULT_STEPS_PER_PERIOD", "FLOQUET_AUTO_LIMIT"]
 
@@ -124,12 +124,15 @@ class ShootingProblem:
     H = 0
 
     def __init__(self, model: Model, steps_per_period: int = DEFAULT_STEPS_PER_PERIOD, mode: int = 1,
-                 floquet: bool | str = "auto"):
+                 scheme: str = "avf", floquet: bool | str = "auto"):
         if not isinstance(model, Model):
             raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
         N = check.integer("steps_per_period", steps_per_period, minimum=8)
         if N % 2:
             raise ValueError(f"steps_per_period must be even (half a period is integrated), got {N}")
+        if scheme not in ("avf", "trapezoidal"):
+            raise ValueError(f"scheme must be 'avf' or 'trapezoidal', got {scheme!r}")
+        self.scheme = scheme
         if not (isinstance(floquet, bool) or floquet == "auto"):
             raise ValueError(f"floquet must be True, False or 'auto', got {floquet!r}")
         self.model = model
@@ -167,17 +170,11 @@ class ShootingProblem:
         Kp = K_open[perm][:, perm]
         self._Mb = _lower_band(Mp, p)
         self._Kb = _lower_band(Kp, p)
-        self._Mf = self._Mb.copy()
-        if not _band_cholesky(self._Mf):
-            raise ValueError("M restricted to the DOFs with mass is not positive definite")
         self._K = Kp.tocsr()
         # contact: free gap h = gap + a·q_l, q_c = B q_l + e λ (permuted l order)
         self.a = np.ascontiguousarray((-K_lc @ e)[perm])
         self._B = np.ascontiguousarray(-la.solve(K_cc, K_lc.T)[:, perm])
         self._e = e
-        self._Minv_a = self.a.copy()
-        _band_solve(self._Mf, self._Minv_a)
-        self._G = None  # M⁻¹ K_open, dense, built for the first Jacobian
 
         freqs, modes = model.linear_modes(self.mode)
         self.linear_frequency = float(freqs[-1])
@@ -232,63 +229,40 @@ class ShootingProblem:
 
     # ------------------------------------------------------------------ integration
     def _step_matrix(self, h: float):
-        """Band Cholesky factor of S = (4/h²) M + K_open, z = S⁻¹ a and α = a·z (cached per h)."""
+        """Band Cholesky factor of S = (4/h²) M + K_open, band P = (4/h²) M − K_open,
+        z = S⁻¹ a and α = a·z (cached per h)."""
         if self._S_cache is not None and self._S_cache[0] == h:
             return self._S_cache[1:]
         Sf = self._Kb + (4.0 / (h * h)) * self._Mb
+        Pb = (4.0 / (h * h)) * self._Mb - self._Kb
         if not _band_cholesky(Sf):
             raise ValueError(f"step matrix not positive definite at h = {h:g} s")
         z = self.a.copy()
         _band_solve(Sf, z)
         alpha = float(self.a @ z)
-        self._S_cache = (h, Sf, z, alpha)
-        return Sf, z, alpha
-
-    def _start(self, x: np.ndarray):
-        """q, v, acc at t = 0 (permuted order) and the active flag of the initial contact."""
-        q = np.ascontiguousarray(x[self.perm])
-        g = self.gap + self.a @ q
-        lam = self.contact_stiffness * max(0.0, -g)
-        acc = -(self._K @ q) + lam * self.a
-        _band_solve(self._Mf, acc)
-        return q, np.zeros(self.n_l), acc, g < 0
+        self._S_cache = (h, Sf, Pb, z, alpha)
+        return Sf, Pb, z, alpha
 
     def _check_omega(self, omega: float) -> float:
         if not (np.isfinite(omega) and omega > 0):
             raise ValueError(f"the frequency unknown must be positive, got Ω = {omega!r} rad/s")
         return 2 * np.pi / omega / self.N
 
-    def _dense_G(self) -> np.ndarray:
-        if self._G is None:
-            G = np.ascontiguousarray(self._K.toarray())  # rows = columns (symmetric)
-            _band_solve_rows(self._Mf, G)  # row j: M⁻¹ K e_j
-            self._G = G
-        return self._G
-
     def _integrate(self, x, omega, n_steps, tangents=None, store=False):
         """Integrate ``n_steps`` from the turning point x; tangents = (dq, dv, da, dh)."""
         h = self._check_omega(omega)
-        Sf, z, alpha = self._step_matrix(h)
-        q, v, acc, _ = self._start(x)
+        Sf, Pb, z, alpha = self._step_matrix(h)
         n = self.n_l
+        q, v = np.ascontiguousarray(x[self.perm]), np.zeros(n)
         if tangents is None:
-            tangents = (np.zeros((0, n)), np.zeros((0, n)), np.zeros((0, n)), np.zeros(0))
+            tangents = (np.zeros((0, n)), np.zeros((0, n)), np.zeros(0))
         if store:
             Q, V, LAM = np.empty((n_steps + 1, n)), np.empty((n_steps + 1, n)), np.empty(n_steps + 1)
         else:
             Q, V, LAM = np.empty((0, n)), np.empty((0, n)), np.empty(0)
-        closed = _trapezoid(Sf, self._Mb, self.a, z, alpha, self.contact_stiffness, self.gap, h, n_steps,
-                            q, v, acc, *tangents, Q, V, LAM)
-        return q, v, acc, closed, (Q, V, LAM)
-
-    def _position_tangents(self, q0, active0, scale):
-        """Tangents (dq, dv, da) of the initial state with respect to q_l(0) (rows scaled)."""
-        n = self.n_l
-        dq = np.diag(scale).astype(float)
-        da = -self._dense_G() * scale[:, None]
-        if active0:
-            da -= self.contact_stiffness * np.outer(self.a * scale, self._Minv_a)
-        return dq, np.zeros((n, n)), np.ascontiguousarray(da)
+        closed = _integrate(Sf, Pb, self._Mb, self._Kb, self.a, z, alpha, self.contact_stiffness, self.gap, h,
+                            n_steps, self.scheme == "avf", q, v, *tangents, Q, V, LAM)
+        return q, v, closed, (Q, V, LAM)
 
     # ------------------------------------------------------------------ residual
     def evaluate(self, u: np.ndarray, jacobian: bool = True):
@@ -297,17 +271,16 @@ class ShootingProblem:
         x, omega = self.unpack(u)
         half = self.N // 2
         if not jacobian:
-            _, v, _, _, _ = self._integrate(x, omega, half)
+            _, v, _, _ = self._integrate(x, omega, half)
             return v / self.rowscale
         n = self.n_l
         h = self._check_omega(omega)
-        q0, _, _, active0 = self._start(x)
-        dq, dv, da = self._position_tangents(q0, active0, self.xscale)
-        zero = np.zeros((1, n))
-        dq, dv, da = (np.ascontiguousarray(np.vstack([m_, zero])) for m_ in (dq, dv, da))
+        dq = np.zeros((n + 1, n))
+        dq[np.arange(n), np.arange(n)] = self.xscale
+        dv = np.zeros((n + 1, n))
         dh = np.zeros(n + 1)
         dh[-1] = -h / omega * self.omega_ref  # h = 2π/(Ω N): ∂h/∂(Ω/ω_ref)
-        _, v, _, _, _ = self._integrate(x, omega, half, (dq, dv, da, dh))
+        _, v, _, _ = self._integrate(x, omega, half, (dq, dv, dh))
         R = v / self.rowscale
         J = dv.T / self.rowscale[:, None]
         return R, J
@@ -346,12 +319,9 @@ class ShootingProblem:
         shape (2 n_l,), sorted by decreasing modulus."""
         x, omega = self.unpack(u)
         n = self.n_l
-        q0, _, _, active0 = self._start(x)
-        dq, dv, da = self._position_tangents(q0, active0, np.ones(n))
-        dq = np.ascontiguousarray(np.vstack([dq, np.zeros((n, n))]))
-        dv = np.ascontiguousarray(np.vstack([dv, np.eye(n)]))
-        da = np.ascontiguousarray(np.vstack([da, np.zeros((n, n))]))
-        self._integrate(x, omega, self.N, (dq, dv, da, np.zeros(2 * n)))
+        dq = np.vstack([np.eye(n), np.zeros((n, n))])
+        dv = np.vstack([np.zeros((n, n)), np.eye(n)])
+        self._integrate(x, omega, self.N, (dq, dv, np.zeros(2 * n)))
         monodromy = np.hstack([dq, dv]).T  # columns: tangents of (q, v)
         mu = la.eigvals(monodromy)
         return mu[np.argsort(-np.abs(mu), kind="stable")]
@@ -372,7 +342,7 @@ class ShootingProblem:
             return self._traj_cache[1]
         x, omega = self.unpack(u)
         half = self.N // 2
-        _, _, _, _, (Q, V, LAM) = self._integrate(x, omega, half, store=True)
+        _, _, _, (Q, V, LAM) = self._integrate(x, omega, half, store=True)
         # the second half mirrors the first: q(T − t) = q(t), v(T − t) = −v(t)
         Qf = np.vstack([Q, Q[half - 1 : 0 : -1]])
         Vf = np.vstack([V, -V[half - 1 : 0 : -1]])
