@@ -49,6 +49,9 @@ def test_dask_local_cluster_gives_identical_numbers(serial):
         via_client = studies.run_study(executor=client, **GRID)
     _same(serial, via_client)
     assert via_client.metadata["executor"].startswith("dask client")
+    local = studies.run_study(executor="dask", workers=1, **GRID)  # a local cluster of its own
+    _same(serial, local)
+    assert local.metadata["executor"] == "dask local cluster (1 workers)"
 
 
 def test_table_is_frequency_at_amplitude(serial):
@@ -148,6 +151,16 @@ def test_bad_grids(kwargs, error):
     args = {"executor": "serial", "elements": (4,), **kwargs}
     with pytest.raises(error):
         studies.run_study(**args)
+
+
+def test_method_axis_in_grid_order():
+    specs = studies.grid_specs(harmonics=(1, 3), elements=(8,), methods=("mmshbm", "penalty"),
+                               params={"grading": [5.0, 10.0]})
+    assert [(s.method, s.harmonics, s.source["grading"]) for s in specs] == [
+        ("mmshbm", 1, 5.0), ("mmshbm", 1, 10.0), ("mmshbm", 3, 5.0), ("mmshbm", 3, 10.0),
+        ("penalty", 1, 5.0), ("penalty", 1, 10.0), ("penalty", 3, 5.0), ("penalty", 3, 10.0)]
+    assert [s.index for s in specs] == list(range(8))
+    assert all("grading" not in s.options for s in specs)  # a mesh parameter, not a solver option
 
 
 def test_model_and_beam_exclusive():
