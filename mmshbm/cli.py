@@ -241,6 +241,8 @@ def cmd_bench(args) -> int:
         kwargs["methods"] = tuple(args.methods)
     if args.repeats is not None:
         kwargs["repeats"] = args.repeats
+    if args.amplitude is not None:
+        kwargs["amplitude_gaps"] = args.amplitude
     rows = benchmarking.compare_methods(**kwargs)
     print(benchmarking.format_table(rows))
     _wrote(*benchmarking.write_results(rows, _out(args)))
@@ -381,6 +383,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--target", type=float, default=None, help="relative frequency accuracy (default 1e-4)")
     p.add_argument("--methods", nargs="+", default=None, choices=["mmshbm", "penalty", "shooting"])
     p.add_argument("--repeats", type=int, default=None, help="timing repeats")
+    p.add_argument("--amplitude", type=float, default=None, help="amplitude (gaps) compared at (default 2)")
     p.set_defaults(func=cmd_bench)
 
     p = sub.add_parser("plot", help="plots of a saved branch or study (.npz)")
