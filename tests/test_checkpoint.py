@@ -233,3 +233,21 @@ def test_file_is_plain_json_lines(tmp_path):
     assert rows[-1] == {"end": "max_steps"}
     assert [r["index"] for r in rows[1:-1]] == list(range(len(br)))
     assert rows[1]["record"]["frequency"] == br.frequency[0]
+
+
+@pytest.mark.parametrize("method, options", [("penalty", {"harmonics": 5}), ("shooting", {})])
+def test_baselines_resume_point_for_point_with_their_records(tmp_path, method, options):
+    """The baselines share the driver: resuming them is exact too, and their extra
+    monitored quantities (shooting: floquet_max) reach Branch.records through the file."""
+    model = OneDofOscillator().model()
+    full = mmshbm.backbone(model, method=method, max_steps=16, **options)
+    path = tmp_path / f"{method}.ckpt"
+    part = mmshbm.backbone(model, method=method, max_steps=8, checkpoint=path, **options)
+    assert len(part) == 9
+    resumed = mmshbm.backbone(model, method=method, max_steps=16, resume=path, **options)
+    assert_same_branch(resumed, full)
+    assert resumed.records.keys() == full.records.keys()
+    for name, values in full.records.items():
+        np.testing.assert_array_equal(resumed.records[name], values)
+    if method == "shooting":
+        assert "floquet_max" in full.records and len(full.records["floquet_max"]) == len(full)
