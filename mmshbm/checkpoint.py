@@ -184,6 +184,8 @@ class CheckpointWriter:
         directory = self.path.parent
         if not directory.is_dir():
             raise ValueError(f"checkpoint directory {str(directory)!r} does not exist")
+        if self.path.is_dir():
+            raise ValueError(f"checkpoint {str(self.path)!r} is a directory; give a file name")
         self.header = {"format": CHECKPOINT_FORMAT, "version": CHECKPOINT_VERSION, **header}
         body = _line(self.header) + "".join(_line(p) for p in points)
         fd, tmp = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=".tmp", dir=directory)

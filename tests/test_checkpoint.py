@@ -221,6 +221,8 @@ def test_checkpoint_into_a_missing_directory(tmp_path):
     model = OneDofOscillator().model()
     with pytest.raises(ValueError, match="checkpoint directory .*nope.* does not exist"):
         mmshbm.backbone(model, harmonics=3, checkpoint=tmp_path / "nope" / "x.ckpt")
+    with pytest.raises(ValueError, match="is a directory; give a file name"):
+        mmshbm.backbone(model, harmonics=3, checkpoint=tmp_path)
     with pytest.raises(TypeError, match="resume must be a file path"):
         mmshbm.backbone(model, harmonics=3, resume=42)
 
