@@ -22,7 +22,7 @@ import sys, time
 import mmshbm
 model = mmshbm.default_beam().model(8)
 def slow(u, rec):
-    time.sleep(0.02)
+    time.sleep(0.04)
 mmshbm.backbone(model, harmonics=5, checkpoint=sys.argv[1], callback=slow)
 """
 
