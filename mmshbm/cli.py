@@ -116,6 +116,7 @@ def cmd_backbone(args) -> int:
     max_amp = args.max_amplitude * model.gap if args.max_amplitude else None
     extra = {}
     if args.checkpoint:
+        Path(args.checkpoint).parent.mkdir(parents=True, exist_ok=True)
         extra["checkpoint"] = args.checkpoint
     if args.resume:
         extra["resume"] = args.resume

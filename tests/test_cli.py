@@ -64,6 +64,18 @@ def test_checkpoint_and_resume_are_passed_through(tmp_path, monkeypatch):
     assert seen["checkpoint"] == ck and seen["resume"] == ck
 
 
+def test_checkpoint_then_resume_equals_one_run(tmp_path):
+    assert main(["backbone", *SMALL, "--out", str(tmp_path / "full")]) == 0
+    ck = str(tmp_path / "ck" / "c.npz")  # the folder is created
+    argv = ["backbone", *SMALL, "--max-steps", "5", "--checkpoint", ck, "--out", str(tmp_path / "a")]
+    assert main(argv) == 0
+    assert Branch.load(tmp_path / "a" / "backbone.npz").status == "max_steps"
+    assert main(["backbone", *SMALL, "--resume", ck, "--out", str(tmp_path / "b")]) == 0
+    full, resumed = (Branch.load(tmp_path / d / "backbone.npz") for d in ("full", "b"))
+    assert resumed.status == "bound:amplitude"
+    np.testing.assert_array_equal(resumed.states, full.states)
+
+
 def test_modes(tmp_path, capsys):
     assert main(["modes", "-n", "2", "--elements", "8", "--out", str(tmp_path)]) == 0
     rows = np.loadtxt(tmp_path / "modes.csv", delimiter=",", skiprows=1)
