@@ -116,3 +116,14 @@ def test_index_checks(beam_branch):
         beam_branch.harmonic_content(len(beam_branch))
     with pytest.raises(TypeError):
         beam_branch.contact_force(1.5)
+
+
+def test_shooting_records_round_trip(tmp_path):
+    branch = mmshbm.backbone(OSC.model(), method="shooting", max_amplitude=2.0)
+    assert "floquet_max" in branch.records
+    loaded = Branch.load(branch.save(tmp_path / "s.npz"))
+    _assert_identical(branch, loaded)
+    header = loaded.to_csv(tmp_path / "s.csv").read_text().splitlines()[0]
+    assert "floquet_max" in header.split(",")
+    # conservative system: the largest Floquet multiplier has modulus 1 (up to the time step)
+    np.testing.assert_allclose(loaded.records["floquet_max"], 1.0, atol=1e-2)
