@@ -317,8 +317,9 @@ class ShootingProblem:
         bordered with that condition. ``guess``: scaled unknowns (default the linear mode).
         Converged when the scaled residual is <= ``tol``, or <= √tol with the last Newton
         update below 1e-9 (relative): on strongly unstable orbits round-off in the
-        integration leaves a residual floor above ``tol`` while Newton has converged. Far from the solution the Ω update is limited to 20 %. Returns the
-        scaled unknowns; raises RuntimeError without convergence."""
+        integration leaves a residual floor above ``tol`` while Newton has converged. Far
+        from the solution the Ω update is limited to 20 %. Returns the scaled unknowns;
+        raises RuntimeError without convergence."""
         amplitude = check.positive("amplitude", amplitude)
         u = self.linear_point(amplitude) if guess is None else np.array(guess, dtype=float)
         # amplitude at t = 0 (open contact): -stop_side * (B x)[contact], a linear row in u
@@ -425,12 +426,16 @@ class ShootingProblem:
         t, ql = self._resample(u, n_samples)
         return t, self._massless(ql)[1]
 
-    def harmonic_content(self, u: np.ndarray, dof: int | None = None, harmonics: int = 10) -> np.ndarray:
+    def harmonic_content(self, u: np.ndarray, dof: int | None = None,
+                         harmonics: int | None = None) -> np.ndarray:
         """|Q_k| for k = 0..harmonics of ``dof`` (default the contact DOF), from the DFT of
-        the N step samples over one period; shape (harmonics+1,)."""
+        the N step samples over one period; shape (harmonics+1,). ``harmonics`` defaults
+        to min(10, N/2 − 1)."""
         dof = self.model.contact_dof if dof is None else check.integer("dof", dof)
         if not 0 <= dof < self.model.n_dof:
             raise ValueError(f"dof must be in [0, {self.model.n_dof - 1}], got {dof}")
+        if harmonics is None:
+            harmonics = min(10, self.N // 2 - 1)
         harmonics = check.integer("harmonics", harmonics, minimum=0)
         if harmonics > self.N // 2 - 1:
             raise ValueError(f"harmonics must be <= N/2 - 1 = {self.N // 2 - 1}, got {harmonics}")
