@@ -1,0 +1,465 @@
+"""Accuracy against cost: MMS-HBM, penalty-HBM and shooting at equal accuracy.
+
+``mmshbm bench`` calls :func:`compare_methods`, prints :func:`format_table` and writes
+:func:`write_results`. Each method is *tuned* to an accuracy target in the relative error
+of the backbone frequency at one amplitude (default 2 gaps) against a reference, then its
+whole backbone (from half a gap up to that amplitude, compiled kernels, the fastest of
+``repeats`` runs) is timed.
+
+Tuning. Each method walks a ladder of its resolution parameter (MMS-HBM: the harmonics
+H; penalty-HBM: H for each penalty stiffness k_p = factor · k_c; shooting: time steps per
+period). Harmonic-balance errors of a nonsmooth problem are not monotone in H (a lucky
+H can hit the target by cancellation and the next one miss it), so a setting counts as
+reaching the target only if it **and the next rung of the ladder** both do ("robustly
+converged to the target"); the cheapest such setting is chosen. A method that never
+gets there is reported with its most accurate setting and ``target_met = False``.
+
+References (column ``reference``):
+
+* one-DOF oscillator: the closed form :meth:`~mmshbm.examples.OneDofOscillator.frequency`;
+* beam: :func:`mmshbm.exact.periodic_orbit` started from the MMS-HBM (H = 5) orbit, if it
+  converges; otherwise a high-H MMS-HBM run if H = 25 and H = 40 agree to a tenth of the
+  target; otherwise (*equal H*, DESIGN.md section 4: "compare on the beam at equal H")
+  the H = 5 MMS-HBM solution with N = 1024 samples, i.e. the nonlinear mode of the
+  5-harmonic problem converged in N. Then both harmonic-balance methods use H = 5
+  (MMS-HBM's only free resolution is N; penalty-HBM is tuned in k_p) and shooting, which
+  does not truncate harmonics, is measured against the same number: its error there is
+  the difference of the models, not its time-step error, and is reported as such.
+
+Timings are wall-clock on whatever machine runs this; on a shared machine they are noisy
+(take the ratios as order-of-magnitude figures). Peak memory is the ``tracemalloc`` peak
+of one whole backbone (Python and NumPy allocations; not the process RSS).
+"""
+
+from __future__ import annotations
+
+import csv
+import logging
+import math
+import time
+import tracemalloc
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["compare_methods", "format_table", "write_results", "element_scaling", "format_scaling",
+           "METHOD_NAMES", "load_model"]
+
+log = logging.getLogger(__name__)
+
+#: display names of the methods
+METHOD_NAMES = {"mmshbm": "MMS-HBM", "penalty": "penalty-HBM", "shooting": "shooting"}
+
+# ladders of the resolution parameters: (full, quick)
+_H_LADDER = ((1, 3, 5, 7, 9, 11, 13, 15, 20, 25, 30, 40), (3, 5, 9, 15, 25))
+_PENALTY_H = ((5, 9, 15, 25, 40), (9, 15, 25))
+_PENALTY_FACTORS = ((1e2, 1e3, 1e4, 1e5, 1e6), (1e3, 1e4, 1e5))
+_STEPS = ((32, 64, 128, 256, 512, 1024, 2048, 4096), (64, 128, 256, 512, 1024))
+_BEAM_STEPS = ((128, 256, 512, 1024, 2048), (128, 256))
+#: equal-H fallback on the beam: the seed's H, and the N of the reference solution
+_EQUAL_H = 5
+_REFERENCE_N = 1024
+#: high-H reference check on the beam
+_HIGH_H = (25, 40)
+
+_COLUMNS = ["model", "method", "setting", "harmonics", "penalty_factor", "steps_per_period", "unknowns",
+            "time_s", "time_ratio", "peak_memory_mib", "newton_iterations", "continuation_steps",
+            "frequency_hz", "reference_hz", "error", "target", "target_met", "amplitude_gaps", "reference",
+            "status", "settings_tried"]
+
+
+# ---------------------------------------------------------------------- models
+def load_model(name: str):
+    """The model called ``name``: ``"oscillator"`` (one-DOF, m = k1 = 1, k2 = 4, gap 1) or
+    ``"beam<n>"`` (the default beam with n elements, e.g. ``"beam21"``).
+
+    Returns (model, oscillator or None).
+    """
+    import mmshbm
+    from mmshbm.examples import OneDofOscillator
+
+    if not isinstance(name, str):
+        raise TypeError(f"model must be a name such as 'beam21' or 'oscillator', got {name!r}")
+    if name in ("oscillator", "one_dof", "onedof"):
+        osc = OneDofOscillator(1.0, 1.0, 4.0, 1.0)
+        return osc.model(), osc
+    if name.startswith("beam") and name[4:].isdigit() and int(name[4:]) >= 1:
+        return mmshbm.default_beam().model(int(name[4:])), None
+    raise ValueError(f"unknown model {name!r}: use 'oscillator' or 'beam<n elements>' (e.g. 'beam21')")
+
+
+# ---------------------------------------------------------------------- runs
+@dataclass
+class _Run:
+    method: str
+    options: dict
+    frequency: float
+    error: float
+    seconds: float
+    branch: object = field(repr=False, default=None)
+
+    @property
+    def ok(self) -> bool:
+        return bool(np.isfinite(self.error))
+
+
+def _backbone(model, method: str, amplitude: float, options: dict):
+    import mmshbm
+
+    opts = dict(options)
+    harmonics = opts.pop("harmonics", 5)
+    factor = opts.pop("penalty_factor", None)
+    if factor is not None:
+        from mmshbm.baselines.penalty_hbm import _condensed_contact_stiffness
+
+        opts["penalty_stiffness"] = factor * _condensed_contact_stiffness(model)
+    return mmshbm.backbone(model, harmonics=harmonics, method=method, max_amplitude=amplitude, **opts)
+
+
+def _run(model, method, amplitude, options, f_ref) -> _Run:
+    t0 = time.perf_counter()
+    try:
+        branch = _backbone(model, method, amplitude, options)
+    except (ArithmeticError, ValueError, np.linalg.LinAlgError) as err:
+        log.info("%s %s failed: %s", method, options, err)
+        return _Run(method, dict(options), math.nan, math.nan, time.perf_counter() - t0)
+    seconds = time.perf_counter() - t0
+    f = _reached_frequency(branch, amplitude)
+    err = abs(f - f_ref) / f_ref if np.isfinite(f) else math.nan
+    log.info("%s %s: f = %.9g Hz, error %.3g, %.3f s", method, options, f, err, seconds)
+    return _Run(method, dict(options), f, err, seconds, branch)
+
+
+def _reached_frequency(branch, amplitude: float) -> float:
+    """Frequency (Hz) at ``amplitude`` if the branch reached it, else NaN."""
+    if len(branch) == 0 or not np.nanmax(branch.amplitude) >= amplitude * (1 - 1e-9):
+        return math.nan
+    return float(branch.frequency_at(amplitude))
+
+
+def _meets(run: _Run, target: float) -> bool:
+    return run.ok and run.error <= target
+
+
+def _tune_ladder(model, method, amplitude, f_ref, target, ladder) -> tuple[_Run | None, list[_Run]]:
+    """Walk ``ladder`` (list of option dicts, coarse to fine) until a rung and the next both
+    meet the target; returns (chosen run or None, all runs)."""
+    runs = []
+    for options in ladder:
+        runs.append(_run(model, method, amplitude, options, f_ref))
+        if len(runs) >= 2 and _meets(runs[-2], target) and _meets(runs[-1], target):
+            return runs[-2], runs
+    if runs and _meets(runs[-1], target) and (len(runs) == 1 or not _meets(runs[-2], target)):
+        return runs[-1], runs  # the finest rung meets it; nothing finer to confirm with
+    return None, runs
+
+
+def _most_accurate(runs: list[_Run]) -> _Run:
+    finite = [r for r in runs if r.ok]
+    return min(finite, key=lambda r: r.error) if finite else runs[-1]
+
+
+# ---------------------------------------------------------------------- references
+@dataclass
+class _Reference:
+    frequency: float
+    label: str
+    equal_h: bool = False
+
+
+def _reference(model, osc, amplitude: float, target: float) -> _Reference:
+    if osc is not None:
+        return _Reference(float(osc.frequency(amplitude)), "closed form (one-DOF oscillator)")
+    import mmshbm
+
+    seed = mmshbm.backbone(model, harmonics=_EQUAL_H, max_amplitude=amplitude)
+    f_seed = _reached_frequency(seed, amplitude)
+    try:
+        orbit = _exact_orbit(model, seed, amplitude)
+    except (ArithmeticError, ValueError, np.linalg.LinAlgError, ImportError) as err:
+        log.info("exact periodic orbit failed: %s", err)
+        orbit = None
+    if orbit is not None and orbit.converged:
+        return _Reference(float(orbit.frequency), f"mmshbm.exact.periodic_orbit "
+                                                  f"({orbit.n_contacts} contact(s) per period)")
+    log.info("no converged exact orbit at %.4g m%s", amplitude,
+             "" if orbit is None else f" ({orbit.n_contacts} contacts, residual {orbit.residual:.2e})")
+    high = [_reached_frequency(mmshbm.backbone(model, harmonics=H, max_amplitude=amplitude), amplitude)
+            for H in _HIGH_H]
+    if all(np.isfinite(high)) and abs(high[1] - high[0]) <= 0.1 * target * abs(high[1]):
+        return _Reference(high[1], f"MMS-HBM H={_HIGH_H[1]} (H={_HIGH_H[0]} agrees to "
+                                   f"{abs(high[1] - high[0]) / high[1]:.1e})")
+    ref = mmshbm.backbone(model, harmonics=_EQUAL_H, max_amplitude=amplitude, n_samples=_REFERENCE_N)
+    f_ref = _reached_frequency(ref, amplitude)
+    if not np.isfinite(f_ref):
+        raise ValueError(f"no reference: MMS-HBM H={_EQUAL_H} does not reach {amplitude:g} m on this model")
+    high_txt = ", ".join(f"H={H}: {f:.6g} Hz" for H, f in zip(_HIGH_H, high, strict=True))
+    return _Reference(f_ref, f"equal H: MMS-HBM H={_EQUAL_H}, N={_REFERENCE_N} (no converged exact orbit; "
+                             f"not converged in H: {high_txt}; H={_EQUAL_H} default N: {f_seed:.9g} Hz)",
+                      equal_h=True)
+
+
+def _exact_orbit(model, branch, amplitude):
+    """Exact symmetric orbit at ``amplitude`` started from the last point of ``branch``."""
+    from mmshbm import exact
+
+    if len(branch) == 0:
+        return None
+    i = len(branch) - 1
+    _, q = branch.time_signals(i, n_samples=512)
+    j = int(np.argmax(-model.stop_side * q[model.contact_dof]))
+    guess = (q[model.l, j], 0.5 / float(branch.frequency[i]))
+    return exact.periodic_orbit(model, amplitude, guess)
+
+
+# ---------------------------------------------------------------------- ladders
+def _ladders(method: str, quick: bool, beam: bool, equal_h: bool) -> list[list[dict]]:
+    q = 1 if quick else 0
+    if method == "mmshbm":
+        if equal_h:
+            return [[{"harmonics": _EQUAL_H}] + [{"harmonics": _EQUAL_H, "n_samples": n} for n in (256, 512)]]
+        return [[{"harmonics": H} for H in _H_LADDER[q]]]
+    if method == "penalty":
+        Hs = (_EQUAL_H,) if equal_h else _PENALTY_H[q]
+        if equal_h:
+            return [[{"harmonics": _EQUAL_H, "penalty_factor": f} for f in _PENALTY_FACTORS[q]]]
+        return [[{"harmonics": H, "penalty_factor": f} for H in Hs] for f in _PENALTY_FACTORS[q]]
+    if method == "shooting":
+        steps = _BEAM_STEPS[q] if beam else _STEPS[q]
+        return [[{"steps_per_period": s} for s in steps]]
+    raise ValueError(f"unknown method {method!r}; choose from {sorted(METHOD_NAMES)}")
+
+
+def _setting(method: str, options: dict) -> str:
+    parts = []
+    if method != "shooting":
+        parts.append(f"H={options.get('harmonics', 5)}")
+    if "n_samples" in options:
+        parts.append(f"N={options['n_samples']}")
+    if "penalty_factor" in options:
+        parts.append(f"k_p={options['penalty_factor']:.0e} k_c")
+    if "steps_per_period" in options:
+        parts.append(f"{options['steps_per_period']} steps/period")
+    return ", ".join(parts)
+
+
+# ---------------------------------------------------------------------- measurement
+def _measure(model, method, amplitude, options, repeats):
+    """(fastest time (s) of ``repeats`` whole backbones, peak tracemalloc MiB, last branch)."""
+    best, branch = math.inf, None
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        branch = _backbone(model, method, amplitude, options)
+        best = min(best, time.perf_counter() - t0)
+    tracemalloc.start()
+    try:
+        _backbone(model, method, amplitude, options)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    return best, peak / 2**20, branch
+
+
+def compare_methods(model: str = "beam21", amplitude_gaps: float = 2.0, target: float = 1e-4,
+                    methods=("mmshbm", "penalty", "shooting"), repeats: int = 3,
+                    quick: bool = False) -> list[dict]:
+    """Tune each method to ``target`` and measure its cost (module docstring).
+
+    Parameters
+    ----------
+    model : str
+        ``"beam21"`` (default beam, 21 elements), ``"beam8"``, any ``"beam<n>"``, or
+        ``"oscillator"`` (one-DOF, closed-form reference).
+    amplitude_gaps : float
+        Amplitude of the comparison in gaps (> 1: above grazing).
+    target : float
+        Relative frequency error to reach, in (0, 1).
+    methods : sequence of {"mmshbm", "penalty", "shooting"}
+        A method that is not installed is skipped with a warning.
+    repeats : int
+        Timed whole-backbone runs per method (the fastest counts), >= 1.
+    quick : bool
+        Shorter ladders (for tests and CI).
+
+    Returns
+    -------
+    list of dict
+        One row per method with the keys of :data:`_COLUMNS`: ``setting`` (the chosen
+        resolution), ``unknowns``, ``time_s``, ``time_ratio`` (time / MMS-HBM's time),
+        ``peak_memory_mib``, ``newton_iterations``, ``continuation_steps``,
+        ``frequency_hz``, ``reference_hz``, ``error`` (relative), ``target_met``,
+        ``reference`` (what the reference is), ``status`` and ``settings_tried``.
+    """
+    from . import _validate as check
+
+    if isinstance(methods, str):
+        methods = (methods,)
+    methods = tuple(methods)
+    if not methods:
+        raise ValueError("methods must name at least one method")
+    for m in methods:
+        if m not in METHOD_NAMES:
+            raise ValueError(f"unknown method {m!r}; choose from {sorted(METHOD_NAMES)}")
+    amplitude_gaps = check.positive("amplitude_gaps", amplitude_gaps)
+    target = check.positive("target", target)
+    if not target < 1:
+        raise ValueError(f"target must be a relative error in (0, 1), got {target!r}")
+    repeats = check.integer("repeats", repeats, minimum=1)
+    mdl, osc = load_model(model)
+    amplitude = amplitude_gaps * mdl.gap
+    ref = _reference(mdl, osc, amplitude, target)
+    log.info("reference %.12g Hz: %s", ref.frequency, ref.label)
+
+    rows = []
+    for method in methods:
+        if method == "shooting" and not _available("shooting"):
+            log.warning("shooting is not available: skipped")
+            continue
+        runs, candidates = [], []
+        for ladder in _ladders(method, quick, osc is None, ref.equal_h):
+            chosen, tried = _tune_ladder(mdl, method, amplitude, ref.frequency, target, ladder)
+            runs += tried
+            if chosen is not None:
+                candidates.append(chosen)
+        met = bool(candidates)
+        pick = min(candidates, key=lambda r: r.seconds) if met else _most_accurate(runs)
+        seconds, peak, branch = _measure(mdl, method, amplitude, pick.options, repeats)
+        solver = branch.solver
+        rows.append({
+            "model": model, "method": method, "setting": _setting(method, pick.options),
+            "harmonics": int(pick.options.get("harmonics", 0)) if method != "shooting" else 0,
+            "penalty_factor": pick.options.get("penalty_factor", math.nan),
+            "steps_per_period": int(pick.options.get("steps_per_period", 0)),
+            "unknowns": int(solver.n_unknowns), "time_s": seconds, "time_ratio": math.nan,
+            "peak_memory_mib": peak, "newton_iterations": int(np.sum(branch.newton_iterations)),
+            "continuation_steps": max(len(branch) - 1, 0), "frequency_hz": pick.frequency,
+            "reference_hz": ref.frequency, "error": pick.error, "target": target, "target_met": met,
+            "amplitude_gaps": amplitude_gaps, "reference": ref.label, "status": branch.status,
+            "settings_tried": len(runs),
+        })
+    base = next((r["time_s"] for r in rows if r["method"] == "mmshbm"), None)
+    if base:
+        for r in rows:
+            r["time_ratio"] = r["time_s"] / base
+    return rows
+
+
+def _available(method: str) -> bool:
+    import importlib
+
+    from .api import METHODS
+
+    try:
+        importlib.import_module(METHODS[method].split(":")[0])
+    except ImportError:
+        return False
+    return True
+
+
+# ---------------------------------------------------------------------- output
+def format_table(rows: list[dict]) -> str:
+    """Markdown table of :func:`compare_methods` rows, with the reference underneath."""
+    if not rows:
+        return "(no results)"
+    head = ("| method | setting | unknowns | time (ms) | × MMS-HBM | peak mem (MiB) | Newton it. | steps "
+            "| f (Hz) | rel. error | target met |")
+    lines = [head, "|" + "---|" * 11]
+    for r in rows:
+        ratio = "" if not np.isfinite(r["time_ratio"]) else f"{r['time_ratio']:.1f}"
+        lines.append(
+            f"| {METHOD_NAMES.get(r['method'], r['method'])} | {r['setting']} | {r['unknowns']} "
+            f"| {1e3 * r['time_s']:.1f} | {ratio} | {r['peak_memory_mib']:.2f} | {r['newton_iterations']} "
+            f"| {r['continuation_steps']} | {r['frequency_hz']:.9g} | {r['error']:.2e} "
+            f"| {'yes' if r['target_met'] else 'no'} |")
+    r0 = rows[0]
+    lines.append("")
+    lines.append(f"Model {r0['model']}, amplitude {r0['amplitude_gaps']:g} gaps, target {r0['target']:g} "
+                 f"relative frequency error; reference {r0['reference_hz']:.12g} Hz: {r0['reference']}. "
+                 "Time: fastest of the repeats, whole backbone from half a gap, kernels compiled.")
+    return "\n".join(lines)
+
+
+def write_results(rows: list[dict], out_dir) -> list[Path]:
+    """Write ``bench.csv`` (all columns) and ``bench.md`` (:func:`format_table`) into
+    ``out_dir``; returns the two paths."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    csv_path, md_path = out / "bench.csv", out / "bench.md"
+    with csv_path.open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=_COLUMNS, extrasaction="ignore")
+        writer.writeheader()
+        for r in rows:
+            writer.writerow({k: (repr(v) if isinstance(v, float) else v) for k, v in r.items()})
+    md_path.write_text(format_table(rows) + "\n")
+    return [csv_path, md_path]
+
+
+# ---------------------------------------------------------------------- scaling
+def element_scaling(elements=(8, 21, 100, 1000), harmonics: int = 5, amplitude_gaps: float = 2.0,
+                    repeats: int = 3) -> tuple[list[dict], float]:
+    """Cost of MMS-HBM against the number of beam elements.
+
+    For each element count: the whole backbone up to ``amplitude_gaps`` (fastest of
+    ``repeats``), its Newton iterations, and the time of one residual + Jacobian
+    evaluation (fastest of 20). The branches differ between meshes (more points where a
+    finer mesh meets more internal resonances), so the exponent is fitted to the time
+    **per Newton iteration** (whole backbone time / Newton iterations), which is the
+    cost the mesh size controls; each row also has the raw times.
+
+    Returns
+    -------
+    rows : list of dict
+        ``elements, n_dof, unknowns, time_s, newton_iterations, continuation_steps,
+        time_per_iteration_s, evaluate_s, frequency_hz``.
+    exponent : float
+        Least-squares slope of log(time per Newton iteration) against log(elements).
+    """
+    import mmshbm
+    from mmshbm.api import make_problem
+
+    from . import _validate as check
+
+    elements = [check.integer("elements", n, minimum=1) for n in elements]
+    if len(elements) < 2:
+        raise ValueError(f"need at least two element counts, got {elements}")
+    beam = mmshbm.default_beam()
+    rows = []
+    for n in elements:
+        model = beam.model(n)
+        amplitude = amplitude_gaps * model.gap
+        seconds, _, branch = _measure(model, "mmshbm", amplitude, {"harmonics": harmonics}, repeats)
+        problem = make_problem(model, "mmshbm", harmonics=harmonics)
+        u = branch.states[-1]
+        problem.evaluate(u)
+        ev = math.inf
+        for _ in range(20):
+            t0 = time.perf_counter()
+            problem.evaluate(u, jacobian=True)
+            ev = min(ev, time.perf_counter() - t0)
+        nit = int(np.sum(branch.newton_iterations))
+        rows.append({"elements": n, "n_dof": model.n_dof, "unknowns": problem.n_unknowns, "time_s": seconds,
+                     "newton_iterations": nit, "continuation_steps": len(branch) - 1,
+                     "time_per_iteration_s": seconds / max(nit, 1), "evaluate_s": ev,
+                     "frequency_hz": _reached_frequency(branch, amplitude)})
+    x = np.log([r["elements"] for r in rows])
+    y = np.log([r["time_per_iteration_s"] for r in rows])
+    exponent = float(np.polyfit(x, y, 1)[0])
+    return rows, exponent
+
+
+def format_scaling(rows: list[dict], exponent: float) -> str:
+    """Markdown table of :func:`element_scaling`."""
+    lines = ["| elements | DOFs | time (ms) | Newton it. | steps | ms / iteration | evaluate (µs) | f (Hz) |",
+             "|" + "---|" * 8]
+    for r in rows:
+        lines.append(f"| {r['elements']} | {r['n_dof']} | {1e3 * r['time_s']:.1f} | {r['newton_iterations']} "
+                     f"| {r['continuation_steps']} | {1e3 * r['time_per_iteration_s']:.3f} "
+                     f"| {1e6 * r['evaluate_s']:.0f} | {r['frequency_hz']:.6g} |")
+    x = np.log([r["elements"] for r in rows])
+    y = np.log([r["time_s"] for r in rows])
+    whole = float(np.polyfit(x, y, 1)[0])
+    lines.append("")
+    lines.append(f"Cost exponent (time per Newton iteration ∝ elements^p): p = {exponent:.2f}; "
+                 f"whole backbone: p = {whole:.2f}.")
+    return "\n".join(lines)
