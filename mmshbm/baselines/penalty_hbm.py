@@ -1,0 +1,413 @@
+"""Baseline 1: classical harmonic balance on all DOFs, the stop as a penalty spring.
+
+This is how general harmonic-balance tools treat contact (DESIGN.md section 3). Every DOF
+of the finite-element model is expanded, and the rigid stop becomes a one-sided spring of
+stiffness k_p at the contact DOF:
+
+    (K − (kΩ)² M) Q_k + proj_k(f_nl(q(τ))) = 0,      k = 0..H, all n DOFs,
+    f_nl = −W λ,   λ(τ) = k_p max(0, −g_N(τ)),   g_N = gap − stop_side · q[contact_dof],
+
+with ``W = −stop_side e_contact`` (:class:`~mmshbm.model.Model`), i.e. the spring pushes the
+contact DOF away from the stop with the force λ >= 0. The massless contact node keeps zero
+mass: between impacts it follows the structure statically, as in MMS-HBM.
+
+Conventions follow :mod:`mmshbm.mms_hbm`:
+
+* Cosine-only (time-symmetric) ansatz q(τ) = Σ_k Q_k cos kτ on every DOF. It anchors the
+  phase at a turning point and removes the energy-balance identity of the conservative
+  family (it lives in the sine projections, which vanish for an even q), so the n(H+1)
+  equations in n(H+1)+1 unknowns (the Q_k of all DOFs and Ω) have full row rank along the
+  branch.
+* Alternating frequency-time on the contact DOF only: it is the only DOF with a nonlinear
+  force. Its cosine series is synthesised on N samples (pyfftw, :func:`~mmshbm.harmonics.transform`),
+  the penalty force and its active set s_j = [g_N(τ_j) < 0] are evaluated by a Numba kernel,
+  and λ is projected back on harmonics 0..H.
+* Analytic, sparse Jacobian. Harmonic k's block is K − (kΩ)² M (sparse, the pattern of the
+  FE matrices); the penalty couples the harmonics only in the contact DOF's row and column,
+  ∂R_{m,c}/∂Q_{k,c} += k_p P_{mk} with P the cosine product matrix of the active set
+  (:func:`~mmshbm.kernels._cosine_product_matrix`); the Ω column is −2k²Ω M Q_k. The CSR
+  pattern is built once; each evaluation only fills its data vector (a Numba kernel), so the
+  cost per Jacobian is that of writing its non-zeros, not of scipy sparse arithmetic.
+* Scaled unknowns: Q_k,i by gap·max(|φ_i|, 10⁻³ max|φ|)·ρ, with φ the first linear mode
+  normalised to a unit contact-DOF swing; Ω by ω_1; row i by the force scale (|K| s)_i. The
+  factor ρ = ‖φ/s‖ / ‖φ_c/s_c‖ makes the scaled norm of the linear mode equal to that of
+  MMS-HBM's unknowns (the massless DOFs only), so an arclength step means the same change of
+  amplitude in both methods; without it the arclength would grow like √n with the DOF
+  count, and point counts would compare the scalings, not the methods.
+
+Choice of k_p and its error. Within contact the penalty spring is in series with the
+structure, so the contact constraint is violated by a penetration of order λ/k_p and the
+closed-contact stiffness seen by a mode is lowered by a relative amount of order
+k_eff/k_p, with k_eff the modal stiffness of the constraint (for the one-DOF oscillator
+k_eff = k2²/(k1+k2), four times its condensed contact stiffness k_c). The backbone's
+relative frequency error is a fraction of that (the closed phase lasts part of the period):
+
+    |f_penalty − f| / f  ≈  C · k_c / k_p,     C = O(0.1..1),
+
+measured C ≈ 0.5 on the one-DOF oscillator at amplitude 2 gaps (tests/test_penalty_hbm.py).
+The default k_p = 10³ k_c, with k_c = (w_cᵀ D_0⁻¹ w_c)⁻¹ the condensed static contact
+stiffness, gives errors ~10⁻⁴..10⁻³. Larger k_p is more accurate, but the penalty force
+becomes a steeper function of the displacement: its harmonics decay more slowly (more
+harmonics H and samples N are needed for the same truncation error), the Jacobian's
+condition number grows like k_p/k_c, and Newton's semismooth iteration has to resolve an
+active set within a penetration of only λ/k_p.
+
+Energy. The penalty system conserves the energy of the structure *plus* the spring; the
+monitored energy is the period average of the structure's kinetic and potential energy
+(as in MMS-HBM) plus the period average of the spring's ½ k_p max(0, −g_N)², which tends
+to zero as k_p → ∞ (it is of order λ²/k_p).
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from .. import _validate as check
+from ..condense import Condensation
+from ..harmonics import check_harmonics, transform
+from ..kernels import _cosine_product_matrix
+from ..mms_hbm import _mean_energy, _refined_max
+from ..model import Model
+from ._penalty_kernels import _penalty_contact, _penalty_hbm_jacobian
+
+__all__ = ["PenaltyHBMProblem", "DEFAULT_PENALTY_FACTOR"]
+
+log = logging.getLogger(__name__)
+
+#: Default penalty stiffness in units of the condensed static contact stiffness k_c.
+DEFAULT_PENALTY_FACTOR = 1e3
+
+
+@dataclass(frozen=True)
+class _Pattern:
+    """Fixed CSR pattern of the Jacobian and where each kind of entry sits in it.
+
+    Attributes
+    ----------
+    indices, indptr : ndarray of int32
+        CSR column indices (nnz,) and row pointers (n_rows + 1,).
+    shape : tuple of int
+        (n(H+1), n(H+1) + 1).
+    K_data, M_data : ndarray, shape (nnz_A,)
+        K and M on the union pattern A of one harmonic block.
+    block_pos : ndarray of int64, shape (H+1, nnz_A)
+        CSR position of entry e of block k.
+    coupling_pos : ndarray of int64, shape (H+1, H+1)
+        CSR position of (row m·n + contact_dof, column k·n + contact_dof).
+    omega_rows : ndarray of int64, shape (n_l,)
+        DOFs with mass: the rows of the Ω column in each harmonic k >= 1.
+    omega_pos : ndarray of int64, shape (H, n_l)
+        CSR position of (row k·n + omega_rows[r], Ω column), k = 1..H.
+    """
+
+    indices: np.ndarray
+    indptr: np.ndarray
+    shape: tuple
+    K_data: np.ndarray
+    M_data: np.ndarray
+    block_pos: np.ndarray
+    coupling_pos: np.ndarray
+    omega_rows: np.ndarray
+    omega_pos: np.ndarray
+
+    @property
+    def rows(self) -> np.ndarray:
+        """Row index of every stored entry, shape (nnz,)."""
+        return np.repeat(np.arange(self.shape[0]), np.diff(self.indptr))
+
+
+def _jacobian_pattern(K: sp.csr_matrix, M: sp.csr_matrix, harmonics: int, contact_dof: int,
+                      mass_dofs: np.ndarray) -> _Pattern:
+    """Build the CSR pattern of the penalty-HBM Jacobian once.
+
+    Rows and columns are numbered k·n + i (harmonic k, DOF i); the last column is Ω.
+    """
+    n, H1 = K.shape[0], harmonics + 1
+    A = (abs(K) + abs(M)).tocsr()
+    A.sum_duplicates()
+    A.sort_indices()
+    a_rows = np.repeat(np.arange(n), np.diff(A.indptr))
+    a_cols = A.indices.astype(np.int64)
+    K_data = np.asarray(K[a_rows, a_cols]).ravel()
+    M_data = np.asarray(M[a_rows, a_cols]).ravel()
+    diag = np.flatnonzero((a_rows == contact_dof) & (a_cols == contact_dof))
+    if len(diag) != 1:  # pragma: no cover - K is positive definite, its diagonal is stored
+        raise ValueError("K has no stored diagonal entry at the contact DOF")
+
+    k = np.arange(H1)
+    blk_r = (k[:, None] * n + a_rows[None, :]).ravel()
+    blk_c = (k[:, None] * n + a_cols[None, :]).ravel()
+    m_, k_ = np.nonzero(~np.eye(H1, dtype=bool))
+    cpl_r, cpl_c = m_ * n + contact_dof, k_ * n + contact_dof
+    mass_dofs = np.asarray(mass_dofs, dtype=np.int64)
+    om_r = ((k[1:, None]) * n + mass_dofs[None, :]).ravel()
+    om_c = np.full(om_r.shape, H1 * n)
+
+    rows = np.concatenate([blk_r, cpl_r, om_r])
+    cols = np.concatenate([blk_c, cpl_c, om_c])
+    order = np.lexsort((cols, rows))  # CSR order
+    position = np.empty_like(order)
+    position[order] = np.arange(len(order))
+    n_blk, n_cpl = len(blk_r), len(cpl_r)
+    block_pos = position[:n_blk].reshape(H1, len(a_rows))
+    coupling_pos = np.empty((H1, H1), dtype=np.int64)
+    coupling_pos[m_, k_] = position[n_blk : n_blk + n_cpl]
+    coupling_pos[k, k] = block_pos[k, diag[0]]
+    omega_pos = position[n_blk + n_cpl :].reshape(harmonics, len(mass_dofs))
+    n_rows = H1 * n
+    indptr = np.zeros(n_rows + 1, dtype=np.int64)
+    np.cumsum(np.bincount(rows, minlength=n_rows), out=indptr[1:])
+    itype = np.int32 if max(len(rows), n_rows + 1) < np.iinfo(np.int32).max else np.int64
+    return _Pattern(indices=cols[order].astype(itype), indptr=indptr.astype(itype),
+                    shape=(n_rows, n_rows + 1), K_data=K_data, M_data=M_data,
+                    block_pos=np.ascontiguousarray(block_pos), coupling_pos=coupling_pos,
+                    omega_rows=mass_dofs, omega_pos=np.ascontiguousarray(omega_pos))
+
+
+class PenaltyHBMProblem:
+    """Penalty harmonic balance on all DOFs of a :class:`Model`, as a continuation problem.
+
+    Parameters
+    ----------
+    model : Model
+        The structure; its contact DOF meets the stop through a penalty spring.
+    harmonics : int
+        Highest harmonic H >= 1.
+    n_samples : int, optional
+        Time samples per period N >= 2H+1 for the contact DOF's AFT (default
+        :func:`~mmshbm.harmonics.default_n_samples`, as in MMS-HBM).
+    penalty_stiffness : float, optional
+        k_p (N/m), > 0. Default ``DEFAULT_PENALTY_FACTOR`` (10³) times the condensed
+        static contact stiffness k_c = (w_cᵀ D_0⁻¹ w_c)⁻¹. The relative frequency error
+        of the backbone scales like k_c/k_p (module docstring); larger k_p needs more
+        harmonics and worsens the conditioning.
+    mode : int
+        Which linear mode (1-based) the branch starts from.
+
+    Attributes
+    ----------
+    H, N : int
+        Harmonics and samples per period.
+    n_unknowns : int
+        n_dof·(H+1) + 1.
+    penalty_stiffness, contact_stiffness : float
+        k_p and k_c (N/m).
+    method : str
+        ``"penalty"``.
+
+    Notes
+    -----
+    The scaled unknown vector is ``u = [Q_0/s, Q_1/s, ..., Q_H/s, Ω/ω_ref]`` with
+    Q_k ∈ R^{n_dof} the cosine coefficients of all DOFs (model order) and ``s`` the per-DOF
+    length scale ``xscale``. The residual (n_dof·(H+1),) is ordered the same way and the
+    Jacobian is a ``scipy.sparse.csr_matrix`` of shape (n_dof·(H+1), n_dof·(H+1) + 1).
+    """
+
+    method = "penalty"
+
+    def __init__(self, model: Model, harmonics: int = 5, n_samples: int | None = None,
+                 penalty_stiffness: float | None = None, mode: int = 1):
+        if not isinstance(model, Model):
+            raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
+        self.model = model
+        self.H, self.N = check_harmonics(harmonics, n_samples)
+        self.mode = check.integer("mode", mode, minimum=1)
+        self.n = model.n_dof
+        self.cd = model.contact_dof
+        self.side = float(model.stop_side)
+        self.gap = model.gap
+        self.K = model.K.tocsr()
+        self.M = model.M.tocsr()
+        self.contact_stiffness = _condensed_contact_stiffness(model)
+        if penalty_stiffness is None:
+            self.penalty_stiffness = DEFAULT_PENALTY_FACTOR * self.contact_stiffness
+        else:
+            self.penalty_stiffness = check.positive("penalty_stiffness", penalty_stiffness)
+        log.debug("penalty HBM: k_p = %.4g N/m = %.3g k_c", self.penalty_stiffness,
+                  self.penalty_stiffness / self.contact_stiffness)
+        self._init_mode()
+        self._init_scales()
+        self.n_unknowns = (self.H + 1) * self.n + 1
+        self._pattern = _jacobian_pattern(self.K, self.M, self.H, self.cd, model.l)
+        p = self._pattern
+        self._entry_scale = self.colscale[p.indices] / self.rowscale[p.rows]
+        self._tr = transform(self.H, self.N, 1)
+        self._P = np.empty((self.H + 1, self.H + 1))
+        self._lam_t = np.empty(self.N)
+        self._s_t = np.empty(self.N)
+        self._k2 = np.arange(self.H + 1, dtype=float) ** 2
+        n_fine = max(512, 8 * self.N)
+        self._tau_fine = 2 * np.pi * np.arange(n_fine) / n_fine
+        self._cos_fine = np.cos(np.outer(np.arange(self.H + 1), self._tau_fine))
+
+    def _init_mode(self) -> None:
+        """Linear mode ``self.mode``: frequency and shape with a unit contact swing."""
+        freqs, modes = self.model.linear_modes(self.mode)
+        self.linear_frequency = float(freqs[-1])
+        self.omega_ref = 2 * np.pi * self.linear_frequency
+        phi = modes[:, -1]
+        contact = phi[self.cd]
+        if abs(contact) < 1e-12 * np.max(np.abs(phi)):
+            raise ValueError(f"linear mode {self.mode} does not move the contact DOF: no impact")
+        # unit contact motion toward the stop at τ = 0 (linear_modes orients the modes that way)
+        self.mode_shape = phi / abs(contact)
+
+    def _init_scales(self) -> None:
+        """Column scales (xscale per DOF, ω_ref) and row scales (force per DOF)."""
+        length = self.gap if self.gap > 0 else 1.0
+        shape = np.abs(self.mode_shape)
+        s = np.maximum(shape, 1e-3 * shape.max())
+        c = self.model.c
+        rho = np.linalg.norm(shape / s) / np.linalg.norm(shape[c] / s[c])
+        self.xscale = length * rho * s
+        self.colscale = np.concatenate([np.tile(self.xscale, self.H + 1), [self.omega_ref]])
+        self.rowscale = np.tile(abs(self.K) @ self.xscale, self.H + 1)
+
+    # ------------------------------------------------------------------ unknowns
+    def unpack(self, u: np.ndarray) -> tuple[np.ndarray, float]:
+        """Scaled unknowns -> (cosine coefficients Q (H+1, n_dof) in m/rad, Ω in rad/s)."""
+        x = np.asarray(u, dtype=float) * self.colscale
+        return x[:-1].reshape(self.H + 1, self.n), float(x[-1])
+
+    def pack(self, Q: np.ndarray, omega: float) -> np.ndarray:
+        """(Q (H+1, n_dof), Ω) -> scaled unknowns, shape (n_unknowns,)."""
+        return np.concatenate([np.asarray(Q, dtype=float).ravel(), [omega]]) / self.colscale
+
+    def linear_point(self, amplitude: float) -> np.ndarray:
+        """Scaled unknowns of the linear mode whose contact DOF swings ``amplitude`` (m),
+        moving toward the stop at τ = 0, at Ω = ω of that mode."""
+        Q = np.zeros((self.H + 1, self.n))
+        Q[1] = amplitude * self.mode_shape
+        return self.pack(Q, self.omega_ref)
+
+    def initial_tangent(self) -> np.ndarray:
+        """Unit tangent of the linear branch (growing amplitude, constant Ω)."""
+        t = self.linear_point(1.0)
+        t[-1] = 0.0
+        return t / np.linalg.norm(t)
+
+    # ------------------------------------------------------------------ residual
+    def _contact_aft(self, Qc: np.ndarray) -> np.ndarray:
+        """Penalty force on the samples (fills ``_lam_t``, ``_s_t``); returns its cosine
+        coefficients λ_k (N), shape (H+1,)."""
+        q_t = self._tr.cos_to_time(Qc[None, :])[0]
+        _penalty_contact(q_t, self.gap, self.side, self.penalty_stiffness, self._lam_t, self._s_t)
+        return self._tr.time_to_cos(self._lam_t[None, :])[0]
+
+    def evaluate(self, u: np.ndarray, jacobian: bool = True):
+        """Scaled residual and, if asked, its Jacobian.
+
+        Parameters
+        ----------
+        u : ndarray, shape (n_unknowns,)
+            Scaled unknowns.
+        jacobian : bool
+            Also return the Jacobian.
+
+        Returns
+        -------
+        R : ndarray, shape (n_dof·(H+1),)
+            (K − (kΩ)² M) Q_k − W λ_k, divided by the row scales.
+        J : scipy.sparse.csr_matrix, shape (n_dof·(H+1), n_unknowns), only if ``jacobian``
+            ∂R/∂u (scaled).
+        """
+        Q, omega = self.unpack(u)
+        KQ = (self.K @ Q.T).T
+        MQ = (self.M @ Q.T).T
+        lam_k = self._contact_aft(Q[:, self.cd])
+        R = KQ - (omega**2 * self._k2)[:, None] * MQ
+        R[:, self.cd] += self.side * lam_k
+        R = R.ravel() / self.rowscale
+        if not jacobian:
+            return R
+        return R, self._jacobian(omega, MQ)
+
+    def _jacobian(self, omega: float, MQ: np.ndarray) -> sp.csr_matrix:
+        """Scaled sparse Jacobian from the active set left in ``_s_t`` by the residual."""
+        S = self._tr.cosine_spectrum(self._s_t[None, :])[0]
+        _cosine_product_matrix(S, self.H, self._P)
+        p = self._pattern
+        data = np.empty(len(p.indices))
+        _penalty_hbm_jacobian(p.K_data, p.M_data, omega, self.penalty_stiffness, self._P,
+                              np.ascontiguousarray(MQ), p.block_pos, p.coupling_pos, p.omega_rows,
+                              p.omega_pos, self._entry_scale, data)
+        return sp.csr_matrix((data, p.indices, p.indptr), shape=p.shape, copy=False)
+
+    # ------------------------------------------------------------------ results
+    def contact_signals(self, u: np.ndarray, tau: np.ndarray | None = None):
+        """Contact DOF displacement q(τ) (m) and penalty force λ(τ) (N) on a grid.
+
+        Returns (tau, q_contact, lam), each shape (n_tau,); ``tau`` defaults to a fine
+        grid over one period.
+        """
+        Q, _ = self.unpack(u)
+        if tau is None:
+            tau, C = self._tau_fine, self._cos_fine
+        else:
+            tau = np.asarray(tau, dtype=float)
+            C = np.cos(np.outer(np.arange(self.H + 1), tau))
+        q = Q[:, self.cd] @ C
+        return tau, q, self.penalty_stiffness * np.maximum(0.0, self.side * q - self.gap)
+
+    def coefficients(self, u: np.ndarray) -> np.ndarray:
+        """NLvib-ordered coefficients of all DOFs, shape (n_dof, 2H+1) (sines are zero)."""
+        Q, _ = self.unpack(u)
+        out = np.zeros((self.n, 2 * self.H + 1))
+        out[:, 0] = Q[0]
+        out[:, 1::2] = Q[1:].T
+        return out
+
+    def time_signals(self, u: np.ndarray, dofs=None, n_samples: int = 256):
+        """(t (n_samples,) in s, q (n_dofs, n_samples)) over one period for ``dofs``
+        (all DOFs when None)."""
+        Q, omega = self.unpack(u)
+        if dofs is not None:
+            dofs = np.atleast_1d(np.asarray(dofs))
+            if dofs.dtype.kind not in "iu" or np.any((dofs < -self.n) | (dofs >= self.n)):
+                raise ValueError(f"dofs must be integer indices in [0, {self.n - 1}], got {dofs}")
+            Q = Q[:, dofs]
+        tau = 2 * np.pi * np.arange(n_samples) / n_samples
+        q = Q.T @ np.cos(np.outer(np.arange(self.H + 1), tau))
+        return tau / omega, q
+
+    def contact_force(self, u: np.ndarray, n_samples: int = 256):
+        """(t (n_samples,) in s, λ (n_samples,) in N) over one period."""
+        _, omega = self.unpack(u)
+        tau = 2 * np.pi * np.arange(n_samples) / n_samples
+        _, _, lam = self.contact_signals(u, tau)
+        return tau / omega, lam
+
+    def harmonic_content(self, u: np.ndarray, dof: int | None = None) -> np.ndarray:
+        """|Q_k| for k = 0..H of ``dof`` (default the contact DOF); shape (H+1,)."""
+        dof = self.cd if dof is None else int(dof)
+        Q, _ = self.unpack(u)
+        return np.abs(Q[:, dof])
+
+    def monitor(self, u: np.ndarray) -> dict:
+        """The per-point quantities of a backbone: frequency (Hz), amplitude (m),
+        energy (J, structure plus penalty spring, period averages), contact_force_max (N)."""
+        _, omega = self.unpack(u)
+        _, q, lam = self.contact_signals(u)
+        penetration = self.side * q - self.gap
+        spring = 0.5 * self.penalty_stiffness * np.mean(np.maximum(0.0, penetration) ** 2)
+        return {
+            "frequency": omega / (2 * np.pi),
+            "amplitude": _refined_max(-self.side * q),
+            "energy": _mean_energy(self.model, self.coefficients(u), omega) + float(spring),
+            "contact_force_max": self.penalty_stiffness * max(_refined_max(penetration), 0.0),
+        }
+
+
+def _condensed_stiffness_of(D0: np.ndarray, w: np.ndarray) -> float:
+    """(wᵀ D_0⁻¹ w)⁻¹ (N/m)."""
+    return 1.0 / float(w @ np.linalg.solve(D0, w))
+
+
+def _condensed_contact_stiffness(model: Model) -> float:
+    """k_c = (w_cᵀ D_0⁻¹ w_c)⁻¹ (N/m): the static stiffness of the structure at the contact
+    DOF, D_0 = K_cc − K_cl K_ll⁻¹ K_lc."""
+    return _condensed_stiffness_of(Condensation(model).D0, np.asarray(model.w_c, dtype=float))
