@@ -42,15 +42,22 @@ k_eff/k_p, with k_eff the modal stiffness of the constraint (for the one-DOF osc
 k_eff = k2²/(k1+k2), four times its condensed contact stiffness k_c). The backbone's
 relative frequency error is a fraction of that (the closed phase lasts part of the period):
 
-    |f_penalty − f| / f  ≈  C · k_c / k_p,     C = O(0.1..1),
+    |f_penalty − f_penalty(∞)| / f  ≈  C · k_c / k_p,     C ≈ 0.1..3 (measured),
 
-measured C ≈ 0.5 on the one-DOF oscillator at amplitude 2 gaps (tests/test_penalty_hbm.py).
-The default k_p = 10³ k_c, with k_c = (w_cᵀ D_0⁻¹ w_c)⁻¹ the condensed static contact
-stiffness, gives errors ~10⁻⁴..10⁻³. Larger k_p is more accurate, but the penalty force
-becomes a steeper function of the displacement: its harmonics decay more slowly (more
-harmonics H and samples N are needed for the same truncation error), the Jacobian's
-condition number grows like k_p/k_c, and Newton's semismooth iteration has to resolve an
-active set within a penetration of only λ/k_p.
+on the one-DOF oscillator and the default beam (docs/penalty.md). The default
+k_p = 10³ k_c, with k_c = (w_cᵀ D_0⁻¹ w_c)⁻¹ the condensed static contact stiffness,
+gives errors ~10⁻⁴..3·10⁻³. Larger k_p is more accurate, but the penalty force becomes a
+steeper function of the displacement: its harmonics decay more slowly, its pulses get
+shorter (N must grow: :func:`penalty_n_samples`), the Jacobian's condition number grows
+like k_p/k_c, and Newton's semismooth iteration has to resolve an active set within a
+penetration of only λ/k_p.
+
+The penalty limit is a different truncation. At fixed H, f_penalty(∞) is *not* the
+MMS-HBM frequency at the same H: a degree-H contact displacement can only touch the stop,
+so k_p max(0, −g_N) tends to impulses, whereas MMS-HBM keeps the massless node on the stop
+over the closed phase. The two agree as H grows (one-DOF oscillator at 2 gaps: 3.4·10⁻³
+apart at H = 5, 4·10⁻⁴ at H = 10, 6·10⁻⁵ at H = 20; default beam at 1.05 gaps: 3·10⁻²,
+1.1·10⁻³, 2.2·10⁻⁴). Penalty HBM needs more harmonics than MMS-HBM for the same accuracy.
 
 Energy. The penalty system conserves the energy of the structure *plus* the spring; the
 monitored energy is the period average of the structure's kinetic and potential energy
@@ -68,13 +75,13 @@ import scipy.sparse as sp
 
 from .. import _validate as check
 from ..condense import Condensation
-from ..harmonics import check_harmonics, transform
+from ..harmonics import check_harmonics, default_n_samples, transform
 from ..kernels import _cosine_product_matrix
 from ..mms_hbm import _mean_energy, _refined_max
 from ..model import Model
 from ._penalty_kernels import _penalty_contact, _penalty_hbm_jacobian
 
-__all__ = ["PenaltyHBMProblem", "DEFAULT_PENALTY_FACTOR"]
+__all__ = ["PenaltyHBMProblem", "DEFAULT_PENALTY_FACTOR", "penalty_n_samples"]
 
 log = logging.getLogger(__name__)
 
@@ -178,8 +185,10 @@ class PenaltyHBMProblem:
     harmonics : int
         Highest harmonic H >= 1.
     n_samples : int, optional
-        Time samples per period N >= 2H+1 for the contact DOF's AFT (default
-        :func:`~mmshbm.harmonics.default_n_samples`, as in MMS-HBM).
+        Time samples per period N >= 2H+1 for the contact DOF's AFT. Default
+        :func:`penalty_n_samples`: MMS-HBM's :func:`~mmshbm.harmonics.default_n_samples`
+        up to k_p = 10³ k_c, doubled per further decade of k_p (the penetration window
+        narrows as k_p grows and must stay resolved by the samples).
     penalty_stiffness : float, optional
         k_p (N/m), > 0. Default ``DEFAULT_PENALTY_FACTOR`` (10³) times the condensed
         static contact stiffness k_c = (w_cᵀ D_0⁻¹ w_c)⁻¹. The relative frequency error
@@ -214,7 +223,7 @@ class PenaltyHBMProblem:
         if not isinstance(model, Model):
             raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
         self.model = model
-        self.H, self.N = check_harmonics(harmonics, n_samples)
+        self.H = check_harmonics(harmonics)[0]
         self.mode = check.integer("mode", mode, minimum=1)
         self.n = model.n_dof
         self.cd = model.contact_dof
@@ -227,8 +236,11 @@ class PenaltyHBMProblem:
             self.penalty_stiffness = DEFAULT_PENALTY_FACTOR * self.contact_stiffness
         else:
             self.penalty_stiffness = check.positive("penalty_stiffness", penalty_stiffness)
-        log.debug("penalty HBM: k_p = %.4g N/m = %.3g k_c", self.penalty_stiffness,
-                  self.penalty_stiffness / self.contact_stiffness)
+        if n_samples is None:
+            n_samples = penalty_n_samples(self.H, self.penalty_stiffness / self.contact_stiffness)
+        self.N = check_harmonics(self.H, n_samples)[1]
+        log.debug("penalty HBM: k_p = %.4g N/m = %.3g k_c, N = %d", self.penalty_stiffness,
+                  self.penalty_stiffness / self.contact_stiffness, self.N)
         self._init_mode()
         self._init_scales()
         self.n_unknowns = (self.H + 1) * self.n + 1
@@ -400,6 +412,22 @@ class PenaltyHBMProblem:
             "energy": _mean_energy(self.model, self.coefficients(u), omega) + float(spring),
             "contact_force_max": self.penalty_stiffness * max(_refined_max(penetration), 0.0),
         }
+
+
+def penalty_n_samples(harmonics: int, penalty_factor: float) -> int:
+    """Default samples per period N for penalty HBM with k_p = ``penalty_factor`` · k_c.
+
+    ``default_n_samples(H)`` for k_p <= 10³ k_c, times 2 per further decade (rounded up).
+    In the k_p -> oo limit the penalty force concentrates into ever shorter pulses at the
+    instants the contact displacement touches the stop; unresolved by the samples, the
+    sampled residual jumps as single samples switch and the continuation stalls (on the
+    default beam at H = 10 and 20, k_p = 10⁴ k_c stopped at 1.1 gaps with the default N
+    and runs to 10 gaps with 2× N; docs/penalty.md).
+    """
+    H = check_harmonics(harmonics)[0]
+    factor = check.positive("penalty_factor", penalty_factor)
+    doublings = max(0, int(np.ceil(np.log10(factor / DEFAULT_PENALTY_FACTOR) - 1e-9)))
+    return default_n_samples(H) * 2**doublings
 
 
 def _condensed_stiffness_of(D0: np.ndarray, w: np.ndarray) -> float:
