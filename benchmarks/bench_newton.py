@@ -114,11 +114,6 @@ class CorrectorStep:
     def time_corrector(self, method, name, H):
         self.correct()
 
-    def track_corrector_iterations(self, method, name, H):
-        return self.correct()[1]
-
-    track_corrector_iterations.unit = "iterations"
-
 
 class ShootingCorrectorStep:
     """Shooting's corrector near 1.2 gaps."""
@@ -134,8 +129,3 @@ class ShootingCorrectorStep:
 
     def time_corrector(self, name, steps):
         self.correct()
-
-    def track_corrector_iterations(self, name, steps):
-        return self.correct()[1]
-
-    track_corrector_iterations.unit = "iterations"

@@ -20,7 +20,7 @@ ELEMENTS = (8, 21, 100, 1000)
 #: the models of the whole-backbone suites
 MODELS = ("oscillator", "beam8", "beam21")
 #: time steps per period of shooting
-STEPS = (128, 256, 512)
+STEPS = (64, 128, 256)
 #: amplitude of the whole backbones and of the tracked errors, in gaps
 AMPLITUDE_GAPS = 2.0
 

@@ -128,3 +128,26 @@ def test_element_scaling_structure():
     assert "Cost exponent" in bm.format_scaling(rows, p)
     with pytest.raises(ValueError, match="two element counts"):
         bm.element_scaling(elements=(8,))
+
+
+@pytest.mark.slow
+def test_beam_reference_says_which_and_is_reproducible():
+    """On the beam at 2 gaps the exact orbit and MMS-HBM in H do not converge (multiple
+    contacts, internal resonances): the reference must say so and be the N-converged
+    H = 5 MMS-HBM number; if the exact solver converges one day, it must say that."""
+    import mmshbm
+
+    model, osc = bm.load_model("beam8")
+    assert osc is None and model.n_dof == 16
+    amplitude = 2.0 * model.gap
+    ref = bm._reference(model, None, amplitude, 1e-4)
+    assert math.isfinite(ref.frequency)
+    if ref.equal_h:
+        assert ref.label.startswith("equal H: MMS-HBM H=5, N=1024")
+        b = mmshbm.backbone(model, harmonics=5, max_amplitude=amplitude, n_samples=1024)
+        assert ref.frequency == pytest.approx(b.frequency_at(amplitude), rel=1e-12)
+        # the default N agrees with N = 1024 well below the target: N is converged
+        b5 = mmshbm.backbone(model, harmonics=5, max_amplitude=amplitude)
+        assert abs(b5.frequency_at(amplitude) - ref.frequency) / ref.frequency < 1e-4
+    else:
+        assert "exact" in ref.label or "H=40" in ref.label
