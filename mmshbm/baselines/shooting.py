@@ -65,15 +65,16 @@ Convention as :mod:`mmshbm.exact`: t = 0 is the turning point farthest from the 
 
 Newton. The Jacobian comes from the tangent (sensitivity) vectors propagated with the
 step, no finite differences: n_l + 1 columns (initial positions and Ω; Ω enters through
-the step size h = T/N). Each column costs one band solve per step, so one Jacobian
-costs O(N n_l² p): for large models shooting pays for the dense monodromy.
+the step size h = T/N). Each column costs one band solve and two band products per step,
+so one Jacobian costs O(N n_l² p): for large models shooting pays for the dense
+monodromy. The columns are processed in blocks so that the band recurrences vectorise.
 
 Floquet multipliers. The monodromy of the discrete map over one period (2 n_l tangent
-vectors) gives the multipliers; on a conservative orbit they come in pairs μ, 1/μ and
-two equal +1. :meth:`ShootingProblem.floquet_multipliers` computes them on demand;
-``monitor`` records ``floquet_max`` (largest modulus) when ``floquet`` is on (default
-for models with at most ``FLOQUET_AUTO_LIMIT`` DOFs with mass: the dense eigenproblem of
-size 2 n_l is the cost).
+vectors) gives the multipliers; on a symmetric orbit of the reversible map they come in
+pairs μ, 1/μ, and energy conservation and the phase give two equal +1.
+:meth:`ShootingProblem.floquet_multipliers` computes them on demand; ``monitor`` records
+``floquet_max`` (largest modulus) when ``floquet`` is on (default for models with at most
+``FLOQUET_AUTO_LIMIT`` DOFs with mass: the dense eigenproblem of size 2 n_l is the cost).
 """
 
 from __future__ import annotations
