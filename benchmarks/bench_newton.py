@@ -14,7 +14,7 @@ CORRECTOR_MODELS = ("oscillator", "beam8", "beam21")
 def _iteration_setup(self, name, method, harmonics=None, steps=None):
     from mmshbm.api import make_problem
 
-    check_feasible(name, method, harmonics)
+    check_feasible(name, method, harmonics, single_iteration=True)
     warm_up(method)
     m = model(name)
     self.problem = make_problem(m, method, **options(method, harmonics, steps))
@@ -54,12 +54,6 @@ class ShootingNewtonIteration:
     timeout = 300
 
     def setup(self, name, steps):
-        if name == "beam100":  # one iteration is affordable, a whole backbone is not
-            from .common import require
-
-            require("shooting")
-        else:
-            check_feasible(name, "shooting")
         _iteration_setup(self, name, "shooting", steps=steps)
 
     iterate = _iterate
