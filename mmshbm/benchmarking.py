@@ -131,11 +131,25 @@ def _run(model, method, amplitude, options, f_ref) -> _Run:
     return _Run(method, dict(options), f, err, seconds, branch)
 
 
+#: a branch "reaches" an amplitude when it gets this close (relative): the continuation
+#: refines its last point onto the amplitude bound only to a few 1e-9
+_REACH_RTOL = 1e-6
+
+
 def _reached_frequency(branch, amplitude: float) -> float:
-    """Frequency (Hz) at ``amplitude`` if the branch reached it, else NaN."""
-    if len(branch) == 0 or not np.nanmax(branch.amplitude) >= amplitude * (1 - 1e-9):
+    """Frequency (Hz) at ``amplitude`` if the branch reached it, else NaN.
+
+    Within :data:`_REACH_RTOL` of the amplitude (a bound refined to a few 1e-9, which
+    ``Branch.frequency_at`` does not accept), the frequency of the point of largest
+    amplitude (the error is the backbone's slope times that offset: far below any target).
+    """
+    if len(branch) == 0:
         return math.nan
-    return float(branch.frequency_at(amplitude))
+    top = int(np.nanargmax(branch.amplitude))
+    if not branch.amplitude[top] >= amplitude * (1 - _REACH_RTOL):
+        return math.nan
+    f = float(branch.frequency_at(amplitude))
+    return f if math.isfinite(f) else float(branch.frequency[top])
 
 
 def _meets(run: _Run, target: float) -> bool:

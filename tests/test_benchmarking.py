@@ -151,3 +151,28 @@ def test_beam_reference_says_which_and_is_reproducible():
         assert abs(b5.frequency_at(amplitude) - ref.frequency) / ref.frequency < 1e-4
     else:
         assert "exact" in ref.label or "H=40" in ref.label
+
+
+class _StubBranch:
+    """The three things ``_reached_frequency`` reads from a Branch."""
+
+    def __init__(self, amplitude, frequency):
+        self.amplitude, self.frequency = np.asarray(amplitude, float), np.asarray(frequency, float)
+
+    def __len__(self):
+        return len(self.amplitude)
+
+    def frequency_at(self, a):  # Branch.frequency_at's contract: NaN unless reached (rtol 1e-9)
+        A, f = self.amplitude, self.frequency
+        if a > A.max() * (1 + 1e-9):
+            return float("nan")
+        return float(np.interp(a, A, f))
+
+
+def test_reached_frequency_accepts_a_bound_refined_to_a_few_1e9():
+    b = _StubBranch([0.5, 1.0, 1.5, 2.0 * (1 - 4e-9)], [1.0, 1.0, 1.2, 1.4])
+    assert bm._reached_frequency(b, 2.0) == 1.4            # 4e-9 short: reached
+    assert bm._reached_frequency(b, 1.25) == pytest.approx(1.1)
+    short = _StubBranch([0.5, 1.0, 1.9], [1.0, 1.0, 1.3])
+    assert math.isnan(bm._reached_frequency(short, 2.0))   # 5 % short: not reached
+    assert math.isnan(bm._reached_frequency(_StubBranch([], []), 2.0))
