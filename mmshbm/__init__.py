@@ -32,7 +32,8 @@ _LAZY = {
     "fit_material": "mmshbm.identification",
 }
 _SUBMODULES = {"exact", "studies", "plotting", "harmonics", "kernels", "condense", "continuation",
-               "baselines", "fe", "examples", "results"}
+               "baselines", "fe", "examples", "results", "measured", "identification",
+               "cli", "benchmarking", "checkpoint", "api", "model", "mms_hbm"}
 
 __all__ = sorted(_LAZY) + ["__version__"]
 

@@ -191,7 +191,8 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     if verbose:
         from tqdm.auto import tqdm
 
-        progress = tqdm(desc=f"{method} backbone", unit="pt", total=copts.max_steps + 1, leave=False)
+        progress = tqdm(desc=f"{method} backbone", unit="pt", total=copts.max_steps + 1, leave=False,
+                        disable=None)
     t0 = time.perf_counter()
     try:
         if previous is not None and _finished(previous, copts):

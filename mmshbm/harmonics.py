@@ -16,6 +16,7 @@ without pyfftw it falls back to ``numpy.fft`` with the same results.
 
 from __future__ import annotations
 
+import threading
 from functools import lru_cache
 
 import numpy as np
@@ -159,10 +160,15 @@ class HarmonicTransform:
         return np.fft.irfft(self._freq, n=self.N, axis=-1) * self.N
 
 
-@lru_cache(maxsize=64)
 def transform(harmonics: int, n_samples: int, n_signals: int = 1) -> HarmonicTransform:
-    """A cached :class:`HarmonicTransform` (plans are made once per shape).
+    """A cached :class:`HarmonicTransform` (plans are made once per shape and thread).
 
-    The returned object owns buffers: do not share it across threads.
+    The returned object owns its FFTW buffers, so each thread gets its own: runs in a
+    thread pool then give the same numbers as serial runs.
     """
+    return _thread_transform(threading.get_ident(), harmonics, n_samples, n_signals)
+
+
+@lru_cache(maxsize=64)
+def _thread_transform(thread: int, harmonics: int, n_samples: int, n_signals: int) -> HarmonicTransform:
     return HarmonicTransform(harmonics, n_samples, n_signals)

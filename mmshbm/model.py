@@ -295,7 +295,9 @@ class Model:
         if n_l <= _DENSE_EIG_LIMIT or n > n_l // 2:
             lam, phi = _lowest_eigenpairs_dense(self.reduced_stiffness.toarray(), b["M_ll"].toarray(), n)
         else:
-            lam, phi = spla.eigsh(self.reduced_stiffness, k=n, M=b["M_ll"], sigma=0.0, which="LM")
+            # a fixed start vector makes ARPACK (and so every branch started from its mode) reproducible
+            lam, phi = spla.eigsh(self.reduced_stiffness, k=n, M=b["M_ll"], sigma=0.0, which="LM",
+                                  v0=np.ones(n_l))
             order = np.argsort(lam)
             lam, phi = lam[order], phi[:, order]
         modes = np.zeros((self.n_dof, n))

@@ -293,14 +293,16 @@ class Branch:
 
     def frequency_at(self, amplitude: float) -> float:
         """Frequency (Hz) at ``amplitude`` (m), linearly interpolated on the first
-        stretch of the branch that reaches it; NaN if the branch never does."""
+        stretch of the branch that reaches it; NaN if the branch never does. A last point
+        refined onto an amplitude bound counts within 1e-6 relative (the bound's secant
+        refinement stops there)."""
         A, f = self.amplitude, self.frequency
         for i in range(len(A) - 1):
             lo, hi = sorted((A[i], A[i + 1]))
             if lo <= amplitude <= hi and hi > lo:
                 s = (amplitude - A[i]) / (A[i + 1] - A[i])
                 return float(f[i] + s * (f[i + 1] - f[i]))
-        if len(A) and np.isclose(A[-1], amplitude, rtol=1e-9, atol=0):
+        if len(A) and np.isclose(A[-1], amplitude, rtol=1e-6, atol=0):
             return float(f[-1])
         return float("nan")
 

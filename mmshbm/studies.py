@@ -26,7 +26,6 @@ import itertools
 import logging
 import math
 import multiprocessing
-import threading
 import time
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, fields, replace
@@ -112,18 +111,11 @@ def build_model(source: dict):
     return model if gap is None or gap == model.gap else model.with_gap(gap)
 
 
-#: one run at a time per process: the cached FFTW plans (mmshbm.harmonics) own their
-#: buffers and are not thread-safe, so thread executors (a ThreadPoolExecutor, a Dask
-#: worker with several threads) would mix runs' numbers; processes are unaffected
-_RUN_LOCK = threading.Lock()
-
-
 def execute(spec: RunSpec) -> Branch:
     """Run one grid point (this is what workers execute); the branch comes back without
-    its solver, which holds unpicklable FFT plans. Runs in threads of one process are
-    serialised (see ``_RUN_LOCK``)."""
-    with _RUN_LOCK:
-        return _execute(spec)
+    its solver, which holds unpicklable FFT plans. Thread executors are safe: every
+    thread has its own FFTW plans and buffers (:func:`mmshbm.harmonics.transform`)."""
+    return _execute(spec)
 
 
 def _execute(spec: RunSpec) -> Branch:
