@@ -26,9 +26,9 @@ from typing import Protocol
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from . import _validate as check
+from ._bordered import solve_bordered_sparse
 
 __all__ = ["ContinuationOptions", "ContinuationProblem", "ContinuationResult", "ContinuationState",
            "continue_branch", "newton"]
@@ -233,11 +233,7 @@ def newton(problem: ContinuationProblem, u: np.ndarray, tangent: np.ndarray, u_p
 def _bordered_solve(J, t: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     """Solve [J; tᵀ] x = rhs for dense or sparse J."""
     if sp.issparse(J):
-        A = sp.vstack([J, sp.csr_matrix(t[None, :])], format="csc")
-        try:
-            return spla.splu(A).solve(rhs)
-        except RuntimeError:
-            return np.full_like(rhs, np.nan)
+        return solve_bordered_sparse(J, t, rhs)  # block elimination, full LU fallback
     A = np.vstack([J, t[None, :]])
     try:
         return np.linalg.solve(A, rhs)

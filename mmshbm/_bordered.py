@@ -1,0 +1,95 @@
+"""Sparse bordered solves of the path follower: block elimination on the square part.
+
+The corrector and the tangent solve ``[J; tᵀ] x = rhs`` with J of shape (n−1, n). For a
+sparse J (penalty-HBM on every DOF) a sparse LU of the bordered matrix itself fills in
+badly: the arclength row tᵀ and the parameter column (∂R/∂Ω, non-zero on every DOF with
+mass) are dense, and SuperLU's fill for the 1000-element beam at H = 5 (12 001 unknowns)
+is ~2·10⁶ entries, ~80 ms per solve. Splitting off the last unknown (the continuation
+parameter, Ω in every mmshbm problem),
+
+    [A  b] [y]   [r]        A = J[:, :-1] (sparse, square),  b = J[:, -1],
+    [cᵀ d] [η] = [s],       c = t[:-1], d = t[-1],
+
+only A is factorised (for harmonic balance on an FE model: block-diagonal over the
+harmonics plus the contact coupling, fill ~8·10⁴, ~6 ms) and
+
+    A z = b,  A w = r,  η = (s − cᵀw) / (d − cᵀz),  y = w − z η.
+
+A is singular exactly at a fold of the branch in the parameter, where the block
+elimination loses accuracy (Govaerts, *Numerical Methods for Bifurcations of Dynamical
+Equilibria*, 2000, ch. 3): one step of iterative refinement with the same factors
+restores it, and if the residual of the bordered system is still not small the solve
+falls back to the LU of the whole bordered matrix. So the result is always that of a
+backward-stable solve; the block path is only the fast one.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+__all__ = ["solve_bordered_sparse"]
+
+#: accept the block-elimination result when ‖[J; tᵀ]x − rhs‖∞ is below this times
+#: ‖[J; tᵀ]‖∞‖x‖∞ + ‖rhs‖∞ (a backward error near round-off)
+_BACKWARD_TOL = 1e-11
+
+
+def _bordered_matrix(J: sp.spmatrix, t: np.ndarray) -> sp.csc_matrix:
+    return sp.vstack([J, sp.csr_matrix(t[None, :])], format="csc")
+
+
+def _full_solve(J: sp.spmatrix, t: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    try:
+        return spla.splu(_bordered_matrix(J, t)).solve(rhs)
+    except RuntimeError:  # exactly singular
+        return np.full_like(rhs, np.nan)
+
+
+def solve_bordered_sparse(J: sp.spmatrix, t: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """Solve ``[J; tᵀ] x = rhs`` for a sparse J of shape (n−1, n).
+
+    Parameters
+    ----------
+    J : scipy.sparse matrix, shape (n−1, n)
+        Jacobian of the residual; its last column belongs to the continuation parameter.
+    t : ndarray, shape (n,)
+        Bordering row (the tangent).
+    rhs : ndarray, shape (n,) or (n, k)
+
+    Returns
+    -------
+    ndarray, shape of ``rhs``
+        The solution; all NaN if the bordered matrix is singular.
+    """
+    J = sp.csc_matrix(J)
+    A = J[:, :-1]
+    b = J[:, -1].toarray().ravel()
+    c, d = t[:-1], t[-1]
+    try:
+        lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A")
+    except RuntimeError:  # A exactly singular: a fold in the parameter
+        return _full_solve(J, t, rhs)
+
+    def block_solve(r):
+        r2 = r.reshape(len(t), -1)
+        w = lu.solve(np.ascontiguousarray(r2[:-1]))
+        z = lu.solve(b)
+        denom = d - c @ z
+        eta = (r2[-1] - c @ w) / denom
+        y = w - np.outer(z, eta)
+        return np.vstack([y, eta[None, :]]).reshape(r.shape)
+
+    def bordered_product(x):
+        x2 = x.reshape(len(t), -1)
+        return np.vstack([J @ x2, t @ x2]).reshape(x.shape)
+
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        x = block_solve(rhs)
+        x = x + block_solve(rhs - bordered_product(x))  # one step of iterative refinement
+        resid = np.abs(rhs - bordered_product(x)).max() if np.all(np.isfinite(x)) else np.inf
+    scale = (abs(J).sum(axis=1).max() + np.abs(t).sum()) * np.abs(x).max() + np.abs(rhs).max()
+    if np.isfinite(resid) and resid <= _BACKWARD_TOL * scale:
+        return x
+    return _full_solve(J, t, rhs)
