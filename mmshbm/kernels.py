@@ -248,3 +248,83 @@ def _condensed_stiffness(Kb, Mb, kl, K_lc, K_cc, omega, harmonics, D, dD, AB, Z,
                 for q in range(n_c):
                     dD[k, p, q] = scale * ZMZ[p, q]
     return 0
+
+
+# ---------------------------------------------------------------------------- fused MMS-HBM
+@njit(**JIT_OPTIONS)
+def _mmshbm_residual(D, dD, a, w, gap, r, ci, cos_table, rowscale, colscale, jacobian,
+                     R, J, P, dF, lam_t, g_t, R_t, s_t):
+    """Scaled cosine-only MMS-HBM residual (and Jacobian) in one call, with the time
+    samples synthesised and projected by a cosine table instead of FFTs (faster at the
+    small N of a few harmonics).
+
+    D, dD     : (H+1, n_c, n_c) condensed dynamic stiffness and ∂D_k/∂Ω (dD read only
+                if ``jacobian``)
+    a         : (H+1, n_c) cosine coefficients (m, rad)
+    w, gap, r : contact direction, gap (m), proximal parameter (N/m)
+    ci        : index of the contact DOF inside c
+    cos_table : (2H+1, N) cos(p τ_j), τ_j = 2πj/N, N >= 2H+1
+    rowscale  : ((H+1) n_c,), colscale : ((H+1) n_c + 1,)
+    R         : ((H+1) n_c,) output, scaled residual
+    J         : ((H+1) n_c, (H+1) n_c + 1) output if ``jacobian``, scaled Jacobian
+    P         : (H+1, H+1) work; dF : (H+1, n_c) work; lam_t, g_t, R_t, s_t : (N,) work
+
+    The numbers are those of the FFT route (``HarmonicTransform.cos_to_time``,
+    ``time_to_cos``, ``cosine_spectrum``, :func:`_cosine_product_matrix`,
+    :func:`_mmshbm_jacobian`) up to round-off.
+    """
+    H1 = D.shape[0]
+    n_c = D.shape[1]
+    N = cos_table.shape[1]
+    n = H1 * n_c
+    # F_k = D_k a_k (rows of the other massless DOFs), λ_k = w·F_k, g_k = w·a_k (+ gap)
+    for j in range(N):
+        lam_t[j] = 0.0
+        g_t[j] = gap
+    for k in range(H1):
+        lam_k = 0.0
+        g_k = 0.0
+        for i in range(n_c):
+            f = 0.0
+            for q in range(n_c):
+                f += D[k, i, q] * a[k, q]
+            R[k * n_c + i] = f
+            lam_k += w[i] * f
+            g_k += w[i] * a[k, i]
+        for j in range(N):
+            c = cos_table[k, j]
+            lam_t[j] += lam_k * c
+            g_t[j] += g_k * c
+    _proximal_contact(lam_t, g_t, r, R_t, s_t)
+    inv_n = 1.0 / N
+    for m in range(H1):
+        acc = 0.0
+        for j in range(N):
+            acc += R_t[j] * cos_table[m, j]
+        R[m * n_c + ci] = acc * (inv_n if m == 0 else 2.0 * inv_n)
+    for row in range(n):
+        R[row] /= rowscale[row]
+    if not jacobian:
+        return
+    # aliased cosine spectrum of the active set, S_p for p = 0..2H (all the product needs)
+    S = g_t  # reuse the work array: only its first 2H+1 entries
+    for p in range(2 * H1 - 1):
+        acc = 0.0
+        for j in range(N):
+            acc += s_t[j] * cos_table[p, j]
+        S[p] = acc * inv_n
+    for m in range(H1):
+        cm = 0.5 if m == 0 else 1.0
+        for k in range(H1):
+            d = m - k if m >= k else k - m
+            P[m, k] = cm * (S[d] + S[m + k])
+    for k in range(H1):
+        for i in range(n_c):
+            f = 0.0
+            for q in range(n_c):
+                f += dD[k, i, q] * a[k, q]
+            dF[k, i] = f
+    _mmshbm_jacobian(P, D, dF, w, r, ci, J)
+    for row in range(n):
+        for col in range(n + 1):
+            J[row, col] = J[row, col] * colscale[col] / rowscale[row]
