@@ -234,11 +234,27 @@ def _bordered_solve(J, t: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     """Solve [J; tᵀ] x = rhs for dense or sparse J."""
     if sp.issparse(J):
         return solve_bordered_sparse(J, t, rhs)  # block elimination, full LU fallback
-    A = np.vstack([J, t[None, :]])
+    n = len(rhs)
+    A = np.empty((n, n))
+    A[:-1] = J
+    A[-1] = t
+    if n <= _SMALL_DENSE:
+        from .kernels import _dense_solve
+
+        x = np.empty(n)
+        if _dense_solve(A, np.ascontiguousarray(rhs, dtype=float), np.empty((n, n)), x):
+            return np.full_like(rhs, np.nan)
+        return x
     try:
         return np.linalg.solve(A, rhs)
     except np.linalg.LinAlgError:
         return np.full_like(rhs, np.nan)
+
+
+#: bordered systems up to this size are solved by a Numba LU (LAPACK's call overhead
+#: dominates below it; measured 2.1 against 7.6 µs at n = 13, 10 against 16 µs at n = 33,
+#: 53 against 37 µs at n = 64)
+_SMALL_DENSE = 40
 
 
 def _tangent(J, t_prev: np.ndarray) -> np.ndarray:

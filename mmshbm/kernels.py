@@ -328,3 +328,48 @@ def _mmshbm_residual(D, dD, a, w, gap, r, ci, cos_table, rowscale, colscale, jac
     for row in range(n):
         for col in range(n + 1):
             J[row, col] = J[row, col] * colscale[col] / rowscale[row]
+
+
+# ---------------------------------------------------------------------------- small dense solve
+@njit(**JIT_OPTIONS)
+def _dense_solve(A, b, LU, x):
+    """Solve A x = b by LU with partial pivoting (small dense systems, where LAPACK's call
+    overhead dominates). A (n, n) and b (n,) are read only; LU (n, n) is work. Returns 0,
+    or the 1-based column of an exactly zero pivot (x is then undefined)."""
+    n = A.shape[0]
+    for i in range(n):
+        for j in range(n):
+            LU[i, j] = A[i, j]
+        x[i] = b[i]
+    for j in range(n):
+        p = j
+        best = abs(LU[j, j])
+        for i in range(j + 1, n):
+            v = abs(LU[i, j])
+            if v > best:
+                best = v
+                p = i
+        if best == 0.0:
+            return j + 1
+        if p != j:
+            for c in range(n):
+                tmp = LU[j, c]
+                LU[j, c] = LU[p, c]
+                LU[p, c] = tmp
+            tmp = x[j]
+            x[j] = x[p]
+            x[p] = tmp
+        pivot = LU[j, j]
+        for i in range(j + 1, n):
+            factor = LU[i, j] / pivot
+            if factor == 0.0:
+                continue
+            for c in range(j + 1, n):
+                LU[i, c] -= factor * LU[j, c]
+            x[i] -= factor * x[j]
+    for i in range(n - 1, -1, -1):
+        acc = x[i]
+        for c in range(i + 1, n):
+            acc -= LU[i, c] * x[c]
+        x[i] = acc / LU[i, i]
+    return 0
