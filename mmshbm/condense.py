@@ -71,10 +71,14 @@ class Condensation:
         perm = reverse_cuthill_mckee(pattern, symmetric_mode=True)
         self.perm = perm
         self.n_l, self.n_c = K.shape[0], b["K_cc"].shape[0]
-        K = K.tocsr()[perm][:, perm].tocsc()
-        M = M.tocsr()[perm][:, perm].tocsc()
-        coo = pattern[perm][:, perm].tocoo()
-        half_band = int(np.max(np.abs(coo.row - coo.col))) if coo.nnz else 0
+        # RCM order by index maps on the COO triplets (no permuted sparse copies: scipy's
+        # fancy indexing dominated the set-up of small models)
+        inverse = np.empty_like(perm)
+        inverse[perm] = np.arange(len(perm))
+        K = _permuted_coo(K, inverse)
+        M = _permuted_coo(M, inverse)
+        coo = pattern.tocoo()
+        half_band = int(np.max(np.abs(inverse[coo.row] - inverse[coo.col]))) if coo.nnz else 0
         if backend == "auto":
             backend = "banded" if half_band <= max(8, int(np.sqrt(self.n_l))) else "splu"
         self.backend = backend
@@ -90,6 +94,7 @@ class Condensation:
             self._Zwork = np.empty((self.n_l, self.n_c))
             self._ZMZ = np.empty((self.n_c, self.n_c))
         else:
+            K, M = K.tocsc(), M.tocsc()
             S = (abs(K) + abs(M)).tocsc()
             S.sort_indices()
             rows = S.indices
@@ -196,6 +201,14 @@ class Condensation:
             Ql[self.perm, 2 * k - 1] = -Z @ Qc[:, 2 * k - 1]
             Ql[self.perm, 2 * k] = -Z @ Qc[:, 2 * k]
         return Ql
+
+
+def _permuted_coo(A: sp.spmatrix, inverse: np.ndarray) -> sp.coo_matrix:
+    """A with rows and columns renumbered i -> inverse[i] (duplicates summed)."""
+    A = A.tocsr()  # canonical: duplicate entries summed, as the former csr slicing did
+    A.sum_duplicates()
+    coo = A.tocoo()
+    return sp.coo_matrix((coo.data, (inverse[coo.row], inverse[coo.col])), shape=A.shape)
 
 
 def _band_storage(A: sp.spmatrix, kl: int) -> np.ndarray:
