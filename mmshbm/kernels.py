@@ -373,3 +373,69 @@ def _dense_solve(A, b, LU, x):
             acc -= LU[i, c] * x[c]
         x[i] = acc / LU[i, i]
     return 0
+
+
+# ---------------------------------------------------------------------------- MMS-HBM monitor
+@njit(**JIT_OPTIONS)
+def _peak(y):
+    """Largest value of a periodic sampled signal, refined by a parabola through the
+    peak (the first sample of the maximum, as numpy.argmax)."""
+    n = y.shape[0]
+    j = 0
+    for i in range(1, n):
+        if y[i] > y[j]:
+            j = i
+    ym = y[j - 1] if j > 0 else y[n - 1]
+    y0 = y[j]
+    yp = y[(j + 1) % n]
+    denom = ym - 2 * y0 + yp
+    if denom < 0:
+        return y0 - 0.125 * (yp - ym) ** 2 / denom
+    return y0
+
+
+@njit(**JIT_OPTIONS)
+def _mmshbm_monitor(D, dD, a, w, ci, omega, side, cos_fine, q_t, lam_t, out):
+    """Amplitude, mean energy and peak contact force of a cosine MMS-HBM point.
+
+    D, dD : (H+1, n_c, n_c) condensed stiffness and ∂D_k/∂Ω at Ω (rad/s); a : (H+1, n_c)
+    cosine coefficients; w : contact direction; ci : contact index; side : stop side (±1);
+    cos_fine : (H+1, n_fine) cos kτ on the fine grid; q_t, lam_t : (n_fine,) work.
+    out : (3,) <- [largest −side·q_contact (m), energy (J), max(peak λ, 0) (N)], the
+    energy by Parseval from the condensed stiffness (see ``mms_hbm._condensed_energy``).
+    """
+    H1 = D.shape[0]
+    n_c = D.shape[1]
+    n_fine = cos_fine.shape[1]
+    for j in range(n_fine):
+        q_t[j] = 0.0
+        lam_t[j] = 0.0
+    quad = 0.0
+    quad_m = 0.0
+    for k in range(H1):
+        lam_k = 0.0
+        qk = 0.0
+        qm = 0.0
+        for i in range(n_c):
+            f = 0.0
+            df = 0.0
+            for j in range(n_c):
+                f += D[k, i, j] * a[k, j]
+                df += dD[k, i, j] * a[k, j]
+            lam_k += w[i] * f
+            qk += a[k, i] * f
+            qm += a[k, i] * df
+        if k == 0:
+            quad0 = qk
+        else:
+            quad += qk
+            quad_m += qm
+        ak = -side * a[k, ci]
+        for j in range(n_fine):
+            c = cos_fine[k, j]
+            q_t[j] += ak * c
+            lam_t[j] += lam_k * c
+    out[0] = _peak(q_t)
+    out[1] = 0.5 * quad0 + 0.25 * (quad - omega * quad_m)
+    force = _peak(lam_t)
+    out[2] = force if force > 0.0 else 0.0

@@ -40,7 +40,13 @@ import numpy as np
 from . import _validate as check
 from .condense import Condensation
 from .harmonics import check_harmonics, transform
-from .kernels import _cosine_product_matrix, _mmshbm_jacobian, _mmshbm_residual, _proximal_contact
+from .kernels import (
+    _cosine_product_matrix,
+    _mmshbm_jacobian,
+    _mmshbm_monitor,
+    _mmshbm_residual,
+    _proximal_contact,
+)
 from .model import Model
 
 __all__ = ["MMSHBMProblem"]
@@ -265,15 +271,15 @@ class MMSHBMProblem:
         energy (J), contact_force_max (N)."""
         a, omega = self.unpack(u)
         D, dD = self._condensed(omega, True)
-        lam_k = np.einsum("kij,kj->ki", D, a) @ self.w
-        q = a[:, self.ci] @ self._cos_fine
-        lam = lam_k @ self._cos_fine
-        away = -self.model.stop_side * q
+        out = np.empty(3)
+        n_fine = self._cos_fine.shape[1]
+        _mmshbm_monitor(D, dD, np.ascontiguousarray(a), self.w, self.ci, omega, float(self.model.stop_side),
+                        self._cos_fine, np.empty(n_fine), np.empty(n_fine), out)
         return {
             "frequency": omega / (2 * np.pi),
-            "amplitude": _refined_max(away),
-            "energy": _condensed_energy(D, dD, a, omega),
-            "contact_force_max": max(_refined_max(lam), 0.0),
+            "amplitude": float(out[0]),
+            "energy": float(out[1]),
+            "contact_force_max": float(out[2]),
         }
 
 
