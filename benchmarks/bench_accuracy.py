@@ -15,13 +15,22 @@ from __future__ import annotations
 import itertools
 import math
 
-from .common import AMPLITUDE_GAPS, HARMONICS, MODELS, STEPS, available, backbone, model, reference_frequency
+from benchmarks.common import (
+    AMPLITUDE_GAPS,
+    HARMONICS,
+    MODELS,
+    STEPS,
+    available,
+    backbone,
+    model,
+    reference_frequency,
+)
 
 _METHODS = ("mmshbm", "penalty")
 
 
 def _numbers(name, method, harmonics=None, steps=None) -> dict:
-    from mmshbm.benchmarking import _reached_frequency
+    from mmshbm.analysis.benchmarking import _reached_frequency
 
     m = model(name)
     branch = backbone(name, method, harmonics, steps)

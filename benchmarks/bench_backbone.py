@@ -7,7 +7,7 @@ elements (8, 21, 100, 1000) for the harmonic-balance methods. Kernels are compil
 
 from __future__ import annotations
 
-from .common import ELEMENTS, HARMONICS, MODELS, STEPS, backbone, beam_name, check_feasible, warm_up
+from benchmarks.common import ELEMENTS, HARMONICS, MODELS, STEPS, backbone, beam_name, check_feasible, warm_up
 
 
 class _Backbone:
@@ -53,7 +53,7 @@ class ShootingBackbone(_Backbone):
 
 class ElementScaling(_Backbone):
     """Cost against the number of beam elements (MMS-HBM: about linear; see
-    ``mmshbm.benchmarking.element_scaling`` for the fitted exponent)."""
+    ``mmshbm.analysis.benchmarking.element_scaling`` for the fitted exponent)."""
 
     params = [("mmshbm", "penalty"), ELEMENTS, HARMONICS]
     param_names = ["method", "elements", "H"]

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import HARMONICS, check_feasible, model, warm_up
+from benchmarks.common import HARMONICS, check_feasible, model, warm_up
 
 SAMPLES = (64, 128, 256, 512, 1024, 4096)
 RESIDUAL_MODELS = ("oscillator", "beam8", "beam21", "beam100", "beam1000")
@@ -19,7 +19,7 @@ class ProximalContact:
     param_names = ["N"]
 
     def setup(self, N):
-        from mmshbm.kernels import _proximal_contact
+        from mmshbm.core.kernels import _proximal_contact
 
         rng = np.random.default_rng(0)
         self.lam = rng.standard_normal(N)
@@ -40,7 +40,7 @@ class FFTRoundTrip:
     param_names = ["N", "signals"]
 
     def setup(self, N, signals):
-        from mmshbm.harmonics import transform
+        from mmshbm.core.harmonics import transform
 
         self.H = max(1, N // 16)
         self.tr = transform(self.H, N, signals)
@@ -63,8 +63,8 @@ class CosineProductMatrix:
     param_names = ["H"]
 
     def setup(self, H):
-        from mmshbm.harmonics import default_n_samples
-        from mmshbm.kernels import _cosine_product_matrix
+        from mmshbm.core.harmonics import default_n_samples
+        from mmshbm.core.kernels import _cosine_product_matrix
 
         N = default_n_samples(H)
         self.S = np.random.default_rng(0).standard_normal(N)
@@ -84,7 +84,7 @@ class MMSHBMResidual:
     param_names = ["model", "H"]
 
     def setup(self, name, H):
-        from mmshbm.api import make_problem
+        from mmshbm.methods.backbone import make_problem
 
         check_feasible(name, "mmshbm", H)
         warm_up("mmshbm")

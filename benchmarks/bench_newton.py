@@ -5,14 +5,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import HARMONICS, STEPS, backbone, check_feasible, model, options, point_near, warm_up
+from benchmarks.common import HARMONICS, STEPS, backbone, check_feasible, model, options, point_near, warm_up
 
 NEWTON_MODELS = ("oscillator", "beam8", "beam21", "beam100", "beam1000")
 CORRECTOR_MODELS = ("oscillator", "beam8", "beam21")
 
 
 def _iteration_setup(self, name, method, harmonics=None, steps=None):
-    from mmshbm.api import make_problem
+    from mmshbm.methods.backbone import make_problem
 
     check_feasible(name, method, harmonics, single_iteration=True)
     warm_up(method)
@@ -24,7 +24,7 @@ def _iteration_setup(self, name, method, harmonics=None, steps=None):
 
 
 def _iterate(self):
-    from mmshbm.continuation import _bordered_solve
+    from mmshbm.core.continuation import _bordered_solve
 
     # alternate two states whose last unknown (Ω) differs in the last digits: MMS-HBM
     # reuses its condensation at an unchanged Ω, and a Newton iteration always changes Ω
@@ -71,7 +71,7 @@ class ShootingNewtonIteration:
 def _corrector_setup(self, name, method, harmonics=None, steps=None):
     """A secant predictor between two converged points above grazing; the timed corrector
     converges from it to the second point."""
-    from mmshbm.continuation import ContinuationOptions
+    from mmshbm.core.continuation import ContinuationOptions
 
     check_feasible(name, method, harmonics)
     warm_up(method)
@@ -94,7 +94,7 @@ def _corrector_setup(self, name, method, harmonics=None, steps=None):
 
 
 def _correct(self):
-    from mmshbm.continuation import newton
+    from mmshbm.core.continuation import newton
 
     return newton(self.problem, self.u_pred, self.t, self.u_pred, self.tol, self.max_newton, self.step_tol)
 

@@ -38,7 +38,7 @@ SKIP_REASONS = {
 
 def available(method: str) -> bool:
     """Whether ``method``'s module imports (shooting may be missing on old commits)."""
-    from mmshbm.api import METHODS
+    from mmshbm.methods.backbone import METHODS
 
     try:
         importlib.import_module(METHODS[method].split(":")[0])
@@ -56,7 +56,7 @@ def require(method: str) -> None:
 @functools.cache
 def model(name: str):
     """``"oscillator"`` or ``"beam<n>"`` -> Model (cached per process)."""
-    from mmshbm.benchmarking import load_model
+    from mmshbm.analysis.benchmarking import load_model
 
     return load_model(name)[0]
 
@@ -123,7 +123,7 @@ def reference_frequency(name: str, harmonics: int = 5, amplitude_gaps: float = A
     amplitude.
     """
     import mmshbm
-    from mmshbm.benchmarking import _reached_frequency, load_model
+    from mmshbm.analysis.benchmarking import _reached_frequency, load_model
 
     m, osc = load_model(name)
     if osc is not None:

@@ -21,19 +21,30 @@ __version__ = "0.1.0"
 
 # public name -> module that defines it
 _LAZY = {
-    "Model": "mmshbm.model",
+    "Model": "mmshbm.model.model",
     "TimoshenkoBeam": "mmshbm.fe.beam",
     "default_beam": "mmshbm.fe.beam",
-    "one_dof_oscillator": "mmshbm.examples",
-    "OneDofOscillator": "mmshbm.examples",
-    "backbone": "mmshbm.api",
-    "ContinuationOptions": "mmshbm.continuation",
-    "Branch": "mmshbm.results",
-    "fit_material": "mmshbm.identification",
+    "one_dof_oscillator": "mmshbm.fe.oscillator",
+    "OneDofOscillator": "mmshbm.fe.oscillator",
+    "backbone": "mmshbm.methods.backbone",
+    "ContinuationOptions": "mmshbm.core.continuation",
+    "Branch": "mmshbm.results.branch",
+    "fit_material": "mmshbm.analysis.identification",
+    "load": "mmshbm.io",
 }
-_SUBMODULES = {"exact", "studies", "plotting", "harmonics", "kernels", "condense", "continuation",
-               "baselines", "fe", "examples", "results", "measured", "identification",
-               "cli", "benchmarking", "checkpoint", "api", "model", "mms_hbm"}
+# submodule attribute -> module (the layered packages, and the flat names of 0.1)
+_SUBMODULES = {
+    "model": "mmshbm.model", "fe": "mmshbm.fe", "core": "mmshbm.core", "results": "mmshbm.results",
+    "methods": "mmshbm.methods", "analysis": "mmshbm.analysis", "io": "mmshbm.io",
+    "plotting": "mmshbm.plotting", "cli": "mmshbm.cli",
+    "harmonics": "mmshbm.core.harmonics", "kernels": "mmshbm.core.kernels",
+    "condense": "mmshbm.core.condense", "continuation": "mmshbm.core.continuation",
+    "checkpoint": "mmshbm.core.checkpoint", "mms_hbm": "mmshbm.methods.mms_hbm",
+    "exact": "mmshbm.methods.exact", "api": "mmshbm.methods.backbone",
+    "examples": "mmshbm.fe.oscillator", "studies": "mmshbm.analysis.studies",
+    "benchmarking": "mmshbm.analysis.benchmarking", "identification": "mmshbm.analysis.identification",
+    "measured": "mmshbm.analysis.measured",
+}
 
 __all__ = sorted(_LAZY) + ["__version__"]
 
@@ -42,7 +53,7 @@ def __getattr__(name: str):
     if name in _LAZY:
         return getattr(importlib.import_module(_LAZY[name]), name)
     if name in _SUBMODULES:
-        return importlib.import_module(f"mmshbm.{name}")
+        return importlib.import_module(_SUBMODULES[name])
     raise AttributeError(f"module 'mmshbm' has no attribute {name!r}")
 
 

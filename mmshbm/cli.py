@@ -65,7 +65,7 @@ def _measured(args):
     """The measured backbone of ``--measured``, read before any computation (None without)."""
     if not getattr(args, "measured", None):
         return None
-    from .measured import load_measured
+    from .analysis.measured import load_measured
 
     return load_measured(args.measured)
 
@@ -88,7 +88,7 @@ def _beam(args):
 
 def _model(args):
     if getattr(args, "model_file", None):
-        from .model import Model
+        from .model.model import Model
 
         model = Model.from_npz(args.model_file)
         return model.with_gap(args.gap) if args.gap is not None else model
@@ -108,7 +108,7 @@ def cmd_modes(args) -> int:
 
 
 def cmd_backbone(args) -> int:
-    from .api import backbone
+    from .methods.backbone import backbone
     from .plotting import plot_backbone, plot_frequency_energy
 
     measured = _measured(args)
@@ -136,7 +136,7 @@ def cmd_backbone(args) -> int:
 
 
 def cmd_study(args) -> int:
-    from . import studies
+    from .analysis import studies
     from .plotting import plot_backbone, plot_figure2
 
     params = _params(args.param)
@@ -207,7 +207,7 @@ def _params(items) -> dict:
 
 
 def cmd_fit(args) -> int:
-    from .identification import fit_material
+    from .analysis.identification import fit_material
 
     beam = _beam(args)
     fitted, report = fit_material(beam, args.frequencies, args.elements, modes=args.modes,
@@ -232,7 +232,7 @@ def cmd_fit(args) -> int:
 
 def cmd_bench(args) -> int:
     try:
-        from . import benchmarking
+        from .analysis import benchmarking
     except ImportError as err:
         raise ValueError(f"benchmarking is not available: {err}") from None
     kwargs = {"model": args.model, "quick": args.quick}
@@ -252,7 +252,8 @@ def cmd_bench(args) -> int:
 
 def cmd_plot(args) -> int:
     from . import plotting
-    from .results import Branch, load
+    from .io import load
+    from .results.branch import Branch
 
     data = load(args.file)
     measured = _measured(args)

@@ -56,7 +56,7 @@ def _finish(fig: Figure, path) -> Figure:
 
 
 def _as_list(branches) -> list:
-    from .results import Branch
+    from .results.branch import Branch
 
     return [branches] if isinstance(branches, Branch) else list(branches)
 
@@ -165,7 +165,7 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
     labels : sequence of str, optional
         Legend entries (default :func:`branch_label`).
     measured : MeasuredBackbone or path, optional
-        A measured backbone to overlay (``mmshbm.measured.load_measured`` reads CSV).
+        A measured backbone to overlay (``mmshbm.analysis.measured.load_measured`` reads CSV).
     model : Model, optional
         For the reference lines (default the first branch's model).
     marks : sequence of (branch index, point index), optional
@@ -205,7 +205,7 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
         ax.plot(b.frequency, b.amplitude / scale, label=label, **({"lw": 1.4} | style))
     if measured is not None:
         if not hasattr(measured, "frequency"):
-            from .measured import load_measured
+            from .analysis.measured import load_measured
 
             measured = load_measured(measured)
         _overlay_measured(ax, measured, scale)
@@ -268,7 +268,7 @@ def plot_peak_contact_force(branches, labels: Sequence[str] | None = None, *, me
         ax.plot(b.frequency, b.contact_force_max, label=label, **style)
     if measured is not None:
         if not hasattr(measured, "frequency"):
-            from .measured import load_measured
+            from .analysis.measured import load_measured
 
             measured = load_measured(measured)
         if measured.contact_force is None:
@@ -419,7 +419,7 @@ def plot_figure2(study, *, marks: Sequence[float] = (1.5, 3.0, 6.0), marked: dic
     Parameters
     ----------
     study : Study
-        With coordinates ``harmonics`` and ``elements`` (e.g. :func:`mmshbm.studies.figure2_study`).
+        With coordinates ``harmonics`` and ``elements`` (e.g. :func:`mmshbm.analysis.studies.figure2_study`).
     marks : sequence of float
         Amplitudes (gaps) of the numbered points: the first branch point reaching each.
     marked : dict, optional

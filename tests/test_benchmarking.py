@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from mmshbm import benchmarking as bm
-from mmshbm.examples import OneDofOscillator
+from mmshbm.fe.oscillator import OneDofOscillator
 
 TARGET = 1e-4
 

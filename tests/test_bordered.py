@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from mmshbm._bordered import solve_bordered_sparse
+from mmshbm.core.bordered import solve_bordered_sparse
 
 
 def _random_system(n, seed):

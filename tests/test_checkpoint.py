@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 import mmshbm
-from mmshbm.checkpoint import CheckpointWriter, read_checkpoint
-from mmshbm.examples import OneDofOscillator
+from mmshbm.core.checkpoint import CheckpointWriter, read_checkpoint
+from mmshbm.fe.oscillator import OneDofOscillator
 
 BEAM_SCRIPT = """
 import sys, time

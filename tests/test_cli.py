@@ -7,7 +7,8 @@ import pytest
 
 import mmshbm
 from mmshbm.cli import main
-from mmshbm.results import Branch, load
+from mmshbm.io import load
+from mmshbm.results.branch import Branch
 
 SMALL = ["--elements", "4", "-H", "3", "--max-amplitude", "3"]
 
@@ -45,10 +46,10 @@ def test_backbone_options_reach_the_run(tmp_path):
 
 
 def test_checkpoint_and_resume_are_passed_through(tmp_path, monkeypatch):
-    import mmshbm.api
+    import mmshbm.methods.backbone as api
 
     seen = {}
-    real = mmshbm.api.backbone
+    real = api.backbone
 
     def spy(model, **kwargs):
         seen.update(kwargs)
@@ -56,7 +57,7 @@ def test_checkpoint_and_resume_are_passed_through(tmp_path, monkeypatch):
         kwargs.pop("resume", None)
         return real(model, **kwargs)
 
-    monkeypatch.setattr(mmshbm.api, "backbone", spy)
+    monkeypatch.setattr(api, "backbone", spy)
     assert main(["backbone", *SMALL, "--out", str(tmp_path)]) == 0
     assert "checkpoint" not in seen and "resume" not in seen
     ck = str(tmp_path / "ck.npz")
@@ -126,7 +127,7 @@ def test_study_grid_with_parameter(tmp_path):
 def test_fit(tmp_path):
     from dataclasses import replace
 
-    from mmshbm.identification import beam_frequencies
+    from mmshbm.analysis.identification import beam_frequencies
 
     f = beam_frequencies(replace(mmshbm.default_beam(), E=200e9), 21, 2)
     assert main(["fit", *(f"{x:.12g}" for x in f), "--out", str(tmp_path)]) == 0
@@ -144,16 +145,16 @@ def test_plot_saved_branch(tmp_path):
 
 
 def test_bench(tmp_path, monkeypatch):
-    """The wiring only (the benchmark itself is tested with mmshbm.benchmarking)."""
+    """The wiring only (the benchmark itself is tested with mmshbm.analysis.benchmarking)."""
     import importlib
     import sys
     import types
 
     try:
-        benchmarking = importlib.import_module("mmshbm.benchmarking")
+        benchmarking = importlib.import_module("mmshbm.analysis.benchmarking")
     except ImportError:  # not written yet: a stand-in module with the agreed functions
-        benchmarking = types.ModuleType("mmshbm.benchmarking")
-        monkeypatch.setitem(sys.modules, "mmshbm.benchmarking", benchmarking)
+        benchmarking = types.ModuleType("mmshbm.analysis.benchmarking")
+        monkeypatch.setitem(sys.modules, "mmshbm.analysis.benchmarking", benchmarking)
     calls = {}
 
     def fake(**kwargs):

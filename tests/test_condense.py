@@ -5,7 +5,7 @@ import pytest
 from naive import condensed_stiffness_dense
 
 import mmshbm
-from mmshbm.condense import Condensation, SingularDynamicStiffness
+from mmshbm.core.condense import Condensation, SingularDynamicStiffness
 
 
 @pytest.fixture(scope="module")

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from mmshbm.continuation import ContinuationOptions, continue_branch
+from mmshbm.core.continuation import ContinuationOptions, continue_branch
 
 
 class Circle:

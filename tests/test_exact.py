@@ -15,7 +15,7 @@ from scipy.integrate import solve_ivp
 
 import mmshbm
 from mmshbm import Model, OneDofOscillator
-from mmshbm.exact import (
+from mmshbm.methods.exact import (
     PiecewiseLinearSystem,
     backbone,
     integrate,

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import mmshbm
-from mmshbm.identification import beam_frequencies, fit_material
+from mmshbm.analysis.identification import beam_frequencies, fit_material
 
 BEAM = mmshbm.default_beam()
 TRUE = replace(BEAM, E=195e9, rho=7700.0)

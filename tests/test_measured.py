@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import mmshbm
-from mmshbm.measured import MeasuredBackbone, load_measured
+from mmshbm.analysis.measured import MeasuredBackbone, load_measured
 
 
 def _write(tmp_path, text, name="m.csv"):

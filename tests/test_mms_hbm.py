@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 import mmshbm
-from mmshbm.continuation import newton
-from mmshbm.mms_hbm import MMSHBMProblem
+from mmshbm.core.continuation import newton
+from mmshbm.methods.mms_hbm import MMSHBMProblem
 
 OSC = mmshbm.OneDofOscillator(m=1.0, k1=1.0, k2=4.0, gap=1.0)
 AMPLITUDES = (1.5, 2.0, 3.0, 5.0, 10.0)  # gaps

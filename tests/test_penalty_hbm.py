@@ -10,14 +10,14 @@ import pytest
 import scipy.sparse as sp
 
 import mmshbm
-from mmshbm.baselines._penalty_kernels import _penalty_contact
-from mmshbm.baselines.penalty_hbm import (
+from mmshbm.core.harmonics import default_n_samples
+from mmshbm.methods._penalty_kernels import _penalty_contact
+from mmshbm.methods.penalty_hbm import (
     DEFAULT_PENALTY_FACTOR,
     PenaltyHBMProblem,
     _condensed_contact_stiffness,
     penalty_n_samples,
 )
-from mmshbm.harmonics import default_n_samples
 
 OSC = mmshbm.OneDofOscillator(m=1.0, k1=1.0, k2=4.0, gap=1.0)
 FACTORS = (1e2, 1e3, 1e4)  # k_p / k_c

@@ -8,7 +8,7 @@ from matplotlib.figure import Figure
 
 import mmshbm
 from mmshbm import plotting, studies
-from mmshbm.measured import MeasuredBackbone
+from mmshbm.analysis.measured import MeasuredBackbone
 
 
 @pytest.fixture(scope="module")

@@ -22,12 +22,12 @@ from naive import (
 )
 
 import mmshbm
-from mmshbm.condense import Condensation
-from mmshbm.examples import OneDofOscillator
+from mmshbm.core.condense import Condensation
+from mmshbm.core.harmonics import HarmonicTransform
+from mmshbm.core.kernels import proximal_contact
 from mmshbm.fe import assembly, element
-from mmshbm.harmonics import HarmonicTransform
-from mmshbm.kernels import proximal_contact
-from mmshbm.mms_hbm import MMSHBMProblem
+from mmshbm.fe.oscillator import OneDofOscillator
+from mmshbm.methods.mms_hbm import MMSHBMProblem
 
 seeds = st.integers(0, 2**32 - 1)
 

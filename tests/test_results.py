@@ -5,7 +5,8 @@ import pytest
 import scipy.sparse as sp
 
 import mmshbm
-from mmshbm.results import ARRAY_FIELDS, Branch, load
+from mmshbm.io import load
+from mmshbm.results.branch import ARRAY_FIELDS, Branch
 
 OSC = mmshbm.OneDofOscillator(m=1.0, k1=1.0, k2=4.0, gap=1.0)
 

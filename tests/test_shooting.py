@@ -11,9 +11,9 @@ from scipy.integrate import quad
 from scipy.optimize import brentq
 
 import mmshbm
-from mmshbm.baselines._shooting_kernels import band_cholesky, band_solve, band_symv
-from mmshbm.baselines.shooting import ShootingProblem
-from mmshbm.examples import OneDofOscillator
+from mmshbm.fe.oscillator import OneDofOscillator
+from mmshbm.methods._shooting_kernels import band_cholesky, band_solve, band_symv
+from mmshbm.methods.shooting import ShootingProblem
 
 OSC = OneDofOscillator(m=1.0, k1=1.0, k2=4.0, gap=1.0)
 

@@ -8,7 +8,7 @@ import pytest
 
 import mmshbm
 from mmshbm import studies
-from mmshbm.results import load
+from mmshbm.io import load
 
 GRID = {"harmonics": (1, 3), "elements": (4, 6), "max_amplitude": 3.0, "unit": "gap"}
 

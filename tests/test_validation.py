@@ -18,10 +18,10 @@ import scipy.sparse as sp
 
 import mmshbm
 from mmshbm import Model, TimoshenkoBeam, default_beam
-from mmshbm.condense import Condensation
-from mmshbm.examples import OneDofOscillator
+from mmshbm.core.condense import Condensation
 from mmshbm.fe import assembly, element
-from mmshbm.mms_hbm import MMSHBMProblem
+from mmshbm.fe.oscillator import OneDofOscillator
+from mmshbm.methods.mms_hbm import MMSHBMProblem
 
 M2 = np.diag([1.0, 0.0])
 K2 = np.array([[5.0, -4.0], [-4.0, 4.0]])  # the one-DOF oscillator, m = k1 = 1, k2 = 4
@@ -254,7 +254,7 @@ def test_exact_pole_at_the_start_is_a_status_not_a_crash():
     """k2 = 3 k1: the closed-contact frequency ω2 = 2 rad/s is exactly twice the linear
     one, so D_2(Ω) has a pole on the whole linear part of the backbone and the
     factorisation of K_ll − (2Ω)² M_ll is exactly singular at the first point."""
-    from mmshbm.condense import SingularDynamicStiffness
+    from mmshbm.core.condense import SingularDynamicStiffness
 
     model = OneDofOscillator(1.0, 1.0, 3.0, 0.1).model()
     p = MMSHBMProblem(model, 3)
@@ -272,7 +272,7 @@ class PoleWindow:
     factorisation with a pivot threshold would)."""
 
     def __init__(self, width):
-        from mmshbm.condense import SingularDynamicStiffness
+        from mmshbm.core.condense import SingularDynamicStiffness
 
         self.osc = OneDofOscillator(1.0, 1.0, 4.0, 1.0)
         self.problem = MMSHBMProblem(self.osc.model(), 3)
@@ -290,7 +290,7 @@ class PoleWindow:
         self.reference = MMSHBMProblem(self.osc.model(), 3)
 
     def run(self):
-        from mmshbm.continuation import ContinuationOptions, continue_branch
+        from mmshbm.core.continuation import ContinuationOptions, continue_branch
 
         p = self.problem
         return continue_branch(p, p.linear_point(0.5), p.initial_tangent(),

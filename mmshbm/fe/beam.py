@@ -15,7 +15,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .. import _validate as check
-from ..model import Model
+from ..model.model import Model
 from . import assembly, element, mesh
 
 __all__ = ["TimoshenkoBeam", "default_beam"]

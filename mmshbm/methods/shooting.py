@@ -1,7 +1,7 @@
 """Baseline 2: time-domain shooting with an energy-conserving trapezoidal rule.
 
 Because the contact DOFs are massless they follow the DOFs with mass ``l`` statically
-(DESIGN.md section 1; the docstring of :mod:`mmshbm.exact`): at fixed ``q_l`` the contact
+(DESIGN.md section 1; the docstring of :mod:`mmshbm.methods.exact`): at fixed ``q_l`` the contact
 problem is a scalar LCP with the solution λ = k_c max(0, −h(q_l)), free gap
 h(q_l) = gap + a·q_l, a = −K_lc K_cc⁻¹ w_c and k_c = 1/(w_cᵀ K_cc⁻¹ w_c). The motion of
 the DOFs with mass is the continuous, piecewise-linear system
@@ -61,7 +61,7 @@ monodromy with a double multiplier +1 (phase and energy), so its 2 n_l equations
 half-period problem has n_l equations in n_l + 1 unknowns with full row rank along the
 family, at half the integration cost. The discrete orbit is exactly periodic (the
 second half is the mirror image of the first) because the scheme is reversible.
-Convention as :mod:`mmshbm.exact`: t = 0 is the turning point farthest from the stop.
+Convention as :mod:`mmshbm.methods.exact`: t = 0 is the turning point farthest from the stop.
 
 Newton. The Jacobian comes from the tangent (sensitivity) vectors propagated with the
 step, no finite differences: n_l + 1 columns (initial positions and Ω; Ω enters through
@@ -87,9 +87,9 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from .. import _validate as check
-from ..mms_hbm import _refined_max
-from ..model import Model
+from ..model.model import Model
 from ._shooting_kernels import _band_cholesky, _band_solve, _integrate
+from .mms_hbm import _refined_max
 
 __all__ = ["ShootingProblem", "DEFAULT_STEPS_PER_PERIOD", "FLOQUET_AUTO_LIMIT"]
 
@@ -314,7 +314,7 @@ class ShootingProblem:
     def solve_at_amplitude(self, amplitude: float, guess: np.ndarray | None = None, tol: float = 1e-10,
                            max_iter: int = 30) -> np.ndarray:
         """The orbit whose contact DOF starts ``amplitude`` (m) away from the stop at t = 0
-        (the convention of :func:`mmshbm.exact.periodic_orbit`), by Newton on the residual
+        (the convention of :func:`mmshbm.methods.exact.periodic_orbit`), by Newton on the residual
         bordered with that condition. ``guess``: scaled unknowns (default the linear mode).
         Converged when the scaled residual is <= ``tol``, or <= √tol with the last Newton
         update below 1e-9 (relative): on strongly unstable orbits round-off in the

@@ -3,7 +3,7 @@
 Format: JSON lines (UTF-8). The first line is a header (format name and version, and the
 configuration that fixes the branch: method, H, N, model fingerprint, solver options);
 then one line per accepted point holding the full driver state
-(:class:`~mmshbm.continuation.ContinuationState`: scaled unknowns ``u``, unit
+(:class:`~mmshbm.core.continuation.ContinuationState`: scaled unknowns ``u``, unit
 ``tangent``, the step ``ds`` that led to the point and the step ``ds_next`` the driver
 tries next, the step count, Newton iterations and residual history, the monitored
 record, the special points at that index, and the terminal status if the point ends
@@ -19,7 +19,7 @@ is an error.
 
 Resume. :func:`read_checkpoint` returns the header and the points;
 :meth:`Checkpoint.state` turns them into a :class:`ContinuationState` from which
-:func:`~mmshbm.continuation.continue_branch` goes on exactly as the uninterrupted run
+:func:`~mmshbm.core.continuation.continue_branch` goes on exactly as the uninterrupted run
 would (``mmshbm.backbone(..., resume=path)``).
 """
 

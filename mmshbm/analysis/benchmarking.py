@@ -16,8 +16,8 @@ gets there is reported with its most accurate setting and ``target_met = False``
 
 References (column ``reference``):
 
-* one-DOF oscillator: the closed form :meth:`~mmshbm.examples.OneDofOscillator.frequency`;
-* beam: :func:`mmshbm.exact.periodic_orbit` started from the MMS-HBM (H = 5) orbit, if it
+* one-DOF oscillator: the closed form :meth:`~mmshbm.fe.oscillator.OneDofOscillator.frequency`;
+* beam: :func:`mmshbm.methods.exact.periodic_orbit` started from the MMS-HBM (H = 5) orbit, if it
   converges; otherwise a high-H MMS-HBM run if H = 25 and H = 40 agree to a tenth of the
   target; otherwise (*equal H*, DESIGN.md section 4: "compare on the beam at equal H")
   the H = 5 MMS-HBM solution with N = 1024 samples, i.e. the nonlinear mode of the
@@ -77,7 +77,8 @@ def load_model(name: str):
     Returns (model, oscillator or None).
     """
     import mmshbm
-    from mmshbm.examples import OneDofOscillator
+
+    from ..fe.oscillator import OneDofOscillator
 
     if not isinstance(name, str):
         raise TypeError(f"model must be a name such as 'beam21' or 'oscillator', got {name!r}")
@@ -111,7 +112,7 @@ def _backbone(model, method: str, amplitude: float, options: dict):
     harmonics = opts.pop("harmonics", 5)
     factor = opts.pop("penalty_factor", None)
     if factor is not None:
-        from mmshbm.baselines.penalty_hbm import _condensed_contact_stiffness
+        from ..methods.penalty_hbm import _condensed_contact_stiffness
 
         opts["penalty_stiffness"] = factor * _condensed_contact_stiffness(model)
     return mmshbm.backbone(model, harmonics=harmonics, method=method, max_amplitude=amplitude, **opts)
@@ -216,7 +217,7 @@ def _reference(model, osc, amplitude: float, target: float) -> _Reference:
 
 def _exact_orbit(model, branch, amplitude):
     """Exact symmetric orbit at ``amplitude`` started from the last point of ``branch``."""
-    from mmshbm import exact
+    from ..methods import exact
 
     if len(branch) == 0:
         return None
@@ -305,7 +306,7 @@ def compare_methods(model: str = "beam21", amplitude_gaps: float = 2.0, target: 
         ``frequency_hz``, ``reference_hz``, ``error`` (relative), ``target_met``,
         ``reference`` (what the reference is), ``status`` and ``settings_tried``.
     """
-    from . import _validate as check
+    from .. import _validate as check
 
     if isinstance(methods, str):
         methods = (methods,)
@@ -362,7 +363,7 @@ def compare_methods(model: str = "beam21", amplitude_gaps: float = 2.0, target: 
 def _available(method: str) -> bool:
     import importlib
 
-    from .api import METHODS
+    from ..methods.backbone import METHODS
 
     try:
         importlib.import_module(METHODS[method].split(":")[0])
@@ -430,9 +431,9 @@ def element_scaling(elements=(8, 21, 100, 1000), harmonics: int = 5, amplitude_g
         Least-squares slope of log(time per Newton iteration) against log(elements).
     """
     import mmshbm
-    from mmshbm.api import make_problem
 
-    from . import _validate as check
+    from .. import _validate as check
+    from ..methods.backbone import make_problem
 
     elements = [check.integer("elements", n, minimum=1) for n in elements]
     if len(elements) < 2:

@@ -37,9 +37,9 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-from . import _validate as check
+from .. import _validate as check
+from ..model.model import Model
 from .kernels import _band_quadratic_form, _band_solve, _condensed_stiffness
-from .model import Model
 
 __all__ = ["Condensation", "SingularDynamicStiffness"]
 

@@ -28,7 +28,7 @@ import scipy.linalg as la
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from . import _validate as check
+from .. import _validate as check
 
 __all__ = ["Model"]
 

@@ -9,7 +9,7 @@ rates in H and in the number of elements.
 The reference of a convergence fit is the finest run of its series (largest H, or most
 elements), not the exact solution: the rates say how fast the runs approach the finest
 one, and a rate fitted on two points is a two-point slope. Compare with
-:mod:`mmshbm.exact` for errors against the truth.
+:mod:`mmshbm.methods.exact` for errors against the truth.
 
 Runs go through any :class:`concurrent.futures.Executor`: a local process pool by
 default, in-process when ``executor`` is None or ``"serial"``, or a Dask cluster's
@@ -24,7 +24,6 @@ from __future__ import annotations
 import concurrent.futures as cf
 import itertools
 import logging
-import math
 import multiprocessing
 import time
 from collections.abc import Iterator, Mapping, Sequence
@@ -33,8 +32,16 @@ from pathlib import Path
 
 import numpy as np
 
-from . import _validate as check
-from .results import Branch, branch_from_payload, branch_payload, read_archive, versions, write_archive
+from .. import _validate as check
+from ..results.branch import (
+    Branch,
+    branch_from_payload,
+    branch_payload,
+    read_archive,
+    versions,
+    write_archive,
+)
+from .tables import ConvergenceFit, FrequencyTable, format_convergence
 
 __all__ = ["run_study", "figure2_study", "Study", "RunSpec", "FrequencyTable", "ConvergenceFit",
            "STUDY_FORMAT"]
@@ -88,10 +95,10 @@ class RunSpec:
 
 def build_model(source: dict):
     """The :class:`~mmshbm.model.Model` described by a :attr:`RunSpec.source`."""
-    from .model import Model
+    from ..model.model import Model
 
     if "beam" in source:
-        from .fe.beam import TimoshenkoBeam
+        from ..fe.beam import TimoshenkoBeam
 
         return TimoshenkoBeam(**source["beam"]).model(source["n_elements"], source["grading"])
     if "file" in source:
@@ -114,12 +121,12 @@ def build_model(source: dict):
 def execute(spec: RunSpec) -> Branch:
     """Run one grid point (this is what workers execute); the branch comes back without
     its solver, which holds unpicklable FFT plans. Thread executors are safe: every
-    thread has its own FFTW plans and buffers (:func:`mmshbm.harmonics.transform`)."""
+    thread has its own FFTW plans and buffers (:func:`mmshbm.core.harmonics.transform`)."""
     return _execute(spec)
 
 
 def _execute(spec: RunSpec) -> Branch:
-    from .api import backbone
+    from ..methods.backbone import backbone
 
     model = build_model(spec.source)
     max_amplitude = spec.max_amplitude
@@ -292,188 +299,6 @@ class Study:
         return f"Study({len(self)} runs over {self.axes}, {status} completed)"
 
 
-@dataclass
-class FrequencyTable:
-    """Frequency (Hz) of each run at chosen amplitudes.
-
-    Attributes
-    ----------
-    axes : list of str
-        Coordinate names (columns before the frequencies).
-    runs : list of dict
-        Coordinates per row.
-    amplitudes : ndarray, shape (n_amplitudes,)
-    unit : {"gap", "m"}
-        Unit of ``amplitudes``.
-    frequency : ndarray, shape (n_runs, n_amplitudes)
-        Hz; NaN where the branch never reaches the amplitude.
-    status : list of str
-        Each branch's status.
-    """
-
-    axes: list
-    runs: list
-    amplitudes: np.ndarray
-    unit: str
-    frequency: np.ndarray
-    status: list
-
-    def _amp_label(self, a: float) -> str:
-        return f"f_at_{a:g}{'gap' if self.unit == 'gap' else 'm'}_hz"
-
-    def to_csv(self, path) -> Path:
-        """Write the table (one header line; frequencies with 10 significant digits)."""
-        path = Path(path)
-        header = [*self.axes, *(self._amp_label(a) for a in self.amplitudes), "status"]
-        lines = [",".join(header)]
-        for r, f, s in zip(self.runs, self.frequency, self.status, strict=True):
-            lines.append(",".join([*(str(r.get(a, "")) for a in self.axes),
-                                   *("nan" if not np.isfinite(x) else f"{x:.10g}" for x in f), s]))
-        path.write_text("\n".join(lines) + "\n")
-        return path
-
-    def to_text(self) -> str:
-        """A fixed-width text table."""
-        unit = "gaps" if self.unit == "gap" else "m"
-        head = [*self.axes, *(f"A={a:g}" for a in self.amplitudes), "status"]
-        rows = [[*(str(r.get(a, "")) for a in self.axes),
-                 *(f"{x:.3f}" if np.isfinite(x) else "-" for x in f), s]
-                for r, f, s in zip(self.runs, self.frequency, self.status, strict=True)]
-        widths = [max(len(h), *(len(row[i]) for row in rows)) if rows else len(h) for i, h in enumerate(head)]
-        fmt = "  ".join(f"{{:>{w}}}" for w in widths)
-        title = f"Frequency (Hz) at tip amplitude A ({unit}); '-' = not reached"
-        return "\n".join([title, fmt.format(*head), *(fmt.format(*row) for row in rows)])
-
-    def pivot(self, amplitude_index: int = 0, rows: str = "elements", columns: str = "harmonics") -> tuple:
-        """The frequencies at one amplitude as a matrix over two coordinates.
-
-        Runs that differ in any other coordinate must not collide (one value per cell).
-
-        Returns
-        -------
-        row_values : list, shape (n_rows,)
-        column_values : list, shape (n_columns,)
-        frequency : ndarray, shape (n_rows, n_columns)
-            Hz; NaN for missing runs or amplitudes not reached.
-
-        Raises
-        ------
-        ValueError
-            If ``rows`` or ``columns`` is not a coordinate, or two runs fall in one cell.
-        """
-        for name in (rows, columns):
-            if name not in self.axes:
-                raise ValueError(f"{name!r} is not a coordinate of the table; it has {self.axes}")
-        rv = sorted({r[rows] for r in self.runs})
-        cv = sorted({r[columns] for r in self.runs})
-        f = np.full((len(rv), len(cv)), np.nan)
-        seen = set()
-        for r, row in zip(self.runs, self.frequency, strict=True):
-            cell = (rv.index(r[rows]), cv.index(r[columns]))
-            if cell in seen:
-                raise ValueError(f"several runs have {rows}={r[rows]}, {columns}={r[columns]}: select first")
-            seen.add(cell)
-            f[cell] = row[amplitude_index]
-        return rv, cv, f
-
-    def pivot_text(self, rows: str = "elements", columns: str = "harmonics") -> str:
-        """Text matrices (one per amplitude) of :meth:`pivot`, e.g. elements × H; empty
-        when other coordinates vary too."""
-        unit = "gaps" if self.unit == "gap" else "m"
-        blocks = []
-        for j, a in enumerate(self.amplitudes):
-            try:
-                rv, cv, f = self.pivot(j, rows, columns)
-            except ValueError:
-                return ""
-            head = [f"{rows} \\ {columns}", *(str(c) for c in cv)]
-            body = [[str(r), *(f"{x:.3f}" if np.isfinite(x) else "-" for x in fr)]
-                    for r, fr in zip(rv, f, strict=True)]
-            widths = [max(len(h), *(len(b[i]) for b in body)) for i, h in enumerate(head)]
-            fmt = "  ".join(f"{{:>{w}}}" for w in widths)
-            blocks.append("\n".join([f"f (Hz) at A = {a:g} {unit}", fmt.format(*head),
-                                     *(fmt.format(*b) for b in body)]))
-        return "\n\n".join(blocks)
-
-    def __str__(self) -> str:
-        return self.to_text()
-
-
-@dataclass
-class ConvergenceFit:
-    """Observed convergence of one series of runs at one amplitude.
-
-    Attributes
-    ----------
-    vary : {"harmonics", "elements"}
-        The refined quantity.
-    fixed : dict
-        The other coordinates of the series.
-    amplitude : float
-        The amplitude (in ``unit``) the frequencies are taken at.
-    unit : {"gap", "m"}
-    values : ndarray, shape (n,)
-        H or element counts, ascending; the last is the reference.
-    frequency : ndarray, shape (n,)
-        Frequencies (Hz) at ``amplitude``.
-    difference : ndarray, shape (n,)
-        |f − f_ref| (Hz); 0 for the reference.
-    rate : float
-        p in |f − f_ref| ∝ value^(−p), least squares in log–log over the non-reference
-        runs; NaN with fewer than two usable runs.
-    n_fit : int
-        Number of runs in the fit.
-    """
-
-    vary: str
-    fixed: dict
-    amplitude: float
-    unit: str
-    values: np.ndarray
-    frequency: np.ndarray
-    difference: np.ndarray
-    rate: float
-    n_fit: int
-
-    @classmethod
-    def fit(cls, vary, fixed, amplitude, unit, values, frequency) -> ConvergenceFit:
-        values = np.asarray(values, dtype=float)
-        frequency = np.asarray(frequency, dtype=float)
-        diff = np.abs(frequency - frequency[-1])
-        use = np.isfinite(diff[:-1]) & (diff[:-1] > 1e-12 * abs(frequency[-1]))
-        if not np.isfinite(frequency[-1]):
-            use[:] = False
-        rate = float("nan")
-        if use.sum() >= 2:
-            slope = np.polyfit(np.log(values[:-1][use]), np.log(diff[:-1][use]), 1)[0]
-            rate = float(-slope)
-        return cls(vary, dict(fixed), amplitude, unit, values, frequency, diff, rate, int(use.sum()))
-
-    @property
-    def reference(self) -> float:
-        """The finest value of the series (the reference run)."""
-        return float(self.values[-1])
-
-
-def format_convergence(fits: Sequence[ConvergenceFit]) -> str:
-    """Text table of convergence fits."""
-    lines = ["Observed convergence rate p, |f - f_ref| ~ x^(-p), x = H or elements; reference = the finest "
-             "run of each series (not the exact solution); p from a log-log least-squares fit "
-             "(two points: a two-point slope)"]
-    head = ("vary", "fixed", "A", "x", "|f - f_ref| (Hz)", "p")
-    rows = []
-    for fit in fits:
-        fixed = " ".join(f"{k}={v}" for k, v in fit.fixed.items())
-        xs = ",".join(f"{v:g}" for v in fit.values)
-        diffs = ",".join("nan" if not np.isfinite(d) else f"{d:.3g}" for d in fit.difference[:-1])
-        unit = "gap" if fit.unit == "gap" else "m"
-        rows.append((fit.vary, fixed, f"{fit.amplitude:g} {unit}", xs, diffs,
-                     "-" if math.isnan(fit.rate) else f"{fit.rate:.2f}"))
-    widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(head)]
-    fmt = "  ".join(f"{{:<{w}}}" for w in widths)
-    return "\n".join([lines[0], fmt.format(*head), *(fmt.format(*r) for r in rows)])
-
-
 # ---------------------------------------------------------------------- running
 def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
               elements: Sequence[int] | None = None, methods: Sequence[str] = ("mmshbm",),
@@ -554,9 +379,9 @@ def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
 def grid_specs(beam=None, *, model=None, harmonics=(1, 3, 5), elements=None, methods=("mmshbm",),
                params=None, grading=10.0, max_amplitude=None, unit="m", **options) -> list[RunSpec]:
     """The :class:`RunSpec` list of :func:`run_study` (validated, nothing computed)."""
-    from .api import METHODS
-    from .fe.beam import TimoshenkoBeam, default_beam
-    from .model import Model
+    from ..fe.beam import TimoshenkoBeam, default_beam
+    from ..methods.backbone import METHODS
+    from ..model.model import Model
 
     unit = _unit(unit)
     if max_amplitude is not None:

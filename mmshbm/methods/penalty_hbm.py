@@ -11,7 +11,7 @@ with ``W = −stop_side e_contact`` (:class:`~mmshbm.model.Model`), i.e. the spr
 contact DOF away from the stop with the force λ >= 0. The massless contact node keeps zero
 mass: between impacts it follows the structure statically, as in MMS-HBM.
 
-Conventions follow :mod:`mmshbm.mms_hbm`:
+Conventions follow :mod:`mmshbm.methods.mms_hbm`:
 
 * Cosine-only (time-symmetric) ansatz q(τ) = Σ_k Q_k cos kτ on every DOF. It anchors the
   phase at a turning point and removes the energy-balance identity of the conservative
@@ -19,13 +19,13 @@ Conventions follow :mod:`mmshbm.mms_hbm`:
   equations in n(H+1)+1 unknowns (the Q_k of all DOFs and Ω) have full row rank along the
   branch.
 * Alternating frequency-time on the contact DOF only: it is the only DOF with a nonlinear
-  force. Its cosine series is synthesised on N samples (pyfftw, :func:`~mmshbm.harmonics.transform`),
+  force. Its cosine series is synthesised on N samples (pyfftw, :func:`~mmshbm.core.harmonics.transform`),
   the penalty force and its active set s_j = [g_N(τ_j) < 0] are evaluated by a Numba kernel,
   and λ is projected back on harmonics 0..H.
 * Analytic, sparse Jacobian. Harmonic k's block is K − (kΩ)² M (sparse, the pattern of the
   FE matrices); the penalty couples the harmonics only in the contact DOF's row and column,
   ∂R_{m,c}/∂Q_{k,c} += k_p P_{mk} with P the cosine product matrix of the active set
-  (:func:`~mmshbm.kernels._cosine_product_matrix`); the Ω column is −2k²Ω M Q_k. The CSR
+  (:func:`~mmshbm.core.kernels._cosine_product_matrix`); the Ω column is −2k²Ω M Q_k. The CSR
   pattern is built once; each evaluation only fills its data vector (a Numba kernel), so the
   cost per Jacobian is that of writing its non-zeros, not of scipy sparse arithmetic.
 * Scaled unknowns: Q_k,i by gap·max(|φ_i|, 10⁻³ max|φ|)·ρ, with φ the first linear mode
@@ -74,12 +74,12 @@ import numpy as np
 import scipy.sparse as sp
 
 from .. import _validate as check
-from ..condense import Condensation
-from ..harmonics import check_harmonics, default_n_samples, transform
-from ..kernels import _cosine_product_matrix
-from ..mms_hbm import _mean_energy, _refined_max
-from ..model import Model
+from ..core.condense import Condensation
+from ..core.harmonics import check_harmonics, default_n_samples, transform
+from ..core.kernels import _cosine_product_matrix
+from ..model.model import Model
 from ._penalty_kernels import _penalty_contact, _penalty_hbm_jacobian
+from .mms_hbm import _mean_energy, _refined_max
 
 __all__ = ["PenaltyHBMProblem", "DEFAULT_PENALTY_FACTOR", "penalty_n_samples"]
 
@@ -186,7 +186,7 @@ class PenaltyHBMProblem:
         Highest harmonic H >= 1.
     n_samples : int, optional
         Time samples per period N >= 2H+1 for the contact DOF's AFT. Default
-        :func:`penalty_n_samples`: MMS-HBM's :func:`~mmshbm.harmonics.default_n_samples`
+        :func:`penalty_n_samples`: MMS-HBM's :func:`~mmshbm.core.harmonics.default_n_samples`
         up to k_p = 10³ k_c, doubled per further decade of k_p (the penetration window
         narrows as k_p grows and must stay resolved by the samples).
     penalty_stiffness : float, optional

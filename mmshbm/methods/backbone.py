@@ -1,11 +1,9 @@
-"""``mmshbm.backbone``: one entry point for every method."""
+"""``mmshbm.backbone``: one entry point for every method (the problems are named in
+:mod:`mmshbm.methods.registry`)."""
 
 from __future__ import annotations
 
 import dataclasses
-import difflib
-import importlib
-import inspect
 import logging
 import platform
 import time
@@ -14,76 +12,15 @@ from pathlib import Path
 
 import numpy as np
 
-from . import _validate as check
-from .continuation import ContinuationOptions, continue_branch
-from .model import Model
-from .results import Branch
+from .. import _validate as check
+from ..core.continuation import ContinuationOptions, continue_branch
+from ..model.model import Model
+from ..results.branch import Branch
+from .registry import _CONTINUATION_FIELDS, METHODS, make_problem
 
-__all__ = ["backbone", "METHODS", "make_problem"]
+__all__ = ["backbone"]
 
 log = logging.getLogger(__name__)
-
-#: method name -> "module:class" of its continuation problem
-METHODS = {
-    "mmshbm": "mmshbm.mms_hbm:MMSHBMProblem",
-    "penalty": "mmshbm.baselines.penalty_hbm:PenaltyHBMProblem",
-    "shooting": "mmshbm.baselines.shooting:ShootingProblem",
-}
-
-_CONTINUATION_FIELDS = {f.name for f in dataclasses.fields(ContinuationOptions)}
-
-
-def make_problem(model: Model, method: str = "mmshbm", **options):
-    """Build the continuation problem of ``method`` on ``model`` (``options`` go to its
-    constructor).
-
-    Raises
-    ------
-    ValueError
-        For an unknown method name.
-    TypeError
-        For an option the method's constructor does not take (named, with the nearest
-        valid name).
-    """
-    if not isinstance(method, str) or method not in METHODS:
-        raise ValueError(f"unknown method {method!r}; choose one of {sorted(METHODS)}")
-    module, cls = METHODS[method].split(":")
-    try:
-        problem_class = getattr(importlib.import_module(module), cls)
-    except ImportError as err:  # pragma: no cover - a baseline not installed
-        raise ValueError(f"method {method!r} is not available: {err}") from None
-    _check_option_names(method, problem_class, options)
-    return problem_class(model, **options)
-
-
-def method_options(method: str) -> list[str]:
-    """Names of the options the constructor of ``method``'s problem takes (besides the model)."""
-    module, cls = METHODS[method].split(":")
-    problem_class = getattr(importlib.import_module(module), cls)
-    params = list(inspect.signature(problem_class).parameters.values())[1:]
-    return [p.name for p in params if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
-
-
-def _check_option_names(method: str, problem_class, options: dict) -> None:
-    params = list(inspect.signature(problem_class).parameters.values())[1:]
-    if any(p.kind == p.VAR_KEYWORD for p in params):
-        return
-    valid = [p.name for p in params if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
-    unknown = [k for k in options if k not in valid]
-    if unknown:
-        everything = sorted(set(valid) | _CONTINUATION_FIELDS | set(_BACKBONE_ARGUMENTS))
-        hints = []
-        for name in unknown:
-            close = difflib.get_close_matches(name, everything, n=1)
-            hints.append(f"{name!r}" + (f" (did you mean {close[0]!r}?)" if close else ""))
-        raise TypeError(f"unknown option{'s' if len(unknown) > 1 else ''} {', '.join(hints)} for method "
-                        f"{method!r}; method options: {valid}; continuation options: "
-                        f"{sorted(_CONTINUATION_FIELDS)}")
-
-
-_BACKBONE_ARGUMENTS = ("harmonics", "method", "max_amplitude", "start_amplitude", "bounds", "verbose",
-                       "callback", "checkpoint", "resume")
-
 
 def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_amplitude: float | None = None,
              *, start_amplitude: float | None = None, bounds: dict | None = None, verbose: bool = False,
@@ -111,7 +48,7 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
         Called with every converged point.
     checkpoint : str or Path, optional
         Write every converged point to this file as it comes (JSON lines, see
-        :mod:`mmshbm.checkpoint`); a killed or interrupted run leaves a valid file.
+        :mod:`mmshbm.core.checkpoint`); a killed or interrupted run leaves a valid file.
     resume : str or Path, optional
         Go on from the last point of this checkpoint file, with its tangent and step:
         the result equals the uninterrupted run point for point. The model, method, H,
@@ -172,7 +109,7 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
 
     state, restored, previous = None, [], None
     if resume is not None:
-        from .checkpoint import read_checkpoint
+        from ..core.checkpoint import read_checkpoint
 
         previous = read_checkpoint(resume)
         _check_resumable(previous.header, header, resume)
@@ -181,7 +118,7 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
         log.info("resuming %s from point %d of %s", method, len(restored) - 1, resume)
     writer = None
     if checkpoint is not None:
-        from .checkpoint import CheckpointWriter
+        from ..core.checkpoint import CheckpointWriter
 
         writer = CheckpointWriter(checkpoint, {**header, "continuation": _jsonable(dataclasses.asdict(copts)),
                                                "start_amplitude": start_amplitude,
@@ -260,7 +197,7 @@ def _path_argument(name: str, value) -> Path | None:
 
 def _checkpoint_header(model: Model, method: str, problem, options: dict) -> dict:
     """What fixes the branch: a resumed run must agree on all of it."""
-    from .checkpoint import model_fingerprint
+    from ..core.checkpoint import model_fingerprint
 
     resolved = {}
     for attr in ("H", "N", "r", "mode", "penalty_stiffness", "steps_per_period"):
@@ -293,7 +230,7 @@ def _finished(previous, copts: ContinuationOptions) -> bool:
 
 
 def _finished_result(state, status):
-    from .continuation import ContinuationResult
+    from ..core.continuation import ContinuationResult
 
     recs = state.records
     return ContinuationResult(

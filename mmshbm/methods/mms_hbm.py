@@ -2,7 +2,7 @@
 
 Unknowns: the Fourier coefficients of the massless (contact) DOFs q_c and the
 fundamental frequency Ω. The linear structure is condensed per harmonic
-(:mod:`mmshbm.condense`): F_k = D_k(Ω) a_k is the force the structure needs at the
+(:mod:`mmshbm.core.condense`): F_k = D_k(Ω) a_k is the force the structure needs at the
 massless DOFs. Equilibrium of the massless node and the Signorini law with the proximal
 point function give, with λ = w_c·f_c and g_N = gap + w_c·q_c,
 
@@ -37,17 +37,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _validate as check
-from .condense import Condensation
-from .harmonics import check_harmonics, transform
-from .kernels import (
+from .. import _validate as check
+from ..core.condense import Condensation
+from ..core.harmonics import check_harmonics, transform
+from ..core.kernels import (
     _cosine_product_matrix,
     _mmshbm_jacobian,
     _mmshbm_monitor,
     _mmshbm_residual,
     _proximal_contact,
 )
-from .model import Model
+from ..model.model import Model
 
 __all__ = ["MMSHBMProblem"]
 

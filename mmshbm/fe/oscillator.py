@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import _validate as check
-from .model import Model
+from .. import _validate as check
+from ..model.model import Model
 
 __all__ = ["OneDofOscillator", "one_dof_oscillator"]
 

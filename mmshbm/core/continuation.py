@@ -27,8 +27,8 @@ from typing import Protocol
 import numpy as np
 import scipy.sparse as sp
 
-from . import _validate as check
-from ._bordered import solve_bordered_sparse
+from .. import _validate as check
+from .bordered import solve_bordered_sparse
 
 __all__ = ["ContinuationOptions", "ContinuationProblem", "ContinuationResult", "ContinuationState",
            "continue_branch", "newton"]
@@ -160,7 +160,7 @@ class ContinuationResult:
 @dataclass
 class ContinuationState:
     """Everything the driver needs to go on from its last accepted point, as if it had
-    never stopped (what a checkpoint file stores; see :mod:`mmshbm.checkpoint`).
+    never stopped (what a checkpoint file stores; see :mod:`mmshbm.core.checkpoint`).
 
     Attributes
     ----------

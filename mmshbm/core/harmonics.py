@@ -21,7 +21,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from . import _validate as check
+from .. import _validate as check
 
 __all__ = ["HarmonicTransform", "transform", "default_n_samples", "check_harmonics"]
 

@@ -15,6 +15,7 @@ so that time signals work again; :meth:`Branch.rerun` redoes the run from the fi
 
 from __future__ import annotations
 
+import importlib
 import json
 import logging
 import os
@@ -26,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Branch", "load", "rebuild_model"]
+__all__ = ["Branch", "rebuild_model"]
 
 log = logging.getLogger(__name__)
 
@@ -147,7 +148,7 @@ class Branch:
     def attach_solver(self, **method_options):
         """Rebuild the solver that computed this branch and attach it (:attr:`solver`).
 
-        Uses :func:`mmshbm.api.make_problem` with the method and method options recorded in
+        Uses :func:`mmshbm.methods.registry.make_problem` with the method and method options recorded in
         ``metadata`` (``method_options`` given here override them), on :meth:`get_model`.
 
         Returns
@@ -161,8 +162,7 @@ class Branch:
             If the model cannot be rebuilt, or the rebuilt solver's unknowns do not match
             :attr:`states`.
         """
-        from .api import make_problem
-
+        make_problem = _entry_point("make_problem")
         options = {**dict(self.metadata.get("method_options", {})), **method_options}
         if self.method != "shooting":
             options.setdefault("harmonics", self.harmonics)
@@ -183,8 +183,7 @@ class Branch:
         Branch
             The new branch; with no overrides it repeats this one.
         """
-        from .api import backbone
-
+        backbone = _entry_point("backbone")
         meta = self.metadata
         kwargs = {**dict(meta.get("continuation", {})), **dict(meta.get("method_options", {}))}
         kwargs.setdefault("harmonics", meta.get("harmonics", self.harmonics))
@@ -322,6 +321,18 @@ class Branch:
                 f"amplitude up to {self.amplitude.max():.3g} m, status={self.status!r})")
 
 
+#: The functions a branch calls to rebuild its solver and to redo its run. They live in
+#: the methods layer above this module, which therefore never imports them statically:
+#: like pickle, a branch finds them by their recorded names.
+_ENTRY_POINTS = {"make_problem": "mmshbm.methods.registry:make_problem",
+                 "backbone": "mmshbm.methods.backbone:backbone"}
+
+
+def _entry_point(name: str):
+    module, _, attr = _ENTRY_POINTS[name].partition(":")
+    return getattr(importlib.import_module(module), attr)
+
+
 # ---------------------------------------------------------------------- models
 def rebuild_model(description: dict, gap: float | None = None):
     """Rebuild a :class:`~mmshbm.model.Model` from its ``description``.
@@ -330,7 +341,7 @@ def rebuild_model(description: dict, gap: float | None = None):
     ----------
     description : dict
         ``model.description`` of a :class:`~mmshbm.fe.beam.TimoshenkoBeam` model
-        (``kind = "TimoshenkoBeam"``) or of :class:`~mmshbm.examples.OneDofOscillator`.
+        (``kind = "TimoshenkoBeam"``) or of :class:`~mmshbm.fe.oscillator.OneDofOscillator`.
     gap : float, optional
         The model's gap (m) if it differs from the description's (``Model.with_gap``).
 
@@ -341,11 +352,11 @@ def rebuild_model(description: dict, gap: float | None = None):
     """
     kind = description.get("kind") if isinstance(description, dict) else None
     if kind == "TimoshenkoBeam":
-        from .fe.beam import TimoshenkoBeam
+        from ..fe.beam import TimoshenkoBeam
 
         model = TimoshenkoBeam.rebuild(description)
     elif kind == "OneDofOscillator":
-        from .examples import OneDofOscillator
+        from ..fe.oscillator import OneDofOscillator
 
         try:
             model = OneDofOscillator(*(description[k] for k in ("m", "k1", "k2", "gap"))).model()
@@ -377,7 +388,7 @@ def _model_arrays(model) -> dict:
 def _model_from_arrays(arrays: dict, info: dict):
     import scipy.sparse as sp
 
-    from .model import Model
+    from ..model.model import Model
 
     mats = []
     for name in ("M", "K"):
@@ -393,7 +404,7 @@ def versions() -> dict:
     import numba
     import scipy
 
-    from . import __version__
+    from .. import __version__
 
     return {"mmshbm": __version__, "python": platform.python_version(), "numpy": np.__version__,
             "scipy": scipy.__version__, "numba": numba.__version__}
@@ -496,18 +507,6 @@ def read_archive(path) -> tuple[dict, dict]:
     if not isinstance(meta, dict):
         raise ValueError(f"{str(path)!r} has a corrupt metadata record")
     return data, meta
-
-
-def load(path, attach_solver: bool = False):
-    """Read a saved :class:`Branch` or :class:`~mmshbm.studies.Study`, whichever the file holds."""
-    _, meta = read_archive(path)
-    if meta.get("format") == BRANCH_FORMAT:
-        return Branch.load(path, attach_solver=attach_solver)
-    from .studies import STUDY_FORMAT, Study
-
-    if meta.get("format") == STUDY_FORMAT:
-        return Study.load(path, attach_solver=attach_solver)
-    raise ValueError(f"{str(path)!r} holds neither a Branch nor a Study (format {meta.get('format')!r})")
 
 
 def _json_default(obj):

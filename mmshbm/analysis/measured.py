@@ -5,7 +5,7 @@ The file is plain CSV with one header line naming the columns ``frequency`` (Hz)
 name (``frequency_hz``, ``amplitude [m]``, ``contact_force (N)``) but must then be
 these; ``amplitude_mm`` is refused rather than silently misread. Lines starting with
 ``#`` and blank lines are skipped, other columns are ignored, and ``,``, ``;`` or tab
-separate fields. A branch's :meth:`~mmshbm.results.Branch.to_csv` file is also a valid
+separate fields. A branch's :meth:`~mmshbm.results.branch.Branch.to_csv` file is also a valid
 measured file.
 """
 

@@ -28,7 +28,7 @@ import numpy as np
 import scipy.linalg as la
 from scipy.optimize import least_squares
 
-from . import _validate as check
+from .. import _validate as check
 
 __all__ = ["fit_material", "FitReport", "beam_frequencies"]
 
@@ -173,7 +173,7 @@ def fit_material(beam, measured_frequencies, n_elements: int = 21, *, modes=None
         For non-positive or non-finite frequencies, bad modes or weights, unknown
         parameters, or a beam that is not a :class:`~mmshbm.fe.beam.TimoshenkoBeam`.
     """
-    from .fe.beam import TimoshenkoBeam
+    from ..fe.beam import TimoshenkoBeam
 
     if not isinstance(beam, TimoshenkoBeam):
         raise TypeError(f"beam must be a TimoshenkoBeam, got {type(beam).__name__}")

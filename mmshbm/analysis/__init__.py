@@ -1,0 +1,2 @@
+"""Analyses built on the methods: convergence studies, benchmarks, identification from
+measurements."""

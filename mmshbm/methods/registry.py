@@ -1,0 +1,81 @@
+"""The continuation problems of the methods, by name.
+
+``METHODS`` maps a method name to the ``module:class`` of its continuation problem;
+:func:`make_problem` builds one (importing only that method's module), validating the
+option names against the class's constructor.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import importlib
+import inspect
+
+from ..core.continuation import ContinuationOptions
+from ..model.model import Model
+
+__all__ = ["METHODS", "make_problem", "method_options"]
+
+#: method name -> "module:class" of its continuation problem
+METHODS = {
+    "mmshbm": "mmshbm.methods.mms_hbm:MMSHBMProblem",
+    "penalty": "mmshbm.methods.penalty_hbm:PenaltyHBMProblem",
+    "shooting": "mmshbm.methods.shooting:ShootingProblem",
+}
+
+_CONTINUATION_FIELDS = {f.name for f in dataclasses.fields(ContinuationOptions)}
+
+
+def make_problem(model: Model, method: str = "mmshbm", **options):
+    """Build the continuation problem of ``method`` on ``model`` (``options`` go to its
+    constructor).
+
+    Raises
+    ------
+    ValueError
+        For an unknown method name.
+    TypeError
+        For an option the method's constructor does not take (named, with the nearest
+        valid name).
+    """
+    if not isinstance(method, str) or method not in METHODS:
+        raise ValueError(f"unknown method {method!r}; choose one of {sorted(METHODS)}")
+    module, cls = METHODS[method].split(":")
+    try:
+        problem_class = getattr(importlib.import_module(module), cls)
+    except ImportError as err:  # pragma: no cover - a baseline not installed
+        raise ValueError(f"method {method!r} is not available: {err}") from None
+    _check_option_names(method, problem_class, options)
+    return problem_class(model, **options)
+
+
+def method_options(method: str) -> list[str]:
+    """Names of the options the constructor of ``method``'s problem takes (besides the model)."""
+    module, cls = METHODS[method].split(":")
+    problem_class = getattr(importlib.import_module(module), cls)
+    params = list(inspect.signature(problem_class).parameters.values())[1:]
+    return [p.name for p in params if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
+
+
+def _check_option_names(method: str, problem_class, options: dict) -> None:
+    params = list(inspect.signature(problem_class).parameters.values())[1:]
+    if any(p.kind == p.VAR_KEYWORD for p in params):
+        return
+    valid = [p.name for p in params if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
+    unknown = [k for k in options if k not in valid]
+    if unknown:
+        everything = sorted(set(valid) | _CONTINUATION_FIELDS | set(_BACKBONE_ARGUMENTS))
+        hints = []
+        for name in unknown:
+            close = difflib.get_close_matches(name, everything, n=1)
+            hints.append(f"{name!r}" + (f" (did you mean {close[0]!r}?)" if close else ""))
+        raise TypeError(f"unknown option{'s' if len(unknown) > 1 else ''} {', '.join(hints)} for method "
+                        f"{method!r}; method options: {valid}; continuation options: "
+                        f"{sorted(_CONTINUATION_FIELDS)}")
+
+
+_BACKBONE_ARGUMENTS = ("harmonics", "method", "max_amplitude", "start_amplitude", "bounds", "verbose",
+                       "callback", "checkpoint", "resume")
+
+

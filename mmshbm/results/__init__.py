@@ -1,0 +1,1 @@
+"""What the methods produce: :class:`~mmshbm.results.branch.Branch` and its file format."""
