@@ -25,7 +25,6 @@ would (``mmshbm.backbone(..., resume=path)``).
 
 from __future__ import annotations
 
-import hashlib
 import json
 import logging
 import os
@@ -46,15 +45,9 @@ CHECKPOINT_VERSION = 1
 
 
 def model_fingerprint(model) -> str:
-    """SHA-256 of a model's matrices (CSR parts), contact DOF, gap and stop side."""
-    h = hashlib.sha256()
-    for A in (model.M, model.K):
-        A = A.tocsr()
-        A.sort_indices()
-        for part in (A.data, A.indices, A.indptr, np.array(A.shape)):
-            h.update(np.ascontiguousarray(part).astype("<f8" if part.dtype.kind == "f" else "<i8").tobytes())
-    h.update(json.dumps([int(model.contact_dof), float(model.gap).hex(), int(model.stop_side)]).encode())
-    return h.hexdigest()
+    """SHA-256 of a model's matrices, contacts, damping and amplitude DOF
+    (:meth:`Model.fingerprint <mmshbm.model.model.Model.fingerprint>`)."""
+    return model.fingerprint()
 
 
 def _plain(x):

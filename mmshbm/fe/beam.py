@@ -176,7 +176,8 @@ class TimoshenkoBeam:
             M.eliminate_zeros()
             return Model.from_matrices(M, K, contact_dof=contact_dof, gap=self.gap, stop_side=+1,
                                        description=description)
-        return Model(M, K, contact_dof, self.gap, 1, description)
+        return Model.from_matrices(M, K, contact_dof=contact_dof, gap=self.gap, stop_side=+1,
+                                   description=description)
 
     @classmethod
     def rebuild(cls, description: dict) -> Model:

@@ -84,6 +84,7 @@ class MMSHBMProblem:
                  r: float | None = None, mode: int = 1, backend: str = "auto"):
         if not isinstance(model, Model):
             raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
+        model.require_massless_contacts("MMS-HBM")
         self.model = model
         self.H, self.N = check_harmonics(harmonics, n_samples)
         self.mode = check.integer("mode", mode, minimum=1)

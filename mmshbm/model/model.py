@@ -1,27 +1,28 @@
-"""The structure: sparse mass and stiffness, massless contact DOFs, the rigid stop.
+"""The structure: sparse mass and stiffness, massless contact DOFs, rigid stops.
 
-A :class:`Model` holds an undamped, unforced finite-element structure
+A :class:`Model` holds a linear finite-element structure and its contacts
 
-    M q'' + K q = W λ,    g_N = gap + Wᵀ q,    0 <= g_N ⊥ λ >= 0
+    M q'' + C q' + K q = Σ_i w_i λ_i,    g_i = gap_i - side_i q[dof_i],    0 <= g_i ⊥ λ_i >= 0,
 
-with one contact DOF facing a rigid stop. The DOFs whose mass rows are zero are the
-*massless* DOFs ``c`` (the contact DOF and its partners, e.g. tip deflection and tip
-rotation of a beam); the others are the *linear* DOFs ``l``. Because ``M_cc = 0`` and
-``M_lc = 0`` the contact DOFs follow the linear ones statically, which is what MMS-HBM
-exploits.
+with one or several rigid stops (:class:`~mmshbm.model.contact.Contact`). The DOFs whose
+mass rows are zero are the *massless* DOFs ``c`` (for the beam: tip deflection and tip
+rotation); the others are the *linear* DOFs ``l``. Because ``M_cc = 0`` and ``M_lc = 0``
+the massless DOFs follow the others statically, which is what MMS-HBM exploits; it
+needs every contact DOF among them. Models exported by FE packages carry mass on the
+contact DOF: they are accepted (penalty-HBM runs them as they are), and
+:meth:`Model.with_contact_layer` or :meth:`Model.with_massless_contact` turn them into
+models MMS-HBM can run.
 
-Sign convention: ``stop_side = +1`` puts the stop at ``q[contact_dof] = +gap``, so
-``g_N = gap - q[contact_dof]`` and ``W = -e_contact``; ``stop_side = -1`` mirrors it.
-λ >= 0 is the contact force's magnitude (N), pushing the structure away from the stop.
+Sign convention: a contact with ``side = +1`` puts its stop at ``q[dof] = +gap``, so
+``g = gap - q[dof]`` and ``w = -e_dof``; ``side = -1`` mirrors it. λ >= 0 is the contact
+force's magnitude (N), pushing the structure away from the stop. The damping ``C``
+(optional, N·s/m) acts on the DOFs with mass only: massless DOFs stay static.
 """
 
 from __future__ import annotations
 
-import json
-import zipfile
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
-from pathlib import Path
 
 import numpy as np
 import scipy.linalg as la
@@ -29,6 +30,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .. import _validate as check
+from .contact import Contact, contacts_from
 
 __all__ = ["Model"]
 
@@ -38,7 +40,7 @@ _DENSE_EIG_LIMIT = 600
 
 @dataclass(frozen=True, eq=False)
 class Model:
-    """A linear structure with massless contact DOFs and a rigid stop.
+    """A linear structure with rigid stops.
 
     Build it with :meth:`from_matrices` (or a beam's ``.model()``); the constructor
     does no validation of its own.
@@ -47,54 +49,61 @@ class Model:
     ----------
     M, K : scipy.sparse.csr_matrix, shape (n_dof, n_dof)
         Mass (kg, kg·m²) and stiffness (N/m, N·m/rad) matrices, symmetric.
-    contact_dof : int
-        Index of the DOF that meets the stop.
-    gap : float
-        Distance (m) from the rest position of the contact DOF to the stop, >= 0.
-    stop_side : {+1, -1}
-        The stop is at ``q[contact_dof] = stop_side * gap``.
+    contacts : tuple of Contact
+        The rigid stops (at least one).
     description : dict
-        JSON-serialisable facts that let the model be rebuilt (e.g. beam data).
+        JSON-serialisable facts that let the model be rebuilt (e.g. beam data, and the
+        ``transforms`` applied since).
+    damping : scipy.sparse.csr_matrix or None, shape (n_dof, n_dof)
+        Viscous damping matrix C (N·s/m), zero on the massless DOFs; None: undamped.
+
+    With one contact, :attr:`contact_dof`, :attr:`gap` and :attr:`stop_side` are its data
+    (the names of mmshbm 0.1); with several, :attr:`gap` is the smallest gap (the unit of
+    amplitudes "in gaps") and :attr:`contacts` holds the rest.
     """
 
     M: sp.csr_matrix
     K: sp.csr_matrix
-    contact_dof: int
-    gap: float
-    stop_side: int = 1
+    contacts: tuple
     description: dict = field(default_factory=dict)
+    damping: sp.csr_matrix | None = None
+    _amplitude_dof: int | None = None
 
     # ------------------------------------------------------------------ builders
     @classmethod
-    def from_matrices(
-        cls,
-        M,
-        K,
-        contact_dof: int,
-        gap: float,
-        stop_side: int = 1,
-        description: dict | None = None,
-    ) -> Model:
+    def from_matrices(cls, M, K, contact_dof, gap, stop_side=1, description: dict | None = None, *,
+                      damping=None, amplitude_dof: int | None = None) -> Model:
         """Build and validate a model from user matrices.
 
         Parameters
         ----------
         M, K : array_like or sparse, shape (n, n)
             Symmetric mass and stiffness matrices. DOFs whose mass row is zero are
-            massless; the contact DOF must be one of them.
-        contact_dof : int
-            Index of the DOF facing the stop, ``0 <= contact_dof < n``.
-        gap : float
-            Distance (m) to the stop, >= 0.
-        stop_side : {+1, -1}
-            +1: stop at ``q[contact_dof] = +gap``; -1: at ``-gap``.
+            massless.
+        contact_dof : int or sequence of int
+            The DOF(s) facing a stop, ``0 <= contact_dof < n``. The same DOF may appear
+            twice with opposite ``stop_side`` (a clearance).
+        gap : float or sequence of float
+            Distance(s) (m) to the stop(s), >= 0: one for all contacts or one per contact.
+        stop_side : {+1, -1} or sequence of them
+            +1: stop at ``q[dof] = +gap``; -1: at ``-gap``; one for all or one per contact.
+        description : dict, optional
+            JSON-serialisable facts about the model.
+        damping : array_like or sparse, shape (n, n), optional
+            Viscous damping matrix C (N·s/m); its rows and columns of massless DOFs must
+            be zero.
+        amplitude_dof : int, optional
+            The DOF whose largest excursion is a branch's amplitude. Default: the contact
+            DOF when the model has a single contact; required otherwise (by the methods
+            that report an amplitude).
 
         Raises
         ------
         ValueError, TypeError
             Naming the offending input: non-square, non-symmetric, non-finite or
-            mismatched matrices; a contact DOF out of range or carrying mass; a
-            negative gap; a singular or indefinite linear subsystem.
+            mismatched matrices; bad contact data (see
+            :func:`~mmshbm.model.contact.contacts_from`); damping on a massless DOF; a
+            singular or indefinite linear subsystem.
         """
         M = check.square_matrix("M", M)
         K = check.square_matrix("K", K)
@@ -103,108 +112,133 @@ class Model:
         check.symmetric("M", M)
         check.symmetric("K", K)
         n = M.shape[0]
-        contact_dof = check.integer("contact_dof", contact_dof)
-        if not 0 <= contact_dof < n:
-            raise ValueError(f"contact_dof must be in [0, {n - 1}], got {contact_dof}")
-        gap = check.non_negative("gap", gap)
-        if isinstance(stop_side, bool) or stop_side not in (1, -1):
-            raise ValueError(f"stop_side must be +1 or -1, got {stop_side!r}")
-        model = cls(M, K, contact_dof, gap, int(stop_side), dict(description or {}))
+        contacts = contacts_from(contact_dof, gap, stop_side, n)
+        if damping is not None:
+            damping = check.square_matrix("damping", damping)
+            if damping.shape != M.shape:
+                raise ValueError(f"damping must have the shape of M {M.shape}, got {damping.shape}")
+        if amplitude_dof is not None:
+            amplitude_dof = check.integer("amplitude_dof", amplitude_dof)
+            if not 0 <= amplitude_dof < n:
+                raise ValueError(f"amplitude_dof must be in [0, {n - 1}], got {amplitude_dof}")
+        model = cls(M, K, contacts, dict(description or {}), damping, amplitude_dof)
         model._check_partition()
         return model
 
     @classmethod
-    def from_npz(cls, path, contact_dof: int | None = None, gap: float | None = None,
-                 stop_side: int | None = None) -> Model:
-        """Load a model from a ``.npz`` file.
+    def from_npz(cls, path, contact_dof=None, gap=None, stop_side=None, *,
+                 amplitude_dof: int | None = None) -> Model:
+        """Load a model from a ``.npz`` file (format: :mod:`mmshbm.model.files`);
+        arguments given here override the file's entries."""
+        from .files import read_npz
 
-        The file holds ``M`` and ``K`` either as dense 2-D arrays or as CSR parts
-        (``M_data``, ``M_indices``, ``M_indptr``, ``M_shape`` and the same for ``K``),
-        and optionally ``contact_dof``, ``gap``, ``stop_side``; arguments given here
-        override the file. :meth:`save_npz` writes this format.
-        """
-        path = Path(path)
-        where = f"model file {str(path)!r}"
-        try:
-            if path.is_file() and not zipfile.is_zipfile(path):
-                raise ValueError("not an .npz archive")
-            loaded = np.load(path, allow_pickle=False)
-            if not hasattr(loaded, "files"):
-                raise ValueError("not an .npz archive (it holds a single array)")
-            with loaded as f:
-                data = {k: f[k] for k in f.files}
-        except (OSError, ValueError, EOFError, zipfile.BadZipFile) as err:
-            raise ValueError(f"cannot read {where}: {err}") from None
-
-        def matrix(name):
-            if name in data:
-                return data[name]
-            parts = [f"{name}_{p}" for p in ("data", "indices", "indptr", "shape")]
-            if all(p in data for p in parts):
-                d, i, p, s = (data[q] for q in parts)
-                try:
-                    A = sp.csr_matrix((d, i, p), shape=tuple(int(v) for v in s))
-                    A.check_format(full_check=True)
-                except (TypeError, ValueError, IndexError) as err:
-                    raise ValueError(f"{where}: the CSR parts of {name!r} are malformed: {err}") from None
-                return A
-            raise ValueError(f"{where} has no matrix {name!r} (keys: {sorted(data)})")
-
-        def scalar(name, given):
-            if given is not None:
-                return given
-            if name not in data:
-                raise ValueError(f"{where} has no {name!r}; pass {name}=...")
-            value = data[name]
-            if value.ndim != 0 or value.dtype.kind not in "biuf":
-                raise ValueError(f"{where}: {name!r} must be a single number, got {value!r}")
-            return value.item()
-
-        description = {}
-        if "description" in data:
-            try:
-                description = json.loads(str(data["description"]))
-            except json.JSONDecodeError as err:
-                raise ValueError(f"{where}: 'description' is not valid JSON ({err})") from None
-            if not isinstance(description, dict):
-                raise ValueError(f"{where}: 'description' must be a JSON object, got {description!r}")
-        return cls.from_matrices(
-            matrix("M"),
-            matrix("K"),
-            scalar("contact_dof", contact_dof),
-            scalar("gap", gap),
-            scalar("stop_side", stop_side) if (stop_side is not None or "stop_side" in data) else 1,
-            description,
-        )
+        return cls.from_matrices(**read_npz(path, contact_dof, gap, stop_side, amplitude_dof))
 
     @classmethod
-    def from_matrix_market(cls, M_path, K_path, contact_dof: int, gap: float,
-                           stop_side: int = 1) -> Model:
+    def from_matrix_market(cls, M_path, K_path, contact_dof, gap, stop_side=1, *,
+                           amplitude_dof: int | None = None) -> Model:
         """Load ``M`` and ``K`` from two Matrix Market (``.mtx``) files."""
-        import scipy.io
+        from .files import read_matrix_market
 
-        mats = []
-        for name, p in (("M", M_path), ("K", K_path)):
-            try:
-                mats.append(scipy.io.mmread(str(p)))
-            except (OSError, ValueError) as err:
-                raise ValueError(f"cannot read {name} from {str(p)!r}: {err}") from None
-        return cls.from_matrices(mats[0], mats[1], contact_dof, gap, stop_side)
+        M, K = read_matrix_market(M_path, K_path)
+        return cls.from_matrices(M, K, contact_dof, gap, stop_side, amplitude_dof=amplitude_dof)
 
     def save_npz(self, path) -> None:
-        """Write the model (CSR parts, contact data, description) to ``path``."""
-        parts = {}
-        for name, A in (("M", self.M), ("K", self.K)):
-            parts.update({f"{name}_data": A.data, f"{name}_indices": A.indices,
-                          f"{name}_indptr": A.indptr, f"{name}_shape": np.array(A.shape)})
-        np.savez(path, **parts, contact_dof=self.contact_dof, gap=self.gap,
-                 stop_side=self.stop_side, description=json.dumps(self.description))
+        """Write the model (CSR parts, contacts, damping, description) to ``path``."""
+        from .files import write_npz
 
-    def with_gap(self, gap: float) -> Model:
-        """The same structure with another gap (m)."""
-        from dataclasses import replace
+        write_npz(path, self)
 
-        return replace(self, gap=check.non_negative("gap", gap))
+    def with_gap(self, gap) -> Model:
+        """The same structure with another gap (m): one number for every contact, or one per
+        contact."""
+        dofs, sides = [c.dof for c in self.contacts], [c.side for c in self.contacts]
+        if len(dofs) == 1:
+            dofs, sides = dofs[0], sides[0]
+        contacts = contacts_from(dofs, gap, sides, self.n_dof)
+        return replace(self, contacts=contacts)
+
+    def with_amplitude_dof(self, dof: int) -> Model:
+        """The same model with its amplitude measured at ``dof``."""
+        dof = check.integer("amplitude_dof", dof)
+        if not 0 <= dof < self.n_dof:
+            raise ValueError(f"amplitude_dof must be in [0, {self.n_dof - 1}], got {dof}")
+        return replace(self, _amplitude_dof=dof)
+
+    # ------------------------------------------------------------------ contacts
+    @property
+    def n_contacts(self) -> int:
+        """Number of contacts (stops)."""
+        return len(self.contacts)
+
+    def _single(self, what: str) -> Contact:
+        if len(self.contacts) != 1:
+            raise ValueError(f"the model has {len(self.contacts)} contacts, so it has no single {what}: "
+                             "use model.contacts")
+        return self.contacts[0]
+
+    @property
+    def contact_dof(self) -> int:
+        """The contact DOF of a single-contact model (ValueError with several)."""
+        return self._single("contact_dof").dof
+
+    @property
+    def stop_side(self) -> int:
+        """The stop side (±1) of a single-contact model (ValueError with several)."""
+        return self._single("stop_side").side
+
+    @property
+    def gap(self) -> float:
+        """The gap (m) of a single-contact model; with several, the smallest positive one
+        (the unit of amplitudes "in gaps"; 0 if all are 0)."""
+        gaps = [c.gap for c in self.contacts]
+        positive = [g for g in gaps if g > 0]
+        return min(positive) if positive else 0.0
+
+    @property
+    def contact_dofs(self) -> tuple:
+        """The DOF of each contact (a DOF appears twice in a clearance)."""
+        return tuple(c.dof for c in self.contacts)
+
+    @property
+    def amplitude_dof(self) -> int:
+        """The DOF whose largest excursion is the amplitude of a branch: the one given, or
+        the contact DOF of a single-contact model.
+
+        Raises
+        ------
+        ValueError
+            If none was given and the model has several contacts.
+        """
+        if self._amplitude_dof is not None:
+            return self._amplitude_dof
+        if len(self.contacts) == 1:
+            return self.contacts[0].dof
+        raise ValueError(f"the model has {len(self.contacts)} contacts: name the DOF whose amplitude a "
+                         "branch reports (Model.from_matrices(..., amplitude_dof=...) or "
+                         "model.with_amplitude_dof)")
+
+    @property
+    def massless_contacts(self) -> bool:
+        """True when every contact DOF is massless (what MMS-HBM and the exact reference
+        need)."""
+        c = set(self.c.tolist())
+        return all(ct.dof in c for ct in self.contacts)
+
+    def require_massless_contacts(self, who: str) -> None:
+        """Raise a ValueError naming the conversions unless every contact DOF is massless.
+
+        ``who`` names the method that needs it (e.g. ``"MMS-HBM"``)."""
+        c = set(self.c.tolist())
+        heavy = sorted({ct.dof for ct in self.contacts if ct.dof not in c})
+        if heavy:
+            many = len(heavy) > 1
+            raise ValueError(
+                f"contact DOF{'s' if many else ''} {heavy} carr{'y' if many else 'ies'} mass, "
+                f"but {who} needs massless contact DOFs (their equations are static): convert the model "
+                "with model.with_contact_layer(stiffness) (a massless contact node joined by a spring, the "
+                "mass kept) or model.with_massless_contact() (the contact node's mass removed), or use "
+                "method='penalty'")
 
     # ------------------------------------------------------------------ partition
     @property
@@ -214,7 +248,7 @@ class Model:
 
     @cached_property
     def c(self) -> np.ndarray:
-        """Indices of the massless (contact) DOFs, sorted; shape (n_c,)."""
+        """Indices of the massless DOFs, sorted; shape (n_c,)."""
         row_mass = np.asarray(abs(self.M).sum(axis=1)).ravel()
         return np.flatnonzero(row_mass == 0.0)
 
@@ -225,12 +259,17 @@ class Model:
 
     @property
     def contact_index(self) -> int:
-        """Position of ``contact_dof`` inside ``c``."""
-        return int(np.searchsorted(self.c, self.contact_dof))
+        """Position of ``contact_dof`` inside ``c`` (single massless contact)."""
+        dof = self.contact_dof
+        i = int(np.searchsorted(self.c, dof))
+        if i >= len(self.c) or self.c[i] != dof:
+            raise ValueError(f"contact_dof {dof} carries mass: it is not among the massless DOFs")
+        return i
 
     @cached_property
     def w_c(self) -> np.ndarray:
-        """Contact direction restricted to ``c``: g_N = gap + w_c · q_c; shape (n_c,)."""
+        """Contact direction restricted to ``c``: g_N = gap + w_c · q_c; shape (n_c,)
+        (single massless contact)."""
         w = np.zeros(len(self.c))
         w[self.contact_index] = -self.stop_side
         return w
@@ -238,7 +277,7 @@ class Model:
     @cached_property
     def blocks(self) -> dict:
         """The partitioned matrices: ``M_ll``, ``K_ll`` (CSC), ``K_lc`` (dense (n_l, n_c)),
-        ``K_cc`` (dense (n_c, n_c))."""
+        ``K_cc`` (dense (n_c, n_c)), and ``C_ll`` (CSC, or None without damping)."""
         l, c = self.l, self.c
         K = self.K.tocsr()
         return {
@@ -246,25 +285,62 @@ class Model:
             "K_ll": K[l][:, l].tocsc(),
             "K_lc": K[l][:, c].toarray(),
             "K_cc": K[c][:, c].toarray(),
+            "C_ll": None if self.damping is None else self.damping.tocsr()[l][:, l].tocsc(),
         }
 
     def _check_partition(self) -> None:
         c, l = self.c, self.l
-        if self.contact_dof not in set(c.tolist()):
-            m = self.M[self.contact_dof].toarray().ravel()
-            raise ValueError(
-                f"contact_dof {self.contact_dof} carries mass (M row has {np.count_nonzero(m)} "
-                "non-zero entries): the contact DOF must be massless"
-            )
         if len(l) == 0:
             raise ValueError("the model has no DOF with mass")
         M_lc = self.M[l][:, c]
         if M_lc.nnz and abs(M_lc).max() > 0:
             raise ValueError("massless DOFs must have zero mass rows and columns (M_lc != 0)")
+        if self.damping is not None and len(c):
+            C = self.damping.tocsr()
+            rows = np.asarray(abs(C[c]).sum(axis=1)).ravel()
+            cols = np.asarray(abs(C[:, c]).sum(axis=0)).ravel()
+            coupled = (rows > 0) | (cols > 0)
+            if np.any(coupled):
+                raise ValueError(f"damping acts on the massless DOFs {c[coupled].tolist()}: massless DOFs "
+                                 "are static, so their rows and columns of C must be zero")
         b = self.blocks
         _require_positive_definite(b["K_cc"], "K restricted to the massless DOFs")
         _require_positive_definite(b["M_ll"], "M restricted to the DOFs with mass")
         _require_positive_definite(self.reduced_stiffness, "K statically condensed on the DOFs with mass")
+
+    def fingerprint(self) -> str:
+        """SHA-256 of the matrices (CSR parts), contacts, damping and amplitude DOF: equal
+        fingerprints mean the same model (a checkpoint can only be resumed on it). A
+        single undamped contact hashes as in mmshbm 0.1."""
+        import hashlib
+        import json
+
+        h = hashlib.sha256()
+        mats = [self.M, self.K] + ([self.damping] if self.damping is not None else [])
+        for A in mats:
+            A = sp.csr_matrix(A, copy=True)
+            A.sort_indices()
+            for part in (A.data, A.indices, A.indptr, np.array(A.shape)):
+                kind = "<f8" if part.dtype.kind == "f" else "<i8"
+                h.update(np.ascontiguousarray(part).astype(kind).tobytes())
+        contacts = [[int(c.dof), float(c.gap).hex(), int(c.side)] for c in self.contacts]
+        h.update(json.dumps(contacts[0] if len(contacts) == 1 else contacts).encode())
+        if self._amplitude_dof is not None:
+            h.update(json.dumps({"amplitude_dof": int(self._amplitude_dof)}).encode())
+        return h.hexdigest()
+
+    def same_as(self, other: Model) -> bool:
+        """True when both models have identical matrices, contacts, damping and amplitude DOF."""
+        if not isinstance(other, Model) or self.M.shape != other.M.shape:
+            return False
+        if self.contacts != other.contacts or self._amplitude_dof != other._amplitude_dof:
+            return False
+        if (self.damping is None) != (other.damping is None):
+            return False
+        pairs = [(self.M, other.M), (self.K, other.K)]
+        if self.damping is not None:
+            pairs.append((self.damping, other.damping))
+        return all((sp.csr_matrix(A) != sp.csr_matrix(B)).nnz == 0 for A, B in pairs)
 
     # ------------------------------------------------------------------ linear modes
     @cached_property
@@ -272,6 +348,8 @@ class Model:
         """Exact static condensation of the massless DOFs:
         K_ll - K_lc K_cc⁻¹ K_cl, sparse (n_l, n_l)."""
         b = self.blocks
+        if not len(self.c):
+            return b["K_ll"]
         K_lc = sp.csr_matrix(b["K_lc"])
         correction = K_lc @ sp.csr_matrix(la.solve(b["K_cc"], b["K_lc"].T))
         return (b["K_ll"] - correction).tocsc()
@@ -302,9 +380,11 @@ class Model:
             lam, phi = lam[order], phi[:, order]
         modes = np.zeros((self.n_dof, n))
         modes[self.l] = phi
-        modes[self.c] = -la.solve(b["K_cc"], b["K_lc"].T @ phi)
-        # fix the sign: the contact DOF of each mode moves toward the stop first
-        sign = np.where(modes[self.contact_dof] * self.stop_side < 0, -1.0, 1.0)
+        if len(self.c):
+            modes[self.c] = -la.solve(b["K_cc"], b["K_lc"].T @ phi)
+        # fix the sign: the (first) contact DOF of each mode moves toward its stop first
+        first = self.contacts[0]
+        sign = np.where(modes[first.dof] * first.side < 0, -1.0, 1.0)
         modes *= sign
         return np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi), modes
 
@@ -316,9 +396,10 @@ class Model:
         """Frequency (Hz) of the first mode's bilinear limit (gap → 0 or amplitude → ∞):
         half a period open, half a period with the contact DOF held at the stop,
         f = 2 / (1/f_open + 1/f_closed)."""
+        contact = self._single("zero-gap limit")
         f_open = self.linear_frequencies(1)[0]
-        closed = np.setdiff1d(np.arange(self.n_dof), [self.contact_dof])
-        sub = Model(self.M[closed][:, closed], self.K[closed][:, closed], 0, 0.0)
+        closed = np.setdiff1d(np.arange(self.n_dof), [contact.dof])
+        sub = Model(self.M[closed][:, closed], self.K[closed][:, closed], (Contact(0, 0.0, 1),))
         b = sub.blocks
         if len(sub.c):
             K_red = sub.reduced_stiffness
@@ -329,8 +410,13 @@ class Model:
         return 2.0 / (1.0 / f_open + 1.0 / f_closed)
 
     def __repr__(self) -> str:
-        return (f"Model(n_dof={self.n_dof}, massless={self.c.tolist()}, contact_dof={self.contact_dof}, "
-                f"gap={self.gap:g}, stop_side={self.stop_side:+d})")
+        if len(self.contacts) == 1:
+            contact = (f"contact_dof={self.contact_dof}, gap={self.gap:g}, stop_side={self.stop_side:+d}")
+        else:
+            contact = "contacts=[" + ", ".join(f"(dof {c.dof}, gap {c.gap:g}, side {c.side:+d})"
+                                               for c in self.contacts) + "]"
+        extra = "" if self.damping is None else ", damped"
+        return f"Model(n_dof={self.n_dof}, massless={self.c.tolist()}, {contact}{extra})"
 
 
 def _lowest_eigenpairs_dense(K: np.ndarray, M: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:

@@ -142,7 +142,8 @@ class Branch:
         if self.model is None and self.solver is not None and hasattr(self.solver, "model"):
             self.model = self.solver.model
         if self.model is None:
-            self.model = rebuild_model(self.metadata.get("model", {}), self.metadata.get("model_gap"))
+            self.model = rebuild_model(self.metadata.get("model", {}),
+                                       self.metadata.get("model_gaps", self.metadata.get("model_gap")))
         return self.model
 
     def attach_solver(self, **method_options):
@@ -345,6 +346,10 @@ def rebuild_model(description: dict, gap: float | None = None):
     gap : float, optional
         The model's gap (m) if it differs from the description's (``Model.with_gap``).
 
+    The ``transforms`` the description records (``[{"name": "with_damping", "args":
+    {...}}, ...]``, appended by the ``Model.with_*`` methods that change the structure)
+    are applied in order after the base model is built.
+
     Raises
     ------
     ValueError
@@ -365,21 +370,23 @@ def rebuild_model(description: dict, gap: float | None = None):
     else:
         raise ValueError(f"a model of kind {kind!r} cannot be rebuilt from its description "
                          "(save it with its matrices)")
-    if gap is not None and float(gap) != model.gap:
-        model = model.with_gap(float(gap))
+    for step in description.get("transforms", []):
+        try:
+            model = getattr(model, step["name"])(**dict(step.get("args", {})))
+        except (KeyError, AttributeError, TypeError) as err:
+            raise ValueError(f"cannot replay the model transform {step!r}: {err}") from None
+    if gap is not None:
+        gaps = [float(g) for g in np.atleast_1d(gap)]
+        if gaps != [c.gap for c in model.contacts]:
+            model = model.with_gap(gaps[0] if len(gaps) == 1 else gaps)
     return model
-
-
-def _same_model(a, b) -> bool:
-    """True when two models have identical matrices, contact DOF, stop side and gap."""
-    if a.M.shape != b.M.shape or (a.contact_dof, a.stop_side, a.gap) != (b.contact_dof, b.stop_side, b.gap):
-        return False
-    return all((A != B).nnz == 0 for A, B in ((a.M, b.M), (a.K, b.K)))
 
 
 def _model_arrays(model) -> dict:
     out = {}
-    for name, A in (("M", model.M.tocsr()), ("K", model.K.tocsr())):
+    mats = [("M", model.M), ("K", model.K)] + ([("C", model.damping)] if model.damping is not None else [])
+    for name, A in mats:
+        A = A.tocsr()
         out.update({f"model_{name}_data": A.data, f"model_{name}_indices": A.indices,
                     f"model_{name}_indptr": A.indptr, f"model_{name}_shape": np.array(A.shape)})
     return out
@@ -390,12 +397,18 @@ def _model_from_arrays(arrays: dict, info: dict):
 
     from ..model.model import Model
 
-    mats = []
-    for name in ("M", "K"):
+    mats = {}
+    for name in ("M", "K", "C"):
+        if f"model_{name}_data" not in arrays:
+            continue
         d, i, p, shape = (arrays[f"model_{name}_{q}"] for q in ("data", "indices", "indptr", "shape"))
-        mats.append(sp.csr_matrix((d, i, p), shape=tuple(int(v) for v in shape)))
-    return Model.from_matrices(mats[0], mats[1], int(info["contact_dof"]), float(info["gap"]),
-                               int(info["stop_side"]), dict(info.get("description", {})))
+        mats[name] = sp.csr_matrix((d, i, p), shape=tuple(int(v) for v in shape))
+    if "contacts" in info:
+        dofs, gaps, sides = (list(v) for v in zip(*info["contacts"], strict=True))
+    else:
+        dofs, gaps, sides = int(info["contact_dof"]), float(info["gap"]), int(info["stop_side"])
+    return Model.from_matrices(mats["M"], mats["K"], dofs, gaps, sides, dict(info.get("description", {})),
+                               damping=mats.get("C"), amplitude_dof=info.get("amplitude_dof"))
 
 
 # ---------------------------------------------------------------------- payloads
@@ -428,11 +441,14 @@ def branch_payload(branch: Branch, prefix: str = "") -> tuple[dict, dict]:
     model = branch.model if branch.model is not None else getattr(branch.solver, "model", None)
     info = {"description": description, "matrices": False}
     if model is not None:
-        info.update(gap=float(model.gap), contact_dof=int(model.contact_dof), stop_side=int(model.stop_side),
-                    description=dict(model.description))
+        info.update(gap=float(model.gap), description=dict(model.description),
+                    contacts=[[int(c.dof), float(c.gap), int(c.side)] for c in model.contacts],
+                    amplitude_dof=model._amplitude_dof)
+        if model.n_contacts == 1:  # the keys of format 1, still read by older versions
+            info.update(contact_dof=int(model.contact_dof), stop_side=int(model.stop_side))
         try:
-            rebuilt = rebuild_model(model.description, model.gap)
-            store = not _same_model(rebuilt, model)
+            rebuilt = rebuild_model(model.description, [c.gap for c in model.contacts])
+            store = not rebuilt.same_as(model)
         except ValueError:
             store = True
         if store:
@@ -466,6 +482,8 @@ def branch_from_payload(arrays: dict, meta: dict, prefix: str = "") -> Branch:
     histories = np.split(flat, np.cumsum(lengths)[:-1]) if len(lengths) else []
     if info.get("gap") is not None and info["gap"] != metadata.get("model", {}).get("gap"):
         metadata["model_gap"] = info["gap"]  # Model.with_gap: the description's gap is stale
+    if "contacts" in info and len(info["contacts"]) > 1:
+        metadata["model_gaps"] = [float(c[1]) for c in info["contacts"]]
     model = _model_from_arrays({k[len(prefix):]: v for k, v in arrays.items() if k.startswith(prefix)},
                                info) if info.get("matrices") else None
     return Branch(**fields_, status=status, method=method, harmonics=harmonics, special_points=special,

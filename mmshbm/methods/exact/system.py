@@ -159,6 +159,7 @@ class PiecewiseLinearSystem:
     def __init__(self, model: Model):
         if not isinstance(model, Model):
             raise TypeError(f"model must be a mmshbm.Model, got {type(model).__name__}")
+        model.require_massless_contacts("the exact reference")
         self.model = model
         b = model.blocks
         M_ll = b["M_ll"].toarray()
