@@ -37,7 +37,7 @@ def test_a_clearance_is_one_dof_with_two_sides():
     dofs, lo, hi = admissible_intervals(model.contacts)
     assert dofs.tolist() == [1] and lo.tolist() == [-0.3] and hi.tolist() == [0.3]
     with pytest.raises(ValueError, match="name the DOF whose amplitude"):
-        model.amplitude_dof
+        _ = model.amplitude_dof
 
 
 @pytest.mark.parametrize("kwargs, match", [
