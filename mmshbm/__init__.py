@@ -31,6 +31,9 @@ _LAZY = {
     "Branch": "mmshbm.results.branch",
     "fit_material": "mmshbm.analysis.identification",
     "load": "mmshbm.io",
+    "MmshbmWarning": "mmshbm._warnings",
+    "BranchWarning": "mmshbm._warnings",
+    "ModelWarning": "mmshbm._warnings",
 }
 # submodule attribute -> module (the layered packages, and the flat names of 0.1)
 _SUBMODULES = {

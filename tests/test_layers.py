@@ -16,6 +16,7 @@ PACKAGE = pathlib.Path(__file__).resolve().parents[1] / "mmshbm"
 #: prefix of a dotted module name -> layer (the longest prefix wins)
 LAYERS = {
     "mmshbm._validate": 0,
+    "mmshbm._warnings": 0,
     "mmshbm.model": 1,
     "mmshbm.fe": 2,
     "mmshbm.core": 3,

@@ -1,0 +1,50 @@
+"""``mmshbm backbone``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from . import common
+
+
+def register(sub) -> None:
+    """Add the subcommand to the subparsers ``sub``."""
+    p = sub.add_parser("backbone", help="first nonlinear mode: backbone.csv/.npz/.png")
+    common.beam_options(p)
+    p.add_argument("-H", "--harmonics", type=int, default=5, help="harmonics (default 5)")
+    p.add_argument("--method", default="mmshbm", choices=["mmshbm", "penalty", "shooting"])
+    p.add_argument("--max-amplitude", type=float, default=None, help="in gaps (default 10)")
+    p.add_argument("--max-steps", type=int, default=None, help="continuation step budget")
+    p.add_argument("--measured", default=None, help="measured backbone CSV to overlay")
+    p.add_argument("--checkpoint", default=None, metavar="FILE",
+                   help="write converged points to FILE as they go")
+    p.add_argument("--resume", default=None, metavar="FILE", help="continue from a checkpoint FILE")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from ..methods.backbone import backbone
+    from ..plotting import plot_backbone, plot_frequency_energy
+
+    measured = common.measured(args)
+    model = common.model(args)
+    max_amp = args.max_amplitude * model.gap if args.max_amplitude else None
+    extra = {}
+    if args.checkpoint:
+        Path(args.checkpoint).parent.mkdir(parents=True, exist_ok=True)
+        extra["checkpoint"] = args.checkpoint
+    if args.resume:
+        extra["resume"] = args.resume
+    if args.max_steps is not None:
+        extra["max_steps"] = args.max_steps
+    branch = backbone(model, harmonics=args.harmonics, method=args.method, max_amplitude=max_amp,
+                      verbose=common.progress(args), **extra)
+    out = common.out_dir(args)
+    files = [branch.to_csv(out / "backbone.csv"), branch.save(out / "backbone.npz")]
+    if len(branch):
+        files += [out / "backbone.png", out / "frequency_energy.png"]
+        plot_backbone(branch, measured=measured, model=model, path=files[-2])
+        plot_frequency_energy(branch, path=files[-1])
+    print(repr(branch))
+    common.wrote(*files)
+    return 0 if branch.completed else 1

@@ -1,0 +1,38 @@
+"""``mmshbm bench``."""
+
+from __future__ import annotations
+
+from . import common
+
+
+def register(sub) -> None:
+    """Add the subcommand to the subparsers ``sub``."""
+    p = sub.add_parser("bench", help="MMS-HBM against penalty-HBM and shooting at equal accuracy")
+    common.out_option(p)
+    p.add_argument("--quick", action="store_true", help="a fast, rough run")
+    p.add_argument("--model", default="beam21", choices=["beam21", "beam8", "oscillator"])
+    p.add_argument("--target", type=float, default=None, help="relative frequency accuracy (default 1e-4)")
+    p.add_argument("--methods", nargs="+", default=None, choices=["mmshbm", "penalty", "shooting"])
+    p.add_argument("--repeats", type=int, default=None, help="timing repeats")
+    p.add_argument("--amplitude", type=float, default=None, help="amplitude (gaps) compared at (default 2)")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    try:
+        from ..analysis import benchmarking
+    except ImportError as err:
+        raise ValueError(f"benchmarking is not available: {err}") from None
+    kwargs = {"model": args.model, "quick": args.quick}
+    if args.target is not None:
+        kwargs["target"] = args.target
+    if args.methods:
+        kwargs["methods"] = tuple(args.methods)
+    if args.repeats is not None:
+        kwargs["repeats"] = args.repeats
+    if args.amplitude is not None:
+        kwargs["amplitude_gaps"] = args.amplitude
+    rows = benchmarking.compare_methods(**kwargs)
+    print(benchmarking.format_table(rows))
+    common.wrote(*benchmarking.write_results(rows, common.out_dir(args)))
+    return 0

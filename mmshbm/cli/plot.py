@@ -1,0 +1,78 @@
+"""``mmshbm plot``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from . import common
+
+
+def register(sub) -> None:
+    """Add the subcommand to the subparsers ``sub``."""
+    p = sub.add_parser("plot", help="plots of a saved branch or study (.npz)")
+    common.out_option(p)
+    p.add_argument("file", help="a .npz written by Branch.save / Study.save (backbone, study)")
+    p.add_argument("--kind", nargs="+", default=["all"],
+                   choices=["all", "backbone", "energy", "peak_force", "signals", "force", "harmonics"])
+    p.add_argument("--points", type=float, nargs="+", default=None,
+                   help="amplitudes (gaps) of the marked points (default 1.5 3 6)")
+    p.add_argument("--measured", default=None, help="measured backbone CSV to overlay")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from .. import plotting
+    from ..io import load
+    from ..results.branch import Branch
+
+    data = load(args.file)
+    measured = common.measured(args)
+    out = common.out_dir(args)
+    stem = Path(args.file).stem
+    kinds = set(args.kind)
+    if "all" in kinds:
+        kinds = {"backbone", "energy", "peak_force", "signals", "force", "harmonics"}
+    marks = tuple(args.points) if args.points else common.DEFAULT_MARKS
+    files = []
+    if not isinstance(data, Branch):  # a study
+        if "backbone" in kinds:
+            path = out / f"{stem}_backbone.png"
+            if common.has_grid(data):
+                plotting.plot_figure2(data, marks=marks, measured=measured, path=path)
+            else:
+                plotting.plot_backbone(data.branches, measured=measured, path=path)
+            files.append(path)
+        styles = plotting.study_styles(data.runs)
+        if "energy" in kinds:
+            files.append(out / f"{stem}_energy.png")
+            plotting.plot_frequency_energy(data.branches, styles=styles, path=files[-1])
+        if "peak_force" in kinds:
+            files.append(out / f"{stem}_peak_force.png")
+            plotting.plot_peak_contact_force(data.branches, measured=measured, styles=styles, path=files[-1])
+        common.wrote(*files)
+        return 0
+    branch = data
+    if not len(branch):
+        raise ValueError(f"{args.file}: the branch has no points")
+    gap = plotting._gap(branch)
+    pts = plotting.points_at(branch, [m * gap for m in marks]) if gap > 0 else [len(branch) - 1]
+    if "backbone" in kinds:
+        files.append(out / f"{stem}_backbone.png")
+        plotting.plot_backbone(branch, measured=measured, marks=[(0, p) for p in pts], path=files[-1])
+    if "energy" in kinds:
+        files.append(out / f"{stem}_energy.png")
+        plotting.plot_frequency_energy(branch, path=files[-1])
+    if "peak_force" in kinds:
+        files.append(out / f"{stem}_peak_force.png")
+        plotting.plot_peak_contact_force(branch, measured=measured, path=files[-1])
+    if "signals" in kinds:
+        files.append(out / f"{stem}_signals.png")
+        plotting.plot_time_signals(branch, pts, path=files[-1])
+    if "force" in kinds:
+        files.append(out / f"{stem}_contact_force.png")
+        plotting.plot_contact_force(branch, pts, path=files[-1])
+    if "harmonics" in kinds:
+        files.append(out / f"{stem}_harmonics.png")
+        plotting.plot_harmonic_content(branch, pts[-1], path=files[-1])
+    common.wrote(*files)
+    return 0

@@ -1,0 +1,74 @@
+"""``mmshbm study``."""
+
+from __future__ import annotations
+
+from . import common
+
+
+def register(sub) -> None:
+    """Add the subcommand to the subparsers ``sub``."""
+    p = sub.add_parser("study", help="convergence study over H, elements, methods, parameters")
+    common.beam_options(p, elements=False)
+    p.add_argument("--figure2", action="store_true",
+                   help="the seed's Figure 2: H 1 3 5 x elements 8 21 (figure2.png, figure2_table.csv)")
+    p.add_argument("-H", "--harmonics", type=int, nargs="+", default=None, help="values of H (default 1 3 5)")
+    p.add_argument("--elements", type=int, nargs="+", default=None, help="element counts (default 8 21)")
+    p.add_argument("--methods", nargs="+", default=None, choices=["mmshbm", "penalty", "shooting"])
+    p.add_argument("--param", action="append", default=None, metavar="NAME=V1,V2",
+                   help="a further grid axis: a beam field (gap, E, rho, ...), grading or a backbone option")
+    p.add_argument("--amplitudes", type=float, nargs="+", default=None,
+                   help="amplitudes (gaps) of the table and the marked points (default 1.5 3 6)")
+    p.add_argument("--max-amplitude", type=float, default=None, help="in gaps (default 10)")
+    p.add_argument("--executor", default="process", choices=["process", "serial", "dask"],
+                   help="where runs go (default a local process pool)")
+    p.add_argument("--workers", type=int, default=2, help="processes (default 2)")
+    p.add_argument("--measured", default=None, help="measured backbone CSV to overlay")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from ..analysis import studies
+    from ..plotting import plot_backbone, plot_figure2
+
+    params = common.params(args.param)
+    measured = common.measured(args)
+    marks = tuple(args.amplitudes) if args.amplitudes else common.DEFAULT_MARKS
+    executor = None if args.executor == "serial" else args.executor
+    shared = {"executor": executor, "workers": args.workers, "verbose": common.progress(args)}
+    if args.max_amplitude is not None:
+        shared.update(max_amplitude=args.max_amplitude, unit="gap")
+    beam = common.beam(args)
+    if args.figure2:
+        if args.harmonics or args.elements or args.methods or params or args.model_file:
+            raise ValueError("--figure2 fixes the grid (H 1 3 5, elements 8 21, mmshbm): drop -H, "
+                             "--elements, --methods, --param and --model-file")
+        study = studies.figure2_study(beam, grading=args.grading, **shared)
+        name = "figure2"
+    else:
+        grid = {"harmonics": args.harmonics or (1, 3, 5), "methods": args.methods or ("mmshbm",),
+                "params": params}
+        if args.model_file:
+            if args.elements:
+                raise ValueError("--elements applies to the beam, not to --model-file")
+            study = studies.run_study(model=args.model_file, **grid, **shared)
+        else:
+            study = studies.run_study(beam, elements=args.elements or (8, 21), grading=args.grading, **grid,
+                                      **shared)
+        name = "study"
+    out = common.out_dir(args)
+    table = study.table(marks, unit="gap")
+    report = study.report(marks, unit="gap")
+    files = [study.save(out / f"{name}.npz"), table.to_csv(out / f"{name}_table.csv")]
+    text = out / f"{name}_table.txt"
+    text.write_text(report + "\n")
+    files.append(text)
+    png = out / f"{name}.png"
+    if args.figure2 or common.has_grid(study):
+        plot_figure2(study, marks=marks, measured=measured, path=png)
+    else:
+        plot_backbone(study.branches, measured=measured, path=png)
+    files.append(png)
+    print(report)
+    print(repr(study))
+    common.wrote(*files)
+    return 0 if all(b.completed for b in study.branches) else 1

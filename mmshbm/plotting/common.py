@@ -1,0 +1,143 @@
+"""Helpers shared by the plots: figures, labels, points, reference lines."""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+
+log = logging.getLogger(__name__)
+
+_DPI = 150
+_H_COLORS = {1: "C0", 2: "C4", 3: "C1", 4: "C5", 5: "C2", 7: "C3", 9: "C6"}
+_POINT_COLORS = ("k", "C3", "C9", "C6", "C8", "C7")
+
+
+def _figure(ax, figsize):
+    if ax is None:
+        fig = Figure(figsize=figsize, layout="constrained")
+        return fig, fig.add_subplot()
+    return ax.figure, ax
+
+
+def _finish(fig: Figure, path) -> Figure:
+    if path is not None:
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(path, dpi=_DPI)
+        log.info("wrote %s", path)
+    return fig
+
+
+def _as_list(branches) -> list:
+    from ..results.branch import Branch
+
+    return [branches] if isinstance(branches, Branch) else list(branches)
+
+
+def _gap(branch) -> float:
+    gap = branch.gap
+    if gap is None:
+        try:
+            gap = branch.get_model().gap
+        except ValueError:
+            gap = 0.0
+    return float(gap)
+
+
+def _model(branch):
+    try:
+        return branch.get_model()
+    except ValueError as err:
+        log.info("no model for the reference lines: %s", err)
+        return None
+
+
+def branch_label(branch) -> str:
+    """A short legend label: method, H and elements, e.g. "H5, 21 el."."""
+    meta = branch.metadata.get("model", {})
+    parts = []
+    if branch.method != "mmshbm":
+        parts.append(branch.method)
+    if branch.harmonics:
+        parts.append(f"H{branch.harmonics}")
+    if "n_elements" in meta:
+        parts.append(f"{meta['n_elements']} el.")
+    return ", ".join(parts) or branch.method
+
+
+def dof_label(branch, dof: int) -> tuple[str, float]:
+    """(axis label with unit, factor from SI) for ``dof`` of the branch's model: beam DOFs
+    become "tip deflection w (mm)" / "rotation θ at node 3 (mrad)"; others "q[dof] (m or rad)"."""
+    meta = branch.metadata.get("model", {})
+    if meta.get("kind") == "TimoshenkoBeam":
+        n_el = int(meta["n_elements"])
+        node = dof // 2 + 1
+        where = "tip" if node == n_el else f"node {node}"
+        if dof % 2 == 0:
+            return f"{where} deflection w (mm)", 1e3
+        return f"{where} rotation θ (mrad)", 1e3
+    model = _model(branch)
+    if model is not None and dof == model.contact_dof:
+        return "contact DOF q (mm)", 1e3
+    return f"q[{dof}] (SI units)", 1.0
+
+
+def points_at(branch, amplitudes) -> list[int]:
+    """Indices of the first branch points whose amplitude reaches each of ``amplitudes``
+    (m); the last point when the branch never does."""
+    out = []
+    for a in np.atleast_1d(np.asarray(amplitudes, dtype=float)):
+        hit = np.flatnonzero(branch.amplitude >= a)
+        out.append(int(hit[0]) if len(hit) else len(branch) - 1)
+    return out
+
+
+def _reference_lines(ax, model, fmin, fmax, modes, max_order) -> None:
+    """Vertical lines: linear f1, zero-gap limit, f_k/n of higher modes inside [fmin, fmax]."""
+    n = max(max(modes, default=1), 1)
+    try:
+        f_lin = model.linear_frequencies(n)
+        f_zero = model.zero_gap_frequency() if model.gap > 0 else None
+    except (ValueError, np.linalg.LinAlgError) as err:
+        log.info("no reference lines: %s", err)
+        return
+    ax.axvline(f_lin[0], color="0.55", ls=":", lw=1.2, label=f"linear $f_1$ = {f_lin[0]:.2f} Hz")
+    if f_zero is not None:
+        ax.axvline(f_zero, color="0.3", ls="--", lw=1.0, label=f"zero-gap limit {f_zero:.2f} Hz")
+    labelled = False
+    for k in modes:
+        if k - 1 >= len(f_lin):
+            continue
+        for order in range(2, max_order + 1):
+            f = f_lin[k - 1] / order
+            if fmin <= f <= fmax:
+                ax.axvline(f, color="C3", ls="-.", lw=0.8, alpha=0.7,
+                           label=None if labelled else "internal resonance $f_k/n$")
+                labelled = True
+                ax.annotate(f"$f_{k}/{order}$", xy=(f, 0.0), xycoords=("data", "axes fraction"),
+                            xytext=(2, 3), textcoords="offset points", ha="left", va="bottom", fontsize=8,
+                            color="C3")
+
+
+def _overlay_measured(ax, measured, scale: float) -> None:
+    ax.plot(measured.frequency, measured.amplitude / scale, "o", mfc="none", mec="k", ms=5, mew=1.0,
+            label=f"measured{f' ({measured.source})' if measured.source else ''}")
+
+
+def _point_label(branch, n: int, i: int) -> str:
+    gap = _gap(branch)
+    amp = f"{branch.amplitude[i] / gap:.2g} gaps" if gap > 0 else f"{1e3 * branch.amplitude[i]:.3g} mm"
+    return f"{n}: {branch.frequency[i]:.2f} Hz, {amp}"
+
+
+def _points(branch, points) -> list[int]:
+    pts = [int(p) for p in np.atleast_1d(points)]
+    n = len(branch)
+    for p in pts:
+        if not -n <= p < n:
+            raise IndexError(f"point {p} out of range for a branch of {n} points")
+    return [p % n for p in pts]
+

@@ -1,0 +1,104 @@
+"""The motion at points of a branch: time signals, contact force, harmonic content."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from .common import _POINT_COLORS, _figure, _finish, _gap, _model, _point_label, _points, dof_label
+
+
+def plot_time_signals(branch, points, dofs: Sequence[int] | None = None, *, n_samples: int = 256, axes=None,
+                      path=None, numbers: Sequence[int] | None = None) -> Figure:
+    """Displacements / rotations over one period (t/T) at branch ``points``.
+
+    Parameters
+    ----------
+    branch : Branch
+    points : int or sequence of int
+        Branch point indices.
+    dofs : sequence of int, optional
+        Model DOFs, one panel each (default the massless contact DOFs: for the beam
+        tip deflection w and tip rotation θ).
+    n_samples : int
+        Samples per period.
+    axes : sequence of Axes, optional
+        One per DOF.
+    numbers : sequence of int, optional
+        Point numbers for the legend (default 1, 2, ...).
+    """
+    pts = _points(branch, points)
+    if dofs is None:
+        dofs = [int(d) for d in branch.get_model().c]
+    dofs = [int(d) for d in np.atleast_1d(dofs)]
+    if axes is None:
+        fig = Figure(figsize=(6.4, 2.3 * len(dofs) + 0.6), layout="constrained")
+        axes = fig.subplots(len(dofs), 1, sharex=True, squeeze=False)[:, 0]
+    else:
+        fig = axes[0].figure
+    numbers = list(numbers) if numbers is not None else list(range(1, len(pts) + 1))
+    for j, (n, i) in enumerate(zip(numbers, pts, strict=True)):
+        t, q = branch.time_signals(i, dofs=dofs, n_samples=n_samples)
+        T = 1.0 / branch.frequency[i]
+        tt = np.append(t, T) / T  # close the period
+        for ax, d, qd in zip(axes, dofs, q, strict=True):
+            _, factor = dof_label(branch, d)
+            ax.plot(tt, np.append(qd, qd[0]) * factor, color=_POINT_COLORS[j % 6], lw=1.3,
+                    label=_point_label(branch, n, i))
+    for ax, d in zip(axes, dofs, strict=True):
+        ax.set_ylabel(dof_label(branch, d)[0])
+        ax.grid(True, alpha=0.3)
+        ax.axhline(0, color="0.7", lw=0.6)
+    gap = _gap(branch)
+    model = _model(branch)
+    if gap > 0 and model is not None and model.contact_dof in dofs:
+        ax = axes[dofs.index(model.contact_dof)]
+        ax.axhline(model.stop_side * gap * 1e3, color="0.3", ls="--", lw=0.9, label="stop")
+    axes[-1].set_xlabel("t / T")
+    axes[-1].set_xlim(0, 1)
+    axes[0].legend(fontsize=8, loc="best")
+    return _finish(fig, path)
+
+
+def plot_contact_force(branch, points, *, n_samples: int = 512, ax=None, path=None,
+                       numbers: Sequence[int] | None = None) -> Figure:
+    """Contact force λ (N) over one period (t/T) at branch ``points``."""
+    pts = _points(branch, points)
+    fig, ax = _figure(ax, (6.4, 3.2))
+    numbers = list(numbers) if numbers is not None else list(range(1, len(pts) + 1))
+    for j, (n, i) in enumerate(zip(numbers, pts, strict=True)):
+        t, lam = branch.contact_force(i, n_samples=n_samples)
+        T = 1.0 / branch.frequency[i]
+        ax.plot(np.append(t, T) / T, np.append(lam, lam[0]), color=_POINT_COLORS[j % 6], lw=1.3,
+                label=_point_label(branch, n, i))
+    ax.set_xlabel("t / T")
+    ax.set_ylabel("contact force λ (N)")
+    ax.set_xlim(0, 1)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    return _finish(fig, path)
+
+
+def plot_harmonic_content(branch, point: int, dof: int | None = None, *, log_scale: bool = True, ax=None,
+                          path=None) -> Figure:
+    """Bar chart of the harmonic amplitudes |Q_k|, k = 0..H, of ``dof`` (default the
+    contact DOF) at ``point``."""
+    (i,) = _points(branch, [point])
+    fig, ax = _figure(ax, (5.2, 3.4))
+    amp = np.asarray(branch.harmonic_content(i, dof))
+    d = branch.get_model().contact_dof if dof is None else int(dof)
+    label, factor = dof_label(branch, d)
+    k = np.arange(len(amp))
+    ax.bar(k, amp * factor, color="C0", width=0.6)
+    if log_scale and np.any(amp > 0):
+        ax.set_yscale("log")
+        ax.set_ylim(bottom=max(amp[amp > 0].min() * factor * 0.3, amp.max() * factor * 1e-8))
+    ax.set_xticks(k)
+    ax.set_xlabel("harmonic k")
+    ax.set_ylabel(f"|Q_k| of {label}")
+    ax.set_title(f"point {i}: {branch.frequency[i]:.2f} Hz", fontsize=10)
+    ax.grid(True, axis="y", alpha=0.3)
+    return _finish(fig, path)
+
