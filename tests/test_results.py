@@ -128,3 +128,15 @@ def test_shooting_records_round_trip(tmp_path):
     assert "floquet_max" in header.split(",")
     # conservative system: the largest Floquet multiplier has modulus 1 (up to the time step)
     np.testing.assert_allclose(loaded.records["floquet_max"], 1.0, atol=1e-2)
+
+
+def test_special_points_keep_their_data_through_files(tmp_path):
+    from mmshbm.core.special_points import SpecialPoint
+
+    branch = mmshbm.backbone(mmshbm.one_dof_oscillator(), harmonics=3, max_amplitude=3.0)
+    branch.special_points.insert(2, SpecialPoint("internal_resonance", 3, k=5, j=2, ratio=1.0004))
+    back = mmshbm.Branch.load(branch.save(tmp_path / "b.npz"))
+    point = [p for p in back.special_points if p.kind == "internal_resonance"][0]
+    assert point == ("internal_resonance", 3) and point.data == {"k": 5, "j": 2, "ratio": 1.0004}
+    kind, index = point  # unpacks like the pairs of 0.1
+    assert (kind, index) == ("internal_resonance", 3)

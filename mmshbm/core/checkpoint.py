@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from .continuation import ContinuationState
+from .special_points import SpecialPoint, special_from_json, special_to_json
 
 __all__ = ["CheckpointWriter", "Checkpoint", "read_checkpoint", "model_fingerprint", "CHECKPOINT_FORMAT"]
 
@@ -97,14 +98,14 @@ class Checkpoint:
         if not self.points:
             raise ValueError(f"checkpoint {str(self.path)!r} holds no converged point")
         p = self.points
-        special = [tuple(s) for q in p for s in q.get("special", ())]
+        special = special_from_json([s for q in p for s in q.get("special", ())])
         return ContinuationState(
             u=[np.array(q["u"], dtype=float) for q in p],
             records=[dict(q["record"]) for q in p],
             newton_iterations=[int(q["newton"]) for q in p],
             step_size=[float(q["ds"]) for q in p],
             residual_histories=[np.array(q["history"], dtype=float) for q in p],
-            special_points=[("start", 0)] + [s for s in special if s[0] != "start"],
+            special_points=[SpecialPoint("start", 0)] + [s for s in special if s[0] != "start"],
             tangent=np.array(p[-1]["tangent"], dtype=float),
             ds=float(p[-1]["ds_next"]),
             steps=int(p[-1]["steps"]),
@@ -208,8 +209,10 @@ class CheckpointWriter:
 
     def point(self, event: dict) -> None:
         """Append one accepted point (the dict ``continue_branch`` gives ``on_point``)."""
-        self._append({k: event[k] for k in ("index", "u", "tangent", "ds", "ds_next", "steps", "newton",
-                                            "history", "record", "special", "status")})
+        entry = {k: event[k] for k in ("index", "u", "tangent", "ds", "ds_next", "steps", "newton",
+                                       "history", "record", "status")}
+        entry["special"] = special_to_json(event["special"])
+        self._append(entry)
         self.n_points += 1
 
     def end(self, status: str) -> None:

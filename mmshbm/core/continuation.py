@@ -29,6 +29,7 @@ import scipy.sparse as sp
 
 from .. import _validate as check
 from .bordered import solve_bordered_sparse
+from .special_points import SpecialPoint
 
 __all__ = ["ContinuationOptions", "ContinuationProblem", "ContinuationResult", "ContinuationState",
            "continue_branch", "newton"]
@@ -317,12 +318,13 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
     """
     opt = options or ContinuationOptions()
     if resume is None:
-        us, recs, nits, dss, hists, special = [], [], [], [], [], [("start", 0)]
+        us, recs, nits, dss, hists, special = [], [], [], [], [], [SpecialPoint("start", 0)]
     else:
         us = [np.asarray(v, dtype=float) for v in resume.u]
         recs, nits, dss = list(resume.records), list(resume.newton_iterations), list(resume.step_size)
         hists = list(resume.residual_histories)
-        special = [tuple(sp_) for sp_ in resume.special_points if sp_[0] != "endpoint"]
+        special = [sp_ if isinstance(sp_, SpecialPoint) else SpecialPoint(*sp_)
+                   for sp_ in resume.special_points if sp_[0] != "endpoint"]
         if not us:
             raise ValueError("resume holds no point")
     state = {"t": None, "ds": opt.ds, "steps": 0}
@@ -347,7 +349,7 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
                                  | {"ds": f"{ds:.2g}", "newton": nit})
 
     def result(status):
-        special.append(("endpoint", len(us) - 1))
+        special.append(SpecialPoint("endpoint", len(us) - 1))
         keys = recs[0].keys() if recs else ()
         return ContinuationResult(
             u=np.array(us), records={k: np.array([r[k] for r in recs]) for k in keys},
@@ -401,11 +403,12 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
                 u_new, nit, hist, rec, t_new = _refine_onto_bound(problem, u, t, ds, crossed, recs[-1], rec,
                                                                   opt, (u_new, nit, hist, rec, t_new))
                 status = f"bound:{crossed[0]}"
-                accept(u_new, nit, ds, hist, rec, t_new, ds, step, [(status, len(us))], terminal=status)
+                accept(u_new, nit, ds, hist, rec, t_new, ds, step, [SpecialPoint(status, len(us))],
+                       terminal=status)
                 break
             new_special = []
             if t_new[-1] * t[-1] < 0 and min(abs(t_new[-1]), abs(t[-1])) > 1e-6:
-                new_special.append(("fold", len(us)))
+                new_special.append(SpecialPoint("fold", len(us)))
             ds_prev = ds
             ds = min(opt.ds_max, ds * (1 + opt.growth * ((opt.max_newton - nit) / opt.max_newton) ** 2))
             accept(u_new, nit, ds_prev, hist, rec, t_new, ds, step, new_special)

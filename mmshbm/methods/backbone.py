@@ -14,6 +14,7 @@ import numpy as np
 
 from .. import _validate as check
 from ..core.continuation import ContinuationOptions, continue_branch
+from ..core.special_points import SpecialPoint
 from ..model.model import Model
 from ..results.branch import Branch
 from .registry import _CONTINUATION_FIELDS, METHODS, make_problem
@@ -158,7 +159,7 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     if gap > 0:
         above = np.flatnonzero(amp > gap * (1 + 1e-9))
         if len(above) and above[0] > 0:
-            special.insert(1, ("grazing", int(above[0])))
+            special.insert(1, SpecialPoint("grazing", int(above[0])))
     log.info("%s backbone: %d points, status %s, %.3f s", method, n, res.status, elapsed)
     metadata = {
         "model": model.description, "method": method, "harmonics": int(getattr(problem, "H", 0)),
@@ -237,7 +238,8 @@ def _finished_result(state, status):
         u=np.array(state.u), records={k: np.array([r[k] for r in recs]) for k in recs[0]},
         newton_iterations=np.array(state.newton_iterations, dtype=int),
         step_size=np.array(state.step_size, dtype=float), residual_histories=state.residual_histories,
-        special_points=list(state.special_points) + [("endpoint", len(state.u) - 1)], status=status,
+        special_points=list(state.special_points) + [SpecialPoint("endpoint", len(state.u) - 1)],
+        status=status,
         tangent=state.tangent, next_ds=state.ds, steps=state.steps)
 
 

@@ -27,6 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.special_points import special_from_json, special_to_json
+
 __all__ = ["Branch", "rebuild_model"]
 
 log = logging.getLogger(__name__)
@@ -66,8 +68,10 @@ class Branch:
         "mmshbm", "penalty" or "shooting".
     harmonics : int
         H (0 for shooting).
-    special_points : list of (str, int)
-        Named points: "start", "grazing", "fold", bound hits, "endpoint".
+    special_points : list of SpecialPoint
+        Named points (:mod:`mmshbm.core.special_points`): pairs ``(kind, index)`` with a
+        ``data`` dict; kinds "start", "grazing", "fold", "branch_point",
+        "internal_resonance", "jump", bound hits, "endpoint".
     metadata : dict
         Model description, solver options, versions, timings.
     solver : object
@@ -461,7 +465,7 @@ def branch_payload(branch: Branch, prefix: str = "") -> tuple[dict, dict]:
             log.warning("saving a branch whose model can neither be rebuilt from its description nor "
                         "was attached: the file cannot redo the run")
     meta = {"status": branch.status, "method": branch.method, "harmonics": int(branch.harmonics),
-            "special_points": [[str(name), int(i)] for name, i in branch.special_points],
+            "special_points": special_to_json(branch.special_points),
             "metadata": branch.metadata, "model": info, "records": names}
     return arrays, meta
 
@@ -474,7 +478,7 @@ def branch_from_payload(arrays: dict, meta: dict, prefix: str = "") -> Branch:
         lengths = arrays[f"{prefix}residual_history_lengths"]
         info = meta["model"]
         status, method, harmonics = meta["status"], meta["method"], int(meta["harmonics"])
-        special = [(str(name), int(i)) for name, i in meta["special_points"]]
+        special = special_from_json(meta["special_points"])
         metadata = dict(meta["metadata"])
         records = {str(name): arrays[f"{prefix}record__{name}"] for name in meta.get("records", [])}
     except (KeyError, TypeError, ValueError) as err:
