@@ -145,19 +145,21 @@ def condensed_stiffness_dense(model, omega: float, H: int):
     return np.array(D), np.array(dD)
 
 
-def mmshbm_full_residual(problem, A, B, omega):
+def mmshbm_full_residual(problem, A, B, omega, n_samples=None):
     """The MMS-HBM residual with the full (cosine and sine) Fourier ansatz, by DFT matrices
-    and a Python loop over the samples: nothing of the production AFT path is used but the
+    and a Python loop over the samples: nothing of the production path is used but the
     condensed dynamic stiffness D_k(Ω).
 
     ``A``, ``B``: cosine and sine coefficients (H+1, n_c) of the massless DOFs (B[0] is
     ignored), Ω in rad/s. Returns the residual (2H+1, n_c) in NLvib order (c0, c1, s1, ...)
-    and unscaled units (N): F_k at the DOFs other than the contact DOF, the projection of
-    λ − max(0, λ − r g_N) at the contact DOF.
+    and unscaled units (N): F_k at the massless DOFs without a stop, the projection of
+    f + r((p − hi)₊ − (lo − p)₊), p = q − f/r, at each contact DOF, on ``n_samples``
+    samples (default the problem's N; many samples approach the exact projection).
     """
-    H, N, r, w, ci = problem.H, problem.N, problem.r, problem.w, problem.ci
+    H, N = problem.H, (problem.N if n_samples is None else n_samples)
     D = problem.cond.dynamic_stiffness(omega, H, derivative=False)
-    Q = np.zeros((2 * H + 1, len(w)))  # NLvib-ordered coefficients of q_c
+    n_c = D.shape[1]
+    Q = np.zeros((2 * H + 1, n_c))  # NLvib-ordered coefficients of q_c
     Q[0], Q[1::2], Q[2::2] = A[0], A[1:], B[1:]
     F = np.zeros_like(Q)
     F[0] = D[0] @ Q[0]
@@ -165,11 +167,14 @@ def mmshbm_full_residual(problem, A, B, omega):
         F[2 * k - 1] = D[k] @ Q[2 * k - 1]
         F[2 * k] = D[k] @ Q[2 * k]
     E = synthesis_matrix(H, N)
-    lam = E @ (F @ w)
-    g = problem.gap + E @ (Q @ w)
-    R_t, _ = proximal_contact_loop(lam, g, r)
     R = F.copy()
-    R[:, ci] = projection(R_t, H)
+    for i, lo, hi, r in zip(problem.cdof, problem.lo, problem.hi, problem.r_each, strict=True):
+        f, q = E @ F[:, i], E @ Q[:, i]
+        R_t = np.empty(N)
+        for j in range(N):
+            p = q[j] - f[j] / r
+            R_t[j] = f[j] + r * (max(0.0, p - hi) - max(0.0, lo - p))
+        R[:, i] = projection(R_t, H)
     return R
 
 

@@ -279,7 +279,7 @@ class PoleWindow:
         from mmshbm.core.condense import SingularDynamicStiffness
 
         self.osc = OneDofOscillator(1.0, 1.0, 4.0, 1.0)
-        self.problem = MMSHBMProblem(self.osc.model(), 3)
+        self.problem = MMSHBMProblem(self.osc.model(), 3, projection="sampled")
         self.pole = self.osc.omega_closed / 2
         self.hits = 0
         real = self.problem.cond.dynamic_stiffness
@@ -291,7 +291,7 @@ class PoleWindow:
             return real(omega, harmonics, derivative)
 
         self.problem.cond.dynamic_stiffness = dynamic_stiffness
-        self.reference = MMSHBMProblem(self.osc.model(), 3)
+        self.reference = MMSHBMProblem(self.osc.model(), 3, projection="sampled")
 
     def run(self):
         from mmshbm.core.continuation import ContinuationOptions, continue_branch

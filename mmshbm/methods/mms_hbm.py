@@ -1,16 +1,24 @@
 """The MMS-HBM residual and its semi-analytic Jacobian (Schreyer, Peter & Leine).
 
-Unknowns: the Fourier coefficients of the massless (contact) DOFs q_c and the
-fundamental frequency Ω. The linear structure is condensed per harmonic
-(:mod:`mmshbm.core.condense`): F_k = D_k(Ω) a_k is the force the structure needs at the
-massless DOFs. Equilibrium of the massless node and the Signorini law with the proximal
-point function give, with λ = w_c·f_c and g_N = gap + w_c·q_c,
+Unknowns: the Fourier coefficients of the massless DOFs q_c and the fundamental frequency
+Ω. The linear structure is condensed per harmonic (:mod:`mmshbm.core.condense`):
+F_k = D_k(Ω) a_k is the force the structure needs at the massless DOFs. The massless
+DOFs are static, so at each of them that force comes from the stops alone:
 
-    contact DOF:   proj_k[ λ(τ) − max(0, λ(τ) − r g_N(τ)) ] = 0,  k = 0..H
-    other c DOFs:  F_k,i = 0,
+    massless DOF without a stop:   F_k,i = 0,
+    contact DOF (interval [lo, hi]):  proj_k[ f + r ((p − hi)₊ − (lo − p)₊) ] = 0,
+                                      p = q − f/r,
 
-evaluated by alternating frequency-time (inverse FFT, Numba kernel on the samples,
-forward FFT). Newton iterates only in these numbers, however many DOFs the FE model has.
+the proximal form of the Signorini law on the interval of positions its stop(s) allow
+(:mod:`mmshbm.core.contact_kernels`; one stop: [−inf, gap] or [−gap, inf], a clearance:
+[−gap₋, gap₊]), whose zeros are exactly the complementarity pairs for any r > 0. Newton
+iterates only in these numbers, however many DOFs the FE model has.
+
+Projection. ``projection="exact"`` (default) locates the switching instants (zeros of the
+degree-H trigonometric polynomial p − θ) and integrates each smooth piece in closed form:
+the residual is C¹ in the unknowns and the sample count N only brackets zeros.
+``projection="sampled"`` is the alternating frequency-time projection on N samples of
+mmshbm 0.1 (a sample that switches is a kink: the branch has corners).
 
 Autonomy and conservation. A time shift of a periodic solution is a solution, and for
 a conservative system the anchored square system is degenerate along the whole family
@@ -24,32 +32,30 @@ projections vanish identically: the energy-balance identity, which lives in the 
 projections, drops out of the equations. What remains is (H+1)·n_c equations in
 (H+1)·n_c + 1 unknowns with full row rank along the family: a regular one-parameter
 branch that pseudo-arclength continuation follows with a well-conditioned bordered
-Jacobian, and Newton converges quadratically away from grazing (tests show it). The
-price: non-symmetric orbits (not expected on the backbones of undamped single-contact
-structures) are outside the ansatz.
+Jacobian. The price: non-symmetric orbits are outside the ansatz.
 
 All vectors handed to the continuation are scaled: coefficients by the first mode's
-contact-DOF shape times the gap, Ω by the first linear frequency, residual rows by
-the force those scales produce.
+massless-DOF shape times the gap, Ω by the linear frequency, residual rows by the force
+those scales produce.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
 from .. import _validate as check
 from ..core.condense import Condensation
-from ..core.harmonics import check_harmonics, transform
-from ..core.kernels import (
-    _cosine_product_matrix,
-    _mmshbm_jacobian,
-    _mmshbm_monitor,
-    _mmshbm_residual,
-    _proximal_contact,
-)
+from ..core.contact_kernels import _mmshbm_eval, _mmshbm_monitor_multi
+from ..core.harmonics import check_harmonics
+from ..core.modal_energy import kinetic_energy_shares
+from ..model.contact import admissible_intervals
 from ..model.model import Model
 
 __all__ = ["MMSHBMProblem"]
+
+_PROJECTIONS = ("exact", "sampled")
 
 
 class MMSHBMProblem:
@@ -58,19 +64,23 @@ class MMSHBMProblem:
     Parameters
     ----------
     model : Model
-        The structure (at least one massless DOF, the contact DOF among them).
+        The structure; every contact DOF must be massless.
     harmonics : int
         Highest harmonic H >= 1.
     n_samples : int, optional
-        Time samples per period N >= 2H+1 (default :func:`default_n_samples`).
-    r : float, optional
-        Proximal parameter (N/m). Default: the condensed static contact stiffness
-        (w_cᵀ D_0⁻¹ w_c)⁻¹, so that both branches of the max carry comparable numbers.
-        The solution does not depend on it; Newton's conditioning does.
+        Time samples per period N >= 2H+1 (default :func:`default_n_samples`): the
+        sampled projection's rule, the exact projection's bracketing grid.
+    r : float or sequence of float, optional
+        Proximal parameter (N/m), one for all contact DOFs or one each. Default: each
+        contact DOF's condensed static stiffness (e_iᵀ D_0⁻¹ e_i)⁻¹, so that both
+        branches of the proximal map carry comparable numbers. The solution of the
+        complementarity problem does not depend on it; Newton's conditioning does.
     mode : int
         Which linear mode (1-based) the branch starts from.
     backend : {"auto", "banded", "splu"}
         Linear solver of the condensation.
+    projection : {"exact", "sampled"}
+        Harmonic projection of the contact law (see the module docstring).
 
     Notes
     -----
@@ -81,7 +91,7 @@ class MMSHBMProblem:
     method = "mmshbm"
 
     def __init__(self, model: Model, harmonics: int = 5, n_samples: int | None = None,
-                 r: float | None = None, mode: int = 1, backend: str = "auto"):
+                 r=None, mode: int = 1, backend: str = "auto", projection: str = "exact"):
         if not isinstance(model, Model):
             raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
         model.require_massless_contacts("MMS-HBM")
@@ -91,53 +101,77 @@ class MMSHBMProblem:
         if self.mode > len(model.l):
             raise ValueError(f"mode must be <= the number of DOFs with mass ({len(model.l)}), "
                              f"got {self.mode}")
+        if projection not in _PROJECTIONS:
+            raise ValueError(f"projection must be one of {_PROJECTIONS}, got {projection!r}")
+        self.projection = projection
         self.cond = Condensation(model, backend)
         self.n_c = len(model.c)
-        self.ci = model.contact_index
-        self.w = np.ascontiguousarray(model.w_c)
+        c_list = model.c.tolist()
+        dofs, lo, hi = admissible_intervals(model.contacts)
+        self.contact_dofs = dofs
+        self.cdof = np.array([c_list.index(d) for d in dofs], dtype=np.int64)
+        self.lo, self.hi = lo, hi
+        D0inv = np.linalg.inv(self.cond.D0)
+        self.contact_stiffness_each = 1.0 / np.diag(D0inv)[self.cdof]
+        if r is None:
+            self.r_each = self.contact_stiffness_each.copy()
+        else:
+            r_arr = np.atleast_1d(np.asarray(r, dtype=float))
+            if r_arr.ndim != 1 or len(r_arr) not in (1, len(dofs)):
+                raise ValueError(f"r must be a number or one per contact DOF ({len(dofs)}), got {r!r}")
+            for v in r_arr:
+                check.positive("r", float(v))
+            self.r_each = np.broadcast_to(r_arr, (len(dofs),)).astype(float).copy()
+        # the 0.1 names of a single contact
+        self.contact_stiffness = float(self.contact_stiffness_each[0])
+        self.r = float(self.r_each[0])
         self.gap = model.gap
-        compliance = float(self.w @ np.linalg.solve(self.cond.D0, self.w))
-        self.contact_stiffness = 1.0 / compliance
-        self.r = self.contact_stiffness if r is None else check.positive("r", r)
 
         freqs, modes = model.linear_modes(self.mode)
         self.linear_frequency = float(freqs[-1])
         self.omega_ref = 2 * np.pi * self.linear_frequency
-        phi_c = modes[model.c, -1]
-        contact = phi_c[self.ci]
-        if abs(contact) < 1e-12 * np.max(np.abs(phi_c)):
-            raise ValueError(f"linear mode {self.mode} does not move the contact DOF: no impact")
-        # unit contact motion toward the stop at τ = 0 (linear_modes orients the modes that way)
-        self.mode_shape_c = phi_c / abs(contact)
+        phi = modes[:, -1]
+        self.amplitude_dof = model.amplitude_dof
+        ref = phi[self.amplitude_dof]
+        if abs(ref) < 1e-12 * np.max(np.abs(phi)):
+            raise ValueError(f"linear mode {self.mode} does not move the amplitude DOF {self.amplitude_dof}")
+        # unit motion of the amplitude DOF at τ = 0 (linear_modes orients the modes so that
+        # the first contact DOF moves toward its stop)
+        self.mode_shape_c = phi[model.c] / abs(ref)
+        contact_motion = np.abs(self.mode_shape_c[self.cdof]).max()
+        if contact_motion < 1e-12 * np.abs(phi).max():
+            raise ValueError(f"linear mode {self.mode} does not move any contact DOF: no impact")
+        # amplitude: excursion away from the stop of a single one-sided contact, else |q|
+        single = len(model.contacts) == 1 and model.contacts[0].dof == self.amplitude_dof
+        self._amp_sign = float(-model.contacts[0].side) if single else 0.0
+        self._amp_in_c = self.amplitude_dof in c_list
+        self._amp_index = c_list.index(self.amplitude_dof) if self._amp_in_c else -1
+
         length = self.gap if self.gap > 0 else 1.0
         shape = np.abs(self.mode_shape_c)
         self.xscale = length * np.maximum(shape, 1e-3 * shape.max())
         self.colscale = np.concatenate([np.tile(self.xscale, self.H + 1), [self.omega_ref]])
         fscale = np.abs(self.cond.D0) @ self.xscale
+        fscale[self.cdof] = self.contact_stiffness_each * length
         self.rowscale = np.tile(fscale, self.H + 1)
-        self.rowscale[self.ci :: self.n_c] = self.contact_stiffness * length
         self.n_unknowns = (self.H + 1) * self.n_c + 1
 
-        self._J = np.empty((self.n_unknowns - 1, self.n_unknowns))
-        self._P = np.empty((self.H + 1, self.H + 1))
-        self._R_t = np.empty(self.N)
-        self._s_t = np.empty(self.N)
-        # Few harmonics: synthesis and projection by a cosine table inside one kernel
-        # (one call per evaluation); many: planned FFTs (see _TABLE_LIMIT).
-        self._use_table = (2 * self.H + 1) * self.N <= _TABLE_LIMIT
-        if self._use_table:
-            tau = 2 * np.pi * np.arange(self.N) / self.N
-            self._cos_table = np.cos(np.outer(np.arange(2 * self.H + 1), tau))
-            self._dF = np.empty((self.H + 1, self.n_c))
-            self._lam_t = np.empty(self.N)
-            self._g_t = np.empty(self.N)
+        H, N = self.H, self.N
+        self._tau = 2 * np.pi * np.arange(N) / N
+        self._cos_table = np.cos(np.outer(np.arange(2 * H + 1), self._tau))
+        self._sin_table = np.sin(np.outer(np.arange(H + 1), self._tau))
+        self._work = (np.empty((H + 1, self.n_c)), np.empty((H + 1, self.n_c)), np.empty(H + 1),
+                      np.zeros(H + 1), np.empty(H + 1), np.empty(N), np.empty(N), np.empty(2 * N + 2),
+                      np.empty(2 * H + 1), np.empty(2 * H + 1), np.empty(2 * H + 1), np.empty((H + 1, H + 1)))
+        self._J_dummy = np.empty((1, 1))
         # the condensed stiffness of the last Ω (the monitor of a converged point reuses
         # the one of Newton's last evaluation)
         self._cached = (None, None, None)
         # fine grid for amplitude and peak force
-        n_fine = max(512, 8 * self.N)
+        n_fine = max(512, 8 * N)
         self._tau_fine = 2 * np.pi * np.arange(n_fine) / n_fine
-        self._cos_fine = np.cos(np.outer(np.arange(self.H + 1), self._tau_fine))
+        self._cos_fine = np.cos(np.outer(np.arange(H + 1), self._tau_fine))
+        self._modal = None  # open-contact modes for the energy shares (built on first use)
 
     # ------------------------------------------------------------------ unknowns
     def unpack(self, u: np.ndarray) -> tuple[np.ndarray, float]:
@@ -152,7 +186,7 @@ class MMSHBMProblem:
         return np.concatenate([np.asarray(a, dtype=float).ravel(), [omega]]) / self.colscale
 
     def linear_point(self, amplitude: float) -> np.ndarray:
-        """Scaled unknowns of the linear mode whose contact DOF swings ``amplitude`` (m)."""
+        """Scaled unknowns of the linear mode whose amplitude DOF swings ``amplitude``."""
         a = np.zeros((self.H + 1, self.n_c))
         a[1] = amplitude * self.mode_shape_c
         return self.pack(a, self.omega_ref)
@@ -181,48 +215,43 @@ class MMSHBMProblem:
         """Scaled residual ((H+1) n_c,) and, if asked, its Jacobian ((H+1) n_c, (H+1) n_c + 1)."""
         a, omega = self.unpack(u)
         D, dD = self._condensed(omega, jacobian)
-        if self._use_table:
-            R = np.empty(self.n_unknowns - 1)
-            J = np.empty((self.n_unknowns - 1, self.n_unknowns)) if jacobian else self._J
-            _mmshbm_residual(D, D if dD is None else dD, np.ascontiguousarray(a), self.w, self.gap, self.r,
-                             self.ci, self._cos_table, self.rowscale, self.colscale, jacobian, R, J,
-                             self._P, self._dF, self._lam_t, self._g_t, self._R_t, self._s_t)
-            return (R, J) if jacobian else R
-        tr2, tr1 = transform(self.H, self.N, 2), transform(self.H, self.N, 1)
-        F = np.einsum("kij,kj->ki", D, a)
-        lam_k = F @ self.w
-        g_k = a @ self.w
-        g_k[0] += self.gap
-        signals = tr2.cos_to_time(np.vstack([lam_k, g_k]))
-        _proximal_contact(signals[0], signals[1], self.r, self._R_t, self._s_t)
-        R = F.copy()
-        R[:, self.ci] = tr1.time_to_cos(self._R_t[None, :])[0]
-        R = R.ravel() / self.rowscale
-        if not jacobian:
-            return R
-        dF = np.einsum("kij,kj->ki", dD, a)
-        S = tr1.cosine_spectrum(self._s_t[None, :])[0]
-        _cosine_product_matrix(S, self.H, self._P)
-        _mmshbm_jacobian(self._P, D, dF, self.w, self.r, self.ci, self._J)
-        J = self._J * self.colscale[None, :] / self.rowscale[:, None]
-        return R, J
+        R = np.empty(self.n_unknowns - 1)
+        J = np.empty((self.n_unknowns - 1, self.n_unknowns)) if jacobian else self._J_dummy
+        _mmshbm_eval(D, D if dD is None else dD, np.ascontiguousarray(a), self.cdof, self.lo, self.hi,
+                     self.r_each, self.projection == "exact", self._cos_table, self._sin_table, self._tau,
+                     self.rowscale, self.colscale, jacobian, R, J, *self._work)
+        return (R, J) if jacobian else R
 
     # ------------------------------------------------------------------ results
-    def contact_signals(self, u: np.ndarray, tau: np.ndarray | None = None):
-        """Contact DOF displacement q(τ) (m) and contact force λ(τ) (N) on a grid.
+    def _force_series(self, a: np.ndarray, omega: float) -> np.ndarray:
+        """Cosine coefficients (H+1, n_k) of the stop force λ at each contact DOF: −f where
+        the DOF has an upper stop, +f where it has only a lower one (in a clearance λ is
+        positive at the upper stop and negative at the lower one)."""
+        D, _ = self._condensed(omega, False)
+        F = np.einsum("kij,kj->ki", D, a)[:, self.cdof]
+        return np.where(np.isfinite(self.hi)[None, :], -F, F)
 
-        Returns (tau, q_contact, lam); ``tau`` defaults to a fine grid over one period.
+    def contact_signals(self, u: np.ndarray, tau: np.ndarray | None = None):
+        """Contact DOF displacement q(τ) (m) and stop force λ(τ) (N) on a grid.
+
+        Returns (tau, q, lam): with one contact DOF ``q`` and ``lam`` have the shape of
+        ``tau``; with several, shape (n_contact_dofs, len(tau)) in the order of
+        ``contact_dofs``. ``tau`` defaults to a fine grid over one period. λ is the
+        truncated series of the force the structure needs (−f at an upper stop, +f at a
+        lower one).
         """
         a, omega = self.unpack(u)
-        D, _ = self._condensed(omega, False)
-        lam_k = np.einsum("kij,kj->ki", D, a) @ self.w
+        lam_k = self._force_series(a, omega)
         if tau is None:
             tau, C = self._tau_fine, self._cos_fine
         else:
             tau = np.asarray(tau, dtype=float)
             C = np.cos(np.outer(np.arange(self.H + 1), tau))
-        q = a[:, self.ci] @ C
-        return tau, q, lam_k @ C
+        q = a[:, self.cdof].T @ C
+        lam = lam_k.T @ C
+        if len(self.cdof) == 1:
+            return tau, q[0], lam[0]
+        return tau, q, lam
 
     def coefficients(self, u: np.ndarray) -> np.ndarray:
         """NLvib-ordered coefficients of all DOFs, shape (n_dof, 2H+1) (sines are zero)."""
@@ -252,7 +281,8 @@ class MMSHBMProblem:
         return tau / omega, q
 
     def contact_force(self, u: np.ndarray, n_samples: int = 256):
-        """(t (n_samples,) in s, λ (n_samples,) in N) over one period."""
+        """(t (n_samples,) in s, λ in N) over one period (shape (n_samples,) with one
+        contact DOF, (n_contact_dofs, n_samples) with several)."""
         n_samples = check.integer("n_samples", n_samples, minimum=1)
         a, omega = self.unpack(u)
         tau = 2 * np.pi * np.arange(n_samples) / n_samples
@@ -260,35 +290,136 @@ class MMSHBMProblem:
         return tau / omega, lam
 
     def harmonic_content(self, u: np.ndarray, dof: int | None = None) -> np.ndarray:
-        """|Q_k| for k = 0..H of ``dof`` (default the contact DOF); shape (H+1,)."""
-        dof = self.model.contact_dof if dof is None else check.integer("dof", dof)
+        """|Q_k| for k = 0..H of ``dof`` (default the amplitude DOF); shape (H+1,)."""
+        dof = self.amplitude_dof if dof is None else check.integer("dof", dof)
         if not 0 <= dof < self.model.n_dof:
             raise ValueError(f"dof must be in [0, {self.model.n_dof - 1}], got {dof}")
         Q = self.coefficients(u)[dof]
         return np.concatenate([[abs(Q[0])], np.hypot(Q[1::2], Q[2::2])])
 
+    def _amplitude_row(self, a: np.ndarray, omega: float) -> np.ndarray:
+        """Cosine coefficients (H+1,) of the amplitude DOF's motion."""
+        if self._amp_in_c:
+            return np.ascontiguousarray(a[:, self._amp_index])
+        Qc = np.zeros((self.n_c, 2 * self.H + 1))
+        Qc[:, 0] = a[0]
+        Qc[:, 1::2] = a[1:].T
+        Ql = self.cond.recover(omega, Qc)
+        row = Ql[int(np.searchsorted(self.model.l, self.amplitude_dof))]
+        return np.concatenate([[row[0]], row[1::2]])
+
+    def amplitude_and_gradient(self, u: np.ndarray) -> tuple[float, np.ndarray]:
+        """The amplitude (m) and its gradient with respect to the scaled unknowns.
+
+        The amplitude is the largest value of a smooth periodic function over τ, so its
+        derivative is that of the function at the maximiser (envelope theorem), located
+        on the fine grid and refined by Newton on q′(τ) = 0.
+        """
+        a, omega = self.unpack(u)
+        row = self._amplitude_row(a, omega)
+        sign = self._amp_sign
+        q = row @ self._cos_fine
+        y = sign * q if sign != 0.0 else np.abs(q)
+        tau = self._tau_fine[int(np.argmax(y))]
+        k = np.arange(self.H + 1)
+        for _ in range(8):  # Newton on q'(τ) = 0 at the peak
+            d1 = -(k * row) @ np.sin(k * tau)
+            d2 = -(k * k * row) @ np.cos(k * tau)
+            if d2 == 0.0:
+                break
+            step = d1 / d2
+            tau -= step
+            if abs(step) < 1e-14:
+                break
+        value = row @ np.cos(k * tau)
+        s = sign if sign != 0.0 else math.copysign(1.0, value)
+        grad = np.zeros(self.n_unknowns)
+        if self._amp_in_c:
+            grad[self._amp_index:-1:self.n_c] = s * np.cos(k * tau)
+        else:  # finite differences through the recovery (amplitude DOF with mass)
+            h = 1e-7
+            for i in range(self.n_unknowns):
+                e = np.zeros(self.n_unknowns)
+                e[i] = h
+                ap, om_p = self.unpack(u + e)
+                am, om_m = self.unpack(u - e)
+                diff = self._amplitude_row(ap, om_p) - self._amplitude_row(am, om_m)
+                grad[i] = s * (diff @ np.cos(k * tau)) / (2 * h)
+            return float(s * value), grad
+        grad[-1] = 0.0
+        return float(s * value), grad * self.colscale
+
+    # ------------------------------------------------------------------ modal energy
+    def _modal_basis(self):
+        """Open-contact modes tracked for the energy shares: those below (H + 1) times the
+        first clamped-contact frequency (an upper bound of Ω on the backbone), at least the
+        starting mode and the next, at most 30."""
+        if self._modal is None:
+            model = self.model
+            n_l = len(model.l)
+            f_track = (self.H + 1) * self._upper_frequency()
+            n = min(n_l, 30, max(self.mode + 1, 2))
+            freqs, _ = model.linear_modes(min(n_l, 30))
+            n = max(n, int(np.searchsorted(freqs, f_track)))
+            n = min(n, n_l, 30)
+            freqs, modes = model.linear_modes(n)
+            Phi = modes[model.l]
+            M_ll = model.blocks["M_ll"]
+            self._modal = (freqs, Phi, np.ascontiguousarray((M_ll @ Phi).T), M_ll)
+        return self._modal
+
+    def _upper_frequency(self) -> float:
+        """First eigenfrequency (Hz) of the structure with its massless DOFs clamped."""
+        import scipy.linalg as la
+
+        b = self.model.blocks
+        if len(self.model.l) <= 600:
+            w2 = la.eigh(b["K_ll"].toarray(), b["M_ll"].toarray(), eigvals_only=True, subset_by_index=(0, 0))
+            return float(np.sqrt(max(w2[0], 0.0)) / (2 * np.pi))
+        import scipy.sparse.linalg as spla
+
+        w2 = spla.eigsh(b["K_ll"], k=1, M=b["M_ll"], sigma=0.0, which="LM", v0=np.ones(len(self.model.l)))[0]
+        return float(np.sqrt(max(w2[0], 0.0)) / (2 * np.pi))
+
+    @property
+    def tracked_frequencies(self) -> np.ndarray:
+        """Open-contact linear frequencies (Hz) of the modes in ``records["modal_shares"]``."""
+        return self._modal_basis()[0]
+
+    def modal_shares(self, u: np.ndarray) -> np.ndarray:
+        """Period-mean kinetic energy share of each tracked open-contact mode j (rows) in
+        each harmonic k (columns), shape (n_tracked, H+1)
+        (:func:`~mmshbm.core.modal_energy.kinetic_energy_shares`)."""
+        a, omega = self.unpack(u)
+        freqs, Phi, MPhiT, M_ll = self._modal_basis()
+        Qc = np.zeros((self.n_c, 2 * self.H + 1))
+        Qc[:, 0] = a[0]
+        Qc[:, 1::2] = a[1:].T
+        Ql = self.cond.recover(omega, Qc)
+        shares, _ = kinetic_energy_shares(Phi, MPhiT, Ql, omega, M_ll)
+        return shares
+
     def monitor(self, u: np.ndarray) -> dict:
-        """The per-point quantities of a backbone: frequency (Hz), amplitude (m),
-        energy (J), contact_force_max (N)."""
+        """The per-point quantities of a backbone: frequency (Hz), amplitude (m), energy
+        (J), contact_force_max (N), mode_share (kinetic energy share of the starting mode)
+        and modal_shares (:meth:`modal_shares`)."""
         a, omega = self.unpack(u)
         D, dD = self._condensed(omega, True)
         out = np.empty(3)
         n_fine = self._cos_fine.shape[1]
-        _mmshbm_monitor(D, dD, np.ascontiguousarray(a), self.w, self.ci, omega, float(self.model.stop_side),
-                        self._cos_fine, np.empty(n_fine), np.empty(n_fine), out)
+        a = np.ascontiguousarray(a)
+        _mmshbm_monitor_multi(D, dD, a, self.cdof, self.lo, self.hi, self.r_each, omega,
+                              self._amplitude_row(a, omega), self._amp_sign, self._cos_fine, np.empty(n_fine),
+                              np.empty(n_fine), out)
+        shares = self.modal_shares(u)
         return {
             "frequency": omega / (2 * np.pi),
             "amplitude": float(out[0]),
             "energy": float(out[1]),
             "contact_force_max": float(out[2]),
+            "mode_share": float(shares[self.mode - 1].sum()),
+            "modal_shares": shares,
         }
-
-
-#: largest (2H+1)·N for which the residual synthesises and projects its samples with a
-#: cosine table in the kernel instead of FFTs (measured on the 21-element beam: 7.7 µs
-#: against 51 µs at H = 5, N = 128; 30 against 88 µs at H = 15, N = 256; 200 against
-#: 94 µs at H = 40, N = 1024)
-_TABLE_LIMIT = 20000
 
 
 def _condensed_energy(D: np.ndarray, dD: np.ndarray, a: np.ndarray, omega: float) -> float:

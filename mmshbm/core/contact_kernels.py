@@ -1,0 +1,499 @@
+"""Harmonic projections of the proximal contact law, sampled or exact (C¹), and the fused
+MMS-HBM residual built on them.
+
+Contact law per DOF. A contact DOF with admissible positions [lo, hi]
+(:func:`~mmshbm.model.contact.admissible_intervals`; ±inf without a stop on a side), the
+force f(τ) the structure needs there and its displacement q(τ) satisfy the Signorini
+law exactly when, for any r > 0 and p = q − f/r,
+
+    R(τ) = f + r [(p − hi)₊ − (lo − p)₊] = 0.
+
+(At the upper stop the structure needs f = −λ ≤ 0 and q = hi; in between f = 0.) With
+the indicator s(τ) of the active set {p > hi} ∪ {p < lo}, R = f + r s (p − θ), θ = hi or
+lo, and the harmonic projection of s·p is a matrix times the coefficients of p:
+
+    proj_m[s · cos kτ] = G_mk = ε_m/2 (C_|m−k| + C_m+k),   C_n = (1/2π) ∫_{s=1} cos nτ dτ,
+
+ε_0 = 1, ε_m = 2 (and the analogous sine terms for a general trigonometric polynomial).
+Only the spectrum C_n (n = 0..2H) of the active set depends on how the projection is done:
+
+* **sampled** (AFT): C_n = (1/N) Σ_j s(τ_j) cos nτ_j on N samples. A sample that changes
+  its active set is a kink of the residual: the branch has corners, N is a discretisation
+  parameter.
+* **exact** (C¹): p − θ is a trigonometric polynomial of degree H. Its zeros on the period
+  are bracketed on the N samples (sign changes of p − θ, and sign changes of p′ between
+  samples of equal sign to catch a pair of close zeros), refined by safeguarded Newton to
+  round-off, and C_n is integrated in closed form over the arcs where s = 1. Because the
+  integrand s·(p − θ) vanishes at the moving arc ends, the derivative of the projection is
+  G times the derivative of p with no boundary terms: the residual is continuously
+  differentiable in the unknowns and the same G gives its exact Jacobian. N only brackets
+  zeros; it is no longer a discretisation error.
+
+The kernels take plain arrays and know nothing of models; all kernels that call each
+other are in this file (numba's cache does not see edits to a callee in another file).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .kernels import JIT_OPTIONS
+
+__all__ = ["project_contact", "contact_spectrum"]
+
+_TWO_PI = 2.0 * math.pi
+
+
+# ---------------------------------------------------------------------- trigonometric polynomials
+@njit(**JIT_OPTIONS)
+def _trig_eval(c, s, tau):
+    """g(τ), g′(τ), g″(τ) of g = c_0 + Σ_k (c_k cos kτ + s_k sin kτ); c, s shape (H+1,)."""
+    H = c.shape[0] - 1
+    c1 = math.cos(tau)
+    s1 = math.sin(tau)
+    ck = 1.0
+    sk = 0.0
+    g = c[0]
+    g1 = 0.0
+    g2 = 0.0
+    for k in range(1, H + 1):
+        ck, sk = ck * c1 - sk * s1, sk * c1 + ck * s1
+        a = c[k] * ck + s[k] * sk
+        b = -c[k] * sk + s[k] * ck
+        g += a
+        g1 += k * b
+        g2 -= k * k * a
+    return g, g1, g2
+
+
+@njit(**JIT_OPTIONS)
+def _refine(c, s, a, b, fa, order):
+    """Zero of g (order 0) or of g′ (order 1) in the bracket [a, b], where the function has
+    the sign of ``fa`` at a and the opposite sign at b: safeguarded Newton (bisection
+    whenever a step leaves the bracket), to round-off in τ."""
+    x = 0.5 * (a + b)
+    for _ in range(100):
+        g, g1, g2 = _trig_eval(c, s, x)
+        f = g if order == 0 else g1
+        df = g1 if order == 0 else g2
+        if f == 0.0:
+            return x
+        if (f > 0.0) == (fa > 0.0):
+            a = x
+        else:
+            b = x
+        step_ok = df != 0.0
+        xn = x - f / df if step_ok else 0.5 * (a + b)
+        if not (a < xn < b):
+            xn = 0.5 * (a + b)
+        if abs(xn - x) <= 2e-16 * (1.0 + abs(x)) or b - a <= 4e-16 * (1.0 + abs(a)):
+            return xn
+        x = xn
+    return x
+
+
+@njit(**JIT_OPTIONS)
+def _zeros(c, s, g_t, dg_t, tau_t, roots):
+    """Zeros of g on [0, 2π), bracketed on the samples g_t = g(τ_j), dg_t = g′(τ_j) at
+    τ_j = tau_t[j] (equispaced, τ_0 = 0); returns their count (stored sorted in ``roots``)."""
+    N = g_t.shape[0]
+    n = 0
+    for j in range(N):
+        jn = j + 1 if j + 1 < N else 0
+        a = tau_t[j]
+        b = tau_t[jn] if jn > 0 else _TWO_PI
+        ga = g_t[j]
+        gb = g_t[jn]
+        if ga == 0.0:
+            if n < roots.shape[0]:
+                roots[n] = a
+                n += 1
+            continue
+        if (ga > 0.0) != (gb > 0.0):
+            if gb == 0.0:
+                continue  # the next interval records it
+            if n < roots.shape[0]:
+                roots[n] = _refine(c, s, a, b, ga, 0)
+                n += 1
+        elif dg_t[j] * dg_t[jn] < 0.0:
+            # an extremum inside: a pair of close zeros hides if it lies on the other side
+            t_ext = _refine(c, s, a, b, dg_t[j], 1)
+            g_ext, _, _ = _trig_eval(c, s, t_ext)
+            if g_ext != 0.0 and (g_ext > 0.0) != (ga > 0.0) and n + 1 < roots.shape[0]:
+                roots[n] = _refine(c, s, a, t_ext, ga, 0)
+                roots[n + 1] = _refine(c, s, t_ext, b, g_ext, 0)
+                n += 2
+    return n
+
+
+@njit(**JIT_OPTIONS)
+def _arc_spectrum(c, s, g_t, dg_t, tau_t, roots, C, S):
+    """Exact spectrum of the indicator of {g > 0}: C_n = (1/2π)∫ cos nτ, S_n = (1/2π)∫ sin nτ
+    over that set, n = 0..len(C)−1 (in place)."""
+    n_spec = C.shape[0]
+    for p in range(n_spec):
+        C[p] = 0.0
+        S[p] = 0.0
+    nr = _zeros(c, s, g_t, dg_t, tau_t, roots)
+    if nr == 0:
+        if g_t[0] > 0.0:
+            C[0] = 1.0
+        return
+    for i in range(nr):
+        a = roots[i]
+        b = roots[i + 1] if i + 1 < nr else roots[0] + _TWO_PI
+        if b <= a:
+            continue
+        g_mid, _, _ = _trig_eval(c, s, 0.5 * (a + b))
+        if g_mid <= 0.0:
+            continue
+        C[0] += b - a
+        ca, sa = math.cos(a), math.sin(a)
+        cb, sb = math.cos(b), math.sin(b)
+        cna, sna, cnb, snb = 1.0, 0.0, 1.0, 0.0
+        for p in range(1, n_spec):
+            cna, sna = cna * ca - sna * sa, sna * ca + cna * sa
+            cnb, snb = cnb * cb - snb * sb, snb * cb + cnb * sb
+            C[p] += (snb - sna) / p
+            S[p] += (cna - cnb) / p
+    for p in range(n_spec):
+        C[p] /= _TWO_PI
+        S[p] /= _TWO_PI
+
+
+@njit(**JIT_OPTIONS)
+def _sampled_spectrum(g_t, cos_table, sin_table, C, S):
+    """Sampled spectrum of the indicator of {g > 0}: C_n = (1/N) Σ_j s_j cos nτ_j (and S_n
+    with sines; sin_table may have fewer rows, the rest of S is zero)."""
+    N = g_t.shape[0]
+    for p in range(C.shape[0]):
+        acc = 0.0
+        acc_s = 0.0
+        for j in range(N):
+            if g_t[j] > 0.0:
+                acc += cos_table[p, j]
+                if p < sin_table.shape[0]:
+                    acc_s += sin_table[p, j]
+        C[p] = acc / N
+        S[p] = acc_s / N
+
+
+@njit(**JIT_OPTIONS)
+def _spectrum(c, s, cos_table, sin_table, tau_t, exact, g_t, dg_t, roots, C, S):
+    """Spectrum of {g > 0} for g with coefficients (c, s) of degree H = len(c) − 1: samples
+    g_t (and g′ for the exact route) from the tables, then the sampled or exact spectrum."""
+    N = g_t.shape[0]
+    H = c.shape[0] - 1
+    for j in range(N):
+        g = c[0]
+        dg = 0.0
+        for k in range(1, H + 1):
+            g += c[k] * cos_table[k, j] + s[k] * sin_table[k, j]
+            dg += k * (s[k] * cos_table[k, j] - c[k] * sin_table[k, j])
+        g_t[j] = g
+        dg_t[j] = dg
+    if exact:
+        _arc_spectrum(c, s, g_t, dg_t, tau_t, roots, C, S)
+    else:
+        _sampled_spectrum(g_t, cos_table, sin_table, C, S)
+
+
+# ---------------------------------------------------------------------- public projections
+def _tables(H: int, N: int):
+    tau = _TWO_PI * np.arange(N) / N
+    n = np.arange(2 * H + 1)[:, None]
+    return tau, np.cos(n * tau), np.sin(n * tau)
+
+
+def contact_spectrum(c: np.ndarray, s: np.ndarray | None = None, exact: bool = True,
+                     n_samples: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Spectrum of the set where the trigonometric polynomial g is positive.
+
+    Parameters
+    ----------
+    c, s : ndarray, shape (H+1,)
+        g(τ) = c_0 + Σ_{k=1..H} (c_k cos kτ + s_k sin kτ) (``s[0]`` unused; None: zero).
+    exact : bool
+        Arcs between exactly located zeros (True) or sample means (False).
+    n_samples : int, optional
+        Samples per period (bracketing grid, or the sampled rule); default 16·(2H+1).
+
+    Returns
+    -------
+    C, S : ndarray, shape (2H+1,)
+        C_n = (1/2π)∫_{g>0} cos nτ dτ and S_n likewise with sines, n = 0..2H.
+    """
+    c = np.ascontiguousarray(c, dtype=float)
+    H = c.shape[0] - 1
+    s = np.zeros(H + 1) if s is None else np.ascontiguousarray(s, dtype=float)
+    if c.ndim != 1 or s.shape != c.shape:
+        raise ValueError(f"c and s must be 1-D of equal length, got {c.shape} and {s.shape}")
+    N = 16 * (2 * H + 1) if n_samples is None else int(n_samples)
+    if N < 2 * H + 1:
+        raise ValueError(f"n_samples must be >= 2H+1 = {2 * H + 1}, got {N}")
+    tau, cos_t, sin_t = _tables(H, N)
+    C, S = np.empty(2 * H + 1), np.empty(2 * H + 1)
+    _spectrum(c, s, cos_t, sin_t, tau, bool(exact), np.empty(N), np.empty(N), np.empty(2 * N + 2), C, S)
+    return C, S
+
+
+def _product_matrix(C: np.ndarray, S: np.ndarray, H: int) -> np.ndarray:
+    """G_ab = proj_a[s φ_b] in NLvib order (φ = 1, cos τ, sin τ, ..., cos Hτ, sin Hτ) from the
+    spectrum (C, S) of s."""
+    G = np.zeros((2 * H + 1, 2 * H + 1))
+    for a in range(2 * H + 1):
+        m, a_sin = (a + 1) // 2, a > 0 and a % 2 == 0
+        w = 1.0 if a == 0 else 2.0
+        for b in range(2 * H + 1):
+            k, b_sin = (b + 1) // 2, b > 0 and b % 2 == 0
+            d, t = abs(m - k), m + k
+            if not a_sin and not b_sin:
+                v = 0.5 * (C[d] + C[t])
+            elif a_sin and b_sin:
+                v = 0.5 * (C[d] - C[t])
+            elif not a_sin:  # cos m · sin k = ½ (sin (k+m) + sin (k−m))
+                v = 0.5 * (S[t] + np.sign(k - m) * S[d])
+            else:  # sin m · cos k = ½ (sin (m+k) + sin (m−k))
+                v = 0.5 * (S[t] + np.sign(m - k) * S[d])
+            G[a, b] = w * v
+    return G
+
+
+def project_contact(p: np.ndarray, lo: float, hi: float, exact: bool = True,
+                    n_samples: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Harmonic projection of (p − hi)₊ − (lo − p)₊ and its Jacobian.
+
+    Parameters
+    ----------
+    p : ndarray, shape (2H+1,)
+        NLvib-ordered coefficients [p_0, p_c1, p_s1, ..., p_cH, p_sH] of p(τ).
+    lo, hi : float
+        The admissible interval (``-inf`` / ``inf`` for a side without a stop), lo <= hi.
+    exact : bool
+        Exact (C¹) projection with the switching instants located (default), or the
+        sampled AFT projection.
+    n_samples : int, optional
+        Samples per period; default 16·(2H+1).
+
+    Returns
+    -------
+    r : ndarray, shape (2H+1,)
+        NLvib-ordered projection (proj_0 = mean, proj_cm = (1/π)∫ · cos mτ, ...).
+    G : ndarray, shape (2H+1, 2H+1)
+        ∂r/∂p: the projection of s(τ)·φ_b(τ), s the indicator of the active set.
+    """
+    p = np.asarray(p, dtype=float)
+    if p.ndim != 1 or p.shape[0] % 2 != 1:
+        raise ValueError(f"p must be 1-D with 2H+1 entries, got shape {p.shape}")
+    lo, hi = float(lo), float(hi)
+    if math.isnan(lo) or math.isnan(hi) or lo > hi:
+        raise ValueError(f"need lo <= hi, got lo={lo!r}, hi={hi!r}")
+    H = (p.shape[0] - 1) // 2
+    c = np.concatenate([[p[0]], p[1::2]])
+    s = np.concatenate([[0.0], p[2::2]])
+    r = np.zeros(2 * H + 1)
+    G = np.zeros((2 * H + 1, 2 * H + 1))
+    for theta, sign in ((hi, 1.0), (lo, -1.0)):
+        if math.isinf(theta):
+            continue
+        gc, gs = sign * c, sign * s
+        gc[0] -= sign * theta  # g = ±(p − θ) > 0 on the active set
+        C, S = contact_spectrum(gc, gs, exact, n_samples)
+        Gt = _product_matrix(C, S, H)
+        G += Gt
+        indicator = np.zeros(2 * H + 1)
+        indicator[0] = C[0]
+        indicator[1::2] = 2 * C[1:H + 1]
+        indicator[2::2] = 2 * S[1:H + 1]
+        r += Gt @ p - theta * indicator
+    return r, G
+
+
+# ---------------------------------------------------------------------- fused MMS-HBM
+@njit(**JIT_OPTIONS)
+def _mmshbm_eval(D, dD, a, cdof, lo, hi, r, exact, cos_table, sin_table, tau_t, rowscale, colscale,
+                 jacobian, R, J, F, dF, pc, ps, gc, g_t, dg_t, roots, C_hi, C_lo, S_w, P):
+    """Scaled cosine-only MMS-HBM residual (and Jacobian) for any number of contact DOFs.
+
+    D, dD     : (H+1, n_c, n_c) condensed dynamic stiffness and ∂D_k/∂Ω (dD read only
+                if ``jacobian``)
+    a         : (H+1, n_c) cosine coefficients of the massless DOFs (m, rad)
+    cdof      : (n_k,) int, positions inside ``c`` of the contact DOFs
+    lo, hi, r : (n_k,) admissible interval (±inf: no stop) and proximal parameter (N/m)
+    exact     : exact (C¹) or sampled projection
+    cos_table : (2H+1, N) cos pτ_j; sin_table : (H+1, N) sin kτ_j; tau_t : (N,) τ_j
+    rowscale  : ((H+1) n_c,); colscale : ((H+1) n_c + 1,)
+    R         : ((H+1) n_c,) output, scaled residual, row m·n_c + i
+    J         : ((H+1) n_c, (H+1) n_c + 1) output if ``jacobian``, scaled
+    work      : F, dF (H+1, n_c); pc, ps, gc (H+1,); g_t, dg_t (N,); roots (2N+2,);
+                C_hi, C_lo, S_w (2H+1,); P (H+1, H+1)
+
+    Rows of massless DOFs without a contact: F_k,i = (D_k a_k)_i = 0. Rows of a contact
+    DOF: proj_m[f + r s (p − θ)] with p = q − f/r (module docstring).
+    """
+    H1 = D.shape[0]
+    n_c = D.shape[1]
+    n = H1 * n_c
+    for k in range(H1):
+        for i in range(n_c):
+            f = 0.0
+            for q in range(n_c):
+                f += D[k, i, q] * a[k, q]
+            F[k, i] = f
+            R[k * n_c + i] = f
+            if jacobian:
+                df = 0.0
+                for q in range(n_c):
+                    df += dD[k, i, q] * a[k, q]
+                dF[k, i] = df
+    if jacobian:
+        for row in range(n):
+            for col in range(n + 1):
+                J[row, col] = 0.0
+        for k in range(H1):
+            for i in range(n_c):
+                for j in range(n_c):
+                    J[k * n_c + i, k * n_c + j] = D[k, i, j]
+                J[k * n_c + i, n] = dF[k, i]
+    for ps_i in range(ps.shape[0]):
+        ps[ps_i] = 0.0
+    n_spec = C_hi.shape[0]
+    for ic in range(cdof.shape[0]):
+        i = cdof[ic]
+        ri = r[ic]
+        for k in range(H1):
+            pc[k] = a[k, i] - F[k, i] / ri
+        for p in range(n_spec):
+            C_hi[p] = 0.0
+            C_lo[p] = 0.0
+        if hi[ic] < np.inf:
+            for k in range(H1):
+                gc[k] = pc[k]
+            gc[0] -= hi[ic]
+            _spectrum(gc, ps, cos_table, sin_table, tau_t, exact, g_t, dg_t, roots, C_hi, S_w)
+        if lo[ic] > -np.inf:
+            for k in range(H1):
+                gc[k] = -pc[k]
+            gc[0] += lo[ic]
+            _spectrum(gc, ps, cos_table, sin_table, tau_t, exact, g_t, dg_t, roots, C_lo, S_w)
+        # P = G of the whole active set; residual rows m of DOF i
+        for m in range(H1):
+            em = 1.0 if m == 0 else 2.0
+            acc = 0.0
+            for k in range(H1):
+                d = m - k if m >= k else k - m
+                P[m, k] = 0.5 * em * (C_hi[d] + C_lo[d] + C_hi[m + k] + C_lo[m + k])
+                acc += P[m, k] * pc[k]
+            if C_hi[m] != 0.0:
+                acc -= hi[ic] * em * C_hi[m]
+            if C_lo[m] != 0.0:
+                acc -= lo[ic] * em * C_lo[m]
+            R[m * n_c + i] = F[m, i] + ri * acc
+        if jacobian:
+            # ∂R_m = Σ_k (δ_mk − P_mk) ∂F_k,i + r P_mk ∂a_k,i
+            for m in range(H1):
+                row = m * n_c + i
+                dOmega = 0.0
+                for k in range(H1):
+                    w = (1.0 if m == k else 0.0) - P[m, k]
+                    for j in range(n_c):
+                        J[row, k * n_c + j] = w * D[k, i, j]
+                    J[row, k * n_c + i] += ri * P[m, k]
+                    dOmega += w * dF[k, i]
+                J[row, n] = dOmega
+    for row in range(n):
+        R[row] /= rowscale[row]
+    if jacobian:
+        for row in range(n):
+            for col in range(n + 1):
+                J[row, col] = J[row, col] * colscale[col] / rowscale[row]
+
+
+@njit(**JIT_OPTIONS)
+def _excursion_peak(y):
+    """Largest value of a periodic sampled signal, refined by a parabola through the
+    peak (the first sample of the maximum, as numpy.argmax)."""
+    n = y.shape[0]
+    j = 0
+    for i in range(1, n):
+        if y[i] > y[j]:
+            j = i
+    ym = y[j - 1] if j > 0 else y[n - 1]
+    y0 = y[j]
+    yp = y[(j + 1) % n]
+    denom = ym - 2 * y0 + yp
+    if denom < 0:
+        return y0 - 0.125 * (yp - ym) ** 2 / denom
+    return y0
+
+
+@njit(**JIT_OPTIONS)
+def _mmshbm_monitor_multi(D, dD, a, cdof, lo, hi, r, omega, amp_row, amp_sign, cos_fine, q_t, f_t, out):
+    """Amplitude, mean energy and peak contact force of a cosine MMS-HBM point.
+
+    amp_row  : (H+1,) cosine coefficients of the amplitude DOF's motion
+    amp_sign : +1/−1: amplitude = max of amp_sign·q over the period (a single one-sided
+               contact: the excursion away from the stop); 0: max |q|
+    cos_fine : (H+1, n_fine) cos kτ on a fine grid; q_t, f_t : (n_fine,) work
+    out      : (3,) <- [amplitude, energy (J), peak contact force (N, exactly 0 when the
+               proximal active set is empty at every contact)]
+    """
+    H1 = D.shape[0]
+    n_c = D.shape[1]
+    n_fine = cos_fine.shape[1]
+    quad0 = 0.0
+    quad = 0.0
+    quad_m = 0.0
+    for k in range(H1):
+        qk = 0.0
+        qm = 0.0
+        for i in range(n_c):
+            f = 0.0
+            df = 0.0
+            for j in range(n_c):
+                f += D[k, i, j] * a[k, j]
+                df += dD[k, i, j] * a[k, j]
+            qk += a[k, i] * f
+            qm += a[k, i] * df
+        if k == 0:
+            quad0 = qk
+        else:
+            quad += qk
+            quad_m += qm
+    out[1] = 0.5 * quad0 + 0.25 * (quad - omega * quad_m)
+    for j in range(n_fine):
+        acc = 0.0
+        for k in range(H1):
+            acc += amp_row[k] * cos_fine[k, j]
+        q_t[j] = amp_sign * acc if amp_sign != 0.0 else abs(acc)
+    out[0] = _excursion_peak(q_t)
+    peak = 0.0
+    for ic in range(cdof.shape[0]):
+        i = cdof[ic]
+        active = False
+        for j in range(n_fine):
+            q = 0.0
+            f = 0.0
+            for k in range(H1):
+                fk = 0.0
+                for m in range(n_c):
+                    fk += D[k, i, m] * a[k, m]
+                q += a[k, i] * cos_fine[k, j]
+                f += fk * cos_fine[k, j]
+            p = q - f / r[ic]
+            lam = 0.0
+            if p > hi[ic]:
+                active = True
+                lam = -f
+            elif p < lo[ic]:
+                active = True
+                lam = f
+            f_t[j] = lam
+        if active:
+            v = _excursion_peak(f_t)
+            if v > peak:
+                peak = v
+    out[2] = peak
