@@ -36,11 +36,12 @@ def _reference(coefs, lo, hi):
                                  xtol=1e-15))
     breaks = sorted(breaks) + [2 * np.pi]
     r = np.zeros(2 * H + 1)
+    tol = {"epsabs": 1e-14, "epsrel": 1e-12}
     for a, b in zip(breaks[:-1], breaks[1:], strict=True):
-        r[0] += quad(f, a, b, epsabs=1e-14, epsrel=1e-12)[0] / (2 * np.pi)
+        r[0] += quad(f, a, b, **tol)[0] / (2 * np.pi)
         for k in range(1, H + 1):
-            r[2 * k - 1] += quad(lambda t, k=k: f(t) * np.cos(k * t), a, b, epsabs=1e-14, epsrel=1e-12)[0] / np.pi
-            r[2 * k] += quad(lambda t, k=k: f(t) * np.sin(k * t), a, b, epsabs=1e-14, epsrel=1e-12)[0] / np.pi
+            r[2 * k - 1] += quad(lambda t, k=k: f(t) * np.cos(k * t), a, b, **tol)[0] / np.pi
+            r[2 * k] += quad(lambda t, k=k: f(t) * np.sin(k * t), a, b, **tol)[0] / np.pi
     return r
 
 
