@@ -32,8 +32,10 @@ def _reference(coefs, lo, hi):
             continue
         v = _p(coefs, grid) - theta
         for j in np.flatnonzero(v[:-1] * v[1:] < 0):
-            breaks.append(brentq(lambda t, th=theta: _p(coefs, np.atleast_1d(t))[0] - th, grid[j], grid[j + 1],
-                                 xtol=1e-15))
+            def g(t, th=theta):
+                return _p(coefs, np.atleast_1d(t))[0] - th
+
+            breaks.append(brentq(g, grid[j], grid[j + 1], xtol=1e-15))
     breaks = sorted(breaks) + [2 * np.pi]
     r = np.zeros(2 * H + 1)
     tol = {"epsabs": 1e-14, "epsrel": 1e-12}
