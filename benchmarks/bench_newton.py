@@ -24,7 +24,7 @@ def _iteration_setup(self, name, method, harmonics=None, steps=None):
 
 
 def _iterate(self):
-    from mmshbm.core.continuation import _bordered_solve
+    from mmshbm.core.bordered import bordered_solve as _bordered_solve
 
     # alternate two states whose last unknown (Ω) differs in the last digits: MMS-HBM
     # reuses its condensation at an unchanged Ω, and a Newton iteration always changes Ω

@@ -52,7 +52,9 @@ def test_unknowns_and_settings_match_the_methods(rows):
     by = {r["method"]: r for r in rows}
     H = by["mmshbm"]["harmonics"]
     assert by["mmshbm"]["setting"] == f"H={H}"
-    assert by["mmshbm"]["unknowns"] == H + 2          # one massless DOF: H+1 cosines and Ω
+    # one massless DOF: H+1 cosines and Ω, and one pole unknown: the oscillator with its
+    # node clamped has ω₂ = √5, and ω₂/2 lies in its backbone's range [ω₁, ω_zero-gap]
+    assert by["mmshbm"]["unknowns"] == H + 2 + 1
     Hp = by["penalty"]["harmonics"]
     assert by["penalty"]["unknowns"] == 2 * (Hp + 1) + 1  # all 2 DOFs
     assert by["penalty"]["penalty_factor"] > 0

@@ -180,8 +180,8 @@ CASES = [
     ("index", "harmonic_content(dof=5) on 2 DOFs",
      lambda t: problem().harmonic_content(problem().linear_point(0.5), dof=5), ValueError,
      r"dof must be in \[0, 1\], got 5"),
-    ("shape", "evaluate(u) with 3 of 5 unknowns", lambda t: problem().evaluate(np.zeros(3)), ValueError,
-     r"u must have shape \(5,\), got \(3,\)"),
+    ("shape", "evaluate(u) with 3 of 6 unknowns (H+1 cosines, the 2Ω = ω₂ pole, Ω)",
+     lambda t: problem().evaluate(np.zeros(3)), ValueError, r"u must have shape \(6,\), got \(3,\)"),
     ("index", "linear_modes(5) on 1 DOF with mass", lambda t: osc().linear_modes(5), ValueError,
      r"n must be <= the number of DOFs with mass \(1\), got 5"),
     ("file", "Model.from_npz(missing file)", lambda t: Model.from_npz(t / "missing.npz"), ValueError,
@@ -254,20 +254,28 @@ def converged(problem, states, tol=1e-8):
     return max(float(np.max(np.abs(problem.evaluate(u, jacobian=False)))) for u in states)
 
 
-def test_exact_pole_at_the_start_is_a_status_not_a_crash():
+def test_exact_pole_at_the_start_is_regular_with_pole_unknowns():
     """k2 = 3 k1: the closed-contact frequency ω2 = 2 rad/s is exactly twice the linear
     one, so D_2(Ω) has a pole on the whole linear part of the backbone and the
-    factorisation of K_ll − (2Ω)² M_ll is exactly singular at the first point."""
+    factorisation of K_ll − (2Ω)² M_ll is exactly singular at the first point. With the
+    pole carried by an unknown (the default) the branch starts there and runs to its
+    bound against the closed form; without (poles=False) the start fails with a status
+    saying why, not a crash."""
     from mmshbm.core.condense import SingularDynamicStiffness
 
-    model = OneDofOscillator(1.0, 1.0, 3.0, 0.1).model()
-    p = MMSHBMProblem(model, 3)
+    osc = OneDofOscillator(1.0, 1.0, 3.0, 0.1)
+    model = osc.model()
+    p = MMSHBMProblem(model, 3, poles=False)
     assert p.unpack(p.linear_point(0.05))[1] == 1.0  # Ω exactly ω1, 2Ω exactly ω2
     with pytest.raises(SingularDynamicStiffness, match=r"harmonic 2 of Ω sits on an eigenfrequency"):
         p.evaluate(p.linear_point(0.05))
-    br = mmshbm.backbone(model, harmonics=3)
+    br = mmshbm.backbone(model, harmonics=3, poles=False)
     assert len(br) == 0
     assert br.status.startswith("start failed") and "harmonic 2 of Ω" in br.status
+    br = mmshbm.backbone(model, harmonics=3)
+    assert br.status == "bound:amplitude" and br.frequency[0] == pytest.approx(1 / (2 * np.pi), rel=1e-12)
+    f = osc.frequency(br.amplitude[-1])
+    assert abs(br.frequency[-1] - f) / f < 1e-2  # H = 3 truncation error
 
 
 class PoleWindow:
@@ -279,7 +287,7 @@ class PoleWindow:
         from mmshbm.core.condense import SingularDynamicStiffness
 
         self.osc = OneDofOscillator(1.0, 1.0, 4.0, 1.0)
-        self.problem = MMSHBMProblem(self.osc.model(), 3, projection="sampled")
+        self.problem = MMSHBMProblem(self.osc.model(), 3, projection="sampled", poles=False)
         self.pole = self.osc.omega_closed / 2
         self.hits = 0
         real = self.problem.cond.dynamic_stiffness
@@ -291,14 +299,14 @@ class PoleWindow:
             return real(omega, harmonics, derivative)
 
         self.problem.cond.dynamic_stiffness = dynamic_stiffness
-        self.reference = MMSHBMProblem(self.osc.model(), 3, projection="sampled")
+        self.reference = MMSHBMProblem(self.osc.model(), 3, projection="sampled", poles=False)
 
-    def run(self):
+    def run(self, follow="path"):
         from mmshbm.core.continuation import ContinuationOptions, continue_branch
 
         p = self.problem
         return continue_branch(p, p.linear_point(0.5), p.initial_tangent(),
-                               ContinuationOptions(bounds={"amplitude": (0.0, 10.0)}))
+                               ContinuationOptions(bounds={"amplitude": (0.0, 10.0)}, follow=follow))
 
 
 def test_a_singular_step_is_halved_and_the_branch_goes_on():
@@ -325,6 +333,12 @@ def test_a_singular_region_stops_the_branch_with_every_converged_point():
     assert omega.max() > case.pole * (1 - width) * (1 - 1e-4)
     assert converged(case.reference, res.u) < 1e-8
     assert res.special_points[-1] == ("endpoint", len(res.u) - 1)
+    # following the family (the default), the branch jumps the region and reaches its bound
+    res = PoleWindow(width).run(follow="family")
+    assert res.status == "bound:amplitude"
+    jumps = [s for s in res.special_points if s[0] == "jump"]
+    assert len(jumps) == 1 and jumps[0].data["reason"] == "ds_min"
+    assert converged(case.reference, res.u) < 1e-8
 
 
 def test_ds_min_status_through_backbone_keeps_the_branch():

@@ -314,50 +314,69 @@ def project_contact(p: np.ndarray, lo: float, hi: float, exact: bool = True,
 
 # ---------------------------------------------------------------------- fused MMS-HBM
 @njit(**JIT_OPTIONS)
-def _mmshbm_eval(D, dD, a, cdof, lo, hi, r, exact, cos_table, sin_table, tau_t, rowscale, colscale,
-                 jacobian, R, J, F, dF, pc, ps, gc, g_t, dg_t, roots, C_hi, C_lo, S_w, P):
-    """Scaled cosine-only MMS-HBM residual (and Jacobian) for any number of contact DOFs.
+def _mmshbm_eval(D, dD, a, eta, omega, pole_k, pole_b, pole_w2, cdof, lo, hi, r, exact, cos_table, sin_table,
+                 tau_t, rowscale, colscale, jacobian, R, J, F, dF, pc, ps, gc, g_t, dg_t, roots, C_hi, C_lo,
+                 S_w, P):
+    """Scaled cosine-only MMS-HBM residual (and Jacobian) for any number of contact DOFs,
+    with the poles of D_k carried by extra unknowns η (:mod:`mmshbm.core.poles`).
 
-    D, dD     : (H+1, n_c, n_c) condensed dynamic stiffness and ∂D_k/∂Ω (dD read only
-                if ``jacobian``)
+    D, dD     : (H+1, n_c, n_c) condensed dynamic stiffness (its regular part for the
+                harmonics with poles) and ∂D_k/∂Ω (dD read only if ``jacobian``)
     a         : (H+1, n_c) cosine coefficients of the massless DOFs (m, rad)
+    eta, omega: (n_p,) pole unknowns η_jk; Ω (rad/s)
+    pole_k, pole_b, pole_w2 : (n_p,) int harmonic k, (n_p, n_c) b_j, (n_p,) ω_j² per pole
     cdof      : (n_k,) int, positions inside ``c`` of the contact DOFs
     lo, hi, r : (n_k,) admissible interval (±inf: no stop) and proximal parameter (N/m)
     exact     : exact (C¹) or sampled projection
     cos_table : (2H+1, N) cos pτ_j; sin_table : (H+1, N) sin kτ_j; tau_t : (N,) τ_j
-    rowscale  : ((H+1) n_c,); colscale : ((H+1) n_c + 1,)
-    R         : ((H+1) n_c,) output, scaled residual, row m·n_c + i
-    J         : ((H+1) n_c, (H+1) n_c + 1) output if ``jacobian``, scaled
+    rowscale  : (n_a + n_p,); colscale : (n_a + n_p + 1,), n_a = (H+1) n_c
+    R         : (n_a + n_p,) output, scaled residual: rows m·n_c + i, then one per pole
+    J         : (n_a + n_p, n_a + n_p + 1) output if ``jacobian``, scaled; columns a, η, Ω
     work      : F, dF (H+1, n_c); pc, ps, gc (H+1,); g_t, dg_t (N,); roots (2N+2,);
                 C_hi, C_lo, S_w (2H+1,); P (H+1, H+1)
 
-    Rows of massless DOFs without a contact: F_k,i = (D_k a_k)_i = 0. Rows of a contact
-    DOF: proj_m[f + r s (p − θ)] with p = q − f/r (module docstring).
+    F_k = D_k a_k − Σ_{poles of k} b_j η_jk is the force the structure needs at the
+    massless DOFs. Rows of massless DOFs without a contact: F_k,i = 0. Rows of a contact
+    DOF: proj_m[f + r s (p − θ)] with p = q − f/r (module docstring). Pole rows:
+    (ω_j² − (kΩ)²) η_jk − b_jᵀ a_k = 0.
     """
     H1 = D.shape[0]
     n_c = D.shape[1]
-    n = H1 * n_c
+    n_a = H1 * n_c
+    n_p = eta.shape[0]
+    n_r = n_a + n_p
+    n_om = n_r
     for k in range(H1):
         for i in range(n_c):
             f = 0.0
             for q in range(n_c):
                 f += D[k, i, q] * a[k, q]
             F[k, i] = f
-            R[k * n_c + i] = f
             if jacobian:
                 df = 0.0
                 for q in range(n_c):
                     df += dD[k, i, q] * a[k, q]
                 dF[k, i] = df
+    for p in range(n_p):
+        k = pole_k[p]
+        for i in range(n_c):
+            F[k, i] -= pole_b[p, i] * eta[p]
+    for k in range(H1):
+        for i in range(n_c):
+            R[k * n_c + i] = F[k, i]
     if jacobian:
-        for row in range(n):
-            for col in range(n + 1):
+        for row in range(n_r):
+            for col in range(n_r + 1):
                 J[row, col] = 0.0
         for k in range(H1):
             for i in range(n_c):
                 for j in range(n_c):
                     J[k * n_c + i, k * n_c + j] = D[k, i, j]
-                J[k * n_c + i, n] = dF[k, i]
+                J[k * n_c + i, n_om] = dF[k, i]
+        for p in range(n_p):
+            k = pole_k[p]
+            for i in range(n_c):
+                J[k * n_c + i, n_a + p] = -pole_b[p, i]
     for ps_i in range(ps.shape[0]):
         ps[ps_i] = 0.0
     n_spec = C_hi.shape[0]
@@ -366,9 +385,9 @@ def _mmshbm_eval(D, dD, a, cdof, lo, hi, r, exact, cos_table, sin_table, tau_t, 
         ri = r[ic]
         for k in range(H1):
             pc[k] = a[k, i] - F[k, i] / ri
-        for p in range(n_spec):
-            C_hi[p] = 0.0
-            C_lo[p] = 0.0
+        for s_i in range(n_spec):
+            C_hi[s_i] = 0.0
+            C_lo[s_i] = 0.0
         if hi[ic] < np.inf:
             for k in range(H1):
                 gc[k] = pc[k]
@@ -403,12 +422,28 @@ def _mmshbm_eval(D, dD, a, cdof, lo, hi, r, exact, cos_table, sin_table, tau_t, 
                         J[row, k * n_c + j] = w * D[k, i, j]
                     J[row, k * n_c + i] += ri * P[m, k]
                     dOmega += w * dF[k, i]
-                J[row, n] = dOmega
-    for row in range(n):
+                J[row, n_om] = dOmega
+                for p in range(n_p):
+                    k = pole_k[p]
+                    w = (1.0 if m == k else 0.0) - P[m, k]
+                    J[row, n_a + p] = -w * pole_b[p, i]
+    for p in range(n_p):
+        k = pole_k[p]
+        kw = k * omega
+        ba = 0.0
+        for q in range(n_c):
+            ba += pole_b[p, q] * a[k, q]
+        R[n_a + p] = (pole_w2[p] - kw * kw) * eta[p] - ba
+        if jacobian:
+            for q in range(n_c):
+                J[n_a + p, k * n_c + q] = -pole_b[p, q]
+            J[n_a + p, n_a + p] = pole_w2[p] - kw * kw
+            J[n_a + p, n_om] = -2.0 * k * k * omega * eta[p]
+    for row in range(n_r):
         R[row] /= rowscale[row]
     if jacobian:
-        for row in range(n):
-            for col in range(n + 1):
+        for row in range(n_r):
+            for col in range(n_r + 1):
                 J[row, col] = J[row, col] * colscale[col] / rowscale[row]
 
 
@@ -431,9 +466,12 @@ def _excursion_peak(y):
 
 
 @njit(**JIT_OPTIONS)
-def _mmshbm_monitor_multi(D, dD, a, cdof, lo, hi, r, omega, amp_row, amp_sign, cos_fine, q_t, f_t, out):
+def _mmshbm_monitor_multi(D, dD, a, eta, pole_k, pole_b, cdof, lo, hi, r, omega, amp_row, amp_sign, cos_fine,
+                          q_t, f_t, out):
     """Amplitude, mean energy and peak contact force of a cosine MMS-HBM point.
 
+    eta, pole_k, pole_b : pole unknowns and their harmonic and b_j (see ``_mmshbm_eval``);
+               D, dD are then the regular parts
     amp_row  : (H+1,) cosine coefficients of the amplitude DOF's motion
     amp_sign : +1/−1: amplitude = max of amp_sign·q over the period (a single one-sided
                contact: the excursion away from the stop); 0: max |q|
@@ -458,6 +496,13 @@ def _mmshbm_monitor_multi(D, dD, a, cdof, lo, hi, r, omega, amp_row, amp_sign, c
                 df += dD[k, i, j] * a[k, j]
             qk += a[k, i] * f
             qm += a[k, i] * df
+        for p in range(pole_k.shape[0]):
+            if pole_k[p] == k:
+                ba = 0.0
+                for i in range(n_c):
+                    ba += pole_b[p, i] * a[k, i]
+                qk -= eta[p] * ba
+                qm -= 2.0 * k * k * omega * eta[p] * eta[p]
         if k == 0:
             quad0 = qk
         else:
@@ -481,6 +526,9 @@ def _mmshbm_monitor_multi(D, dD, a, cdof, lo, hi, r, omega, amp_row, amp_sign, c
                 fk = 0.0
                 for m in range(n_c):
                     fk += D[k, i, m] * a[k, m]
+                for p in range(pole_k.shape[0]):
+                    if pole_k[p] == k:
+                        fk -= pole_b[p, i] * eta[p]
                 q += a[k, i] * cos_fine[k, j]
                 f += fk * cos_fine[k, j]
             p = q - f / r[ic]

@@ -20,177 +20,20 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
-from typing import Protocol
+from collections.abc import Callable
 
 import numpy as np
-import scipy.sparse as sp
 
-from .. import _validate as check
-from .bordered import solve_bordered_sparse
+from .bordered import bordered_solve as _bordered_solve
+from .family import FamilyGuard, jump
+from .options import ContinuationOptions, ContinuationProblem, ContinuationResult, ContinuationState
+from .pinned import PinnedFailure
 from .special_points import SpecialPoint
 
 __all__ = ["ContinuationOptions", "ContinuationProblem", "ContinuationResult", "ContinuationState",
            "continue_branch", "newton"]
 
 log = logging.getLogger(__name__)
-
-
-class ContinuationProblem(Protocol):
-    """What the driver needs from a problem (all vectors in scaled units)."""
-
-    n_unknowns: int
-
-    def evaluate(self, u: np.ndarray, jacobian: bool = True):
-        """Residual (n−1,) and, if ``jacobian``, the Jacobian (n−1, n), dense or sparse."""
-
-    def monitor(self, u: np.ndarray) -> dict:
-        """Scalar quantities recorded per point (e.g. frequency, amplitude, energy)."""
-
-
-@dataclass(frozen=True)
-class ContinuationOptions:
-    """Options of the path follower (scaled arclength units). Validated on creation.
-
-    Attributes
-    ----------
-    ds, ds_min, ds_max : float
-        Initial, smallest and largest arclength step.
-    max_steps : int
-        Largest number of continuation steps (points after the first).
-    newton_tol : float
-        Convergence: infinity norm of the scaled residual.
-    step_tol : float
-        Convergence also when the scaled Newton update's infinity norm falls below
-        this while the residual is below √newton_tol: where the residual has a
-        round-off floor (near a pole of the condensed stiffness, kΩ close to an
-        eigenfrequency of the clamped-contact structure) the iterate is then known to
-        ``step_tol``.
-    max_newton : int
-        Newton iterations per corrector before the step counts as failed.
-    growth : float
-        ``a`` in ds *= 1 + a·((max_newton − nit)/max_newton)².
-    max_angle : float
-        Largest angle (rad) between consecutive tangents; more means the step jumped.
-    corner_ds : float
-        Below this step the angle test is waived: the sampled (AFT) contact residual is
-        piecewise smooth, so where a sample point changes its active set the branch
-        has a genuine corner that no step size removes.
-    bounds : Mapping[str, tuple[float, float]]
-        Stop when a monitored quantity leaves [lo, hi]; the last point is refined onto
-        the bound. E.g. ``{"amplitude": (0, 1e-2), "frequency": (0, 80)}``.
-    """
-
-    ds: float = 0.1
-    ds_min: float = 1e-7
-    ds_max: float = 2.0
-    max_steps: int = 1000
-    newton_tol: float = 1e-10
-    step_tol: float = 1e-8
-    max_newton: int = 10
-    growth: float = 0.5
-    max_angle: float = math.radians(30.0)
-    corner_ds: float = 1e-4
-    bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
-
-    def __post_init__(self):
-        ds_min = check.positive("ds_min", self.ds_min)
-        ds = check.positive("ds", self.ds)
-        ds_max = check.positive("ds_max", self.ds_max)
-        if not ds_min <= ds <= ds_max:
-            raise ValueError(f"need ds_min <= ds <= ds_max, got {ds_min} <= {ds} <= {ds_max}")
-        check.integer("max_steps", self.max_steps, minimum=1)
-        check.positive("newton_tol", self.newton_tol)
-        check.positive("step_tol", self.step_tol)
-        check.integer("max_newton", self.max_newton, minimum=1)
-        check.positive("corner_ds", self.corner_ds)
-        check.non_negative("growth", self.growth)
-        angle = check.positive("max_angle", self.max_angle)
-        if angle > math.pi:
-            raise ValueError(f"max_angle must be <= pi, got {angle}")
-        for name, bound in dict(self.bounds).items():
-            try:
-                lo, hi = (float(b) for b in bound)
-            except (TypeError, ValueError):
-                raise ValueError(f"bounds[{name!r}] must be a pair (lo, hi), got {bound!r}") from None
-            if not lo < hi:
-                raise ValueError(f"bounds[{name!r}] must satisfy lo < hi, got {bound!r}")
-
-
-@dataclass
-class ContinuationResult:
-    """The converged points of a branch and why it stopped.
-
-    Attributes
-    ----------
-    u : ndarray, shape (n_points, n)
-        Scaled unknowns per point.
-    records : dict[str, ndarray]
-        Monitored quantities per point (each shape (n_points,) or (n_points, ...)).
-    newton_iterations : ndarray of int, shape (n_points,)
-    step_size : ndarray, shape (n_points,)
-        Arclength step that led to each point (0 for the first).
-    residual_histories : list of ndarray
-        Corrector residual norms per Newton iteration, per point.
-    special_points : list of (str, int)
-        ("start", 0), ("fold", i), bound hits, and ("endpoint", last).
-    status : str
-        Why the branch stopped: "max_steps", "bound:<name>", "ds_min: ...",
-        "interrupted", "start failed: ...".
-    tangent : ndarray, shape (n,) or None
-        Unit tangent at the last point (None if no point converged).
-    next_ds : float
-        The step the driver would have tried next.
-    steps : int
-        Continuation steps taken (points after the first).
-    """
-
-    u: np.ndarray
-    records: dict
-    newton_iterations: np.ndarray
-    step_size: np.ndarray
-    residual_histories: list
-    special_points: list
-    status: str
-    tangent: np.ndarray | None = None
-    next_ds: float = math.nan
-    steps: int = 0
-
-
-@dataclass
-class ContinuationState:
-    """Everything the driver needs to go on from its last accepted point, as if it had
-    never stopped (what a checkpoint file stores; see :mod:`mmshbm.core.checkpoint`).
-
-    Attributes
-    ----------
-    u : list of ndarray, each shape (n,)
-        Scaled unknowns of the points so far.
-    records : list of dict
-        Monitored quantities per point.
-    newton_iterations : list of int
-    step_size : list of float
-    residual_histories : list of ndarray
-    special_points : list of (str, int)
-        Special points so far (no "endpoint").
-    tangent : ndarray, shape (n,)
-        Unit tangent at the last point.
-    ds : float
-        The step to try next.
-    steps : int
-        Continuation steps taken so far.
-    """
-
-    u: list
-    records: list
-    newton_iterations: list
-    step_size: list
-    residual_histories: list
-    special_points: list
-    tangent: np.ndarray
-    ds: float
-    steps: int
 
 
 class _Failure(Exception):
@@ -234,40 +77,23 @@ def newton(problem: ContinuationProblem, u: np.ndarray, tangent: np.ndarray, u_p
     raise _Failure(f"no convergence in {max_iter} iterations (residual {history[-1]:.2e})")
 
 
-def _bordered_solve(J, t: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-    """Solve [J; tᵀ] x = rhs for dense or sparse J."""
-    if not isinstance(J, np.ndarray) and sp.issparse(J):
-        return solve_bordered_sparse(J, t, rhs)  # block elimination, full LU fallback
-    n = len(rhs)
-    A = np.empty((n, n))
+
+
+def _orientation(J, t: np.ndarray) -> float:
+    """Sign of det [J; tᵀ] (0 where not computed: sparse or large J). Along a branch it
+    changes sign at a simple branch point, not at a fold (the bordered matrix stays
+    regular there and t turns continuously)."""
+    if not isinstance(J, np.ndarray) or J.shape[1] > _DET_LIMIT:
+        return 0.0
+    A = np.empty((J.shape[1], J.shape[1]))
     A[:-1] = J
     A[-1] = t
-    if n <= _SMALL_DENSE:
-        x = np.empty(n)
-        if _small_dense_solver()(A, np.ascontiguousarray(rhs, dtype=float), np.empty((n, n)), x):
-            return np.full_like(rhs, np.nan)
-        return x
-    try:
-        return np.linalg.solve(A, rhs)
-    except np.linalg.LinAlgError:
-        return np.full_like(rhs, np.nan)
+    sign, _ = np.linalg.slogdet(A)
+    return float(sign)
 
 
-#: bordered systems up to this size are solved by a Numba LU (LAPACK's call overhead
-#: dominates below it; measured 2.1 against 7.6 µs at n = 13, 10 against 16 µs at n = 33,
-#: 53 against 37 µs at n = 64)
-_SMALL_DENSE = 40
-
-
-def _small_dense_solver():
-    """The Numba LU kernel (imported on first use: importing numba is not cheap)."""
-    global _dense_solve
-    if _dense_solve is None:
-        from .kernels import _dense_solve
-    return _dense_solve
-
-
-_dense_solve = None
+#: largest bordered system whose determinant sign is tracked (dense slogdet per point)
+_DET_LIMIT = 400
 
 
 def _tangent(J, t_prev: np.ndarray) -> np.ndarray:
@@ -357,6 +183,48 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
             residual_histories=hists, special_points=special, status=status, tangent=state["t"],
             next_ds=float(state["ds"]), steps=int(state["steps"]))
 
+    guard = FamilyGuard(opt.family_share, opt.max_excursion) if opt.follow == "family" else None
+    if guard is not None:
+        for i, rec in enumerate(recs):  # a resumed run replays the guard's decisions
+            if any(s[0] == "jump" and s[1] == i for s in special):
+                guard.jumped(i, rec)
+            else:
+                guard.observe(i, rec)
+    amplitude_max = float(dict(opt.bounds).get("amplitude", (0.0, math.inf))[1])
+    det_sign = {"last": 0.0}
+
+    def jump_over(reason, step):
+        """Jump beyond the family's frontier, fill the family back down from the landing
+        point (:func:`_backfill`), accept those points in increasing amplitude; returns
+        (u, t, terminal status or None) of the landing point."""
+        u_j, nit_j, hist_j, rec_j, t_j, target, i_from = jump(
+            problem, guard, us, recs, step=opt.jump_step, amplitude_max=amplitude_max,
+            newton_tol=opt.newton_tol, max_newton=opt.max_newton, monitor=_pinned_monitor)
+        A_from = float(recs[i_from]["amplitude"])
+        frontier = float(recs[guard.frontier_index]["amplitude"])
+        filled = _backfill(problem, u_j, t_j, frontier, target, opt) if target > frontier * (1 + 1e-9) else []
+        points = filled + [(u_j, nit_j, hist_j, rec_j, t_j)]
+        first = points[0][3]
+        special_jump = SpecialPoint("jump", len(us), reason=reason, from_index=i_from, amplitude_from=A_from,
+                                    amplitude_to=float(first["amplitude"]), landing_amplitude=float(target),
+                                    frequency_from=float(recs[i_from].get("frequency", math.nan)),
+                                    frequency_to=float(first.get("frequency", math.nan)))
+        terminal = None
+        for n, (u_p, nit_p, hist_p, rec_p, t_p) in enumerate(points):
+            if n == 0:
+                guard.jumped(len(us), rec_p)
+            else:
+                guard.observe(len(us), rec_p)
+            last = n == len(points) - 1
+            if last and (_outside(rec_p, opt.bounds) or target >= amplitude_max):
+                terminal = "bound:amplitude"
+            accept(u_p, nit_p, 0.0, hist_p, rec_p, t_p, opt.ds, step, [special_jump] if n == 0 else [],
+                   terminal=terminal if last else None)
+        det_sign["last"] = _orientation_safe(problem, u_j, t_j)
+        log.info("jump (%s) from amplitude %.4g to %.4g (landed at %.4g, %d points filled back)", reason,
+                 A_from, special_jump.data["amplitude_to"], target, len(filled))
+        return u_j, t_j, terminal
+
     try:
         if resume is None:
             t0 = np.asarray(t0, dtype=float)
@@ -372,6 +240,9 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
             _check_bound_names(opt.bounds, rec)
             outside = _outside(rec, opt.bounds)
             terminal = "start outside bounds" if outside else None
+            if guard is not None:
+                guard.observe(0, rec)
+            det_sign["last"] = _orientation(J, t)
             accept(u, nit, 0.0, hist, rec, t, opt.ds, 0, terminal=terminal)
             if terminal:
                 return result(terminal)
@@ -382,7 +253,9 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
             ds, step = float(resume.ds), int(resume.steps)
             state.update(t=t, ds=ds, steps=step)
             _check_bound_names(opt.bounds, recs[-1])
+            det_sign["last"] = _orientation_safe(problem, u, t)
         status = "max_steps"
+        n_jumps = sum(1 for s in special if s[0] == "jump")
         while step < opt.max_steps:
             try:
                 u_new, nit, hist, J = _corrector(problem, u, t, ds, opt)
@@ -395,6 +268,19 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
                 log.debug("step failed (%s); ds -> %g", err, ds)
                 if ds < opt.ds_min:
                     status = f"ds_min: step size fell below {opt.ds_min:g} ({err})"
+                    if guard is not None and guard.active and n_jumps < opt.max_jumps:
+                        try:
+                            u, t, terminal = jump_over("ds_min", step + 1)
+                        except PinnedFailure as jerr:
+                            status = f"{status}; {jerr}"
+                            break
+                        step += 1
+                        n_jumps += 1
+                        ds = opt.ds
+                        if terminal:
+                            status = terminal
+                            break
+                        continue
                     break
                 continue
             step += 1
@@ -403,19 +289,84 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
                 u_new, nit, hist, rec, t_new = _refine_onto_bound(problem, u, t, ds, crossed, recs[-1], rec,
                                                                   opt, (u_new, nit, hist, rec, t_new))
                 status = f"bound:{crossed[0]}"
+                action = guard.observe(len(us), rec) if guard is not None else None
+                if (guard is not None and guard.active and rec.get("on_family", 1.0) < 0.5
+                        and n_jumps < opt.max_jumps):
+                    # the bound was reached off the family (a tongue climbing to it): not an
+                    # end of the backbone; jump from the frontier instead
+                    accept(u_new, nit, ds, hist, rec, t_new, ds, step, [])
+                    try:
+                        u, t, terminal = jump_over("tongue reached the bound", step)
+                    except PinnedFailure as err:
+                        status = f"jump failed: {err}"
+                        break
+                    n_jumps += 1
+                    ds = opt.ds
+                    if terminal:
+                        status = terminal
+                        break
+                    continue
                 accept(u_new, nit, ds, hist, rec, t_new, ds, step, [SpecialPoint(status, len(us))],
                        terminal=status)
                 break
             new_special = []
             if t_new[-1] * t[-1] < 0 and min(abs(t_new[-1]), abs(t[-1])) > 1e-6:
                 new_special.append(SpecialPoint("fold", len(us)))
+            sign = _orientation(J, t_new)
+            if sign and det_sign["last"] and sign != det_sign["last"]:
+                new_special.append(SpecialPoint("branch_point", len(us)))
+            det_sign["last"] = sign or det_sign["last"]
+            action = guard.observe(len(us), rec) if guard is not None else None
             ds_prev = ds
             ds = min(opt.ds_max, ds * (1 + opt.growth * ((opt.max_newton - nit) / opt.max_newton) ** 2))
             accept(u_new, nit, ds_prev, hist, rec, t_new, ds, step, new_special)
             u, t = u_new, t_new
+            if action == "jump" and n_jumps < opt.max_jumps:
+                reason = "loop" if guard.left and guard.away <= opt.max_excursion else "excursion"
+                try:
+                    u, t, terminal = jump_over(reason, step)
+                except PinnedFailure as err:
+                    status = f"jump failed: {err}"
+                    break
+                n_jumps += 1
+                ds = opt.ds
+                if terminal:
+                    status = terminal
+                    break
     except KeyboardInterrupt:
         status = "interrupted"
     return result(status)
+
+
+def _backfill(problem, u, t, frontier: float, landing: float, opt: ContinuationOptions) -> list:
+    """The family below a jump's landing point: continued backwards from it (plain path
+    following) until it leaves the family (mode share refined onto ``family_share``) or
+    reaches the frontier. Returns the points in increasing amplitude, as tuples
+    (u, iterations, history, record, tangent oriented to growing amplitude), without the
+    landing point."""
+    back = ContinuationOptions(
+        ds=opt.ds, ds_min=opt.ds_min, ds_max=opt.ds_max, max_steps=opt.max_excursion,
+        newton_tol=opt.newton_tol, step_tol=opt.step_tol, max_newton=opt.max_newton, growth=opt.growth,
+        max_angle=opt.max_angle, corner_ds=opt.corner_ds, follow="path",
+        bounds={"amplitude": (frontier, landing * (1 + 1e-6)), "mode_share": (opt.family_share, 2.0)})
+    res = continue_branch(problem, u, -t, back)
+    out = []
+    for i in range(len(res.u) - 1, 0, -1):
+        rec = {k: v[i] for k, v in res.records.items()}
+        if rec.get("mode_share", 1.0) < opt.family_share * (1 - 1e-6):
+            continue
+        tangent = res.u[i - 1] - res.u[i]
+        tangent /= max(np.linalg.norm(tangent), 1e-300)
+        out.append((res.u[i], int(res.newton_iterations[i]), res.residual_histories[i], rec, tangent))
+    return out
+
+
+def _orientation_safe(problem, u, t) -> float:
+    try:
+        _, J = problem.evaluate(u, jacobian=True)
+    except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError):
+        return 0.0
+    return _orientation(J, t)
 
 
 def _monitor(problem, u) -> dict:
@@ -425,6 +376,14 @@ def _monitor(problem, u) -> dict:
         return problem.monitor(u)
     except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError) as err:
         raise _Failure(f"monitor failed: {err}") from None
+
+
+def _pinned_monitor(problem, u) -> dict:
+    """:func:`_monitor` for the jumps, whose failures are PinnedFailure."""
+    try:
+        return _monitor(problem, u)
+    except _Failure as err:
+        raise PinnedFailure(str(err)) from None
 
 
 def _check_bound_names(bounds, rec: dict) -> None:

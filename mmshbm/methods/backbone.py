@@ -14,6 +14,7 @@ import numpy as np
 
 from .. import _validate as check
 from ..core.continuation import ContinuationOptions, continue_branch
+from ..core.resonances import internal_resonances
 from ..core.special_points import SpecialPoint
 from ..model.model import Model
 from ..results.branch import Branch
@@ -160,6 +161,10 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
         above = np.flatnonzero(amp > gap * (1 + 1e-9))
         if len(above) and above[0] > 0:
             special.insert(1, SpecialPoint("grazing", int(above[0])))
+    if "modal_shares" in rec and hasattr(problem, "tracked_frequencies"):
+        named = internal_resonances(rec["frequency"], rec["modal_shares"], problem.tracked_frequencies,
+                                    getattr(problem, "mode", 1))
+        special = sorted(special + named, key=lambda s: (s[1], s[0] == "endpoint"))
     log.info("%s backbone: %d points, status %s, %.3f s", method, n, res.status, elapsed)
     metadata = {
         "model": model.description, "method": method, "harmonics": int(getattr(problem, "H", 0)),

@@ -41,24 +41,23 @@ those scales produce.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from .. import _validate as check
 from ..core.condense import Condensation
 from ..core.contact_kernels import _mmshbm_eval, _mmshbm_monitor_multi
 from ..core.harmonics import check_harmonics
-from ..core.modal_energy import kinetic_energy_shares
 from ..model.contact import admissible_intervals
 from ..model.model import Model
+from .mms_hbm_family import FamilyMixin
+from .mms_hbm_signals import SignalsMixin
 
 __all__ = ["MMSHBMProblem"]
 
 _PROJECTIONS = ("exact", "sampled")
 
 
-class MMSHBMProblem:
+class MMSHBMProblem(SignalsMixin, FamilyMixin):
     """MMS-HBM on a :class:`Model`, as a continuation problem.
 
     Parameters
@@ -81,17 +80,22 @@ class MMSHBMProblem:
         Linear solver of the condensation.
     projection : {"exact", "sampled"}
         Harmonic projection of the contact law (see the module docstring).
+    poles : bool
+        Carry the poles of D_k that the backbone's frequency range contains as extra
+        unknowns η_jk (:mod:`mmshbm.core.poles`), so that kΩ = ω_j (an eigenfrequency
+        of the structure with its massless DOFs clamped) is a regular point.
 
     Notes
     -----
-    The scaled unknown vector is ``u = [a_0/s, a_1/s, ..., a_H/s, Ω/ω_ref]`` with
-    a_k ∈ R^{n_c} (``model.c`` order) and ``s`` the per-DOF length scale ``xscale``.
+    The scaled unknown vector is ``u = [a_0/s, a_1/s, ..., a_H/s, η/s_η, Ω/ω_ref]`` with
+    a_k ∈ R^{n_c} (``model.c`` order), ``s`` the per-DOF length scale ``xscale`` and η
+    the pole unknowns (``pole_set.pairs``; none when no pole lies in the range).
     """
 
     method = "mmshbm"
 
     def __init__(self, model: Model, harmonics: int = 5, n_samples: int | None = None,
-                 r=None, mode: int = 1, backend: str = "auto", projection: str = "exact"):
+                 r=None, mode: int = 1, backend: str = "auto", projection: str = "exact", poles: bool = True):
         if not isinstance(model, Model):
             raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
         model.require_massless_contacts("MMS-HBM")
@@ -147,14 +151,28 @@ class MMSHBMProblem:
         self._amp_in_c = self.amplitude_dof in c_list
         self._amp_index = c_list.index(self.amplitude_dof) if self._amp_in_c else -1
 
+        self.pole_set = None
+        if poles:
+            from ..core.poles import PoleSet
+
+            self.pole_set = PoleSet(self.cond, model, self.H, self._omega_range())
+        n_p = self.pole_set.n if self.pole_set is not None else 0
+        self.n_poles = n_p
+        self._pole_k = self.pole_set.k if n_p else np.zeros(0, dtype=np.int64)
+        self._pole_b = self.pole_set.b if n_p else np.zeros((0, self.n_c))
+        self._pole_w2 = self.pole_set.omega2 if n_p else np.zeros(0)
+
         length = self.gap if self.gap > 0 else 1.0
         shape = np.abs(self.mode_shape_c)
         self.xscale = length * np.maximum(shape, 1e-3 * shape.max())
-        self.colscale = np.concatenate([np.tile(self.xscale, self.H + 1), [self.omega_ref]])
         fscale = np.abs(self.cond.D0) @ self.xscale
         fscale[self.cdof] = self.contact_stiffness_each * length
-        self.rowscale = np.tile(fscale, self.H + 1)
-        self.n_unknowns = (self.H + 1) * self.n_c + 1
+        # η_jk enters the force as b_j η: scale it so that b_j η is the force scale
+        bnorm = np.abs(self._pole_b).max(axis=1) if n_p else np.zeros(0)
+        self.eta_scale = np.where(bnorm > 0, fscale.max() / np.maximum(bnorm, 1e-300), 1.0)
+        self.colscale = np.concatenate([np.tile(self.xscale, self.H + 1), self.eta_scale, [self.omega_ref]])
+        self.rowscale = np.concatenate([np.tile(fscale, self.H + 1), self._pole_w2 * self.eta_scale])
+        self.n_unknowns = (self.H + 1) * self.n_c + n_p + 1
 
         H, N = self.H, self.N
         self._tau = 2 * np.pi * np.arange(N) / N
@@ -179,11 +197,30 @@ class MMSHBMProblem:
         if np.shape(u) != (self.n_unknowns,):
             raise ValueError(f"u must have shape ({self.n_unknowns},), got {np.shape(u)}")
         x = u * self.colscale
-        return x[:-1].reshape(self.H + 1, self.n_c), float(x[-1])
+        n_a = (self.H + 1) * self.n_c
+        return x[:n_a].reshape(self.H + 1, self.n_c), float(x[-1])
 
-    def pack(self, a: np.ndarray, omega: float) -> np.ndarray:
-        """(a (H+1, n_c), Ω) -> scaled unknowns."""
-        return np.concatenate([np.asarray(a, dtype=float).ravel(), [omega]]) / self.colscale
+    def unpack_eta(self, u: np.ndarray) -> np.ndarray:
+        """The pole unknowns η (n_p,) of the scaled unknowns (see :mod:`mmshbm.core.poles`)."""
+        n_a = (self.H + 1) * self.n_c
+        return np.asarray(u, dtype=float)[n_a:n_a + self.n_poles] * self.eta_scale
+
+    def pack(self, a: np.ndarray, omega: float, eta: np.ndarray | None = None) -> np.ndarray:
+        """(a (H+1, n_c), Ω[, η]) -> scaled unknowns; η defaults to its value at that (a, Ω)
+        (b_jᵀ a_k / (ω_j² − (kΩ)²))."""
+        a = np.asarray(a, dtype=float)
+        if eta is None:  # b_jᵀa_k/(ω_j² − (kΩ)²); 0 exactly on a pole (where b_jᵀa_k = 0 too)
+            gap = self._pole_w2 - (self._pole_k * omega) ** 2
+            ba = np.array([self._pole_b[p] @ a[k] for p, k in enumerate(self._pole_k)])
+            eta = np.divide(ba, gap, out=np.zeros(len(gap)), where=gap != 0)
+        return np.concatenate([a.ravel(), np.asarray(eta, dtype=float), [omega]]) / self.colscale
+
+    def harmonic_columns(self, k: int) -> np.ndarray:
+        """Indices in u of the unknowns of harmonic k: a_k and the η of its poles."""
+        n_a = (self.H + 1) * self.n_c
+        own = np.arange(k * self.n_c, (k + 1) * self.n_c)
+        poles = n_a + np.flatnonzero(self._pole_k == k)
+        return np.concatenate([own, poles]).astype(int)
 
     def linear_point(self, amplitude: float) -> np.ndarray:
         """Scaled unknowns of the linear mode whose amplitude DOF swings ``amplitude``."""
@@ -197,6 +234,17 @@ class MMSHBMProblem:
         t[-1] = 0.0
         return t / np.linalg.norm(t)
 
+    def _omega_range(self) -> tuple[float, float]:
+        """Ω (rad/s) the backbone can reach: from the linear frequency up to the zero-gap
+        (bilinear) limit of a single one-sided contact, else the frequency with every
+        contact DOF held at its stop."""
+        model = self.model
+        if len(model.contacts) == 1 and model.contacts[0].dof == self.amplitude_dof and self.mode == 1:
+            top = model.zero_gap_frequency()
+        else:
+            top = _held_frequency(model, self.contact_dofs, self.mode)
+        return self.omega_ref, 2 * np.pi * max(top, self.linear_frequency)
+
     # ------------------------------------------------------------------ residual
     def _condensed(self, omega: float, derivative: bool):
         """(D, dD) of :meth:`Condensation.dynamic_stiffness` at Ω (dD None unless
@@ -204,7 +252,9 @@ class MMSHBMProblem:
         last, D, dD = self._cached
         if last == omega and (dD is not None or not derivative):
             return D, dD
-        if derivative:
+        if self.pole_set is not None and self.pole_set.n:
+            D, dD = self.pole_set.dynamic_stiffness(omega, derivative)
+        elif derivative:
             D, dD = self.cond.dynamic_stiffness(omega, self.H, derivative=True)
         else:
             D, dD = self.cond.dynamic_stiffness(omega, self.H, derivative=False), None
@@ -217,209 +267,55 @@ class MMSHBMProblem:
         D, dD = self._condensed(omega, jacobian)
         R = np.empty(self.n_unknowns - 1)
         J = np.empty((self.n_unknowns - 1, self.n_unknowns)) if jacobian else self._J_dummy
-        _mmshbm_eval(D, D if dD is None else dD, np.ascontiguousarray(a), self.cdof, self.lo, self.hi,
-                     self.r_each, self.projection == "exact", self._cos_table, self._sin_table, self._tau,
-                     self.rowscale, self.colscale, jacobian, R, J, *self._work)
+        _mmshbm_eval(D, D if dD is None else dD, np.ascontiguousarray(a), self.unpack_eta(u), omega,
+                     self._pole_k, self._pole_b, self._pole_w2, self.cdof, self.lo, self.hi, self.r_each,
+                     self.projection == "exact", self._cos_table, self._sin_table, self._tau, self.rowscale,
+                     self.colscale, jacobian, R, J, *self._work)
         return (R, J) if jacobian else R
-
-    # ------------------------------------------------------------------ results
-    def _force_series(self, a: np.ndarray, omega: float) -> np.ndarray:
-        """Cosine coefficients (H+1, n_k) of the stop force λ at each contact DOF: −f where
-        the DOF has an upper stop, +f where it has only a lower one (in a clearance λ is
-        positive at the upper stop and negative at the lower one)."""
-        D, _ = self._condensed(omega, False)
-        F = np.einsum("kij,kj->ki", D, a)[:, self.cdof]
-        return np.where(np.isfinite(self.hi)[None, :], -F, F)
-
-    def contact_signals(self, u: np.ndarray, tau: np.ndarray | None = None):
-        """Contact DOF displacement q(τ) (m) and stop force λ(τ) (N) on a grid.
-
-        Returns (tau, q, lam): with one contact DOF ``q`` and ``lam`` have the shape of
-        ``tau``; with several, shape (n_contact_dofs, len(tau)) in the order of
-        ``contact_dofs``. ``tau`` defaults to a fine grid over one period. λ is the
-        truncated series of the force the structure needs (−f at an upper stop, +f at a
-        lower one).
-        """
-        a, omega = self.unpack(u)
-        lam_k = self._force_series(a, omega)
-        if tau is None:
-            tau, C = self._tau_fine, self._cos_fine
-        else:
-            tau = np.asarray(tau, dtype=float)
-            C = np.cos(np.outer(np.arange(self.H + 1), tau))
-        q = a[:, self.cdof].T @ C
-        lam = lam_k.T @ C
-        if len(self.cdof) == 1:
-            return tau, q[0], lam[0]
-        return tau, q, lam
-
-    def coefficients(self, u: np.ndarray) -> np.ndarray:
-        """NLvib-ordered coefficients of all DOFs, shape (n_dof, 2H+1) (sines are zero)."""
-        a, omega = self.unpack(u)
-        Qc = np.zeros((self.n_c, 2 * self.H + 1))
-        Qc[:, 0] = a[0]
-        Qc[:, 1::2] = a[1:].T
-        Q = np.zeros((self.model.n_dof, 2 * self.H + 1))
-        Q[self.model.c] = Qc
-        Q[self.model.l] = self.cond.recover(omega, Qc)
-        return Q
-
-    def time_signals(self, u: np.ndarray, dofs=None, n_samples: int = 256):
-        """(t (n_samples,) in s, q (n_dofs, n_samples)) over one period for ``dofs``
-        (all DOFs when None)."""
-        n_samples = check.integer("n_samples", n_samples, minimum=1)
-        a, omega = self.unpack(u)
-        Q = self.coefficients(u)
-        if dofs is not None:
-            dofs = np.atleast_1d(np.asarray(dofs))
-            if dofs.dtype.kind not in "iu" or np.any((dofs < -self.model.n_dof) | (dofs >= self.model.n_dof)):
-                raise ValueError(f"dofs must be integer indices in [0, {self.model.n_dof - 1}], got {dofs}")
-            Q = Q[dofs]
-        tau = 2 * np.pi * np.arange(n_samples) / n_samples
-        k = np.arange(1, self.H + 1)
-        q = Q[:, :1] + Q[:, 1::2] @ np.cos(np.outer(k, tau)) + Q[:, 2::2] @ np.sin(np.outer(k, tau))
-        return tau / omega, q
-
-    def contact_force(self, u: np.ndarray, n_samples: int = 256):
-        """(t (n_samples,) in s, λ in N) over one period (shape (n_samples,) with one
-        contact DOF, (n_contact_dofs, n_samples) with several)."""
-        n_samples = check.integer("n_samples", n_samples, minimum=1)
-        a, omega = self.unpack(u)
-        tau = 2 * np.pi * np.arange(n_samples) / n_samples
-        _, _, lam = self.contact_signals(u, tau)
-        return tau / omega, lam
-
-    def harmonic_content(self, u: np.ndarray, dof: int | None = None) -> np.ndarray:
-        """|Q_k| for k = 0..H of ``dof`` (default the amplitude DOF); shape (H+1,)."""
-        dof = self.amplitude_dof if dof is None else check.integer("dof", dof)
-        if not 0 <= dof < self.model.n_dof:
-            raise ValueError(f"dof must be in [0, {self.model.n_dof - 1}], got {dof}")
-        Q = self.coefficients(u)[dof]
-        return np.concatenate([[abs(Q[0])], np.hypot(Q[1::2], Q[2::2])])
-
-    def _amplitude_row(self, a: np.ndarray, omega: float) -> np.ndarray:
-        """Cosine coefficients (H+1,) of the amplitude DOF's motion."""
-        if self._amp_in_c:
-            return np.ascontiguousarray(a[:, self._amp_index])
-        Qc = np.zeros((self.n_c, 2 * self.H + 1))
-        Qc[:, 0] = a[0]
-        Qc[:, 1::2] = a[1:].T
-        Ql = self.cond.recover(omega, Qc)
-        row = Ql[int(np.searchsorted(self.model.l, self.amplitude_dof))]
-        return np.concatenate([[row[0]], row[1::2]])
-
-    def amplitude_and_gradient(self, u: np.ndarray) -> tuple[float, np.ndarray]:
-        """The amplitude (m) and its gradient with respect to the scaled unknowns.
-
-        The amplitude is the largest value of a smooth periodic function over τ, so its
-        derivative is that of the function at the maximiser (envelope theorem), located
-        on the fine grid and refined by Newton on q′(τ) = 0.
-        """
-        a, omega = self.unpack(u)
-        row = self._amplitude_row(a, omega)
-        sign = self._amp_sign
-        q = row @ self._cos_fine
-        y = sign * q if sign != 0.0 else np.abs(q)
-        tau = self._tau_fine[int(np.argmax(y))]
-        k = np.arange(self.H + 1)
-        for _ in range(8):  # Newton on q'(τ) = 0 at the peak
-            d1 = -(k * row) @ np.sin(k * tau)
-            d2 = -(k * k * row) @ np.cos(k * tau)
-            if d2 == 0.0:
-                break
-            step = d1 / d2
-            tau -= step
-            if abs(step) < 1e-14:
-                break
-        value = row @ np.cos(k * tau)
-        s = sign if sign != 0.0 else math.copysign(1.0, value)
-        grad = np.zeros(self.n_unknowns)
-        if self._amp_in_c:
-            grad[self._amp_index:-1:self.n_c] = s * np.cos(k * tau)
-        else:  # finite differences through the recovery (amplitude DOF with mass)
-            h = 1e-7
-            for i in range(self.n_unknowns):
-                e = np.zeros(self.n_unknowns)
-                e[i] = h
-                ap, om_p = self.unpack(u + e)
-                am, om_m = self.unpack(u - e)
-                diff = self._amplitude_row(ap, om_p) - self._amplitude_row(am, om_m)
-                grad[i] = s * (diff @ np.cos(k * tau)) / (2 * h)
-            return float(s * value), grad
-        grad[-1] = 0.0
-        return float(s * value), grad * self.colscale
-
-    # ------------------------------------------------------------------ modal energy
-    def _modal_basis(self):
-        """Open-contact modes tracked for the energy shares: those below (H + 1) times the
-        first clamped-contact frequency (an upper bound of Ω on the backbone), at least the
-        starting mode and the next, at most 30."""
-        if self._modal is None:
-            model = self.model
-            n_l = len(model.l)
-            f_track = (self.H + 1) * self._upper_frequency()
-            n = min(n_l, 30, max(self.mode + 1, 2))
-            freqs, _ = model.linear_modes(min(n_l, 30))
-            n = max(n, int(np.searchsorted(freqs, f_track)))
-            n = min(n, n_l, 30)
-            freqs, modes = model.linear_modes(n)
-            Phi = modes[model.l]
-            M_ll = model.blocks["M_ll"]
-            self._modal = (freqs, Phi, np.ascontiguousarray((M_ll @ Phi).T), M_ll)
-        return self._modal
-
-    def _upper_frequency(self) -> float:
-        """First eigenfrequency (Hz) of the structure with its massless DOFs clamped."""
-        import scipy.linalg as la
-
-        b = self.model.blocks
-        if len(self.model.l) <= 600:
-            w2 = la.eigh(b["K_ll"].toarray(), b["M_ll"].toarray(), eigvals_only=True, subset_by_index=(0, 0))
-            return float(np.sqrt(max(w2[0], 0.0)) / (2 * np.pi))
-        import scipy.sparse.linalg as spla
-
-        w2 = spla.eigsh(b["K_ll"], k=1, M=b["M_ll"], sigma=0.0, which="LM", v0=np.ones(len(self.model.l)))[0]
-        return float(np.sqrt(max(w2[0], 0.0)) / (2 * np.pi))
-
-    @property
-    def tracked_frequencies(self) -> np.ndarray:
-        """Open-contact linear frequencies (Hz) of the modes in ``records["modal_shares"]``."""
-        return self._modal_basis()[0]
-
-    def modal_shares(self, u: np.ndarray) -> np.ndarray:
-        """Period-mean kinetic energy share of each tracked open-contact mode j (rows) in
-        each harmonic k (columns), shape (n_tracked, H+1)
-        (:func:`~mmshbm.core.modal_energy.kinetic_energy_shares`)."""
-        a, omega = self.unpack(u)
-        freqs, Phi, MPhiT, M_ll = self._modal_basis()
-        Qc = np.zeros((self.n_c, 2 * self.H + 1))
-        Qc[:, 0] = a[0]
-        Qc[:, 1::2] = a[1:].T
-        Ql = self.cond.recover(omega, Qc)
-        shares, _ = kinetic_energy_shares(Phi, MPhiT, Ql, omega, M_ll)
-        return shares
 
     def monitor(self, u: np.ndarray) -> dict:
         """The per-point quantities of a backbone: frequency (Hz), amplitude (m), energy
-        (J), contact_force_max (N), mode_share (kinetic energy share of the starting mode)
-        and modal_shares (:meth:`modal_shares`)."""
+        (J), contact_force_max (N), mode_share (share of the kinetic energy in the starting
+        mode at the fundamental harmonic: what makes a point a member of the starting mode's
+        family, rather than a superharmonic or an internal resonance) and modal_shares
+        (:meth:`modal_shares`)."""
         a, omega = self.unpack(u)
         D, dD = self._condensed(omega, True)
         out = np.empty(3)
         n_fine = self._cos_fine.shape[1]
         a = np.ascontiguousarray(a)
-        _mmshbm_monitor_multi(D, dD, a, self.cdof, self.lo, self.hi, self.r_each, omega,
-                              self._amplitude_row(a, omega), self._amp_sign, self._cos_fine, np.empty(n_fine),
-                              np.empty(n_fine), out)
+        eta = self.unpack_eta(u)
+        _mmshbm_monitor_multi(D, dD, a, eta, self._pole_k, self._pole_b, self.cdof, self.lo, self.hi,
+                              self.r_each, omega, self._amplitude_row(a, omega, eta), self._amp_sign,
+                              self._cos_fine,
+                              np.empty(n_fine), np.empty(n_fine), out)
         shares = self.modal_shares(u)
         return {
             "frequency": omega / (2 * np.pi),
             "amplitude": float(out[0]),
             "energy": float(out[1]),
             "contact_force_max": float(out[2]),
-            "mode_share": float(shares[self.mode - 1].sum()),
+            "mode_share": float(shares[self.mode - 1, 1]),
             "modal_shares": shares,
         }
+
+
+def _held_frequency(model: Model, dofs, mode: int) -> float:
+    """Frequency (Hz) of linear mode ``mode`` with the DOFs ``dofs`` held fixed (all
+    contacts closed at once: the upper end of a backbone's frequency range)."""
+    import scipy.linalg as la
+
+    keep = np.setdiff1d(np.arange(model.n_dof), np.asarray(dofs))
+    M = model.M[keep][:, keep]
+    K = model.K[keep][:, keep]
+    massless = np.asarray(abs(M).sum(axis=1)).ravel() == 0
+    l, c = np.flatnonzero(~massless), np.flatnonzero(massless)
+    Kd = K.toarray()
+    K_red = Kd[np.ix_(l, l)]
+    if len(c):
+        K_red = K_red - Kd[np.ix_(l, c)] @ np.linalg.solve(Kd[np.ix_(c, c)], Kd[np.ix_(c, l)])
+    w2 = la.eigh(K_red, M.toarray()[np.ix_(l, l)], eigvals_only=True, subset_by_index=(mode - 1, mode - 1))
+    return float(np.sqrt(max(w2[0], 0.0)) / (2 * np.pi))
 
 
 def _condensed_energy(D: np.ndarray, dD: np.ndarray, a: np.ndarray, omega: float) -> float:

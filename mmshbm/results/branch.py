@@ -295,19 +295,67 @@ class Branch:
         at ``point``; shape (H+1,)."""
         return self._require_solver().harmonic_content(self.states[self._index(point)], dof)
 
-    def frequency_at(self, amplitude: float) -> float:
-        """Frequency (Hz) at ``amplitude`` (m), linearly interpolated on the first
-        stretch of the branch that reaches it; NaN if the branch never does. A last point
-        refined onto an amplitude bound counts within 1e-6 relative (the bound's secant
-        refinement stops there)."""
+    def family_front(self) -> np.ndarray:
+        """Indices of the points that make up the backbone of the starting mode's family:
+        points on the family (``records["on_family"]``, all points when the branch has no
+        such record) whose amplitude is at least every earlier family point's. Excursions
+        into internal-resonance tongues, and the way back down a loop, are left out."""
+        on = np.asarray(self.records.get("on_family", np.ones(len(self))), dtype=float) > 0.5
+        front, best = [], -np.inf
+        for i in range(len(self)):
+            if on[i] and self.amplitude[i] >= best * (1 - 1e-9):
+                front.append(i)
+                best = max(best, float(self.amplitude[i]))
+        return np.array(front, dtype=int)
+
+    def frequency_at(self, amplitude: float, *, interpolate: bool = False, tol: float = 1e-10) -> float:
+        """Frequency (Hz) of the backbone at ``amplitude`` (m).
+
+        By default the point is *solved*: Newton on the method's equations with the
+        amplitude pinned (:func:`mmshbm.core.pinned.solve_at_amplitude`), started between
+        the two neighbouring points of the family front (:meth:`family_front`), so the
+        answer is the one a run refined onto that amplitude gives (to the Newton
+        tolerance), not a secant between continuation points. NaN where the front does not
+        reach the amplitude or skips it (inside an internal-resonance tongue that the
+        branch jumped or passed: see ``special_points``).
+
+        Parameters
+        ----------
+        amplitude : float
+            m.
+        interpolate : bool
+            Linear interpolation between the neighbouring front points instead (no solve;
+            the 0.1 behaviour, with an error of the order of the curvature times the
+            step).
+        tol : float
+            Newton tolerance of the solve.
+        """
+        from ..core.pinned import PinnedFailure, solve_at_amplitude
+
+        a = float(amplitude)
+        front = self.family_front()
         A, f = self.amplitude, self.frequency
-        for i in range(len(A) - 1):
-            lo, hi = sorted((A[i], A[i + 1]))
-            if lo <= amplitude <= hi and hi > lo:
-                s = (amplitude - A[i]) / (A[i + 1] - A[i])
-                return float(f[i] + s * (f[i + 1] - f[i]))
-        if len(A) and np.isclose(A[-1], amplitude, rtol=1e-6, atol=0):
-            return float(f[-1])
+        for i in front:
+            if np.isclose(A[i], a, rtol=1e-9, atol=0):
+                return float(f[i])
+        jumps = {int(s[1]) for s in self.special_points if s[0] == "jump"}
+        for i, j in zip(front[:-1], front[1:], strict=False):
+            if not (min(A[i], A[j]) <= a <= max(A[i], A[j])) or A[i] == A[j]:
+                continue
+            if j != i + 1 or j in jumps:
+                return float("nan")  # a skipped interval
+            s = (a - A[i]) / (A[j] - A[i])
+            if interpolate:
+                return float(f[i] + s * (f[j] - f[i]))
+            solver = self._require_solver()
+            u0 = self.states[i] + s * (self.states[j] - self.states[i])
+            try:
+                u, _, _, _ = solve_at_amplitude(solver, u0, a, tol=tol, max_iter=30)
+                value = float(solver.monitor(u)["frequency"])
+            except (PinnedFailure, ArithmeticError, ValueError) as err:
+                log.warning("frequency_at(%g): the pinned solve failed (%s); interpolating", a, err)
+                return float(f[i] + s * (f[j] - f[i]))
+            return value
         return float("nan")
 
     def _index(self, point: int) -> int:

@@ -1,0 +1,216 @@
+"""Staying on the family of the starting mode: internal-resonance tongues and jumps.
+
+A backbone continued from a linear mode meets internal resonances where a harmonic k of
+the motion reaches another mode j (kΩ ≈ ω_j). There the branch of the conservative
+problem turns into a *tongue*: the frequency locks near ω_j/k while the energy moves into
+mode j. Arclength continuation follows the tongue. Sometimes the tongue comes back onto
+the starting mode's family above the amplitude where it left (a *passage*); sometimes it
+becomes the nonlinear mode of mode j and leads back down onto the family below that
+amplitude, and the path follower cycles (a *loop*), or it never comes back.
+
+:class:`FamilyGuard` watches the kinetic-energy share of the starting mode
+(``record["mode_share"]``, 0..1) and the amplitude of every accepted point:
+
+* a point is *on the family* when the starting mode carries at least ``family_share`` of
+  the kinetic energy (default a majority, 0.5);
+* the *frontier* is the largest amplitude reached on the family so far;
+* it asks for a **jump** when the branch left the family and has not come back above the
+  frontier within ``max_excursion`` steps, when it comes back onto the family 5 % or more
+  below the frontier (a loop), when it stays on the family without passing the frontier for
+  ``max_excursion`` steps, or when the step size fails at ``ds_min``.
+
+A jump (:func:`jump`) solves the problem with the amplitude pinned
+(:mod:`mmshbm.core.pinned`) slightly beyond the frontier, from a predictor extrapolated
+along the family (``problem.family_predictor`` if the problem has one, else a quadratic
+through the last clean family points), and accepts the result only if it is on the
+family; otherwise it tries further out (amplitude steps 2, 4, 8, ... % beyond the
+frontier). The continuation goes on from there; the skipped interval is recorded as a
+``"jump"`` special point. Points of the excursion stay on the branch with
+``record["on_family"] = 0``.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+
+from .pinned import PinnedFailure, solve_at_amplitude
+
+__all__ = ["FamilyGuard", "jump"]
+
+log = logging.getLogger(__name__)
+
+#: a branch that left the family and comes back onto it this far (relative) below the
+#: frontier is going back down the family: a loop (a passage may dip less than this)
+_LOOP_DROP = 0.05
+
+
+class FamilyGuard:
+    """Bookkeeping of the family's frontier along a branch (see the module docstring).
+
+    Parameters
+    ----------
+    family_share : float
+        Share of the kinetic energy in the starting mode above which a point is on the
+        family.
+    max_excursion : int
+        Steps allowed off the family (or on it below the frontier) before a jump.
+    """
+
+    def __init__(self, family_share: float, max_excursion: int):
+        self.family_share = family_share
+        self.max_excursion = max_excursion
+        self.frontier = -math.inf  # largest amplitude on the family so far
+        self.frontier_index = -1
+        self.away = 0  # steps since the frontier last moved
+        self.left = False  # the branch left the family since the frontier moved
+        self.clean = []  # indices of frontier points (for extrapolation)
+        self.shares = {}  # mode share of the frontier points
+        self.active = False  # the problem records mode_share
+
+    def observe(self, index: int, rec: dict) -> str | None:
+        """Register the accepted point ``index`` with record ``rec``; sets
+        ``rec["on_family"]`` and returns ``"jump"`` when a jump is due, else None."""
+        share = rec.get("mode_share")
+        if share is None:
+            return None
+        self.active = True
+        amplitude = float(rec["amplitude"])
+        on = bool(share >= self.family_share)
+        rec["on_family"] = 1.0 if on else 0.0
+        if on and amplitude >= self.frontier * (1 - 1e-9):
+            self.frontier = amplitude
+            self.frontier_index = index
+            self.away = 0
+            self.left = False
+            self.clean.append(index)
+            self.shares[index] = float(share)
+            return None
+        self.away += 1
+        if not on:
+            self.left = True
+        elif self.left and amplitude < self.frontier * (1 - _LOOP_DROP):
+            return "jump"  # back on the family well below the frontier: a loop
+        if self.away > self.max_excursion:
+            return "jump"
+        return None
+
+    def jumped(self, index: int, rec: dict) -> None:
+        """Register the point a jump landed on (a new frontier)."""
+        rec["on_family"] = 1.0
+        self.frontier = float(rec["amplitude"])
+        self.frontier_index = index
+        self.away = 0
+        self.left = False
+        self.clean.append(index)
+        self.shares[index] = float(rec.get("mode_share", 1.0))
+
+    def origins(self, amplitudes) -> list[int]:
+        """Frontier points to jump from, best first: in each of the amplitude windows
+        [0.8, 1], [0.6, 0.8) and [0.4, 0.6) times the frontier, the point where the
+        starting mode's share is largest (before an internal resonance drew energy from
+        it), then the frontier itself. ``amplitudes`` maps a point index to its amplitude."""
+        out = []
+        for lo, hi in ((0.8, 1.0 + 1e-12), (0.6, 0.8), (0.4, 0.6)):
+            window = [i for i in self.clean if lo * self.frontier <= amplitudes(i) < hi * self.frontier]
+            if window:
+                best = max(window, key=lambda i: (self.shares[i], i))
+                if best not in out:
+                    out.append(best)
+        if self.frontier_index >= 0 and self.frontier_index not in out:
+            out.append(self.frontier_index)
+        return out
+
+
+def _extrapolated(us: list, recs: list, clean: list, amplitude: float) -> np.ndarray:
+    """u at ``amplitude`` by a polynomial in the amplitude (degree <= 2) through the last
+    clean frontier points."""
+    idx = clean[-3:]
+    A = np.array([recs[i]["amplitude"] for i in idx])
+    U = np.array([us[i] for i in idx])
+    if len(idx) == 1 or np.ptp(A) == 0:
+        return U[-1].copy()
+    deg = min(len(idx) - 1, 2)
+    x = (A - A[-1]) / max(abs(A[-1]), 1e-300)
+    coef = np.polyfit(x, U, deg)
+    xt = (amplitude - A[-1]) / max(abs(A[-1]), 1e-300)
+    return sum(c * xt ** (deg - p) for p, c in enumerate(coef))
+
+
+def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, amplitude_max: float,
+         newton_tol: float, max_newton: int, monitor) -> tuple:
+    """Land on the family beyond the frontier.
+
+    Tries the origins of :meth:`FamilyGuard.origins` and, from each, amplitudes
+    ``frontier·(1 + step·2^i)``, i = 0..6 (capped at ``amplitude_max``); a landing counts
+    when Newton converges, the point is on the family, and its frequency is within 15 %
+    of the predicted one (else it found another branch).
+
+    Returns
+    -------
+    (u, iterations, history, record, tangent, target, origin) of the landing point.
+
+    Raises
+    ------
+    PinnedFailure
+        If no attempt lands on the family.
+    """
+    if guard.frontier_index < 0:
+        raise PinnedFailure("the branch has no family point to jump from")
+    frontier = float(recs[guard.frontier_index]["amplitude"])
+    f_frontier = float(recs[guard.frontier_index].get("frequency", math.nan))
+    predictor = getattr(problem, "family_predictor", None)
+    landing = getattr(problem, "family_landing", None)
+    last_error = "no attempt"
+    targets = []
+    for attempt in range(7):
+        target = min(frontier * (1.0 + step * 2.0**attempt), amplitude_max)
+        if not targets or target > targets[-1]:
+            targets.append(target)
+
+    def accept(u0, target, f_pred):
+        u, nit, hist, t = solve_at_amplitude(problem, u0, target, tol=newton_tol, max_iter=3 * max_newton)
+        rec = monitor(problem, u)
+        f = rec.get("frequency", math.nan)
+        if rec.get("mode_share", 1.0) < guard.family_share:
+            raise PinnedFailure(f"landed off the family (mode share {rec['mode_share']:.3f}) at {target:.4g}")
+        if math.isfinite(f_pred) and not abs(f - f_pred) <= 0.15 * abs(f_pred):
+            raise PinnedFailure(f"landed on another branch ({f:.4g} instead of about {f_pred:.4g})")
+        if math.isfinite(f_frontier) and not abs(f - f_frontier) <= 0.3 * abs(f_frontier):
+            raise PinnedFailure(f"landed on another branch ({f:.4g}, the family was at {f_frontier:.4g})")
+        return u, nit, hist, rec, t
+
+    if landing is not None:  # the problem's own landing (MMS-HBM: filtering the resonant harmonic)
+        excursion = recs[guard.frontier_index + 1:]
+        for origin in guard.origins(lambda i: float(recs[i]["amplitude"])):
+            try:
+                u0, target = landing(us[origin], recs[origin], excursion, amplitude_max, frontier)
+                u, nit, hist, rec, t = accept(u0, target, math.nan)
+                return u, nit, hist, rec, t, target, origin
+            except (PinnedFailure, ArithmeticError, ValueError, RuntimeError) as err:
+                last_error = f"filtered passage: {err}"
+                log.debug("jump from %d by filtering: %s", origin, last_error)
+    for origin in guard.origins(lambda i: float(recs[i]["amplitude"])):
+        A_o = float(recs[origin]["amplitude"])
+        u_o = us[origin]
+        for target in targets:
+            if target <= A_o * (1 + 1e-12):
+                continue
+            u0 = None
+            if predictor is not None:
+                try:
+                    u0 = predictor(u_o, A_o, target, amplitude_max)
+                except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
+                    u0 = None
+            if u0 is None:
+                u0 = _extrapolated(us, recs, [i for i in guard.clean if i <= origin], target)
+            try:
+                f_pred = monitor(problem, u0).get("frequency", math.nan)
+                u, nit, hist, rec, t = accept(u0, target, f_pred)
+                return u, nit, hist, rec, t, target, origin
+            except (PinnedFailure, ArithmeticError, ValueError) as err:
+                last_error = str(err)
+            log.debug("jump attempt from %d (%.4g) to %.4g: %s", origin, A_o, target, last_error)
+    raise PinnedFailure(f"jump from amplitude {frontier:.4g} failed: {last_error}")

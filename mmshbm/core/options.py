@@ -1,0 +1,197 @@
+"""The continuation driver's protocol, options and results (:mod:`mmshbm.core.continuation`)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+
+from .. import _validate as check
+
+__all__ = ["ContinuationOptions", "ContinuationProblem", "ContinuationResult", "ContinuationState"]
+
+
+class ContinuationProblem(Protocol):
+    """What the driver needs from a problem (all vectors in scaled units)."""
+
+    n_unknowns: int
+
+    def evaluate(self, u: np.ndarray, jacobian: bool = True):
+        """Residual (n−1,) and, if ``jacobian``, the Jacobian (n−1, n), dense or sparse."""
+
+    def monitor(self, u: np.ndarray) -> dict:
+        """Scalar quantities recorded per point (e.g. frequency, amplitude, energy)."""
+
+
+@dataclass(frozen=True)
+class ContinuationOptions:
+    """Options of the path follower (scaled arclength units). Validated on creation.
+
+    Attributes
+    ----------
+    ds, ds_min, ds_max : float
+        Initial, smallest and largest arclength step.
+    max_steps : int
+        Largest number of continuation steps (points after the first).
+    newton_tol : float
+        Convergence: infinity norm of the scaled residual.
+    step_tol : float
+        Convergence also when the scaled Newton update's infinity norm falls below
+        this while the residual is below √newton_tol: where the residual has a
+        round-off floor (near a pole of the condensed stiffness, kΩ close to an
+        eigenfrequency of the clamped-contact structure) the iterate is then known to
+        ``step_tol``.
+    max_newton : int
+        Newton iterations per corrector before the step counts as failed.
+    growth : float
+        ``a`` in ds *= 1 + a·((max_newton − nit)/max_newton)².
+    max_angle : float
+        Largest angle (rad) between consecutive tangents; more means the step jumped.
+    corner_ds : float
+        Below this step the angle test is waived: the sampled (AFT) contact residual is
+        piecewise smooth, so where a sample point changes its active set the branch
+        has a genuine corner that no step size removes.
+    bounds : Mapping[str, tuple[float, float]]
+        Stop when a monitored quantity leaves [lo, hi]; the last point is refined onto
+        the bound. E.g. ``{"amplitude": (0, 1e-2), "frequency": (0, 80)}``.
+    follow : {"family", "path"}
+        ``"family"`` (default): stay on the starting mode's family, jumping over
+        internal-resonance tongues the path follower cannot come back from
+        (:mod:`mmshbm.core.family`; needs a problem that records ``mode_share``).
+        ``"path"``: plain path following (to study a tongue).
+    family_share : float
+        Share (0..1) of the kinetic energy in the starting mode above which a point is on
+        its family.
+    max_excursion : int
+        Steps the branch may spend off the family (or below its frontier) before a jump.
+    jump_step : float
+        First relative amplitude step of a jump beyond the frontier (doubled per retry).
+    max_jumps : int
+        Jumps allowed per branch.
+    """
+
+    ds: float = 0.1
+    ds_min: float = 1e-7
+    ds_max: float = 2.0
+    max_steps: int = 1000
+    newton_tol: float = 1e-10
+    step_tol: float = 1e-8
+    max_newton: int = 10
+    growth: float = 0.5
+    max_angle: float = math.radians(30.0)
+    corner_ds: float = 1e-4
+    bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
+    follow: str = "family"
+    family_share: float = 0.5
+    max_excursion: int = 60
+    jump_step: float = 0.02
+    max_jumps: int = 50
+
+    def __post_init__(self):
+        ds_min = check.positive("ds_min", self.ds_min)
+        ds = check.positive("ds", self.ds)
+        ds_max = check.positive("ds_max", self.ds_max)
+        if not ds_min <= ds <= ds_max:
+            raise ValueError(f"need ds_min <= ds <= ds_max, got {ds_min} <= {ds} <= {ds_max}")
+        check.integer("max_steps", self.max_steps, minimum=1)
+        check.positive("newton_tol", self.newton_tol)
+        check.positive("step_tol", self.step_tol)
+        check.integer("max_newton", self.max_newton, minimum=1)
+        check.positive("corner_ds", self.corner_ds)
+        check.non_negative("growth", self.growth)
+        if self.follow not in ("family", "path"):
+            raise ValueError(f"follow must be 'family' or 'path', got {self.follow!r}")
+        share = check.real_number("family_share", self.family_share)
+        if not 0.0 < share < 1.0:
+            raise ValueError(f"family_share must be in (0, 1), got {self.family_share!r}")
+        check.integer("max_excursion", self.max_excursion, minimum=1)
+        check.positive("jump_step", self.jump_step)
+        check.integer("max_jumps", self.max_jumps, minimum=0)
+        angle = check.positive("max_angle", self.max_angle)
+        if angle > math.pi:
+            raise ValueError(f"max_angle must be <= pi, got {angle}")
+        for name, bound in dict(self.bounds).items():
+            try:
+                lo, hi = (float(b) for b in bound)
+            except (TypeError, ValueError):
+                raise ValueError(f"bounds[{name!r}] must be a pair (lo, hi), got {bound!r}") from None
+            if not lo < hi:
+                raise ValueError(f"bounds[{name!r}] must satisfy lo < hi, got {bound!r}")
+
+
+@dataclass
+class ContinuationResult:
+    """The converged points of a branch and why it stopped.
+
+    Attributes
+    ----------
+    u : ndarray, shape (n_points, n)
+        Scaled unknowns per point.
+    records : dict[str, ndarray]
+        Monitored quantities per point (each shape (n_points,) or (n_points, ...)).
+    newton_iterations : ndarray of int, shape (n_points,)
+    step_size : ndarray, shape (n_points,)
+        Arclength step that led to each point (0 for the first).
+    residual_histories : list of ndarray
+        Corrector residual norms per Newton iteration, per point.
+    special_points : list of (str, int)
+        ("start", 0), ("fold", i), bound hits, and ("endpoint", last).
+    status : str
+        Why the branch stopped: "max_steps", "bound:<name>", "ds_min: ...",
+        "interrupted", "start failed: ...".
+    tangent : ndarray, shape (n,) or None
+        Unit tangent at the last point (None if no point converged).
+    next_ds : float
+        The step the driver would have tried next.
+    steps : int
+        Continuation steps taken (points after the first).
+    """
+
+    u: np.ndarray
+    records: dict
+    newton_iterations: np.ndarray
+    step_size: np.ndarray
+    residual_histories: list
+    special_points: list
+    status: str
+    tangent: np.ndarray | None = None
+    next_ds: float = math.nan
+    steps: int = 0
+
+
+@dataclass
+class ContinuationState:
+    """Everything the driver needs to go on from its last accepted point, as if it had
+    never stopped (what a checkpoint file stores; see :mod:`mmshbm.core.checkpoint`).
+
+    Attributes
+    ----------
+    u : list of ndarray, each shape (n,)
+        Scaled unknowns of the points so far.
+    records : list of dict
+        Monitored quantities per point.
+    newton_iterations : list of int
+    step_size : list of float
+    residual_histories : list of ndarray
+    special_points : list of (str, int)
+        Special points so far (no "endpoint").
+    tangent : ndarray, shape (n,)
+        Unit tangent at the last point.
+    ds : float
+        The step to try next.
+    steps : int
+        Continuation steps taken so far.
+    """
+
+    u: list
+    records: list
+    newton_iterations: list
+    step_size: list
+    residual_histories: list
+    special_points: list
+    tangent: np.ndarray
+    ds: float
+    steps: int

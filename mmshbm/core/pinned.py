@@ -1,0 +1,124 @@
+"""Points pinned by a constraint: the solution of the continuation problem at a given
+amplitude.
+
+The continuation problem has n−1 equations in n unknowns; fixing a scalar function of the
+unknowns, here the amplitude A(u) = A*, closes it:
+
+    [R(u); A(u) − A*] = 0,        Jacobian [J; ∇A(u)ᵀ].
+
+Newton on this system gives the point of the branch at exactly that amplitude (what
+``Branch.frequency_at`` reports, and where a jump over an internal-resonance tongue lands).
+The amplitude is the largest excursion of a DOF over the period; problems that know its
+gradient provide ``amplitude_and_gradient(u) -> (A, ∇A)`` (MMS-HBM: envelope theorem);
+otherwise it is differenced from ``monitor(u)["amplitude"]``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .bordered import bordered_solve
+
+__all__ = ["amplitude_and_gradient", "solve_at_amplitude", "PinnedFailure"]
+
+
+class PinnedFailure(ArithmeticError):
+    """Newton on the pinned system did not converge (the message says why)."""
+
+
+def amplitude_and_gradient(problem, u: np.ndarray, h: float = 1e-7) -> tuple[float, np.ndarray]:
+    """(A(u), ∇A(u)) from the problem, or by central differences of its monitor."""
+    if hasattr(problem, "amplitude_and_gradient"):
+        return problem.amplitude_and_gradient(u)
+    value = float(problem.monitor(u)["amplitude"])
+    grad = np.empty(len(u))
+    for i in range(len(u)):
+        e = np.zeros(len(u))
+        e[i] = h
+        grad[i] = (problem.monitor(u + e)["amplitude"] - problem.monitor(u - e)["amplitude"]) / (2 * h)
+    return value, grad
+
+
+def solve_at_amplitude(problem, u0: np.ndarray, amplitude: float, *, tol: float = 1e-10, max_iter: int = 20,
+                       step_tol: float = 1e-8, solve=None) -> tuple[np.ndarray, int, np.ndarray, np.ndarray]:
+    """Newton on [R(u); A(u)/A* − 1] = 0 from ``u0``.
+
+    Parameters
+    ----------
+    problem : ContinuationProblem
+    u0 : ndarray, shape (n,)
+        Start (scaled unknowns), e.g. interpolated between neighbouring branch points.
+    amplitude : float
+        A* (m), > 0.
+    tol : float
+        Infinity norm of the scaled residual (the amplitude row relative).
+    max_iter : int
+    step_tol : float
+        Also converged when the full Newton update's infinity norm is below this while the
+        residual is below √tol (a round-off floor near a pole of the condensed stiffness,
+        as in :func:`mmshbm.core.continuation.newton`).
+    solve : callable(J_bordered_rows, rhs), optional
+        Solver of the bordered system ``[J; g] x = rhs`` (default: the continuation's).
+
+    Returns
+    -------
+    u, iterations, residual history, unit tangent of the branch at u (oriented to
+    increasing amplitude)
+
+    Raises
+    ------
+    PinnedFailure
+        No convergence, a singular system or a non-finite residual.
+    """
+    if not amplitude > 0:
+        raise ValueError(f"amplitude must be positive, got {amplitude!r}")
+    solve = solve or bordered_solve
+    u = np.array(u0, dtype=float)
+    history = []
+    du_norm = math.inf
+    for it in range(max_iter + 1):
+        try:
+            R, J = problem.evaluate(u, jacobian=True)
+            A, g = amplitude_and_gradient(problem, u)
+        except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError) as err:
+            raise PinnedFailure(f"evaluation failed: {err}") from None
+        c = A / amplitude - 1.0
+        norm = max(float(np.abs(R).max()) if R.size else 0.0, abs(c))
+        history.append(norm)
+        if not math.isfinite(norm):
+            raise PinnedFailure("non-finite residual")
+        if norm <= tol or (du_norm <= step_tol and norm <= math.sqrt(tol)):
+            rhs = np.zeros(len(u))
+            rhs[-1] = 1.0
+            t = solve(J, g / amplitude, rhs)
+            if not np.all(np.isfinite(t)):
+                raise PinnedFailure("singular system at the solution")
+            t /= np.linalg.norm(t)
+            return u, it, np.array(history), t
+        if it == max_iter:
+            break
+        rhs = np.empty(len(u))
+        rhs[:-1] = R
+        rhs[-1] = c
+        du = solve(J, g / amplitude, rhs)
+        if not np.all(np.isfinite(du)):
+            raise PinnedFailure("singular system")
+        du_norm = float(np.abs(du).max())
+        # backtracking: halve the step while the residual grows (nonsmooth, and far from
+        # the solution a full step can land on another branch)
+        lam = 1.0
+        for _ in range(6):
+            trial = u - lam * du
+            try:
+                R_t = problem.evaluate(trial, jacobian=False)
+                A_t, _ = amplitude_and_gradient(problem, trial)
+                n_t = max(float(np.abs(R_t).max()), abs(A_t / amplitude - 1.0))
+            except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError):
+                n_t = math.inf
+            if n_t < norm or lam < 0.05:
+                break
+            lam *= 0.5
+        u = u - lam * du
+    raise PinnedFailure(f"no convergence in {max_iter} iterations (residual {history[-1]:.2e})")

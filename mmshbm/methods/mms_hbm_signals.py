@@ -1,0 +1,153 @@
+"""What MMS-HBM gives beyond its residual: the motion of every DOF, contact forces,
+harmonic content and the amplitude with its gradient (a mixin of
+:class:`~mmshbm.methods.mms_hbm.MMSHBMProblem`)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .. import _validate as check
+
+__all__ = ["SignalsMixin"]
+
+
+class SignalsMixin:
+    """Signals of an MMS-HBM point (needs the attributes of ``MMSHBMProblem``)."""
+
+    # ------------------------------------------------------------------ results
+    def _recover(self, a: np.ndarray, omega: float, eta: np.ndarray) -> np.ndarray:
+        """Coefficients (n_l, 2H+1) of the DOFs with mass of the cosine motion a at Ω."""
+        Qc = np.zeros((self.n_c, 2 * self.H + 1))
+        Qc[:, 0] = a[0]
+        Qc[:, 1::2] = a[1:].T
+        if self.n_poles:
+            return self.pole_set.recover(omega, Qc, eta)
+        return self.cond.recover(omega, Qc)
+
+    def _force_series(self, a: np.ndarray, omega: float, eta: np.ndarray) -> np.ndarray:
+        """Cosine coefficients (H+1, n_k) of the stop force λ at each contact DOF: −f where
+        the DOF has an upper stop, +f where it has only a lower one (in a clearance λ is
+        positive at the upper stop and negative at the lower one)."""
+        D, _ = self._condensed(omega, False)
+        F = np.einsum("kij,kj->ki", D, a)
+        for p, k in enumerate(self._pole_k):
+            F[k] -= self._pole_b[p] * eta[p]
+        F = F[:, self.cdof]
+        return np.where(np.isfinite(self.hi)[None, :], -F, F)
+
+    def contact_signals(self, u: np.ndarray, tau: np.ndarray | None = None):
+        """Contact DOF displacement q(τ) (m) and stop force λ(τ) (N) on a grid.
+
+        Returns (tau, q, lam): with one contact DOF ``q`` and ``lam`` have the shape of
+        ``tau``; with several, shape (n_contact_dofs, len(tau)) in the order of
+        ``contact_dofs``. ``tau`` defaults to a fine grid over one period. λ is the
+        truncated series of the force the structure needs (−f at an upper stop, +f at a
+        lower one).
+        """
+        a, omega = self.unpack(u)
+        lam_k = self._force_series(a, omega, self.unpack_eta(u))
+        if tau is None:
+            tau, C = self._tau_fine, self._cos_fine
+        else:
+            tau = np.asarray(tau, dtype=float)
+            C = np.cos(np.outer(np.arange(self.H + 1), tau))
+        q = a[:, self.cdof].T @ C
+        lam = lam_k.T @ C
+        if len(self.cdof) == 1:
+            return tau, q[0], lam[0]
+        return tau, q, lam
+
+    def coefficients(self, u: np.ndarray) -> np.ndarray:
+        """NLvib-ordered coefficients of all DOFs, shape (n_dof, 2H+1) (sines are zero)."""
+        a, omega = self.unpack(u)
+        Q = np.zeros((self.model.n_dof, 2 * self.H + 1))
+        Q[self.model.c, 0] = a[0]
+        Q[self.model.c, 1::2] = a[1:].T
+        Q[self.model.l] = self._recover(a, omega, self.unpack_eta(u))
+        return Q
+
+    def time_signals(self, u: np.ndarray, dofs=None, n_samples: int = 256):
+        """(t (n_samples,) in s, q (n_dofs, n_samples)) over one period for ``dofs``
+        (all DOFs when None)."""
+        n_samples = check.integer("n_samples", n_samples, minimum=1)
+        a, omega = self.unpack(u)
+        Q = self.coefficients(u)
+        if dofs is not None:
+            dofs = np.atleast_1d(np.asarray(dofs))
+            if dofs.dtype.kind not in "iu" or np.any((dofs < -self.model.n_dof) | (dofs >= self.model.n_dof)):
+                raise ValueError(f"dofs must be integer indices in [0, {self.model.n_dof - 1}], got {dofs}")
+            Q = Q[dofs]
+        tau = 2 * np.pi * np.arange(n_samples) / n_samples
+        k = np.arange(1, self.H + 1)
+        q = Q[:, :1] + Q[:, 1::2] @ np.cos(np.outer(k, tau)) + Q[:, 2::2] @ np.sin(np.outer(k, tau))
+        return tau / omega, q
+
+    def contact_force(self, u: np.ndarray, n_samples: int = 256):
+        """(t (n_samples,) in s, λ in N) over one period (shape (n_samples,) with one
+        contact DOF, (n_contact_dofs, n_samples) with several)."""
+        n_samples = check.integer("n_samples", n_samples, minimum=1)
+        a, omega = self.unpack(u)
+        tau = 2 * np.pi * np.arange(n_samples) / n_samples
+        _, _, lam = self.contact_signals(u, tau)
+        return tau / omega, lam
+
+    def harmonic_content(self, u: np.ndarray, dof: int | None = None) -> np.ndarray:
+        """|Q_k| for k = 0..H of ``dof`` (default the amplitude DOF); shape (H+1,)."""
+        dof = self.amplitude_dof if dof is None else check.integer("dof", dof)
+        if not 0 <= dof < self.model.n_dof:
+            raise ValueError(f"dof must be in [0, {self.model.n_dof - 1}], got {dof}")
+        Q = self.coefficients(u)[dof]
+        return np.concatenate([[abs(Q[0])], np.hypot(Q[1::2], Q[2::2])])
+
+    def _amplitude_row(self, a: np.ndarray, omega: float, eta: np.ndarray) -> np.ndarray:
+        """Cosine coefficients (H+1,) of the amplitude DOF's motion."""
+        if self._amp_in_c:
+            return np.ascontiguousarray(a[:, self._amp_index])
+        Ql = self._recover(a, omega, eta)
+        row = Ql[int(np.searchsorted(self.model.l, self.amplitude_dof))]
+        return np.concatenate([[row[0]], row[1::2]])
+
+    def amplitude_and_gradient(self, u: np.ndarray) -> tuple[float, np.ndarray]:
+        """The amplitude (m) and its gradient with respect to the scaled unknowns.
+
+        The amplitude is the largest value of a smooth periodic function over τ, so its
+        derivative is that of the function at the maximiser (envelope theorem), located
+        on the fine grid and refined by Newton on q′(τ) = 0.
+        """
+        a, omega = self.unpack(u)
+        row = self._amplitude_row(a, omega, self.unpack_eta(u))
+        sign = self._amp_sign
+        q = row @ self._cos_fine
+        y = sign * q if sign != 0.0 else np.abs(q)
+        tau = self._tau_fine[int(np.argmax(y))]
+        k = np.arange(self.H + 1)
+        for _ in range(8):  # Newton on q'(τ) = 0 at the peak
+            d1 = -(k * row) @ np.sin(k * tau)
+            d2 = -(k * k * row) @ np.cos(k * tau)
+            if d2 == 0.0:
+                break
+            step = d1 / d2
+            tau -= step
+            if abs(step) < 1e-14:
+                break
+        value = row @ np.cos(k * tau)
+        s = sign if sign != 0.0 else math.copysign(1.0, value)
+        grad = np.zeros(self.n_unknowns)
+        if self._amp_in_c:
+            n_a = (self.H + 1) * self.n_c
+            grad[self._amp_index:n_a:self.n_c] = s * np.cos(k * tau)
+        else:  # finite differences through the recovery (amplitude DOF with mass)
+            h = 1e-7
+            for i in range(self.n_unknowns):
+                e = np.zeros(self.n_unknowns)
+                e[i] = h
+                ap, om_p = self.unpack(u + e)
+                am, om_m = self.unpack(u - e)
+                diff = (self._amplitude_row(ap, om_p, self.unpack_eta(u + e))
+                        - self._amplitude_row(am, om_m, self.unpack_eta(u - e)))
+                grad[i] = s * (diff @ np.cos(k * tau)) / (2 * h)
+            return float(s * value), grad
+        grad[-1] = 0.0
+        return float(s * value), grad * self.colscale
