@@ -22,7 +22,11 @@ import scipy.sparse.linalg as spla
 
 from ..model.model import Model
 
-__all__ = ["ContactTable", "contact_table", "static_contact_stiffness", "start_mode", "amplitude_sign"]
+__all__ = ["DEFAULT_PENALTY_FACTOR", "ContactTable", "contact_table", "static_contact_stiffness",
+           "start_mode", "amplitude_sign", "refined_peak"]
+
+#: Default penalty stiffness in units of the static stiffness at the contact k_c.
+DEFAULT_PENALTY_FACTOR = 1e3
 
 # Two linear frequencies closer than this (relative) span one eigenspace (a degenerate mode).
 _DEGENERATE_REL = 1e-8

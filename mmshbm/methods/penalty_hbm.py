@@ -77,7 +77,14 @@ from .. import _validate as check
 from ..core.harmonics import check_harmonics, default_n_samples, transform
 from ..core.kernels import _cosine_product_matrix
 from ..model.model import Model
-from ._contacts import amplitude_sign, contact_table, refined_peak, start_mode, static_contact_stiffness
+from ._contacts import (
+    DEFAULT_PENALTY_FACTOR,
+    amplitude_sign,
+    contact_table,
+    refined_peak,
+    start_mode,
+    static_contact_stiffness,
+)
 from ._penalty_kernels import _penalty_contacts, _penalty_hbm_jacobian
 from .mms_hbm import _mean_energy, _refined_max
 
@@ -85,8 +92,6 @@ __all__ = ["PenaltyHBMProblem", "DEFAULT_PENALTY_FACTOR", "penalty_n_samples"]
 
 log = logging.getLogger(__name__)
 
-#: Default penalty stiffness in units of the condensed static contact stiffness k_c.
-DEFAULT_PENALTY_FACTOR = 1e3
 
 
 @dataclass(frozen=True)

@@ -88,7 +88,22 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from .. import _validate as check
 from ..model.model import Model
-from ._shooting_kernels import _band_cholesky, _band_solve, _integrate
+from ._contacts import (
+    DEFAULT_PENALTY_FACTOR,
+    amplitude_sign,
+    contact_table,
+    refined_peak,
+    start_mode,
+    static_contact_stiffness,
+)
+from ._shooting_kernels import (
+    _band_cholesky,
+    _band_solve,
+    _band_solve_rows,
+    _integrate,
+    _integrate_multi,
+    lcp_solve,
+)
 from .mms_hbm import _refined_max
 
 __all__ = ["ShootingProblem", "DEFAULT_STEPS_PER_PERIOD", "FLOQUET_AUTO_LIMIT"]
@@ -149,7 +164,7 @@ class ShootingProblem:
     H = 0
 
     def __init__(self, model: Model, steps_per_period: int = DEFAULT_STEPS_PER_PERIOD, mode: int = 1,
-                 scheme: str = "avf", floquet: bool | str = "auto"):
+                 scheme: str = "avf", floquet: bool | str = "auto", penalty_stiffness=None):
         if not isinstance(model, Model):
             raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
         N = check.integer("steps_per_period", steps_per_period, minimum=8)
@@ -163,14 +178,16 @@ class ShootingProblem:
         self.model = model
         self.N = N
         self.mode = check.integer("mode", mode, minimum=1)
+        if self.mode > len(model.l):
+            raise ValueError(f"mode must be <= the number of DOFs with mass ({len(model.l)}), "
+                             f"got {self.mode}")
+        self.amplitude_dof = model.amplitude_dof  # ValueError naming it if it is needed and missing
+        self._amp_sign = amplitude_sign(model)
+        self.contacts = ct = contact_table(model)
         b = model.blocks
         self.n_c = len(model.c)
-        self.ci = model.contact_index
         self.gap = float(model.gap)
-        w = np.asarray(model.w_c, dtype=float)
         K_cc, K_lc = b["K_cc"], b["K_lc"]
-        e = la.solve(K_cc, w)
-        self.contact_stiffness = 1.0 / float(w @ e)
         K_open = model.reduced_stiffness
         M_ll = b["M_ll"]
         n = M_ll.shape[0]
@@ -196,26 +213,29 @@ class ShootingProblem:
         self._Mb = _lower_band(Mp, p)
         self._Kb = _lower_band(Kp, p)
         self._K = Kp.tocsr()
-        # contact: free gap h = gap + a·q_l, q_c = B q_l + e λ (permuted l order)
-        self.a = np.ascontiguousarray((-K_lc @ e)[perm])
-        self._B = np.ascontiguousarray(-la.solve(K_cc, K_lc.T)[:, perm])
-        self._e = e
+        self._B = np.ascontiguousarray(-la.solve(K_cc, K_lc.T)[:, perm]) if self.n_c else np.zeros((0, n))
+        self._init_contacts(K_cc, K_lc, penalty_stiffness)
 
-        freqs, modes = model.linear_modes(self.mode)
-        self.linear_frequency = float(freqs[-1])
+        freq, phi = start_mode(model, self.mode)
+        self.linear_frequency = freq
         self.omega_ref = 2 * np.pi * self.linear_frequency
-        phi = modes[:, -1]
-        contact = phi[model.contact_dof]
-        if abs(contact) < 1e-12 * np.max(np.abs(phi)):
+        amp = phi[self.amplitude_dof]
+        if abs(amp) < 1e-12 * np.max(np.abs(phi)):
             raise ValueError(f"linear mode {self.mode} does not move the contact DOF: no impact")
-        phi = phi / abs(contact)  # contact DOF: +stop_side (toward the stop)
+        if np.all(np.abs(phi[ct.dofs]) < 1e-12 * np.max(np.abs(phi))):
+            raise ValueError(f"linear mode {self.mode} does not move any contact DOF: no impact")
+        phi = phi / abs(amp)  # amplitude DOF ±1; the (first) contact DOF toward its stop
         self.mode_shape_l = phi[model.l][perm]
+        # sign of the amplitude DOF at t = 0 (the turning point farthest from the stop)
+        self._amp_sigma = -float(np.sign(phi[self.amplitude_dof]))
         length = self.gap if self.gap > 0 else 1.0
         shape_l = np.abs(self.mode_shape_l)
         s0 = length * np.maximum(shape_l, 1e-3 * shape_l.max())
-        shape_c = np.abs(phi[model.c])
+        # MMS-HBM's unknowns are the massless DOFs; without them the contact DOFs
+        ref = model.c if (model.massless_contacts and self.n_c) else ct.dofs
+        shape_c = np.abs(phi[ref])
         s0_c = length * np.maximum(shape_c, 1e-3 * shape_c.max())
-        rho = np.linalg.norm(self.mode_shape_l / s0) / np.linalg.norm(phi[model.c] / s0_c)
+        rho = np.linalg.norm(self.mode_shape_l / s0) / np.linalg.norm(phi[ref] / s0_c)
         self.xscale = s0 * rho
         self.colscale = np.concatenate([self.xscale, [self.omega_ref]])
         self.rowscale = self.omega_ref * self.xscale
@@ -223,6 +243,62 @@ class ShootingProblem:
         self.floquet = (n <= FLOQUET_AUTO_LIMIT) if floquet == "auto" else bool(floquet)
         self._S_cache = None
         self._traj_cache = None
+
+    def _init_contacts(self, K_cc, K_lc, penalty_stiffness) -> None:
+        """The contact law in terms of the DOFs with mass: free gaps h = gap + A q_l (permuted
+        order), the Delassus matrix G of the LCP at fixed q_l, and the massless DOFs'
+        recovery q_c = B q_l + E λ.
+
+        A massless contact i (w_i = −side_i e_dof in c): A_i = −(K_lc K_cc⁻¹ w_i)ᵀ,
+        G_ij = w_iᵀ K_cc⁻¹ w_j. A contact on a DOF with mass is a penalty spring k_p:
+        A_i = −side_i e_dof (in l), G_ii = 1/k_p (λ = k_p max(0, −h) solves its LCP).
+        """
+        model, ct = self.model, self.contacts
+        c, l = model.c, model.l
+        n_ct, n = ct.n, self.n_l
+        heavy = ~ct.massless
+        if heavy.any():
+            kp = _penalty_values(penalty_stiffness, model, ct)
+        elif penalty_stiffness is not None:
+            raise ValueError("penalty_stiffness applies to contact DOFs with mass; every contact DOF of this "
+                             "model is massless (its contact is exact)")
+        else:
+            kp = None
+        inv_perm = np.argsort(self.perm)
+        A = np.zeros((n_ct, n))
+        W = np.zeros((self.n_c, n_ct))
+        for i in range(n_ct):
+            if ct.massless[i]:
+                W[int(np.searchsorted(c, ct.dof[i])), i] = -float(ct.side[i])
+            else:
+                A[i, inv_perm[int(np.searchsorted(l, ct.dof[i]))]] = -float(ct.side[i])
+        E = la.solve(K_cc, W) if self.n_c else np.zeros((0, n_ct))
+        G = W.T @ E
+        if heavy.any():
+            G[np.ix_(heavy, heavy)] = np.diag(1.0 / kp[heavy])
+        self.penalty_stiffnesses = kp
+        if n_ct == 1 and ct.massless[0]:
+            # one massless contact: the arithmetic of mmshbm 0.1
+            w = W[:, 0]
+            e = la.solve(K_cc, w)
+            self.contact_stiffness = 1.0 / float(w @ e)
+            self.a = np.ascontiguousarray((-K_lc @ e)[self.perm])
+            self._e = e
+            E = e[:, None]
+            A = self.a[None, :]
+        else:
+            for i in np.flatnonzero(ct.massless):
+                A[i] = (-K_lc @ E[:, i])[self.perm]
+            if n_ct == 1:  # a penalty spring on a DOF with mass
+                self.contact_stiffness = float(kp[0])
+                self.a = np.ascontiguousarray(A[0])
+                self._e = E[:, 0] if self.n_c else np.zeros(0)
+            else:
+                self.contact_stiffness = float(np.min(1.0 / np.diag(G)))
+        self._A = np.ascontiguousarray(A)
+        self._E = np.ascontiguousarray(E)
+        self._G = np.ascontiguousarray(G)
+        self._gaps = np.ascontiguousarray(ct.gap)
 
     # ------------------------------------------------------------------ unknowns
     def unpack(self, u: np.ndarray) -> tuple[np.ndarray, float]:
@@ -255,16 +331,23 @@ class ShootingProblem:
     # ------------------------------------------------------------------ integration
     def _step_matrix(self, h: float):
         """Band Cholesky factor of S = (4/h²) M + K_open, band P = (4/h²) M − K_open,
-        z = S⁻¹ a and α = a·z (cached per h)."""
+        z = S⁻¹ a and α = a·z (cached per h); with several contacts z = S⁻¹ Aᵀ (n_l, n_ct)
+        and α = A z (n_ct, n_ct)."""
         if self._S_cache is not None and self._S_cache[0] == h:
             return self._S_cache[1:]
         Sf = self._Kb + (4.0 / (h * h)) * self._Mb
         Pb = (4.0 / (h * h)) * self._Mb - self._Kb
         if not _band_cholesky(Sf):
             raise ValueError(f"step matrix not positive definite at h = {h:g} s")
-        z = self.a.copy()
-        _band_solve(Sf, z)
-        alpha = float(self.a @ z)
+        if self.contacts.n == 1:
+            z = self.a.copy()
+            _band_solve(Sf, z)
+            alpha = float(self.a @ z)
+        else:  # Z = S⁻¹ Aᵀ (n_l, n_ct) and A Z (n_ct, n_ct)
+            Zt = self._A.copy()
+            _band_solve_rows(Sf, Zt)
+            z = np.ascontiguousarray(Zt.T)
+            alpha = np.ascontiguousarray(self._A @ z)
         self._S_cache = (h, Sf, Pb, z, alpha)
         return Sf, Pb, z, alpha
 
@@ -282,12 +365,22 @@ class ShootingProblem:
         q, v = np.ascontiguousarray(x[self.perm]), np.zeros(n)
         if tangents is None:
             tangents = (np.zeros((n, 0)), np.zeros((n, 0)), np.zeros(0))
+        m = self.contacts.n
+        lam_shape = (n_steps + 1,) if m == 1 else (n_steps + 1, m)
         if store:
-            Q, V, LAM = np.empty((n_steps + 1, n)), np.empty((n_steps + 1, n)), np.empty(n_steps + 1)
+            Q, V, LAM = np.empty((n_steps + 1, n)), np.empty((n_steps + 1, n)), np.empty(lam_shape)
         else:
-            Q, V, LAM = np.empty((0, n)), np.empty((0, n)), np.empty(0)
-        closed = _integrate(Sf, Pb, self._Mb, self._Kb, self.a, z, alpha, self.contact_stiffness, self.gap, h,
-                            n_steps, self.scheme == "avf", q, v, *tangents, Q, V, LAM)
+            Q, V, LAM = np.empty((0, n)), np.empty((0, n)), np.empty((0,) * len(lam_shape))
+        avf = self.scheme == "avf"
+        if m == 1:
+            closed = _integrate(Sf, Pb, self._Mb, self._Kb, self.a, z, alpha, self.contact_stiffness,
+                                self.gap, h, n_steps, avf, q, v, *tangents, Q, V, LAM)
+        else:
+            closed = _integrate_multi(Sf, Pb, self._Mb, self._Kb, self._A, z, alpha, self._G, self._gaps, h,
+                                      n_steps, avf, q, v, *tangents, Q, V, LAM)
+            if closed < 0:
+                raise RuntimeError(f"the contact problem of step {-1 - closed} has no unique solution "
+                                   f"(Ω = {omega:.6g} rad/s)")
         return q, v, closed, (Q, V, LAM)
 
     # ------------------------------------------------------------------ residual
@@ -323,8 +416,10 @@ class ShootingProblem:
         raises RuntimeError without convergence."""
         amplitude = check.positive("amplitude", amplitude)
         u = self.linear_point(amplitude) if guess is None else np.array(guess, dtype=float)
-        # amplitude at t = 0 (open contact): -stop_side * (B x)[contact], a linear row in u
-        row = -self.model.stop_side * self._B[self.ci] * self.xscale
+        # amplitude at t = 0, a linear row in u: -stop_side * (B x)[contact] for one contact on
+        # the amplitude DOF (open there), else the amplitude DOF's value (a massless one by
+        # the open-contact recovery B) signed as the start of the family
+        row = self._amplitude_row() * self.xscale
         length = self.gap if self.gap > 0 else amplitude
         du_norm = np.inf
         for _ in range(max_iter):
@@ -341,6 +436,18 @@ class ShootingProblem:
             du_norm = float(np.max(np.abs(du)))
         raise RuntimeError(f"no convergence at amplitude {amplitude:g} m in {max_iter} iterations "
                            f"(residual {max(np.max(np.abs(R)), abs(c)):.2e})")
+
+    def _amplitude_row(self) -> np.ndarray:
+        """Row r (n_l, permuted order) with the amplitude = r · q_l at t = 0."""
+        model, amp = self.model, self.amplitude_dof
+        if self._amp_sign != 0 and self.contacts.massless[0]:
+            return -self._amp_sign * self._B[int(np.searchsorted(model.c, amp))]
+        sigma = -self._amp_sign if self._amp_sign else self._amp_sigma
+        if amp in set(model.l.tolist()):
+            row = np.zeros(self.n_l)
+            row[np.argsort(self.perm)[int(np.searchsorted(model.l, amp))]] = sigma
+            return row
+        return sigma * self._B[int(np.searchsorted(model.c, amp))]
 
     def floquet_multipliers(self, u: np.ndarray) -> np.ndarray:
         """Eigenvalues of the discrete map's monodromy matrix over one period at ``u``,
@@ -363,7 +470,7 @@ class ShootingProblem:
         t : ndarray (N,), s
         q_l, v_l : ndarray (N, n_l), positions and velocities of the DOFs with mass
             (``model.l`` order)
-        lam : ndarray (N,), contact force (N)
+        lam : ndarray (N,), contact force (N); (N, n_contacts) with several contacts
         """
         key = np.asarray(u, dtype=float).tobytes()
         if self._traj_cache is not None and self._traj_cache[0] == key:
@@ -382,10 +489,14 @@ class ShootingProblem:
         return out
 
     def _massless(self, q_l: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(q_c (n_c, m), λ (m,)) from q_l (n_l, m) in ``model.l`` order."""
+        """(q_c (n_c, m), λ) from q_l (n_l, m) in ``model.l`` order; λ shape (m,) with one
+        contact, (n_contacts, m) with several (the LCP at each column)."""
         ql = q_l[self.perm]
-        lam = self.contact_stiffness * np.maximum(0.0, -(self.gap + self.a @ ql))
-        return self._B @ ql + np.outer(self._e, lam), lam
+        if self.contacts.n == 1:
+            lam = self.contact_stiffness * np.maximum(0.0, -(self.gap + self.a @ ql))
+            return self._B @ ql + np.outer(self._e, lam), lam
+        lam, _ = lcp_solve(self._G, self._gaps[:, None] + self._A @ ql)
+        return self._B @ ql + self._E @ lam, lam
 
     def _resample(self, u: np.ndarray, n_samples: int):
         """(t (n_samples,), q_l (n_l, n_samples)) by cubic Hermite interpolation of the
@@ -423,16 +534,17 @@ class ShootingProblem:
         return t, q
 
     def contact_force(self, u: np.ndarray, n_samples: int = 256):
-        """(t (n_samples,) in s, λ (n_samples,) in N) over one period."""
+        """(t (n_samples,) in s, λ in N) over one period; λ has shape (n_samples,) with one
+        contact, (n_contacts, n_samples) with several."""
         t, ql = self._resample(u, n_samples)
         return t, self._massless(ql)[1]
 
     def harmonic_content(self, u: np.ndarray, dof: int | None = None,
                          harmonics: int | None = None) -> np.ndarray:
-        """|Q_k| for k = 0..harmonics of ``dof`` (default the contact DOF), from the DFT of
+        """|Q_k| for k = 0..harmonics of ``dof`` (default the amplitude DOF), from the DFT of
         the N step samples over one period; shape (harmonics+1,). ``harmonics`` defaults
         to min(10, N/2 − 1)."""
-        dof = self.model.contact_dof if dof is None else check.integer("dof", dof)
+        dof = self.amplitude_dof if dof is None else check.integer("dof", dof)
         if not 0 <= dof < self.model.n_dof:
             raise ValueError(f"dof must be in [0, {self.model.n_dof - 1}], got {dof}")
         if harmonics is None:
@@ -456,26 +568,56 @@ class ShootingProblem:
 
     # ------------------------------------------------------------------ monitor
     def energy(self, u: np.ndarray) -> float:
-        """Energy (J) of the orbit's initial state: ½ xᵀ K_open x + ½ k_c min(0, h(x))²
-        (velocities are zero at t = 0; this is ½ qᵀ K q over all DOFs)."""
+        """Energy (J) of the orbit's initial state (velocities are zero at t = 0): ½ qᵀ K q
+        over all DOFs, i.e. ½ xᵀ K_open x + ½ λᵀ G λ with λ the contact forces at x (one
+        contact: ½ xᵀ K_open x + ½ k_c min(0, h(x))²); a penalty spring's energy is included."""
         x, _ = self.unpack(u)
         q = x[self.perm]
-        g = self.gap + self.a @ q
-        return float(0.5 * q @ (self._K @ q) + 0.5 * self.contact_stiffness * min(0.0, g) ** 2)
+        if self.contacts.n == 1:
+            g = self.gap + self.a @ q
+            return float(0.5 * q @ (self._K @ q) + 0.5 * self.contact_stiffness * min(0.0, g) ** 2)
+        lam, _ = lcp_solve(self._G, self._gaps + self._A @ q)
+        return float(0.5 * q @ (self._K @ q) + 0.5 * lam @ (self._G @ lam))
 
     def monitor(self, u: np.ndarray) -> dict:
-        """frequency (Hz), amplitude (m: largest excursion of the contact DOF away from the
-        stop), energy (J), contact_force_max (N), closed_fraction (share of the steps with
-        the contact closed), floquet_max (largest multiplier modulus; NaN when off)."""
+        """frequency (Hz), amplitude (m, at ``model.amplitude_dof``: the excursion away from
+        the stop for the DOF of a single contact, else max |q|), energy (J),
+        contact_force_max (N, over all contacts), closed_fraction (share of the steps
+        with a contact closed), floquet_max (largest multiplier modulus; NaN when off);
+        with several contacts also ``contact_force_max_<i>`` per contact."""
         _, omega = self.unpack(u)
-        away = -self.model.stop_side * self._dof_at_steps(u, self.model.contact_dof)
         lam = self.trajectory(u)[3]
+        q_amp = self._dof_at_steps(u, self.amplitude_dof)
+        if lam.ndim == 1:
+            peak = max(_refined_max(lam), 0.0) if lam.max() > 0 else 0.0
+            closed = float(np.mean(lam > 0))
+            peaks = [peak]
+        else:
+            peaks = [max(_refined_max(col), 0.0) if col.max() > 0 else 0.0 for col in lam.T]
+            closed = float(np.mean(np.any(lam > 0, axis=1)))
         rec = {
             "frequency": omega / (2 * np.pi),
-            "amplitude": _refined_max(away),
+            "amplitude": refined_peak(q_amp, self._amp_sign),
             "energy": self.energy(u),
-            "contact_force_max": max(_refined_max(lam), 0.0) if lam.max() > 0 else 0.0,
-            "closed_fraction": float(np.mean(lam > 0)),
+            "contact_force_max": float(max(peaks)),
+            "closed_fraction": closed,
             "floquet_max": float(np.abs(self.floquet_multipliers(u)[0])) if self.floquet else float("nan"),
         }
+        if len(peaks) > 1:
+            rec.update({f"contact_force_max_{i}": float(v) for i, v in enumerate(peaks)})
         return rec
+
+
+def _penalty_values(penalty_stiffness, model: Model, ct) -> np.ndarray:
+    """Penalty stiffness (N/m) per contact (used on the contacts whose DOF carries mass):
+    the given number, or one per contact, or ``DEFAULT_PENALTY_FACTOR`` times the static
+    stiffness at each contact (as penalty-HBM)."""
+    if penalty_stiffness is None:
+        return DEFAULT_PENALTY_FACTOR * static_contact_stiffness(model)
+    if np.ndim(penalty_stiffness) == 0:
+        return np.full(ct.n, check.positive("penalty_stiffness", penalty_stiffness))
+    values = list(np.asarray(penalty_stiffness, dtype=object).ravel())
+    if np.ndim(penalty_stiffness) != 1 or len(values) != ct.n:
+        raise ValueError(f"penalty_stiffness must be one number or one per contact ({ct.n}), got "
+                         f"{penalty_stiffness!r}")
+    return np.array([check.positive(f"penalty_stiffness[{i}]", v) for i, v in enumerate(values)])
