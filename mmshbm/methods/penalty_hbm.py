@@ -11,6 +11,17 @@ with ``W = −stop_side e_contact`` (:class:`~mmshbm.model.Model`), i.e. the spr
 contact DOF away from the stop with the force λ >= 0. The massless contact node keeps zero
 mass: between impacts it follows the structure statically, as in MMS-HBM.
 
+Several contacts: one spring per contact (its DOF, side and gap; k_p per contact), a
+clearance being two springs on one DOF. The residual's row of a contact DOF gets the net
+force Σ_i side_i λ_i of its springs, and the Jacobian's harmonic coupling of that DOF is
+Σ_i k_p,i P_i (P_i the cosine product matrix of spring i's active set): still one dense
+(H+1)² block per distinct contact DOF, the rest the pattern of K and M. Contact DOFs may
+carry mass (FE-package models, as NLvib runs them): nothing in the formulation needs a
+massless DOF; only the default k_p is then taken from the static stiffness at the
+contact, 1/(e_dᵀ K⁻¹ e_d) by a sparse factorisation of K (the same number as the
+condensed (w_cᵀ D_0⁻¹ w_c)⁻¹ of a massless contact, which is what 0.1 used and still
+uses there). The amplitude is measured at ``model.amplitude_dof``.
+
 Conventions follow :mod:`mmshbm.methods.mms_hbm`:
 
 * Cosine-only (time-symmetric) ansatz q(τ) = Σ_k Q_k cos kτ on every DOF. It anchors the

@@ -2,7 +2,7 @@
 
 Because the contact DOFs are massless they follow the DOFs with mass ``l`` statically
 (DESIGN.md section 1; the docstring of :mod:`mmshbm.methods.exact`): at fixed ``q_l`` the contact
-problem is a scalar LCP with the solution λ = k_c max(0, −h(q_l)), free gap
+problem of one contact is a scalar LCP with the solution λ = k_c max(0, −h(q_l)), free gap
 h(q_l) = gap + a·q_l, a = −K_lc K_cc⁻¹ w_c and k_c = 1/(w_cᵀ K_cc⁻¹ w_c). The motion of
 the DOFs with mass is the continuous, piecewise-linear system
 
@@ -47,6 +47,40 @@ resolve stay bounded but mistimed. Why "avf" is the default:
 ``S`` and ``M`` are stored in band form (reverse Cuthill–McKee ordering of the DOFs with
 mass when it narrows the band); ``S`` is factored once per step size, i.e. per Newton
 iterate, in O(n p²).
+
+Several contacts. With contacts i = 1..m the free gaps are h = gap + A q_l (A (m, n_l)),
+and at fixed q_l the massless nodes' static contact problem is the LCP
+
+    g = h + G λ >= 0,   λ >= 0,   gᵀλ = 0,      G = Wᵀ K_cc⁻¹ W  (the Delassus matrix),
+
+whose solution λ(h) is continuous and piecewise linear (λ_J = −G_JJ⁻¹ h_J on the region
+of an active set J; for a clearance G is singular, but the two stops of one DOF are never
+both closed). The step keeps its form: S q1 = P q0 + (4/h) M v0 + Aᵀ F(h0, h1), so the
+new free gaps solve the m-dimensional equation h1 = hy + A Z F(h0, h1), Z = S⁻¹Aᵀ. Its
+force sum F is λ(h0) + λ(h1) (trapezoidal) or 2 ∫₀¹ λ(h0 + s(h1 − h0)) ds ("avf"),
+computed *exactly* by following λ along the straight path in h by principal pivoting
+(each piece ends where an active λ_j or an inactive g_i reaches zero; λ is linear on a
+piece, so the trapezoid rule on the pieces is exact), with its derivatives
+∂F/∂h1 = Σ_k J_k (s_k+1² − s_k²), ∂F/∂h0 = Σ_k J_k ((1−s_k)² − (1−s_k+1)²) (J_k = ∂λ/∂h on
+piece k; no boundary terms because λ is continuous). The equation for h1 is monotone
+(−F is the gradient of a convex function of h1, A Z is positive semidefinite), and a
+semismooth Newton iteration (halving a step that does not reduce the residual) solves it
+to round-off: finitely for the trapezoidal rule, quadratically on the final pieces for
+"avf". The "avf" step stays a discrete gradient of ½vᵀMv + ½qᵀK_open q + ½λᵀGλ (energy
+conserved to round-off, tested) and C¹. Sensitivities: (S − AᵀF1A) dq1 = ... + AᵀF0A dq0,
+solved with the factor of S and the Woodbury form dq1 = Y + Z (I − F1 A Z)⁻¹ F1 A Y. One
+contact keeps the closed-form scalar step of mmshbm 0.1 (bit for bit).
+
+Contact DOFs with mass (models as FE packages export them). There is no massless node to
+solve statically; the contact is then a penalty spring λ = k_p max(0, −g) on the DOF
+with mass, which is the same structure in this step: a free gap linear in q_l
+(h = gap − side q_dof) and a piecewise-linear force, i.e. an LCP row with G_ii = 1/k_p.
+So such models run with the same energy-conserving implicit step, as a stiff ODE: the
+trapezoidal rule is A-stable, so a step that does not resolve the contact phase
+(√(k_p/m) ≫ 2π/h) stays bounded but mistimes it (order 2 once resolved: tested against
+the closed form of a mass with a penalty stop). k_p: option ``penalty_stiffness`` (one
+number or one per contact), default 10³ times the static stiffness at the contact, as
+penalty-HBM.
 
 Unknowns and phase. The system is reversible (q, v, t) -> (q, −v, −t) and so is the
 trapezoidal map, exactly. The nonlinear modes continued from the linear modes are
@@ -133,7 +167,8 @@ class ShootingProblem:
     Parameters
     ----------
     model : Model
-        The structure (at least one massless DOF, the contact DOF among them).
+        The structure; contacts on massless DOFs are exact (their LCP per step), contacts
+        on DOFs with mass are penalty springs (``penalty_stiffness``).
     steps_per_period : int
         Time steps N per period (even, >= 8); N/2 steps are integrated.
     mode : int
@@ -144,12 +179,17 @@ class ShootingProblem:
     floquet : bool or "auto"
         Record ``floquet_max`` in :meth:`monitor` ("auto": when the model has at most
         ``FLOQUET_AUTO_LIMIT`` DOFs with mass; otherwise NaN is recorded).
+    penalty_stiffness : float or sequence of float, optional
+        k_p (N/m) of the contacts whose DOF carries mass: one for all, or one per contact
+        (entries of massless contacts unused). Default ``DEFAULT_PENALTY_FACTOR`` (10³)
+        times the static stiffness at each contact, 1/(e_dᵀ K⁻¹ e_d). A ValueError if
+        every contact DOF is massless (their contact is exact).
 
     Notes
     -----
     The scaled unknown vector is ``u = [x/s, Ω/ω_ref]`` with ``x = q_l(0)`` (m, rad) in
     ``model.l`` order, ``s`` the per-DOF length scale ``xscale`` and ω_ref the linear
-    frequency (rad/s) of the mode. ``s`` is the gap times the mode's shape (contact DOF
+    frequency (rad/s) of the mode. ``s`` is the gap times the mode's shape (amplitude DOF
     1, floored at 10⁻³ of its largest entry) times a factor that makes the scaled norm of
     the linear mode equal to MMS-HBM's, so that an arclength step means the same change
     of amplitude in both methods. Residual rows are v_l(T/2) / (ω_ref s).
