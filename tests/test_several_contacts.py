@@ -21,7 +21,7 @@ import mmshbm
 from mmshbm import ClearanceOscillator, Model, OneDofOscillator
 from mmshbm.core.continuation import ContinuationOptions, continue_branch
 from mmshbm.methods import exact
-from mmshbm.methods._shooting_kernels import lcp_solve
+from mmshbm.methods._shooting_contact_kernels import lcp_solve
 from mmshbm.methods.penalty_hbm import PenaltyHBMProblem
 from mmshbm.methods.shooting import ShootingProblem
 

@@ -23,7 +23,7 @@ import scipy.sparse.linalg as spla
 from ..model.model import Model
 
 __all__ = ["DEFAULT_PENALTY_FACTOR", "ContactTable", "contact_table", "static_contact_stiffness",
-           "start_mode", "amplitude_sign", "refined_peak"]
+           "penalty_values", "contact_law", "start_mode", "amplitude_sign", "refined_peak"]
 
 #: Default penalty stiffness in units of the static stiffness at the contact k_c.
 DEFAULT_PENALTY_FACTOR = 1e3
@@ -108,6 +108,65 @@ def static_contact_stiffness(model: Model) -> np.ndarray:
     X = lu.solve(E)
     flex = X[table.dofs, np.arange(len(table.dofs))]
     return 1.0 / flex[table.slot]
+
+
+def penalty_values(model: Model, value, stiffness: np.ndarray | None = None) -> np.ndarray:
+    """Penalty stiffness k_p (N/m) of each contact, shape (n_ct,): ``value`` (one number for
+    all or one per contact), or by default ``DEFAULT_PENALTY_FACTOR`` times the static
+    stiffness at each contact (``stiffness``, computed when not given).
+
+    Raises
+    ------
+    ValueError, TypeError
+        Naming ``penalty_stiffness`` (or its entry): not positive and finite, or a
+        sequence whose length is not the number of contacts.
+    """
+    from .. import _validate as check
+
+    n_ct = model.n_contacts
+    if value is None:
+        return DEFAULT_PENALTY_FACTOR * (static_contact_stiffness(model) if stiffness is None else stiffness)
+    if np.ndim(value) == 0:
+        return np.full(n_ct, check.positive("penalty_stiffness", value))
+    values = list(np.asarray(value, dtype=object).ravel())
+    if np.ndim(value) != 1 or len(values) != n_ct:
+        raise ValueError(f"penalty_stiffness must be one number or one per contact ({n_ct}), got {value!r}")
+    return np.array([check.positive(f"penalty_stiffness[{i}]", v) for i, v in enumerate(values)])
+
+
+def contact_law(model: Model, kp: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The contacts in terms of the DOFs with mass: free gaps ``h = gap + A q_l``, the LCP
+    ``g = h + G λ >= 0, λ >= 0, gᵀλ = 0`` at fixed q_l, and the massless DOFs
+    ``q_c = B q_l + E λ`` (B = −K_cc⁻¹ K_cl, the open recovery).
+
+    A massless contact i (w_i = −side_i e_dof in c): A_i = −(K_lc K_cc⁻¹ w_i)ᵀ,
+    G_ij = w_iᵀ K_cc⁻¹ w_j, E_:i = K_cc⁻¹ w_i. A contact on a DOF with mass is a penalty
+    spring ``kp[i]``: A_i = −side_i e_dof (in l), G_ii = 1/k_p, E_:i = 0 (λ = k_p max(0, −h)
+    solves its row of the LCP).
+
+    Returns A (n_ct, n_l) in ``model.l`` order, E (n_c, n_ct), G (n_ct, n_ct).
+    """
+    import scipy.linalg as la
+
+    table = contact_table(model)
+    b = model.blocks
+    c, l = model.c, model.l
+    n_ct, n_c = table.n, len(c)
+    A = np.zeros((n_ct, len(l)))
+    W = np.zeros((n_c, n_ct))
+    for i in range(n_ct):
+        if table.massless[i]:
+            W[int(np.searchsorted(c, table.dof[i])), i] = -float(table.side[i])
+        else:
+            A[i, int(np.searchsorted(l, table.dof[i]))] = -float(table.side[i])
+    E = la.solve(b["K_cc"], W) if n_c else np.zeros((0, n_ct))
+    G = W.T @ E
+    heavy = ~table.massless
+    if heavy.any():
+        G[np.ix_(heavy, heavy)] = np.diag(1.0 / np.asarray(kp)[heavy])
+    for i in np.flatnonzero(table.massless):
+        A[i] = -b["K_lc"] @ E[:, i]
+    return A, E, G
 
 
 def start_mode(model: Model, mode: int) -> tuple[float, np.ndarray]:

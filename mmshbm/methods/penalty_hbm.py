@@ -92,6 +92,7 @@ from ._contacts import (
     DEFAULT_PENALTY_FACTOR,
     amplitude_sign,
     contact_table,
+    penalty_values,
     refined_peak,
     start_mode,
     static_contact_stiffness,
@@ -269,7 +270,7 @@ class PenaltyHBMProblem:
         self.K = model.K.tocsr()
         self.M = model.M.tocsr()
         self.contact_stiffnesses = static_contact_stiffness(model)
-        self.penalty_stiffnesses = self._penalty_stiffnesses(penalty_stiffness)
+        self.penalty_stiffnesses = penalty_values(model, penalty_stiffness, self.contact_stiffnesses)
         self.contact_stiffness = float(self.contact_stiffnesses.min())
         self.penalty_stiffness = float(self.penalty_stiffnesses.max())
         # the Jacobian's factor per distinct contact DOF: the largest k_p on it
@@ -306,18 +307,6 @@ class PenaltyHBMProblem:
     def side(self) -> float:
         """The stop side (±1.0) of a single-contact model (ValueError with several)."""
         return float(self.model.stop_side)
-
-    def _penalty_stiffnesses(self, penalty_stiffness) -> np.ndarray:
-        n_ct = self.contacts.n
-        if penalty_stiffness is None:
-            return DEFAULT_PENALTY_FACTOR * self.contact_stiffnesses
-        if np.ndim(penalty_stiffness) == 0:
-            return np.full(n_ct, check.positive("penalty_stiffness", penalty_stiffness))
-        values = list(np.asarray(penalty_stiffness, dtype=object).ravel())
-        if np.ndim(penalty_stiffness) != 1 or len(values) != n_ct:
-            raise ValueError(f"penalty_stiffness must be one number or one per contact ({n_ct}), got "
-                             f"{penalty_stiffness!r}")
-        return np.array([check.positive(f"penalty_stiffness[{i}]", v) for i, v in enumerate(values)])
 
     def _init_mode(self) -> None:
         """Linear mode ``self.mode``: frequency and shape with a unit swing of the

@@ -48,39 +48,21 @@ resolve stay bounded but mistimed. Why "avf" is the default:
 mass when it narrows the band); ``S`` is factored once per step size, i.e. per Newton
 iterate, in O(n p²).
 
-Several contacts. With contacts i = 1..m the free gaps are h = gap + A q_l (A (m, n_l)),
-and at fixed q_l the massless nodes' static contact problem is the LCP
+Several contacts (details: docs/shooting.md, :mod:`mmshbm.methods._shooting_contact_kernels`).
+With free gaps h = gap + A q_l the contact forces at fixed q_l solve the LCP
+g = h + G λ >= 0, λ >= 0, gᵀλ = 0 (G = Wᵀ K_cc⁻¹ W), whose solution is continuous and
+piecewise linear in h. The step keeps its form with Aᵀ F(h0, h1) for the force, and the
+new free gaps solve the monotone m-dimensional equation h1 = hy + A S⁻¹Aᵀ F(h0, h1) by
+semismooth Newton to round-off; F (λ(h0) + λ(h1), or the exact path average for "avf",
+still a discrete gradient) and its derivatives are computed exactly by following λ along
+the step's straight path in h (principal pivoting); sensitivities by the Woodbury form.
+One contact keeps the closed-form scalar step of 0.1 (bit for bit).
 
-    g = h + G λ >= 0,   λ >= 0,   gᵀλ = 0,      G = Wᵀ K_cc⁻¹ W  (the Delassus matrix),
-
-whose solution λ(h) is continuous and piecewise linear (λ_J = −G_JJ⁻¹ h_J on the region
-of an active set J; for a clearance G is singular, but the two stops of one DOF are never
-both closed). The step keeps its form: S q1 = P q0 + (4/h) M v0 + Aᵀ F(h0, h1), so the
-new free gaps solve the m-dimensional equation h1 = hy + A Z F(h0, h1), Z = S⁻¹Aᵀ. Its
-force sum F is λ(h0) + λ(h1) (trapezoidal) or 2 ∫₀¹ λ(h0 + s(h1 − h0)) ds ("avf"),
-computed *exactly* by following λ along the straight path in h by principal pivoting
-(each piece ends where an active λ_j or an inactive g_i reaches zero; λ is linear on a
-piece, so the trapezoid rule on the pieces is exact), with its derivatives
-∂F/∂h1 = Σ_k J_k (s_k+1² − s_k²), ∂F/∂h0 = Σ_k J_k ((1−s_k)² − (1−s_k+1)²) (J_k = ∂λ/∂h on
-piece k; no boundary terms because λ is continuous). The equation for h1 is monotone
-(−F is the gradient of a convex function of h1, A Z is positive semidefinite), and a
-semismooth Newton iteration (halving a step that does not reduce the residual) solves it
-to round-off: finitely for the trapezoidal rule, quadratically on the final pieces for
-"avf". The "avf" step stays a discrete gradient of ½vᵀMv + ½qᵀK_open q + ½λᵀGλ (energy
-conserved to round-off, tested) and C¹. Sensitivities: (S − AᵀF1A) dq1 = ... + AᵀF0A dq0,
-solved with the factor of S and the Woodbury form dq1 = Y + Z (I − F1 A Z)⁻¹ F1 A Y. One
-contact keeps the closed-form scalar step of mmshbm 0.1 (bit for bit).
-
-Contact DOFs with mass (models as FE packages export them). There is no massless node to
-solve statically; the contact is then a penalty spring λ = k_p max(0, −g) on the DOF
-with mass, which is the same structure in this step: a free gap linear in q_l
-(h = gap − side q_dof) and a piecewise-linear force, i.e. an LCP row with G_ii = 1/k_p.
-So such models run with the same energy-conserving implicit step, as a stiff ODE: the
-trapezoidal rule is A-stable, so a step that does not resolve the contact phase
-(√(k_p/m) ≫ 2π/h) stays bounded but mistimes it (order 2 once resolved: tested against
-the closed form of a mass with a penalty stop). k_p: option ``penalty_stiffness`` (one
-number or one per contact), default 10³ times the static stiffness at the contact, as
-penalty-HBM.
+Contact DOFs with mass (FE-package models): a penalty spring λ = k_p max(0, −g) on the
+DOF, which in this step is an LCP row with G_ii = 1/k_p and h = gap − side q_dof: the
+implicit, A-stable, energy-conserving step integrates it as a stiff ODE (order 2 once the
+contact phase is resolved; ``penalty_stiffness``, default 10³ times the static stiffness
+at the contact, as penalty-HBM).
 
 Unknowns and phase. The system is reversible (q, v, t) -> (q, −v, −t) and so is the
 trapezoidal map, exactly. The nonlinear modes continued from the linear modes are
@@ -122,22 +104,10 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from .. import _validate as check
 from ..model.model import Model
-from ._contacts import (
-    DEFAULT_PENALTY_FACTOR,
-    amplitude_sign,
-    contact_table,
-    refined_peak,
-    start_mode,
-    static_contact_stiffness,
-)
-from ._shooting_kernels import (
-    _band_cholesky,
-    _band_solve,
-    _band_solve_rows,
-    _integrate,
-    _integrate_multi,
-    lcp_solve,
-)
+from ._contacts import amplitude_sign, contact_law, contact_table, penalty_values, refined_peak, start_mode
+from ._shooting_contact_kernels import _integrate_multi, lcp_solve
+from ._shooting_kernels import _band_cholesky, _band_solve, _band_solve_rows, _integrate
+from ._shooting_signals import ShootingSignals
 from .mms_hbm import _refined_max
 
 __all__ = ["ShootingProblem", "DEFAULT_STEPS_PER_PERIOD", "FLOQUET_AUTO_LIMIT"]
@@ -161,7 +131,7 @@ def _lower_band(A: sp.spmatrix, p: int) -> np.ndarray:
     return ab
 
 
-class ShootingProblem:
+class ShootingProblem(ShootingSignals):
     """Symmetric-orbit shooting with the trapezoidal rule, as a continuation problem.
 
     Parameters
@@ -285,56 +255,35 @@ class ShootingProblem:
         self._traj_cache = None
 
     def _init_contacts(self, K_cc, K_lc, penalty_stiffness) -> None:
-        """The contact law in terms of the DOFs with mass: free gaps h = gap + A q_l (permuted
-        order), the Delassus matrix G of the LCP at fixed q_l, and the massless DOFs'
-        recovery q_c = B q_l + E λ.
-
-        A massless contact i (w_i = −side_i e_dof in c): A_i = −(K_lc K_cc⁻¹ w_i)ᵀ,
-        G_ij = w_iᵀ K_cc⁻¹ w_j. A contact on a DOF with mass is a penalty spring k_p:
-        A_i = −side_i e_dof (in l), G_ii = 1/k_p (λ = k_p max(0, −h) solves its LCP).
-        """
-        model, ct = self.model, self.contacts
-        c, l = model.c, model.l
-        n_ct, n = ct.n, self.n_l
-        heavy = ~ct.massless
-        if heavy.any():
-            kp = _penalty_values(penalty_stiffness, model, ct)
+        """Free gaps h = gap + A q_l (permuted order), the Delassus matrix G of the LCP at
+        fixed q_l and the massless DOFs' recovery q_c = B q_l + E λ
+        (:func:`~mmshbm.methods._contacts.contact_law`; penalty springs on DOFs with mass)."""
+        ct = self.contacts
+        if (~ct.massless).any():
+            kp = penalty_values(self.model, penalty_stiffness)
         elif penalty_stiffness is not None:
             raise ValueError("penalty_stiffness applies to contact DOFs with mass; every contact DOF of this "
                              "model is massless (its contact is exact)")
         else:
             kp = None
-        inv_perm = np.argsort(self.perm)
-        A = np.zeros((n_ct, n))
-        W = np.zeros((self.n_c, n_ct))
-        for i in range(n_ct):
-            if ct.massless[i]:
-                W[int(np.searchsorted(c, ct.dof[i])), i] = -float(ct.side[i])
-            else:
-                A[i, inv_perm[int(np.searchsorted(l, ct.dof[i]))]] = -float(ct.side[i])
-        E = la.solve(K_cc, W) if self.n_c else np.zeros((0, n_ct))
-        G = W.T @ E
-        if heavy.any():
-            G[np.ix_(heavy, heavy)] = np.diag(1.0 / kp[heavy])
         self.penalty_stiffnesses = kp
-        if n_ct == 1 and ct.massless[0]:
+        A, E, G = contact_law(self.model, kp)
+        A = A[:, self.perm]
+        if ct.n == 1 and ct.massless[0]:
             # one massless contact: the arithmetic of mmshbm 0.1
-            w = W[:, 0]
+            w = np.zeros(self.n_c)
+            w[int(np.searchsorted(self.model.c, ct.dof[0]))] = -float(ct.side[0])
             e = la.solve(K_cc, w)
             self.contact_stiffness = 1.0 / float(w @ e)
             self.a = np.ascontiguousarray((-K_lc @ e)[self.perm])
             self._e = e
-            E = e[:, None]
-            A = self.a[None, :]
+            E, A = e[:, None], self.a[None, :]
+        elif ct.n == 1:  # a penalty spring on a DOF with mass
+            self.contact_stiffness = float(kp[0])
+            self.a = np.ascontiguousarray(A[0])
+            self._e = E[:, 0]
         else:
-            for i in np.flatnonzero(ct.massless):
-                A[i] = (-K_lc @ E[:, i])[self.perm]
-            if n_ct == 1:  # a penalty spring on a DOF with mass
-                self.contact_stiffness = float(kp[0])
-                self.a = np.ascontiguousarray(A[0])
-                self._e = E[:, 0] if self.n_c else np.zeros(0)
-            else:
-                self.contact_stiffness = float(np.min(1.0 / np.diag(G)))
+            self.contact_stiffness = float(np.min(1.0 / np.diag(G)))
         self._A = np.ascontiguousarray(A)
         self._E = np.ascontiguousarray(E)
         self._G = np.ascontiguousarray(G)
@@ -501,111 +450,6 @@ class ShootingProblem:
         mu = la.eigvals(monodromy)
         return mu[np.argsort(-np.abs(mu), kind="stable")]
 
-    # ------------------------------------------------------------------ trajectories
-    def trajectory(self, u: np.ndarray):
-        """The discrete orbit over one period at the N step instants.
-
-        Returns
-        -------
-        t : ndarray (N,), s
-        q_l, v_l : ndarray (N, n_l), positions and velocities of the DOFs with mass
-            (``model.l`` order)
-        lam : ndarray (N,), contact force (N); (N, n_contacts) with several contacts
-        """
-        key = np.asarray(u, dtype=float).tobytes()
-        if self._traj_cache is not None and self._traj_cache[0] == key:
-            return self._traj_cache[1]
-        x, omega = self.unpack(u)
-        half = self.N // 2
-        _, _, _, (Q, V, LAM) = self._integrate(x, omega, half, store=True)
-        # the second half mirrors the first: q(T − t) = q(t), v(T − t) = −v(t)
-        Qf = np.vstack([Q, Q[half - 1 : 0 : -1]])
-        Vf = np.vstack([V, -V[half - 1 : 0 : -1]])
-        lam = np.concatenate([LAM, LAM[half - 1 : 0 : -1]])
-        inv = np.argsort(self.perm)
-        T = 2 * np.pi / omega
-        out = (T * np.arange(self.N) / self.N, Qf[:, inv], Vf[:, inv], lam)
-        self._traj_cache = (key, out)
-        return out
-
-    def _massless(self, q_l: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(q_c (n_c, m), λ) from q_l (n_l, m) in ``model.l`` order; λ shape (m,) with one
-        contact, (n_contacts, m) with several (the LCP at each column)."""
-        ql = q_l[self.perm]
-        if self.contacts.n == 1:
-            lam = self.contact_stiffness * np.maximum(0.0, -(self.gap + self.a @ ql))
-            return self._B @ ql + np.outer(self._e, lam), lam
-        lam, _ = lcp_solve(self._G, self._gaps[:, None] + self._A @ ql)
-        return self._B @ ql + self._E @ lam, lam
-
-    def _resample(self, u: np.ndarray, n_samples: int):
-        """(t (n_samples,), q_l (n_l, n_samples)) by cubic Hermite interpolation of the
-        discrete orbit (positions and velocities at the steps)."""
-        n_samples = check.integer("n_samples", n_samples, minimum=1)
-        t_steps, Q, V, _ = self.trajectory(u)
-        _, omega = self.unpack(u)
-        T = 2 * np.pi / omega
-        h = T / self.N
-        t = T * np.arange(n_samples) / n_samples
-        s = t / h
-        k = np.minimum(np.floor(s).astype(int), self.N - 1)
-        r = (s - k)[None, :]
-        k1 = (k + 1) % self.N
-        h00 = 2 * r**3 - 3 * r**2 + 1
-        h10 = r**3 - 2 * r**2 + r
-        h01 = -2 * r**3 + 3 * r**2
-        h11 = r**3 - r**2
-        q = h00 * Q[k].T + h10 * h * V[k].T + h01 * Q[k1].T + h11 * h * V[k1].T
-        return t, q
-
-    def time_signals(self, u: np.ndarray, dofs=None, n_samples: int = 256):
-        """(t (n_samples,) in s, q (n_dofs, n_samples)) over one period for ``dofs``
-        (all DOFs when None); massless DOFs follow statically from the DOFs with mass."""
-        t, ql = self._resample(u, n_samples)
-        qc, _ = self._massless(ql)
-        q = np.empty((self.model.n_dof, len(t)))
-        q[self.model.l] = ql
-        q[self.model.c] = qc
-        if dofs is not None:
-            dofs = np.atleast_1d(np.asarray(dofs))
-            if dofs.dtype.kind not in "iu" or np.any((dofs < -self.model.n_dof) | (dofs >= self.model.n_dof)):
-                raise ValueError(f"dofs must be integer indices in [0, {self.model.n_dof - 1}], got {dofs}")
-            q = q[dofs]
-        return t, q
-
-    def contact_force(self, u: np.ndarray, n_samples: int = 256):
-        """(t (n_samples,) in s, λ in N) over one period; λ has shape (n_samples,) with one
-        contact, (n_contacts, n_samples) with several."""
-        t, ql = self._resample(u, n_samples)
-        return t, self._massless(ql)[1]
-
-    def harmonic_content(self, u: np.ndarray, dof: int | None = None,
-                         harmonics: int | None = None) -> np.ndarray:
-        """|Q_k| for k = 0..harmonics of ``dof`` (default the amplitude DOF), from the DFT of
-        the N step samples over one period; shape (harmonics+1,). ``harmonics`` defaults
-        to min(10, N/2 − 1)."""
-        dof = self.amplitude_dof if dof is None else check.integer("dof", dof)
-        if not 0 <= dof < self.model.n_dof:
-            raise ValueError(f"dof must be in [0, {self.model.n_dof - 1}], got {dof}")
-        if harmonics is None:
-            harmonics = min(10, self.N // 2 - 1)
-        harmonics = check.integer("harmonics", harmonics, minimum=0)
-        if harmonics > self.N // 2 - 1:
-            raise ValueError(f"harmonics must be <= N/2 - 1 = {self.N // 2 - 1}, got {harmonics}")
-        q = self._dof_at_steps(u, dof)
-        c = np.fft.rfft(q) / self.N
-        amp = 2 * np.abs(c[: harmonics + 1])
-        amp[0] = abs(c[0].real)
-        return amp
-
-    def _dof_at_steps(self, u: np.ndarray, dof: int) -> np.ndarray:
-        _, Q, _, lam = self.trajectory(u)
-        model = self.model
-        if dof in set(model.l.tolist()):
-            return Q[:, int(np.searchsorted(model.l, dof))]
-        qc, _ = self._massless(Q.T)
-        return qc[int(np.searchsorted(model.c, dof))]
-
     # ------------------------------------------------------------------ monitor
     def energy(self, u: np.ndarray) -> float:
         """Energy (J) of the orbit's initial state (velocities are zero at t = 0): ½ qᵀ K q
@@ -647,17 +491,3 @@ class ShootingProblem:
             rec.update({f"contact_force_max_{i}": float(v) for i, v in enumerate(peaks)})
         return rec
 
-
-def _penalty_values(penalty_stiffness, model: Model, ct) -> np.ndarray:
-    """Penalty stiffness (N/m) per contact (used on the contacts whose DOF carries mass):
-    the given number, or one per contact, or ``DEFAULT_PENALTY_FACTOR`` times the static
-    stiffness at each contact (as penalty-HBM)."""
-    if penalty_stiffness is None:
-        return DEFAULT_PENALTY_FACTOR * static_contact_stiffness(model)
-    if np.ndim(penalty_stiffness) == 0:
-        return np.full(ct.n, check.positive("penalty_stiffness", penalty_stiffness))
-    values = list(np.asarray(penalty_stiffness, dtype=object).ravel())
-    if np.ndim(penalty_stiffness) != 1 or len(values) != ct.n:
-        raise ValueError(f"penalty_stiffness must be one number or one per contact ({ct.n}), got "
-                         f"{penalty_stiffness!r}")
-    return np.array([check.positive(f"penalty_stiffness[{i}]", v) for i, v in enumerate(values)])

@@ -109,7 +109,8 @@ Always check ``converged`` and ``n_contacts``.
 from __future__ import annotations
 
 from .orbits import Backbone, PeriodicOrbit, backbone, periodic_orbit
-from .system import Phase, PiecewiseLinearSystem
+from .phase import Phase
+from .system import PiecewiseLinearSystem
 from .trajectory import Event, Trajectory, integrate
 
 __all__ = [

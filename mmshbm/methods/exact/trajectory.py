@@ -11,7 +11,8 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ... import _validate as check
-from .system import _CHUNK, _CHUNK_FIRST, _GRAZE_REL, _KEEP_REL, _RTOL, Phase, PiecewiseLinearSystem
+from .phase import _CHUNK, _CHUNK_FIRST, _GRAZE_REL, _KEEP_REL, _RTOL, Phase
+from .system import PiecewiseLinearSystem
 
 __all__ = ["Event", "Trajectory", "integrate"]
 
