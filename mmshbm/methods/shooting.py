@@ -396,7 +396,9 @@ class ShootingProblem(ShootingSignals):
     def solve_at_amplitude(self, amplitude: float, guess: np.ndarray | None = None, tol: float = 1e-10,
                            max_iter: int = 30) -> np.ndarray:
         """The orbit whose contact DOF starts ``amplitude`` (m) away from the stop at t = 0
-        (the convention of :func:`mmshbm.methods.exact.periodic_orbit`), by Newton on the residual
+        (the convention of :func:`mmshbm.methods.exact.periodic_orbit`; with several
+        contacts the amplitude DOF's value at t = 0, signed as the start of the first-mode
+        family), by Newton on the residual
         bordered with that condition. ``guess``: scaled unknowns (default the linear mode).
         Converged when the scaled residual is <= ``tol``, or <= √tol with the last Newton
         update below 1e-9 (relative): on strongly unstable orbits round-off in the
