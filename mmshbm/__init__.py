@@ -26,6 +26,7 @@ _LAZY = {
     "default_beam": "mmshbm.fe.beam",
     "one_dof_oscillator": "mmshbm.fe.oscillator",
     "OneDofOscillator": "mmshbm.fe.oscillator",
+    "ClearanceOscillator": "mmshbm.fe.oscillator",
     "backbone": "mmshbm.methods.backbone",
     "ContinuationOptions": "mmshbm.core.continuation",
     "Branch": "mmshbm.results.branch",

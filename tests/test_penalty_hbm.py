@@ -11,7 +11,7 @@ import scipy.sparse as sp
 
 import mmshbm
 from mmshbm.core.harmonics import default_n_samples
-from mmshbm.methods._penalty_kernels import _penalty_contact
+from mmshbm.methods._penalty_kernels import _penalty_contacts
 from mmshbm.methods.penalty_hbm import (
     DEFAULT_PENALTY_FACTOR,
     PenaltyHBMProblem,
@@ -87,13 +87,34 @@ def _contact_point(problem, amplitude_gaps=1.6, seed=0):
 @pytest.mark.parametrize("side", [1.0, -1.0])
 def test_penalty_contact_kernel_equals_loop(side):
     rng = np.random.default_rng(1)
-    q = rng.uniform(-3e-3, 3e-3, 200)
-    lam, act = np.empty(200), np.empty(200)
-    _penalty_contact(q, 1e-3, side, 2e7, lam, act)
-    lam_ref, act_ref = penalty_contact_loop(q, 1e-3, side, 2e7)
-    np.testing.assert_allclose(lam, lam_ref, rtol=1e-14, atol=0)
-    np.testing.assert_array_equal(act, act_ref)
+    q = rng.uniform(-3e-3, 3e-3, (1, 200))
+    force, act = np.empty((1, 200)), np.empty((1, 200))
+    _penalty_contacts(q, np.array([0]), np.array([1e-3]), np.array([side]), np.array([2e7]),
+                      np.array([2e7]), force, act)
+    lam_ref, act_ref = penalty_contact_loop(q[0], 1e-3, side, 2e7)
+    np.testing.assert_allclose(force[0], side * lam_ref, rtol=1e-14, atol=0)
+    np.testing.assert_array_equal(act[0], act_ref)
     assert 0 < act.sum() < 200
+
+
+def test_penalty_kernel_sums_the_contacts_of_a_dof():
+    """A clearance (two stops on one DOF, different k_p) and a third contact on another DOF:
+    the net force per DOF is Σ side_i λ_i and the active weights are k_p,i / k_p,ref."""
+    rng = np.random.default_rng(2)
+    q = rng.uniform(-3e-3, 3e-3, (2, 300))
+    slot, gap = np.array([0, 0, 1]), np.array([1e-3, 2e-3, 0.5e-3])
+    side, kp = np.array([1.0, -1.0, -1.0]), np.array([2e7, 1e7, 3e5])
+    kp_ref = np.array([2e7, 3e5])
+    force, act = np.empty((2, 300)), np.empty((2, 300))
+    _penalty_contacts(q, slot, gap, side, kp, kp_ref, force, act)
+    f_ref, a_ref = np.zeros((2, 300)), np.zeros((2, 300))
+    for i in range(3):
+        lam, s = penalty_contact_loop(q[slot[i]], gap[i], side[i], kp[i])
+        f_ref[slot[i]] += side[i] * lam
+        a_ref[slot[i]] += kp[i] / kp_ref[slot[i]] * s
+    np.testing.assert_allclose(force, f_ref, rtol=1e-14, atol=0)
+    np.testing.assert_allclose(act, a_ref, rtol=1e-15, atol=0)
+    assert np.all(act[0] <= 1.0) and set(np.unique(act[0])) == {0.0, 0.5, 1.0}
 
 
 @pytest.fixture(scope="module")

@@ -11,6 +11,17 @@ with ``W = −stop_side e_contact`` (:class:`~mmshbm.model.Model`), i.e. the spr
 contact DOF away from the stop with the force λ >= 0. The massless contact node keeps zero
 mass: between impacts it follows the structure statically, as in MMS-HBM.
 
+Several contacts: one spring per contact (its DOF, side and gap; k_p per contact), a
+clearance being two springs on one DOF. The residual's row of a contact DOF gets the net
+force Σ_i side_i λ_i of its springs, and the Jacobian's harmonic coupling of that DOF is
+Σ_i k_p,i P_i (P_i the cosine product matrix of spring i's active set): still one dense
+(H+1)² block per distinct contact DOF, the rest the pattern of K and M. Contact DOFs may
+carry mass (FE-package models, as NLvib runs them): nothing in the formulation needs a
+massless DOF; only the default k_p is then taken from the static stiffness at the
+contact, 1/(e_dᵀ K⁻¹ e_d) by a sparse factorisation of K (the same number as the
+condensed (w_cᵀ D_0⁻¹ w_c)⁻¹ of a massless contact, which is what 0.1 used and still
+uses there). The amplitude is measured at ``model.amplitude_dof``.
+
 Conventions follow :mod:`mmshbm.methods.mms_hbm`:
 
 * Cosine-only (time-symmetric) ansatz q(τ) = Σ_k Q_k cos kτ on every DOF. It anchors the
@@ -74,19 +85,25 @@ import numpy as np
 import scipy.sparse as sp
 
 from .. import _validate as check
-from ..core.condense import Condensation
 from ..core.harmonics import check_harmonics, default_n_samples, transform
 from ..core.kernels import _cosine_product_matrix
 from ..model.model import Model
-from ._penalty_kernels import _penalty_contact, _penalty_hbm_jacobian
+from ._contacts import (
+    DEFAULT_PENALTY_FACTOR,
+    amplitude_sign,
+    contact_table,
+    penalty_values,
+    refined_peak,
+    start_mode,
+    static_contact_stiffness,
+)
+from ._penalty_kernels import _penalty_contacts, _penalty_hbm_jacobian
 from .mms_hbm import _mean_energy, _refined_max
 
 __all__ = ["PenaltyHBMProblem", "DEFAULT_PENALTY_FACTOR", "penalty_n_samples"]
 
 log = logging.getLogger(__name__)
 
-#: Default penalty stiffness in units of the condensed static contact stiffness k_c.
-DEFAULT_PENALTY_FACTOR = 1e3
 
 
 @dataclass(frozen=True)
@@ -103,8 +120,8 @@ class _Pattern:
         K and M on the union pattern A of one harmonic block.
     block_pos : ndarray of int64, shape (H+1, nnz_A)
         CSR position of entry e of block k.
-    coupling_pos : ndarray of int64, shape (H+1, H+1)
-        CSR position of (row m·n + contact_dof, column k·n + contact_dof).
+    coupling_pos : ndarray of int64, shape (n_d, H+1, H+1)
+        CSR position of (row m·n + d, column k·n + d) for each distinct contact DOF d.
     omega_rows : ndarray of int64, shape (n_l,)
         DOFs with mass: the rows of the Ω column in each harmonic k >= 1.
     omega_pos : ndarray of int64, shape (H, n_l)
@@ -127,13 +144,17 @@ class _Pattern:
         return np.repeat(np.arange(self.shape[0]), np.diff(self.indptr))
 
 
-def _jacobian_pattern(K: sp.csr_matrix, M: sp.csr_matrix, harmonics: int, contact_dof: int,
+def _jacobian_pattern(K: sp.csr_matrix, M: sp.csr_matrix, harmonics: int, contact_dofs,
                       mass_dofs: np.ndarray) -> _Pattern:
     """Build the CSR pattern of the penalty-HBM Jacobian once.
 
     Rows and columns are numbered k·n + i (harmonic k, DOF i); the last column is Ω.
+    ``contact_dofs`` (n_d,) are the distinct DOFs with a penalty spring: each couples its
+    harmonics in its own row and column.
     """
     n, H1 = K.shape[0], harmonics + 1
+    contact_dofs = np.atleast_1d(np.asarray(contact_dofs, dtype=np.int64))
+    n_d = len(contact_dofs)
     A = (abs(K) + abs(M)).tocsr()
     A.sum_duplicates()
     A.sort_indices()
@@ -141,15 +162,19 @@ def _jacobian_pattern(K: sp.csr_matrix, M: sp.csr_matrix, harmonics: int, contac
     a_cols = A.indices.astype(np.int64)
     K_data = np.asarray(K[a_rows, a_cols]).ravel()
     M_data = np.asarray(M[a_rows, a_cols]).ravel()
-    diag = np.flatnonzero((a_rows == contact_dof) & (a_cols == contact_dof))
-    if len(diag) != 1:  # pragma: no cover - K is positive definite, its diagonal is stored
-        raise ValueError("K has no stored diagonal entry at the contact DOF")
+    diag = np.empty(n_d, dtype=np.int64)
+    for j, d in enumerate(contact_dofs):
+        where = np.flatnonzero((a_rows == d) & (a_cols == d))
+        if len(where) != 1:  # pragma: no cover - K is positive definite, its diagonal is stored
+            raise ValueError(f"K has no stored diagonal entry at the contact DOF {d}")
+        diag[j] = where[0]
 
     k = np.arange(H1)
     blk_r = (k[:, None] * n + a_rows[None, :]).ravel()
     blk_c = (k[:, None] * n + a_cols[None, :]).ravel()
     m_, k_ = np.nonzero(~np.eye(H1, dtype=bool))
-    cpl_r, cpl_c = m_ * n + contact_dof, k_ * n + contact_dof
+    cpl_r = (m_[None, :] * n + contact_dofs[:, None]).ravel()
+    cpl_c = (k_[None, :] * n + contact_dofs[:, None]).ravel()
     mass_dofs = np.asarray(mass_dofs, dtype=np.int64)
     om_r = ((k[1:, None]) * n + mass_dofs[None, :]).ravel()
     om_c = np.full(om_r.shape, H1 * n)
@@ -161,9 +186,11 @@ def _jacobian_pattern(K: sp.csr_matrix, M: sp.csr_matrix, harmonics: int, contac
     position[order] = np.arange(len(order))
     n_blk, n_cpl = len(blk_r), len(cpl_r)
     block_pos = position[:n_blk].reshape(H1, len(a_rows))
-    coupling_pos = np.empty((H1, H1), dtype=np.int64)
-    coupling_pos[m_, k_] = position[n_blk : n_blk + n_cpl]
-    coupling_pos[k, k] = block_pos[k, diag[0]]
+    coupling_pos = np.empty((n_d, H1, H1), dtype=np.int64)
+    off = position[n_blk : n_blk + n_cpl].reshape(n_d, len(m_))
+    for j in range(n_d):
+        coupling_pos[j, m_, k_] = off[j]
+        coupling_pos[j, k, k] = block_pos[k, diag[j]]
     omega_pos = position[n_blk + n_cpl :].reshape(harmonics, len(mass_dofs))
     n_rows = H1 * n
     indptr = np.zeros(n_rows + 1, dtype=np.int64)
@@ -181,19 +208,23 @@ class PenaltyHBMProblem:
     Parameters
     ----------
     model : Model
-        The structure; its contact DOF meets the stop through a penalty spring.
+        The structure; each contact meets its stop through a penalty spring. Contact DOFs
+        may carry mass (models as FE packages export them).
     harmonics : int
         Highest harmonic H >= 1.
     n_samples : int, optional
-        Time samples per period N >= 2H+1 for the contact DOF's AFT. Default
+        Time samples per period N >= 2H+1 for the contact DOFs' AFT. Default
         :func:`penalty_n_samples`: MMS-HBM's :func:`~mmshbm.core.harmonics.default_n_samples`
         up to k_p = 10³ k_c, doubled per further decade of k_p (the penetration window
         narrows as k_p grows and must stay resolved by the samples).
-    penalty_stiffness : float, optional
-        k_p (N/m), > 0. Default ``DEFAULT_PENALTY_FACTOR`` (10³) times the condensed
-        static contact stiffness k_c = (w_cᵀ D_0⁻¹ w_c)⁻¹. The relative frequency error
-        of the backbone scales like k_c/k_p (module docstring); larger k_p needs more
-        harmonics and worsens the conditioning.
+    penalty_stiffness : float or sequence of float, optional
+        k_p (N/m), > 0: one for all contacts or one per contact. Default
+        ``DEFAULT_PENALTY_FACTOR`` (10³) times each contact's static stiffness k_c
+        (:func:`~mmshbm.methods._contacts.static_contact_stiffness`: the condensed
+        (w_cᵀ D_0⁻¹ w_c)⁻¹ when the contact DOFs are massless, as in 0.1, else
+        1/(e_dᵀ K⁻¹ e_d) from a sparse factorisation of K; the same number where both
+        apply). The relative frequency error of the backbone scales like k_c/k_p (module
+        docstring); larger k_p needs more harmonics and worsens the conditioning.
     mode : int
         Which linear mode (1-based) the branch starts from.
 
@@ -204,7 +235,9 @@ class PenaltyHBMProblem:
     n_unknowns : int
         n_dof·(H+1) + 1.
     penalty_stiffness, contact_stiffness : float
-        k_p and k_c (N/m).
+        k_p and k_c (N/m) of a single-contact model; with several contacts the largest
+        k_p and the smallest k_c (the per-contact values are ``penalty_stiffnesses`` and
+        ``contact_stiffnesses``, shape (n_contacts,)).
     method : str
         ``"penalty"``.
 
@@ -219,61 +252,85 @@ class PenaltyHBMProblem:
     method = "penalty"
 
     def __init__(self, model: Model, harmonics: int = 5, n_samples: int | None = None,
-                 penalty_stiffness: float | None = None, mode: int = 1):
+                 penalty_stiffness=None, mode: int = 1):
         if not isinstance(model, Model):
             raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
         self.model = model
         self.H = check_harmonics(harmonics)[0]
         self.mode = check.integer("mode", mode, minimum=1)
+        if self.mode > len(model.l):
+            raise ValueError(f"mode must be <= the number of DOFs with mass ({len(model.l)}), "
+                             f"got {self.mode}")
         self.n = model.n_dof
-        self.cd = model.contact_dof
-        self.side = float(model.stop_side)
+        self.amplitude_dof = model.amplitude_dof  # ValueError naming it if it is needed and missing
+        self._amp_sign = amplitude_sign(model)
+        self.contacts = contact_table(model)
+        ct = self.contacts
         self.gap = model.gap
         self.K = model.K.tocsr()
         self.M = model.M.tocsr()
-        self.contact_stiffness = _condensed_contact_stiffness(model)
-        if penalty_stiffness is None:
-            self.penalty_stiffness = DEFAULT_PENALTY_FACTOR * self.contact_stiffness
-        else:
-            self.penalty_stiffness = check.positive("penalty_stiffness", penalty_stiffness)
+        self.contact_stiffnesses = static_contact_stiffness(model)
+        self.penalty_stiffnesses = penalty_values(model, penalty_stiffness, self.contact_stiffnesses)
+        self.contact_stiffness = float(self.contact_stiffnesses.min())
+        self.penalty_stiffness = float(self.penalty_stiffnesses.max())
+        # the Jacobian's factor per distinct contact DOF: the largest k_p on it
+        self._kp_ref = np.zeros(len(ct.dofs))
+        np.maximum.at(self._kp_ref, ct.slot, self.penalty_stiffnesses)
         if n_samples is None:
-            n_samples = penalty_n_samples(self.H, self.penalty_stiffness / self.contact_stiffness)
+            ratio = float(np.max(self.penalty_stiffnesses / self.contact_stiffnesses))
+            n_samples = penalty_n_samples(self.H, ratio)
         self.N = check_harmonics(self.H, n_samples)[1]
-        log.debug("penalty HBM: k_p = %.4g N/m = %.3g k_c, N = %d", self.penalty_stiffness,
-                  self.penalty_stiffness / self.contact_stiffness, self.N)
+        log.debug("penalty HBM: k_p = %s N/m = %s k_c, N = %d", self.penalty_stiffnesses,
+                  self.penalty_stiffnesses / self.contact_stiffnesses, self.N)
         self._init_mode()
         self._init_scales()
         self.n_unknowns = (self.H + 1) * self.n + 1
-        self._pattern = _jacobian_pattern(self.K, self.M, self.H, self.cd, model.l)
+        self._pattern = _jacobian_pattern(self.K, self.M, self.H, ct.dofs, model.l)
         p = self._pattern
         self._entry_scale = self.colscale[p.indices] / self.rowscale[p.rows]
-        self._tr = transform(self.H, self.N, 1)
-        self._P = np.empty((self.H + 1, self.H + 1))
-        self._lam_t = np.empty(self.N)
-        self._s_t = np.empty(self.N)
+        n_d = len(ct.dofs)
+        self._tr = transform(self.H, self.N, n_d)
+        self._P = np.empty((n_d, self.H + 1, self.H + 1))
+        self._f_t = np.empty((n_d, self.N))
+        self._s_t = np.empty((n_d, self.N))
         self._k2 = np.arange(self.H + 1, dtype=float) ** 2
         n_fine = max(512, 8 * self.N)
         self._tau_fine = 2 * np.pi * np.arange(n_fine) / n_fine
         self._cos_fine = np.cos(np.outer(np.arange(self.H + 1), self._tau_fine))
 
+    @property
+    def cd(self) -> int:
+        """The contact DOF of a single-contact model (ValueError with several)."""
+        return self.model.contact_dof
+
+    @property
+    def side(self) -> float:
+        """The stop side (±1.0) of a single-contact model (ValueError with several)."""
+        return float(self.model.stop_side)
+
     def _init_mode(self) -> None:
-        """Linear mode ``self.mode``: frequency and shape with a unit contact swing."""
-        freqs, modes = self.model.linear_modes(self.mode)
-        self.linear_frequency = float(freqs[-1])
+        """Linear mode ``self.mode``: frequency and shape with a unit swing of the
+        amplitude DOF."""
+        freq, phi = start_mode(self.model, self.mode)
+        self.linear_frequency = freq
         self.omega_ref = 2 * np.pi * self.linear_frequency
-        phi = modes[:, -1]
-        contact = phi[self.cd]
-        if abs(contact) < 1e-12 * np.max(np.abs(phi)):
+        amp = phi[self.amplitude_dof]
+        if abs(amp) < 1e-12 * np.max(np.abs(phi)):
             raise ValueError(f"linear mode {self.mode} does not move the contact DOF: no impact")
-        # unit contact motion toward the stop at τ = 0 (linear_modes orients the modes that way)
-        self.mode_shape = phi / abs(contact)
+        if np.all(np.abs(phi[self.contacts.dofs]) < 1e-12 * np.max(np.abs(phi))):
+            raise ValueError(f"linear mode {self.mode} does not move any contact DOF: no impact")
+        # unit motion of the amplitude DOF; the (first moving) contact DOF moves toward its
+        # stop at τ = 0 (start_mode / linear_modes orient the modes that way)
+        self.mode_shape = phi / abs(amp)
 
     def _init_scales(self) -> None:
         """Column scales (xscale per DOF, ω_ref) and row scales (force per DOF)."""
         length = self.gap if self.gap > 0 else 1.0
         shape = np.abs(self.mode_shape)
         s = np.maximum(shape, 1e-3 * shape.max())
-        c = self.model.c
+        # MMS-HBM's unknowns: the massless DOFs; for contact DOFs with mass (no MMS-HBM
+        # formulation) the contact DOFs play that part
+        c = self.model.c if (self.model.massless_contacts and len(self.model.c)) else self.contacts.dofs
         rho = np.linalg.norm(shape / s) / np.linalg.norm(shape[c] / s[c])
         self.xscale = length * rho * s
         self.colscale = np.concatenate([np.tile(self.xscale, self.H + 1), [self.omega_ref]])
@@ -290,8 +347,8 @@ class PenaltyHBMProblem:
         return np.concatenate([np.asarray(Q, dtype=float).ravel(), [omega]]) / self.colscale
 
     def linear_point(self, amplitude: float) -> np.ndarray:
-        """Scaled unknowns of the linear mode whose contact DOF swings ``amplitude`` (m),
-        moving toward the stop at τ = 0, at Ω = ω of that mode."""
+        """Scaled unknowns of the linear mode whose amplitude DOF swings ``amplitude`` (m),
+        the contact DOF moving toward the stop at τ = 0, at Ω = ω of that mode."""
         Q = np.zeros((self.H + 1, self.n))
         Q[1] = amplitude * self.mode_shape
         return self.pack(Q, self.omega_ref)
@@ -303,12 +360,15 @@ class PenaltyHBMProblem:
         return t / np.linalg.norm(t)
 
     # ------------------------------------------------------------------ residual
-    def _contact_aft(self, Qc: np.ndarray) -> np.ndarray:
-        """Penalty force on the samples (fills ``_lam_t``, ``_s_t``); returns its cosine
-        coefficients λ_k (N), shape (H+1,)."""
-        q_t = self._tr.cos_to_time(Qc[None, :])[0]
-        _penalty_contact(q_t, self.gap, self.side, self.penalty_stiffness, self._lam_t, self._s_t)
-        return self._tr.time_to_cos(self._lam_t[None, :])[0]
+    def _contact_aft(self, Q: np.ndarray) -> np.ndarray:
+        """Penalty forces on the samples (fills ``_f_t``, ``_s_t``); returns the cosine
+        coefficients (n_d, H+1) (N) of the net force Σ side_i λ_i on each distinct contact
+        DOF."""
+        ct = self.contacts
+        q_t = self._tr.cos_to_time(np.ascontiguousarray(Q[:, ct.dofs].T))
+        _penalty_contacts(q_t, ct.slot, ct.gap, ct.side.astype(float), self.penalty_stiffnesses,
+                          self._kp_ref, self._f_t, self._s_t)
+        return self._tr.time_to_cos(self._f_t)
 
     def evaluate(self, u: np.ndarray, jacobian: bool = True):
         """Scaled residual and, if asked, its Jacobian.
@@ -323,47 +383,55 @@ class PenaltyHBMProblem:
         Returns
         -------
         R : ndarray, shape (n_dof·(H+1),)
-            (K − (kΩ)² M) Q_k − W λ_k, divided by the row scales.
+            (K − (kΩ)² M) Q_k − Σ_i w_i λ_i,k, divided by the row scales.
         J : scipy.sparse.csr_matrix, shape (n_dof·(H+1), n_unknowns), only if ``jacobian``
             ∂R/∂u (scaled).
         """
         Q, omega = self.unpack(u)
         KQ = (self.K @ Q.T).T
         MQ = (self.M @ Q.T).T
-        lam_k = self._contact_aft(Q[:, self.cd])
+        f_k = self._contact_aft(Q)
         R = KQ - (omega**2 * self._k2)[:, None] * MQ
-        R[:, self.cd] += self.side * lam_k
+        R[:, self.contacts.dofs] += f_k.T
         R = R.ravel() / self.rowscale
         if not jacobian:
             return R
         return R, self._jacobian(omega, MQ)
 
     def _jacobian(self, omega: float, MQ: np.ndarray) -> sp.csr_matrix:
-        """Scaled sparse Jacobian from the active set left in ``_s_t`` by the residual."""
-        S = self._tr.cosine_spectrum(self._s_t[None, :])[0]
-        _cosine_product_matrix(S, self.H, self._P)
+        """Scaled sparse Jacobian from the active sets left in ``_s_t`` by the residual."""
+        S = self._tr.cosine_spectrum(self._s_t)
+        for d in range(len(S)):
+            _cosine_product_matrix(S[d], self.H, self._P[d])
         p = self._pattern
         data = np.empty(len(p.indices))
-        _penalty_hbm_jacobian(p.K_data, p.M_data, omega, self.penalty_stiffness, self._P,
-                              np.ascontiguousarray(MQ), p.block_pos, p.coupling_pos, p.omega_rows,
-                              p.omega_pos, self._entry_scale, data)
+        _penalty_hbm_jacobian(p.K_data, p.M_data, omega, self._kp_ref, self._P, np.ascontiguousarray(MQ),
+                              p.block_pos, p.coupling_pos, p.omega_rows, p.omega_pos, self._entry_scale, data)
         return sp.csr_matrix((data, p.indices, p.indptr), shape=p.shape, copy=False)
 
     # ------------------------------------------------------------------ results
-    def contact_signals(self, u: np.ndarray, tau: np.ndarray | None = None):
-        """Contact DOF displacement q(τ) (m) and penalty force λ(τ) (N) on a grid.
+    def _cosines(self, tau):
+        if tau is None:
+            return self._tau_fine, self._cos_fine
+        tau = np.asarray(tau, dtype=float)
+        return tau, np.cos(np.outer(np.arange(self.H + 1), tau))
 
-        Returns (tau, q_contact, lam), each shape (n_tau,); ``tau`` defaults to a fine
-        grid over one period.
+    def contact_signals(self, u: np.ndarray, tau: np.ndarray | None = None):
+        """Contact DOF displacements q(τ) (m) and penalty forces λ(τ) (N) on a grid.
+
+        Returns (tau, q_contact, lam): ``tau`` (n_tau,) defaults to a fine grid over one
+        period; with one contact ``q_contact`` and ``lam`` have shape (n_tau,), with
+        several (n_contacts, n_tau) (one row per contact, in ``model.contacts`` order).
         """
         Q, _ = self.unpack(u)
-        if tau is None:
-            tau, C = self._tau_fine, self._cos_fine
-        else:
-            tau = np.asarray(tau, dtype=float)
-            C = np.cos(np.outer(np.arange(self.H + 1), tau))
-        q = Q[:, self.cd] @ C
-        return tau, q, self.penalty_stiffness * np.maximum(0.0, self.side * q - self.gap)
+        tau, C = self._cosines(tau)
+        ct = self.contacts
+        q = np.array([Q[:, d] @ C for d in ct.dof])
+        pen = ct.side[:, None] * q - ct.gap[:, None]
+        lam = self.penalty_stiffnesses[:, None] * np.maximum(0.0, pen)
+        if ct.n == 1:
+            return tau, q[0], lam[0]
+        return tau, q, lam
 
     def coefficients(self, u: np.ndarray) -> np.ndarray:
         """NLvib-ordered coefficients of all DOFs, shape (n_dof, 2H+1) (sines are zero)."""
@@ -387,31 +455,45 @@ class PenaltyHBMProblem:
         return tau / omega, q
 
     def contact_force(self, u: np.ndarray, n_samples: int = 256):
-        """(t (n_samples,) in s, λ (n_samples,) in N) over one period."""
+        """(t (n_samples,) in s, λ in N) over one period; λ has shape (n_samples,) with one
+        contact, (n_contacts, n_samples) with several."""
         _, omega = self.unpack(u)
         tau = 2 * np.pi * np.arange(n_samples) / n_samples
         _, _, lam = self.contact_signals(u, tau)
         return tau / omega, lam
 
     def harmonic_content(self, u: np.ndarray, dof: int | None = None) -> np.ndarray:
-        """|Q_k| for k = 0..H of ``dof`` (default the contact DOF); shape (H+1,)."""
-        dof = self.cd if dof is None else int(dof)
+        """|Q_k| for k = 0..H of ``dof`` (default the amplitude DOF); shape (H+1,)."""
+        dof = self.amplitude_dof if dof is None else int(dof)
         Q, _ = self.unpack(u)
         return np.abs(Q[:, dof])
 
     def monitor(self, u: np.ndarray) -> dict:
-        """The per-point quantities of a backbone: frequency (Hz), amplitude (m),
-        energy (J, structure plus penalty spring, period averages), contact_force_max (N)."""
-        _, omega = self.unpack(u)
+        """The per-point quantities of a backbone: frequency (Hz), amplitude (m, at
+        ``model.amplitude_dof``), energy (J, structure plus penalty springs, period
+        averages), contact_force_max (N, the largest over all contacts); with several
+        contacts also ``contact_force_max_<i>`` per contact i."""
+        Q, omega = self.unpack(u)
         _, q, lam = self.contact_signals(u)
-        penetration = self.side * q - self.gap
-        spring = 0.5 * self.penalty_stiffness * np.mean(np.maximum(0.0, penetration) ** 2)
-        return {
+        ct = self.contacts
+        q, lam = np.atleast_2d(q), np.atleast_2d(lam)
+        penetration = ct.side[:, None] * q - ct.gap[:, None]
+        spring = 0.5 * sum(float(kp * np.mean(np.maximum(0.0, pen) ** 2))
+                           for kp, pen in zip(self.penalty_stiffnesses, penetration, strict=True))
+        if self._amp_sign != 0 and ct.n == 1:
+            q_amp = q[0]
+        else:
+            q_amp = Q[:, self.amplitude_dof] @ self._cos_fine
+        peaks = [self.penalty_stiffnesses[i] * max(_refined_max(penetration[i]), 0.0) for i in range(ct.n)]
+        rec = {
             "frequency": omega / (2 * np.pi),
-            "amplitude": _refined_max(-self.side * q),
-            "energy": _mean_energy(self.model, self.coefficients(u), omega) + float(spring),
-            "contact_force_max": self.penalty_stiffness * max(_refined_max(penetration), 0.0),
+            "amplitude": refined_peak(q_amp, self._amp_sign),
+            "energy": _mean_energy(self.model, self.coefficients(u), omega) + spring,
+            "contact_force_max": float(max(peaks)),
         }
+        if ct.n > 1:
+            rec.update({f"contact_force_max_{i}": float(v) for i, v in enumerate(peaks)})
+        return rec
 
 
 def penalty_n_samples(harmonics: int, penalty_factor: float) -> int:
@@ -430,12 +512,8 @@ def penalty_n_samples(harmonics: int, penalty_factor: float) -> int:
     return default_n_samples(H) * 2**doublings
 
 
-def _condensed_stiffness_of(D0: np.ndarray, w: np.ndarray) -> float:
-    """(wᵀ D_0⁻¹ w)⁻¹ (N/m)."""
-    return 1.0 / float(w @ np.linalg.solve(D0, w))
-
-
 def _condensed_contact_stiffness(model: Model) -> float:
-    """k_c = (w_cᵀ D_0⁻¹ w_c)⁻¹ (N/m): the static stiffness of the structure at the contact
-    DOF, D_0 = K_cc − K_cl K_ll⁻¹ K_lc."""
-    return _condensed_stiffness_of(Condensation(model).D0, np.asarray(model.w_c, dtype=float))
+    """k_c (N/m): the static stiffness of the structure at the contact of a single-contact
+    model (with several contacts, the smallest over the contacts); see
+    :func:`~mmshbm.methods._contacts.static_contact_stiffness`."""
+    return float(static_contact_stiffness(model).min())

@@ -2,7 +2,7 @@
 
 Because the contact DOFs are massless they follow the DOFs with mass ``l`` statically
 (DESIGN.md section 1; the docstring of :mod:`mmshbm.methods.exact`): at fixed ``q_l`` the contact
-problem is a scalar LCP with the solution λ = k_c max(0, −h(q_l)), free gap
+problem of one contact is a scalar LCP with the solution λ = k_c max(0, −h(q_l)), free gap
 h(q_l) = gap + a·q_l, a = −K_lc K_cc⁻¹ w_c and k_c = 1/(w_cᵀ K_cc⁻¹ w_c). The motion of
 the DOFs with mass is the continuous, piecewise-linear system
 
@@ -48,6 +48,22 @@ resolve stay bounded but mistimed. Why "avf" is the default:
 mass when it narrows the band); ``S`` is factored once per step size, i.e. per Newton
 iterate, in O(n p²).
 
+Several contacts (details: docs/shooting.md, :mod:`mmshbm.methods._shooting_contact_kernels`).
+With free gaps h = gap + A q_l the contact forces at fixed q_l solve the LCP
+g = h + G λ >= 0, λ >= 0, gᵀλ = 0 (G = Wᵀ K_cc⁻¹ W), whose solution is continuous and
+piecewise linear in h. The step keeps its form with Aᵀ F(h0, h1) for the force, and the
+new free gaps solve the monotone m-dimensional equation h1 = hy + A S⁻¹Aᵀ F(h0, h1) by
+semismooth Newton to round-off; F (λ(h0) + λ(h1), or the exact path average for "avf",
+still a discrete gradient) and its derivatives are computed exactly by following λ along
+the step's straight path in h (principal pivoting); sensitivities by the Woodbury form.
+One contact keeps the closed-form scalar step of 0.1 (bit for bit).
+
+Contact DOFs with mass (FE-package models): a penalty spring λ = k_p max(0, −g) on the
+DOF, which in this step is an LCP row with G_ii = 1/k_p and h = gap − side q_dof: the
+implicit, A-stable, energy-conserving step integrates it as a stiff ODE (order 2 once the
+contact phase is resolved; ``penalty_stiffness``, default 10³ times the static stiffness
+at the contact, as penalty-HBM).
+
 Unknowns and phase. The system is reversible (q, v, t) -> (q, −v, −t) and so is the
 trapezoidal map, exactly. The nonlinear modes continued from the linear modes are
 symmetric orbits: all velocities vanish at t = 0 and at t = T/2. Shooting uses this as
@@ -88,7 +104,10 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from .. import _validate as check
 from ..model.model import Model
-from ._shooting_kernels import _band_cholesky, _band_solve, _integrate
+from ._contacts import amplitude_sign, contact_law, contact_table, penalty_values, refined_peak, start_mode
+from ._shooting_contact_kernels import _integrate_multi, lcp_solve
+from ._shooting_kernels import _band_cholesky, _band_solve, _band_solve_rows, _integrate
+from ._shooting_signals import ShootingSignals
 from .mms_hbm import _refined_max
 
 __all__ = ["ShootingProblem", "DEFAULT_STEPS_PER_PERIOD", "FLOQUET_AUTO_LIMIT"]
@@ -112,13 +131,14 @@ def _lower_band(A: sp.spmatrix, p: int) -> np.ndarray:
     return ab
 
 
-class ShootingProblem:
+class ShootingProblem(ShootingSignals):
     """Symmetric-orbit shooting with the trapezoidal rule, as a continuation problem.
 
     Parameters
     ----------
     model : Model
-        The structure (at least one massless DOF, the contact DOF among them).
+        The structure; contacts on massless DOFs are exact (their LCP per step), contacts
+        on DOFs with mass are penalty springs (``penalty_stiffness``).
     steps_per_period : int
         Time steps N per period (even, >= 8); N/2 steps are integrated.
     mode : int
@@ -129,12 +149,17 @@ class ShootingProblem:
     floquet : bool or "auto"
         Record ``floquet_max`` in :meth:`monitor` ("auto": when the model has at most
         ``FLOQUET_AUTO_LIMIT`` DOFs with mass; otherwise NaN is recorded).
+    penalty_stiffness : float or sequence of float, optional
+        k_p (N/m) of the contacts whose DOF carries mass: one for all, or one per contact
+        (entries of massless contacts unused). Default ``DEFAULT_PENALTY_FACTOR`` (10³)
+        times the static stiffness at each contact, 1/(e_dᵀ K⁻¹ e_d). A ValueError if
+        every contact DOF is massless (their contact is exact).
 
     Notes
     -----
     The scaled unknown vector is ``u = [x/s, Ω/ω_ref]`` with ``x = q_l(0)`` (m, rad) in
     ``model.l`` order, ``s`` the per-DOF length scale ``xscale`` and ω_ref the linear
-    frequency (rad/s) of the mode. ``s`` is the gap times the mode's shape (contact DOF
+    frequency (rad/s) of the mode. ``s`` is the gap times the mode's shape (amplitude DOF
     1, floored at 10⁻³ of its largest entry) times a factor that makes the scaled norm of
     the linear mode equal to MMS-HBM's, so that an arclength step means the same change
     of amplitude in both methods. Residual rows are v_l(T/2) / (ω_ref s).
@@ -149,7 +174,7 @@ class ShootingProblem:
     H = 0
 
     def __init__(self, model: Model, steps_per_period: int = DEFAULT_STEPS_PER_PERIOD, mode: int = 1,
-                 scheme: str = "avf", floquet: bool | str = "auto"):
+                 scheme: str = "avf", floquet: bool | str = "auto", penalty_stiffness=None):
         if not isinstance(model, Model):
             raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
         N = check.integer("steps_per_period", steps_per_period, minimum=8)
@@ -163,14 +188,16 @@ class ShootingProblem:
         self.model = model
         self.N = N
         self.mode = check.integer("mode", mode, minimum=1)
+        if self.mode > len(model.l):
+            raise ValueError(f"mode must be <= the number of DOFs with mass ({len(model.l)}), "
+                             f"got {self.mode}")
+        self.amplitude_dof = model.amplitude_dof  # ValueError naming it if it is needed and missing
+        self._amp_sign = amplitude_sign(model)
+        self.contacts = ct = contact_table(model)
         b = model.blocks
         self.n_c = len(model.c)
-        self.ci = model.contact_index
         self.gap = float(model.gap)
-        w = np.asarray(model.w_c, dtype=float)
         K_cc, K_lc = b["K_cc"], b["K_lc"]
-        e = la.solve(K_cc, w)
-        self.contact_stiffness = 1.0 / float(w @ e)
         K_open = model.reduced_stiffness
         M_ll = b["M_ll"]
         n = M_ll.shape[0]
@@ -196,26 +223,29 @@ class ShootingProblem:
         self._Mb = _lower_band(Mp, p)
         self._Kb = _lower_band(Kp, p)
         self._K = Kp.tocsr()
-        # contact: free gap h = gap + a·q_l, q_c = B q_l + e λ (permuted l order)
-        self.a = np.ascontiguousarray((-K_lc @ e)[perm])
-        self._B = np.ascontiguousarray(-la.solve(K_cc, K_lc.T)[:, perm])
-        self._e = e
+        self._B = np.ascontiguousarray(-la.solve(K_cc, K_lc.T)[:, perm]) if self.n_c else np.zeros((0, n))
+        self._init_contacts(K_cc, K_lc, penalty_stiffness)
 
-        freqs, modes = model.linear_modes(self.mode)
-        self.linear_frequency = float(freqs[-1])
+        freq, phi = start_mode(model, self.mode)
+        self.linear_frequency = freq
         self.omega_ref = 2 * np.pi * self.linear_frequency
-        phi = modes[:, -1]
-        contact = phi[model.contact_dof]
-        if abs(contact) < 1e-12 * np.max(np.abs(phi)):
+        amp = phi[self.amplitude_dof]
+        if abs(amp) < 1e-12 * np.max(np.abs(phi)):
             raise ValueError(f"linear mode {self.mode} does not move the contact DOF: no impact")
-        phi = phi / abs(contact)  # contact DOF: +stop_side (toward the stop)
+        if np.all(np.abs(phi[ct.dofs]) < 1e-12 * np.max(np.abs(phi))):
+            raise ValueError(f"linear mode {self.mode} does not move any contact DOF: no impact")
+        phi = phi / abs(amp)  # amplitude DOF ±1; the (first) contact DOF toward its stop
         self.mode_shape_l = phi[model.l][perm]
+        # sign of the amplitude DOF at t = 0 (the turning point farthest from the stop)
+        self._amp_sigma = -float(np.sign(phi[self.amplitude_dof]))
         length = self.gap if self.gap > 0 else 1.0
         shape_l = np.abs(self.mode_shape_l)
         s0 = length * np.maximum(shape_l, 1e-3 * shape_l.max())
-        shape_c = np.abs(phi[model.c])
+        # MMS-HBM's unknowns are the massless DOFs; without them the contact DOFs
+        ref = model.c if (model.massless_contacts and self.n_c) else ct.dofs
+        shape_c = np.abs(phi[ref])
         s0_c = length * np.maximum(shape_c, 1e-3 * shape_c.max())
-        rho = np.linalg.norm(self.mode_shape_l / s0) / np.linalg.norm(phi[model.c] / s0_c)
+        rho = np.linalg.norm(self.mode_shape_l / s0) / np.linalg.norm(phi[ref] / s0_c)
         self.xscale = s0 * rho
         self.colscale = np.concatenate([self.xscale, [self.omega_ref]])
         self.rowscale = self.omega_ref * self.xscale
@@ -223,6 +253,41 @@ class ShootingProblem:
         self.floquet = (n <= FLOQUET_AUTO_LIMIT) if floquet == "auto" else bool(floquet)
         self._S_cache = None
         self._traj_cache = None
+
+    def _init_contacts(self, K_cc, K_lc, penalty_stiffness) -> None:
+        """Free gaps h = gap + A q_l (permuted order), the Delassus matrix G of the LCP at
+        fixed q_l and the massless DOFs' recovery q_c = B q_l + E λ
+        (:func:`~mmshbm.methods._contacts.contact_law`; penalty springs on DOFs with mass)."""
+        ct = self.contacts
+        if (~ct.massless).any():
+            kp = penalty_values(self.model, penalty_stiffness)
+        elif penalty_stiffness is not None:
+            raise ValueError("penalty_stiffness applies to contact DOFs with mass; every contact DOF of this "
+                             "model is massless (its contact is exact)")
+        else:
+            kp = None
+        self.penalty_stiffnesses = kp
+        A, E, G = contact_law(self.model, kp)
+        A = A[:, self.perm]
+        if ct.n == 1 and ct.massless[0]:
+            # one massless contact: the arithmetic of mmshbm 0.1
+            w = np.zeros(self.n_c)
+            w[int(np.searchsorted(self.model.c, ct.dof[0]))] = -float(ct.side[0])
+            e = la.solve(K_cc, w)
+            self.contact_stiffness = 1.0 / float(w @ e)
+            self.a = np.ascontiguousarray((-K_lc @ e)[self.perm])
+            self._e = e
+            E, A = e[:, None], self.a[None, :]
+        elif ct.n == 1:  # a penalty spring on a DOF with mass
+            self.contact_stiffness = float(kp[0])
+            self.a = np.ascontiguousarray(A[0])
+            self._e = E[:, 0]
+        else:
+            self.contact_stiffness = float(np.min(1.0 / np.diag(G)))
+        self._A = np.ascontiguousarray(A)
+        self._E = np.ascontiguousarray(E)
+        self._G = np.ascontiguousarray(G)
+        self._gaps = np.ascontiguousarray(ct.gap)
 
     # ------------------------------------------------------------------ unknowns
     def unpack(self, u: np.ndarray) -> tuple[np.ndarray, float]:
@@ -255,16 +320,23 @@ class ShootingProblem:
     # ------------------------------------------------------------------ integration
     def _step_matrix(self, h: float):
         """Band Cholesky factor of S = (4/h²) M + K_open, band P = (4/h²) M − K_open,
-        z = S⁻¹ a and α = a·z (cached per h)."""
+        z = S⁻¹ a and α = a·z (cached per h); with several contacts z = S⁻¹ Aᵀ (n_l, n_ct)
+        and α = A z (n_ct, n_ct)."""
         if self._S_cache is not None and self._S_cache[0] == h:
             return self._S_cache[1:]
         Sf = self._Kb + (4.0 / (h * h)) * self._Mb
         Pb = (4.0 / (h * h)) * self._Mb - self._Kb
         if not _band_cholesky(Sf):
             raise ValueError(f"step matrix not positive definite at h = {h:g} s")
-        z = self.a.copy()
-        _band_solve(Sf, z)
-        alpha = float(self.a @ z)
+        if self.contacts.n == 1:
+            z = self.a.copy()
+            _band_solve(Sf, z)
+            alpha = float(self.a @ z)
+        else:  # Z = S⁻¹ Aᵀ (n_l, n_ct) and A Z (n_ct, n_ct)
+            Zt = self._A.copy()
+            _band_solve_rows(Sf, Zt)
+            z = np.ascontiguousarray(Zt.T)
+            alpha = np.ascontiguousarray(self._A @ z)
         self._S_cache = (h, Sf, Pb, z, alpha)
         return Sf, Pb, z, alpha
 
@@ -282,12 +354,22 @@ class ShootingProblem:
         q, v = np.ascontiguousarray(x[self.perm]), np.zeros(n)
         if tangents is None:
             tangents = (np.zeros((n, 0)), np.zeros((n, 0)), np.zeros(0))
+        m = self.contacts.n
+        lam_shape = (n_steps + 1,) if m == 1 else (n_steps + 1, m)
         if store:
-            Q, V, LAM = np.empty((n_steps + 1, n)), np.empty((n_steps + 1, n)), np.empty(n_steps + 1)
+            Q, V, LAM = np.empty((n_steps + 1, n)), np.empty((n_steps + 1, n)), np.empty(lam_shape)
         else:
-            Q, V, LAM = np.empty((0, n)), np.empty((0, n)), np.empty(0)
-        closed = _integrate(Sf, Pb, self._Mb, self._Kb, self.a, z, alpha, self.contact_stiffness, self.gap, h,
-                            n_steps, self.scheme == "avf", q, v, *tangents, Q, V, LAM)
+            Q, V, LAM = np.empty((0, n)), np.empty((0, n)), np.empty((0,) * len(lam_shape))
+        avf = self.scheme == "avf"
+        if m == 1:
+            closed = _integrate(Sf, Pb, self._Mb, self._Kb, self.a, z, alpha, self.contact_stiffness,
+                                self.gap, h, n_steps, avf, q, v, *tangents, Q, V, LAM)
+        else:
+            closed = _integrate_multi(Sf, Pb, self._Mb, self._Kb, self._A, z, alpha, self._G, self._gaps, h,
+                                      n_steps, avf, q, v, *tangents, Q, V, LAM)
+            if closed < 0:
+                raise RuntimeError(f"the contact problem of step {-1 - closed} has no unique solution "
+                                   f"(Ω = {omega:.6g} rad/s)")
         return q, v, closed, (Q, V, LAM)
 
     # ------------------------------------------------------------------ residual
@@ -314,7 +396,9 @@ class ShootingProblem:
     def solve_at_amplitude(self, amplitude: float, guess: np.ndarray | None = None, tol: float = 1e-10,
                            max_iter: int = 30) -> np.ndarray:
         """The orbit whose contact DOF starts ``amplitude`` (m) away from the stop at t = 0
-        (the convention of :func:`mmshbm.methods.exact.periodic_orbit`), by Newton on the residual
+        (the convention of :func:`mmshbm.methods.exact.periodic_orbit`; with several
+        contacts the amplitude DOF's value at t = 0, signed as the start of the first-mode
+        family), by Newton on the residual
         bordered with that condition. ``guess``: scaled unknowns (default the linear mode).
         Converged when the scaled residual is <= ``tol``, or <= √tol with the last Newton
         update below 1e-9 (relative): on strongly unstable orbits round-off in the
@@ -323,8 +407,10 @@ class ShootingProblem:
         raises RuntimeError without convergence."""
         amplitude = check.positive("amplitude", amplitude)
         u = self.linear_point(amplitude) if guess is None else np.array(guess, dtype=float)
-        # amplitude at t = 0 (open contact): -stop_side * (B x)[contact], a linear row in u
-        row = -self.model.stop_side * self._B[self.ci] * self.xscale
+        # amplitude at t = 0, a linear row in u: -stop_side * (B x)[contact] for one contact on
+        # the amplitude DOF (open there), else the amplitude DOF's value (a massless one by
+        # the open-contact recovery B) signed as the start of the family
+        row = self._amplitude_row() * self.xscale
         length = self.gap if self.gap > 0 else amplitude
         du_norm = np.inf
         for _ in range(max_iter):
@@ -342,6 +428,18 @@ class ShootingProblem:
         raise RuntimeError(f"no convergence at amplitude {amplitude:g} m in {max_iter} iterations "
                            f"(residual {max(np.max(np.abs(R)), abs(c)):.2e})")
 
+    def _amplitude_row(self) -> np.ndarray:
+        """Row r (n_l, permuted order) with the amplitude = r · q_l at t = 0."""
+        model, amp = self.model, self.amplitude_dof
+        if self._amp_sign != 0 and self.contacts.massless[0]:
+            return -self._amp_sign * self._B[int(np.searchsorted(model.c, amp))]
+        sigma = -self._amp_sign if self._amp_sign else self._amp_sigma
+        if amp in set(model.l.tolist()):
+            row = np.zeros(self.n_l)
+            row[np.argsort(self.perm)[int(np.searchsorted(model.l, amp))]] = sigma
+            return row
+        return sigma * self._B[int(np.searchsorted(model.c, amp))]
+
     def floquet_multipliers(self, u: np.ndarray) -> np.ndarray:
         """Eigenvalues of the discrete map's monodromy matrix over one period at ``u``,
         shape (2 n_l,), sorted by decreasing modulus."""
@@ -354,128 +452,44 @@ class ShootingProblem:
         mu = la.eigvals(monodromy)
         return mu[np.argsort(-np.abs(mu), kind="stable")]
 
-    # ------------------------------------------------------------------ trajectories
-    def trajectory(self, u: np.ndarray):
-        """The discrete orbit over one period at the N step instants.
-
-        Returns
-        -------
-        t : ndarray (N,), s
-        q_l, v_l : ndarray (N, n_l), positions and velocities of the DOFs with mass
-            (``model.l`` order)
-        lam : ndarray (N,), contact force (N)
-        """
-        key = np.asarray(u, dtype=float).tobytes()
-        if self._traj_cache is not None and self._traj_cache[0] == key:
-            return self._traj_cache[1]
-        x, omega = self.unpack(u)
-        half = self.N // 2
-        _, _, _, (Q, V, LAM) = self._integrate(x, omega, half, store=True)
-        # the second half mirrors the first: q(T − t) = q(t), v(T − t) = −v(t)
-        Qf = np.vstack([Q, Q[half - 1 : 0 : -1]])
-        Vf = np.vstack([V, -V[half - 1 : 0 : -1]])
-        lam = np.concatenate([LAM, LAM[half - 1 : 0 : -1]])
-        inv = np.argsort(self.perm)
-        T = 2 * np.pi / omega
-        out = (T * np.arange(self.N) / self.N, Qf[:, inv], Vf[:, inv], lam)
-        self._traj_cache = (key, out)
-        return out
-
-    def _massless(self, q_l: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(q_c (n_c, m), λ (m,)) from q_l (n_l, m) in ``model.l`` order."""
-        ql = q_l[self.perm]
-        lam = self.contact_stiffness * np.maximum(0.0, -(self.gap + self.a @ ql))
-        return self._B @ ql + np.outer(self._e, lam), lam
-
-    def _resample(self, u: np.ndarray, n_samples: int):
-        """(t (n_samples,), q_l (n_l, n_samples)) by cubic Hermite interpolation of the
-        discrete orbit (positions and velocities at the steps)."""
-        n_samples = check.integer("n_samples", n_samples, minimum=1)
-        t_steps, Q, V, _ = self.trajectory(u)
-        _, omega = self.unpack(u)
-        T = 2 * np.pi / omega
-        h = T / self.N
-        t = T * np.arange(n_samples) / n_samples
-        s = t / h
-        k = np.minimum(np.floor(s).astype(int), self.N - 1)
-        r = (s - k)[None, :]
-        k1 = (k + 1) % self.N
-        h00 = 2 * r**3 - 3 * r**2 + 1
-        h10 = r**3 - 2 * r**2 + r
-        h01 = -2 * r**3 + 3 * r**2
-        h11 = r**3 - r**2
-        q = h00 * Q[k].T + h10 * h * V[k].T + h01 * Q[k1].T + h11 * h * V[k1].T
-        return t, q
-
-    def time_signals(self, u: np.ndarray, dofs=None, n_samples: int = 256):
-        """(t (n_samples,) in s, q (n_dofs, n_samples)) over one period for ``dofs``
-        (all DOFs when None); massless DOFs follow statically from the DOFs with mass."""
-        t, ql = self._resample(u, n_samples)
-        qc, _ = self._massless(ql)
-        q = np.empty((self.model.n_dof, len(t)))
-        q[self.model.l] = ql
-        q[self.model.c] = qc
-        if dofs is not None:
-            dofs = np.atleast_1d(np.asarray(dofs))
-            if dofs.dtype.kind not in "iu" or np.any((dofs < -self.model.n_dof) | (dofs >= self.model.n_dof)):
-                raise ValueError(f"dofs must be integer indices in [0, {self.model.n_dof - 1}], got {dofs}")
-            q = q[dofs]
-        return t, q
-
-    def contact_force(self, u: np.ndarray, n_samples: int = 256):
-        """(t (n_samples,) in s, λ (n_samples,) in N) over one period."""
-        t, ql = self._resample(u, n_samples)
-        return t, self._massless(ql)[1]
-
-    def harmonic_content(self, u: np.ndarray, dof: int | None = None,
-                         harmonics: int | None = None) -> np.ndarray:
-        """|Q_k| for k = 0..harmonics of ``dof`` (default the contact DOF), from the DFT of
-        the N step samples over one period; shape (harmonics+1,). ``harmonics`` defaults
-        to min(10, N/2 − 1)."""
-        dof = self.model.contact_dof if dof is None else check.integer("dof", dof)
-        if not 0 <= dof < self.model.n_dof:
-            raise ValueError(f"dof must be in [0, {self.model.n_dof - 1}], got {dof}")
-        if harmonics is None:
-            harmonics = min(10, self.N // 2 - 1)
-        harmonics = check.integer("harmonics", harmonics, minimum=0)
-        if harmonics > self.N // 2 - 1:
-            raise ValueError(f"harmonics must be <= N/2 - 1 = {self.N // 2 - 1}, got {harmonics}")
-        q = self._dof_at_steps(u, dof)
-        c = np.fft.rfft(q) / self.N
-        amp = 2 * np.abs(c[: harmonics + 1])
-        amp[0] = abs(c[0].real)
-        return amp
-
-    def _dof_at_steps(self, u: np.ndarray, dof: int) -> np.ndarray:
-        _, Q, _, lam = self.trajectory(u)
-        model = self.model
-        if dof in set(model.l.tolist()):
-            return Q[:, int(np.searchsorted(model.l, dof))]
-        qc, _ = self._massless(Q.T)
-        return qc[int(np.searchsorted(model.c, dof))]
-
     # ------------------------------------------------------------------ monitor
     def energy(self, u: np.ndarray) -> float:
-        """Energy (J) of the orbit's initial state: ½ xᵀ K_open x + ½ k_c min(0, h(x))²
-        (velocities are zero at t = 0; this is ½ qᵀ K q over all DOFs)."""
+        """Energy (J) of the orbit's initial state (velocities are zero at t = 0): ½ qᵀ K q
+        over all DOFs, i.e. ½ xᵀ K_open x + ½ λᵀ G λ with λ the contact forces at x (one
+        contact: ½ xᵀ K_open x + ½ k_c min(0, h(x))²); a penalty spring's energy is included."""
         x, _ = self.unpack(u)
         q = x[self.perm]
-        g = self.gap + self.a @ q
-        return float(0.5 * q @ (self._K @ q) + 0.5 * self.contact_stiffness * min(0.0, g) ** 2)
+        if self.contacts.n == 1:
+            g = self.gap + self.a @ q
+            return float(0.5 * q @ (self._K @ q) + 0.5 * self.contact_stiffness * min(0.0, g) ** 2)
+        lam, _ = lcp_solve(self._G, self._gaps + self._A @ q)
+        return float(0.5 * q @ (self._K @ q) + 0.5 * lam @ (self._G @ lam))
 
     def monitor(self, u: np.ndarray) -> dict:
-        """frequency (Hz), amplitude (m: largest excursion of the contact DOF away from the
-        stop), energy (J), contact_force_max (N), closed_fraction (share of the steps with
-        the contact closed), floquet_max (largest multiplier modulus; NaN when off)."""
+        """frequency (Hz), amplitude (m, at ``model.amplitude_dof``: the excursion away from
+        the stop for the DOF of a single contact, else max |q|), energy (J),
+        contact_force_max (N, over all contacts), closed_fraction (share of the steps
+        with a contact closed), floquet_max (largest multiplier modulus; NaN when off);
+        with several contacts also ``contact_force_max_<i>`` per contact."""
         _, omega = self.unpack(u)
-        away = -self.model.stop_side * self._dof_at_steps(u, self.model.contact_dof)
         lam = self.trajectory(u)[3]
+        q_amp = self._dof_at_steps(u, self.amplitude_dof)
+        if lam.ndim == 1:
+            peak = max(_refined_max(lam), 0.0) if lam.max() > 0 else 0.0
+            closed = float(np.mean(lam > 0))
+            peaks = [peak]
+        else:
+            peaks = [max(_refined_max(col), 0.0) if col.max() > 0 else 0.0 for col in lam.T]
+            closed = float(np.mean(np.any(lam > 0, axis=1)))
         rec = {
             "frequency": omega / (2 * np.pi),
-            "amplitude": _refined_max(away),
+            "amplitude": refined_peak(q_amp, self._amp_sign),
             "energy": self.energy(u),
-            "contact_force_max": max(_refined_max(lam), 0.0) if lam.max() > 0 else 0.0,
-            "closed_fraction": float(np.mean(lam > 0)),
+            "contact_force_max": float(max(peaks)),
+            "closed_fraction": closed,
             "floquet_max": float(np.abs(self.floquet_multipliers(u)[0])) if self.floquet else float("nan"),
         }
+        if len(peaks) > 1:
+            rec.update({f"contact_force_max_{i}": float(v) for i, v in enumerate(peaks)})
         return rec
+

@@ -18,6 +18,22 @@ Each phase is solved in closed form by its own modal decomposition (dense genera
 eigenproblem with ``M_ll``, mass-normalised modes, computed once per model):
 ``q_l(t) = q_static + Σ_j φ_j (α_j cos ω_j t + β_j sin ω_j t)``.
 
+Several contacts (``model.contacts``, e.g. a clearance: two stops on one DOF) make one
+phase per set J of closed contacts: their DOFs held at their stops, the other massless
+DOFs condensed statically (``PiecewiseLinearSystem.phase(J)``, built when the motion
+first enters it; a set that closes both stops of one DOF has no room and never occurs).
+A phase has one switching function per contact, the gap of each open contact and the
+force of each closed one; the phase ends at the first zero of any of them, and the next
+phase toggles that contact. Everything below holds contact by contact: at fixed ``q_l``
+the contact forces solve the LCP ``g = h(q_l) + G λ >= 0, λ >= 0, gᵀλ = 0`` with the free
+gaps ``h_i = gap_i + a_i·q_l`` and the Delassus matrix ``G = Wᵀ K_cc⁻¹ W``; its solution
+is unique and continuous in ``q_l`` (for a clearance G is singular, but the two stops of
+a DOF cannot both be closed), so again nothing jumps at a switch and the saltation
+matrices are the identity. Contacts that switch at the same instant (e.g. identical
+uncoupled substructures) are taken one after the other with zero-length phases between.
+Contact DOFs must be massless (``model.require_massless_contacts``: a ValueError names
+``with_contact_layer`` and ``with_massless_contact``).
+
 Facts this module relies on (derived here, checked in ``tests/test_exact.py``)
 -------------------------------------------------------------------------------
 * At fixed ``q_l`` the contact problem of the massless DOFs is a scalar LCP whose
@@ -68,7 +84,15 @@ i.e. t = 0 is the turning point farthest from the stop, and the amplitude is the
 DOF's excursion away from the stop there (below the gap this is the linear mode's
 amplitude). For the orbits of the first-mode family this is the largest excursion away
 from the stop over the period; each result also reports the measured maximum
-(``max_excursion``) so that this can be checked. The Jacobian is exact:
+(``max_excursion``) so that this can be checked. With several contacts the amplitude is
+``model.amplitude_dof``'s value at t = 0, signed so that it is positive at the start of
+the first-mode family (t = 0 is the turning point where the first contact is farthest
+from its stop; ``PiecewiseLinearSystem.amplitude_row``), and ``max_excursion`` is the
+measured largest |q| of that DOF: they agree on symmetric orbits (a symmetric clearance,
+identical substructures), not in general (with unequal stops the other turning point may
+go farther). The default guess of the half period is then the first return to zero of
+the start mode's modal velocity along the exact motion; a clearance's orbits also have
+the half-period antisymmetry q(t + T/2) = −q(t), which is not used. The Jacobian is exact:
 ``∂v_l(T/2)/∂x`` is the velocity-position block of the product of the transition
 matrices (saltation = I, see above) and ``∂v_l(T/2)/∂(T/2)`` is the acceleration at T/2.
 Newton converges quadratically wherever the number of switches does not change.
@@ -85,7 +109,8 @@ Always check ``converged`` and ``n_contacts``.
 from __future__ import annotations
 
 from .orbits import Backbone, PeriodicOrbit, backbone, periodic_orbit
-from .system import Phase, PiecewiseLinearSystem
+from .phase import Phase
+from .system import PiecewiseLinearSystem
 from .trajectory import Event, Trajectory, integrate
 
 __all__ = [

@@ -8,6 +8,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import brentq
 
 from ... import _validate as check
 from .system import PiecewiseLinearSystem
@@ -26,7 +27,9 @@ class PeriodicOrbit:
     Attributes
     ----------
     amplitude : float
-        Prescribed ``-stop_side * q[contact_dof](0)`` (m).
+        Prescribed amplitude (m): ``-stop_side * q[contact_dof](0)`` with one contact;
+        with several, the amplitude DOF's value at t = 0 signed by
+        ``PiecewiseLinearSystem.amplitude_row``.
     period : float
         T (s).
     frequency : float
@@ -47,9 +50,11 @@ class PeriodicOrbit:
     energy : float
         Total energy (J).
     max_excursion : float
-        Measured max over the period of ``-stop_side * q[contact_dof]`` (m).
+        Measured max over the period of ``-stop_side * q[contact_dof]`` (m); with several
+        contacts of ``|q[amplitude_dof]|`` (or ``-side * q`` when the amplitude DOF carries
+        the only contact).
     max_contact_force : float
-        Largest λ over the period (N), sampled.
+        Largest λ over the period and the contacts (N), sampled.
     multipliers : ndarray, shape (2 n_l,)
         Floquet multipliers (eigenvalues of the monodromy matrix), complex.
     periodicity_error : float
@@ -92,8 +97,12 @@ class PeriodicOrbit:
 
 
 def _guess(system: PiecewiseLinearSystem, amplitude: float) -> tuple[np.ndarray, float]:
-    """The first open mode scaled to the amplitude, and the half period of the one-DOF
-    analogue (DESIGN.md section 4 item 2) with ω1, ω2 the first open and closed frequencies."""
+    """The first open mode scaled to the amplitude, and a half period: with one contact
+    that of the one-DOF analogue (DESIGN.md section 4 item 2) with ω1, ω2 the first open
+    and closed frequencies; with several, the first return of the mode's modal velocity
+    to zero along the exact motion from that start (π/ω1 if no contact closes before)."""
+    if system.n_contacts > 1:
+        return _guess_several(system, amplitude)
     phi = system.open.modes[:, 0]
     x = amplitude * phi / (system.amplitude_row @ phi)
     w1, w2 = system.open.omega[0], system.closed.omega[0]
@@ -104,6 +113,27 @@ def _guess(system: PiecewiseLinearSystem, amplitude: float) -> tuple[np.ndarray,
     B = math.sqrt((rho * g) ** 2 + rho * (amplitude**2 - g**2))
     T = 2 / w1 * math.acos(-g / amplitude) + 2 / w2 * math.acos(min(1.0, rho * g / B))
     return x, 0.5 * T
+
+
+def _guess_several(system: PiecewiseLinearSystem, amplitude: float) -> tuple[np.ndarray, float]:
+    from .._contacts import start_mode
+
+    _, phi = start_mode(system.model, 1)
+    phi = phi[system.model.l]
+    x = amplitude * phi / (system.amplitude_row @ phi)
+    w1 = system.open.omega[0]
+    half = np.pi / w1
+    traj = integrate(system, x, np.zeros_like(x), 1.25 * half)
+    if not len(traj.switch_times):
+        return x, half
+    weight = system.M_ll @ phi
+    ts = np.linspace(0.0, 1.25 * half, 401)[1:]
+    eta_dot = weight @ traj.state_l(ts)[1]
+    change = np.flatnonzero(np.sign(eta_dot[1:]) != np.sign(eta_dot[0]))
+    if not len(change):
+        return x, half
+    k = int(change[0])
+    return x, float(brentq(lambda t: float(weight @ traj.state_l(t)[1]), ts[k], ts[k + 1]))
 
 
 def _scaled_jacobian(dv_dx, dv_dtau, r, w1, A) -> np.ndarray:
@@ -136,10 +166,13 @@ def periodic_orbit(model_or_system, amplitude: float, guess=None, *, tol: float 
     model_or_system : Model or PiecewiseLinearSystem
     amplitude : float
         ``-stop_side * q[contact_dof](0)`` (m), > 0: the contact DOF's excursion away from
-        the stop at the turning point t = 0 (see the module docstring).
+        the stop at the turning point t = 0 (see the module docstring). With several
+        contacts: ``model.amplitude_dof``'s value at t = 0, the turning point where the
+        first contact is farthest from its stop (``PiecewiseLinearSystem.amplitude_row``).
     guess : PeriodicOrbit or (x, half_period), optional
         Starting point; x of shape (n_l,) is rescaled to the amplitude. Default: the first
-        linear (open) mode and the one-DOF analogue's half period.
+        linear (open) mode and the one-DOF analogue's half period (several contacts: the
+        first return of that mode's velocity to zero along the exact motion).
     tol : float
         Convergence: the scaled residual max |v_l(T/2)| / (ω_1 amplitude) and the scaled
         Newton step both below ``tol``, or the residual below ``tol**1.1``.
@@ -180,7 +213,11 @@ def periodic_orbit(model_or_system, amplitude: float, guess=None, *, tol: float 
     # round-off floor of the scaled residual: velocities synthesised from modes up to ω_max
     floor = system._velocity_roundoff * float(np.abs(x).max()) / (w1 * A)
     # scaled unknowns z = (x / A, tau w1), equations F = (v / (w1 A), r·x/A - 1)
-    v, dv_dx, dv_dtau, _ = _shoot(system, x, tau, samples_per_period)
+    v, dv_dx, dv_dtau, traj = _shoot(system, x, tau, samples_per_period)
+    if system.n_contacts > 1:
+        # with several contacts the half period strings more phases together, each restart
+        # adding its own round-off; the phases built meanwhile may raise the bound too
+        floor = system._velocity_roundoff * float(np.abs(x).max()) / (w1 * A) * len(traj.phases)
     F = np.append(v / (w1 * A), r @ x / A - 1.0)
     res = float(np.abs(F).max())
     converged, it = res <= 1e-16, 0
@@ -217,8 +254,13 @@ def _orbit_result(system, A, x, tau, converged, iterations, res, samples_per_per
     half = integrate(system, x, np.zeros_like(x), tau, samples_per_period=samples_per_period)
     kinds = [e.kind for e in half.events]
     n_close = kinds.count("close")
-    closed_at_half = half.phases[-1][0] == "closed"
-    n_contacts = 2 * n_close - (1 if closed_at_half else 0)
+    if system.n_contacts == 1:
+        closed_at_half = half.phases[-1][0] == "closed"
+        n_contacts = 2 * n_close - (1 if closed_at_half else 0)
+    else:
+        # contact phases within a half appear twice per period, one spanning T/2 once; a
+        # phase spanning t = 0 closes in the second half (the mirror of its opening)
+        n_contacts = 2 * n_close - len(half.active_sets[-1][0]) + len(half.active_sets[0][0])
     full = integrate(system, x, np.zeros_like(x), 2 * tau, sensitivity=True,
                      samples_per_period=samples_per_period)
     qT, vT = full.final_state()
@@ -229,7 +271,10 @@ def _orbit_result(system, A, x, tau, converged, iterations, res, samples_per_per
     ts = np.linspace(0.0, tau, 2049)
     q_half, _, lam = half.evaluate(ts)
     m = system.model
-    exc = -m.stop_side * q_half[m.contact_dof]
+    if system.n_contacts == 1:
+        exc = -m.stop_side * q_half[m.contact_dof]
+    else:
+        exc = system.amplitude_of(q_half)
     max_exc = float(exc.max())
     energy = float(system.energy(x, np.zeros_like(x)))
     multipliers = np.linalg.eigvals(full.transition)

@@ -1,159 +1,51 @@
-"""The piecewise-linear system of the exact reference: its two phases (open, closed),
-each solved in closed form by its own modal decomposition (see :mod:`mmshbm.methods.exact`)."""
+"""The piecewise-linear system of the exact reference: its phases (one per set of closed
+contacts), each solved in closed form by its own modal decomposition (see
+:mod:`mmshbm.methods.exact`)."""
 
 from __future__ import annotations
 
+import itertools
 import logging
 import weakref
-from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as la
 
 from ...model.model import Model
+from .phase import _GRAZE_REL, Phase
 
 __all__ = ["Phase", "PiecewiseLinearSystem"]
 
 logger = logging.getLogger(__name__)
 
-# Modes whose share of a switching function is below this (relative to its scale) are left
-# out of the choice of the sampling step (they are kept in every evaluation).
-_KEEP_REL = 1e-15
-# A minimum of a switching function within this (relative) distance of zero is a grazing
-# touch, not a switch.
-_GRAZE_REL = 1e-12
-# Samples per evaluation chunk of the event search: the first chunk, doubling up to the last.
-_CHUNK_FIRST = 32
-_CHUNK = 8192
-# brentq's smallest allowed relative tolerance
-_RTOL = 4 * np.finfo(float).eps
-
-
-
-# ============================================================================ phases
-@dataclass(frozen=True, eq=False)
-class Phase:
-    """The closed-form linear dynamics of one contact state.
-
-    ``q_l(t) = q_static + modes @ (α cos(ω t) + β sin(ω t))`` with modal coordinates
-    ``η = modes_inv @ (q_l - q_static)``; the switching function is
-    ``u = switch_offset + switch_grad · q_l`` (the gap g_N (m) in the open phase, the
-    contact force λ (N) in the closed one) and the phase holds while u > 0.
-
-    Attributes
-    ----------
-    name : {"open", "closed"}
-    omega : ndarray, shape (n_l,)
-        Natural angular frequencies (rad/s) of the phase, ascending.
-    modes : ndarray, shape (n_l, n_l)
-        Mass-normalised mode shapes Φ (columns): Φᵀ M_ll Φ = I.
-    modes_inv : ndarray, shape (n_l, n_l)
-        Φᵀ M_ll, the inverse of Φ.
-    q_static : ndarray, shape (n_l,)
-        Static equilibrium of the phase (m, rad): zero for the open phase.
-    recover, recover_offset : ndarray, shapes (n_c, n_l) and (n_c,)
-        The massless DOFs: ``q_c = recover @ q_l + recover_offset``.
-    switch_grad : ndarray, shape (n_l,)
-    switch_offset : float
-    switch_modal : ndarray, shape (n_l,)
-        ``switch_grad @ modes``: the switching function's modal coefficients c_j.
-    switch_static : float
-        The switching function at ``q_static``.
-    """
-
-    name: str
-    omega: np.ndarray
-    modes: np.ndarray
-    modes_inv: np.ndarray
-    q_static: np.ndarray
-    recover: np.ndarray
-    recover_offset: np.ndarray
-    switch_grad: np.ndarray
-    switch_offset: float
-    switch_modal: np.ndarray = field(init=False)
-    switch_static: float = field(init=False)
-
-    def __post_init__(self):
-        object.__setattr__(self, "switch_modal", self.switch_grad @ self.modes)
-        object.__setattr__(self, "switch_static",
-                           float(self.switch_offset + self.switch_grad @ self.q_static))
-        # magnitudes that set the round-off of u: |offset| + |grad|·|q_static| + Σ_j |grad|·|φ_j| |η_j|
-        g = np.abs(self.switch_grad)
-        object.__setattr__(self, "_abs_static", abs(self.switch_offset) + float(g @ np.abs(self.q_static)))
-        object.__setattr__(self, "_abs_modal", g @ np.abs(self.modes))
-
-    def switch_scale(self, alpha: np.ndarray, beta: np.ndarray) -> float:
-        """Magnitude of the terms that sum to the switching function for the modal state
-        (α, β): its round-off is a few ulps of this."""
-        return self._abs_static + float(self._abs_modal @ np.hypot(alpha, beta))
-
-    @classmethod
-    def build(cls, name, M_ll, F_phase, q_static, recover, recover_offset, switch_grad,
-              switch_offset) -> Phase:
-        """Solve the phase's eigenproblem in flexibility form, ``F M φ = ω⁻² φ`` with
-        ``F = K_phase⁻¹`` (so that the low modes, which carry the motion, are accurate to
-        round-off; see :func:`_accurate_solve`)."""
-        A = M_ll @ F_phase @ M_ll
-        mu, Phi = la.eigh(0.5 * (A + A.T), M_ll)
-        if mu[0] <= 0:
-            raise ValueError(f"the {name} phase's stiffness is not positive definite "
-                             f"(smallest flexibility eigenvalue {mu[0]:.3e})")
-        mu, Phi = mu[::-1], Phi[:, ::-1]
-        return cls(name, 1.0 / np.sqrt(mu), Phi, Phi.T @ M_ll, np.asarray(q_static, dtype=float),
-                   recover, recover_offset, np.asarray(switch_grad, dtype=float), float(switch_offset))
-
-    def modal_state(self, q_l: np.ndarray, v_l: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Modal coefficients (α, β), each shape (n_l,), of the state (q_l, v_l) at local time 0."""
-        alpha = self.modes_inv @ (q_l - self.q_static)
-        beta = (self.modes_inv @ v_l) / self.omega
-        return alpha, beta
-
-    def state(self, alpha: np.ndarray, beta: np.ndarray, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Positions, velocities and accelerations of ``q_l`` at local times ``t``.
-
-        ``t`` scalar gives shapes (n_l,); an array of shape (n_t,) gives (n_l, n_t).
-        """
-        t = np.asarray(t, dtype=float)
-        wt = np.multiply.outer(self.omega, t)
-        C, S = np.cos(wt), np.sin(wt)
-        a = alpha.reshape((-1,) + (1,) * t.ndim)
-        b = beta.reshape((-1,) + (1,) * t.ndim)
-        w = self.omega.reshape((-1,) + (1,) * t.ndim)
-        eta = a * C + b * S
-        deta = w * (b * C - a * S)
-        q = self.modes @ eta
-        q = q + self.q_static.reshape((-1,) + (1,) * t.ndim)
-        return q, self.modes @ deta, -(self.modes @ (w**2 * eta))
-
-    def transition(self, tau: float) -> np.ndarray:
-        """Transition matrix, shape (2 n_l, 2 n_l), of the state (q_l, v_l) over a duration
-        ``tau`` (s): d(q_l, v_l)(tau) / d(q_l, v_l)(0)."""
-        C, S = np.cos(self.omega * tau), np.sin(self.omega * tau)
-        P, Q = self.modes, self.modes_inv
-        qq = (P * C) @ Q
-        return np.block([[qq, (P * (S / self.omega)) @ Q], [(P * (-self.omega * S)) @ Q, qq]])
-
-
 # ============================================================================ system
 class PiecewiseLinearSystem:
-    """Both phases of a :class:`~mmshbm.model.Model`, precomputed once.
+    """The phases of a :class:`~mmshbm.model.Model`: one per set of closed contacts.
 
     Parameters
     ----------
     model : Model
-        The structure; dense eigen-decompositions of size n_l are computed, so this is
-        meant for models up to a few hundred DOFs with mass.
+        The structure, every contact DOF massless; dense eigen-decompositions of size n_l
+        are computed (the open phase at once, a phase with closed contacts when the motion
+        first enters it), so this is meant for models up to a few hundred DOFs with mass.
 
     Attributes
     ----------
     model : Model
-    n_l, n_c : int
-        Numbers of DOFs with mass and of massless DOFs.
-    gap_gradient : ndarray, shape (n_l,)
-        ``a`` in the free gap ``h(q_l) = gap + a · q_l`` (m).
-    contact_stiffness : float
-        ``k_c = 1 / (w_cᵀ K_cc⁻¹ w_c)`` (N/m): λ = k_c max(0, -h).
-    open, closed : Phase
+    n_l, n_c, n_contacts : int
+        Numbers of DOFs with mass, of massless DOFs and of contacts.
+    gap_gradients : ndarray, shape (n_contacts, n_l)
+        Row i is ``a_i`` in the free gap ``h_i(q_l) = gap_i + a_i · q_l`` (m) of contact i
+        (its gap with every contact open).
+    delassus : ndarray, shape (n_contacts, n_contacts)
+        ``G = Wᵀ K_cc⁻¹ W`` (m/N): at fixed q_l the contact forces solve the LCP
+        ``g = h + G λ >= 0, λ >= 0, gᵀλ = 0``.
+    gap_gradient, contact_stiffness : ndarray (n_l,), float
+        Single-contact model: ``a`` and ``k_c = 1/G`` (N/m), λ = k_c max(0, -h).
+    open : Phase
+        No contact closed.
+    closed : Phase
+        Single-contact model: the contact closed (several contacts: :meth:`phase`).
     """
 
     def __init__(self, model: Model):
@@ -165,54 +57,41 @@ class PiecewiseLinearSystem:
         M_ll = b["M_ll"].toarray()
         K_lc, K_cc = b["K_lc"], b["K_cc"]
         self.n_l, self.n_c = M_ll.shape[0], K_cc.shape[0]
+        self.n_contacts = model.n_contacts
         self.M_ll = M_ll
         self.K = model.K.tocsr()
-        s, ci, gap = model.stop_side, model.contact_index, model.gap
-        w_c = model.w_c
-
-        l, n_dof = model.l, model.n_dof
-        K_full = self.K.toarray()
+        self._K_full = self.K.toarray()
+        c = model.c
+        self._dof = np.array([ct.dof for ct in model.contacts])
+        self._side = np.array([ct.side for ct in model.contacts], dtype=float)
+        self._gap = np.array([ct.gap for ct in model.contacts])
+        self._ci = np.searchsorted(c, self._dof)  # position of each contact DOF in c
+        W = np.zeros((self.n_c, self.n_contacts))
+        W[self._ci, np.arange(self.n_contacts)] = -self._side
+        self._W = W
 
         # open phase: q_c = R_o q_l, flexibility K_open⁻¹ = [K⁻¹]_ll
         R_o = -la.solve(K_cc, K_lc.T, assume_a="pos")
+        l, n_dof = model.l, model.n_dof
         E_l = np.zeros((n_dof, self.n_l))
         E_l[l, np.arange(self.n_l)] = 1.0
-        F_open = _accurate_solve(K_full, E_l)[l]
-        self.gap_gradient = R_o.T @ w_c
-        self.contact_stiffness = float(1.0 / (w_c @ la.solve(K_cc, w_c, assume_a="pos")))
-        self.open = Phase.build("open", M_ll, 0.5 * (F_open + F_open.T), np.zeros(self.n_l), R_o,
-                                np.zeros(self.n_c), self.gap_gradient, gap)
-
-        # closed phase: contact DOF prescribed at the stop, the other massless DOFs r condensed
-        r = np.setdiff1d(np.arange(self.n_c), [ci])
-        u_c = s * gap
-        R_c = np.zeros((self.n_c, self.n_l))
-        r0 = np.zeros(self.n_c)
-        r0[ci] = u_c
-        if len(r):
-            K_rr = K_cc[np.ix_(r, r)]
-            R_c[r] = -la.solve(K_rr, K_lc[:, r].T, assume_a="pos")
-            r0[r] = -la.solve(K_rr, K_cc[r, ci], assume_a="pos") * u_c
-        # K_closed⁻¹ = [K_f⁻¹]_ll with K_f = K without the contact DOF; the static state
-        # solves K_f y = -K[f, contact] u_c
-        free = np.setdiff1d(np.arange(n_dof), [model.contact_dof])
-        l_in_free = np.searchsorted(free, l)
-        rhs = np.zeros((len(free), self.n_l + 1))
-        rhs[l_in_free, np.arange(self.n_l)] = 1.0
-        rhs[:, -1] = -K_full[free, model.contact_dof] * u_c
-        Y = _accurate_solve(K_full[np.ix_(free, free)], rhs)[l_in_free]
-        F_closed = 0.5 * (Y[:, :-1] + Y[:, :-1].T)
-        # λ from the contact DOF's static row: K_ci,l q_l + K_ci,c q_c = w_c[ci] λ = -s λ
-        lam_grad = -s * (K_lc[:, ci] + R_c.T @ K_cc[ci])
-        lam_offset = -s * float(K_cc[ci] @ r0)
-        self.closed = Phase.build("closed", M_ll, F_closed, Y[:, -1], R_c, r0, lam_grad, lam_offset)
+        F_open = _accurate_solve(self._K_full, E_l)[l]
+        self.gap_gradients = np.array([R_o.T @ W[:, i] for i in range(self.n_contacts)])
+        self.delassus = W.T @ la.solve(K_cc, W, assume_a="pos")
+        self.open = Phase.build("open", (), M_ll, 0.5 * (F_open + F_open.T), np.zeros(self.n_l), R_o,
+                                np.zeros(self.n_c), self.gap_gradients, self._gap)
+        self._phases = {(): self.open}
+        self._velocity_roundoff = 0.0
+        self._note_roundoff(self.open)
+        if self.n_contacts == 1:
+            w_c = W[:, 0]
+            self.gap_gradient = self.gap_gradients[0]
+            self.contact_stiffness = float(1.0 / (w_c @ la.solve(K_cc, w_c, assume_a="pos")))
+            self.closed = self.phase((0,))
         self._omega_ref = float(self.open.omega[0])
-        self._K_ld = K_full.astype(np.longdouble)
+        self._K_ld = self._K_full.astype(np.longdouble)
         self._M_ld = M_ll.astype(np.longdouble)
-        # bound on the round-off of velocities synthesised from modes, per unit of |q_l|
-        self._velocity_roundoff = np.finfo(float).eps * max(
-            float((np.abs(p.modes) * p.omega @ np.abs(p.modes_inv)).sum(axis=1).max())
-            for p in (self.open, self.closed))
+        self._amplitude = None
 
     @classmethod
     def of(cls, model_or_system) -> PiecewiseLinearSystem:
@@ -228,24 +107,149 @@ class PiecewiseLinearSystem:
             _SYSTEMS[model_or_system] = system
         return system
 
+    # ------------------------------------------------------------------ phases
+    def phase(self, active) -> Phase:
+        """The phase with the contacts ``active`` (indices into ``model.contacts``) closed:
+        their DOFs held at their stops, the other massless DOFs condensed statically.
+
+        Raises
+        ------
+        ValueError
+            If ``active`` closes both stops of one DOF (no room between them).
+        """
+        key = tuple(sorted(int(i) for i in active))
+        phase = self._phases.get(key)
+        if phase is None:
+            phase = self._build_phase(key)
+            self._phases[key] = phase
+            self._note_roundoff(phase)
+        return phase
+
+    def _build_phase(self, active: tuple) -> Phase:
+        model = self.model
+        if any(not 0 <= i < self.n_contacts for i in active):
+            raise ValueError(f"active contacts must be in [0, {self.n_contacts - 1}], got {active}")
+        held = [int(self._dof[i]) for i in active]
+        if len(set(held)) != len(held):
+            raise ValueError(f"contacts {active} close both stops of one DOF")
+        b = model.blocks
+        K_lc, K_cc = b["K_lc"], b["K_cc"]
+        l, n_dof = model.l, model.n_dof
+        K_full = self._K_full
+        ci = [int(self._ci[i]) for i in active]
+        u_c = np.array([self._side[i] * self._gap[i] for i in active])
+        # the other massless DOFs r condensed with the held ones prescribed
+        r = np.setdiff1d(np.arange(self.n_c), ci)
+        R_c = np.zeros((self.n_c, self.n_l))
+        r0 = np.zeros(self.n_c)
+        r0[ci] = u_c
+        if len(r):
+            K_rr = K_cc[np.ix_(r, r)]
+            R_c[r] = -la.solve(K_rr, K_lc[:, r].T, assume_a="pos")
+            if len(ci) == 1:  # the arithmetic of mmshbm 0.1
+                r0[r] = -la.solve(K_rr, K_cc[r, ci[0]], assume_a="pos") * u_c[0]
+            else:
+                r0[r] = -la.solve(K_rr, K_cc[np.ix_(r, ci)] @ u_c, assume_a="pos")
+        # K_phase⁻¹ = [K_f⁻¹]_ll with K_f = K without the held DOFs; the static state
+        # solves K_f y = -K[f, held] u_c
+        free = np.setdiff1d(np.arange(n_dof), held)
+        l_in_free = np.searchsorted(free, l)
+        rhs = np.zeros((len(free), self.n_l + 1))
+        rhs[l_in_free, np.arange(self.n_l)] = 1.0
+        if len(held) == 1:
+            rhs[:, -1] = -K_full[free, held[0]] * u_c[0]
+        else:
+            rhs[:, -1] = -K_full[np.ix_(free, held)] @ u_c
+        Y = _accurate_solve(K_full[np.ix_(free, free)], rhs)[l_in_free]
+        F_closed = 0.5 * (Y[:, :-1] + Y[:, :-1].T)
+        grads, offsets = [], []
+        for i in range(self.n_contacts):
+            s, k = self._side[i], int(self._ci[i])
+            if i in active:
+                # λ from the held DOF's static row: K_k,l q_l + K_k,c q_c = w_k λ = -s λ
+                grads.append(-s * (K_lc[:, k] + R_c.T @ K_cc[k]))
+                offsets.append(-s * float(K_cc[k] @ r0))
+            else:
+                # the gap of an open contact: gap - s q_c[k]
+                grads.append(-s * R_c[k])
+                offsets.append(self._gap[i] - s * r0[k])
+        return Phase.build("closed", active, self.M_ll, F_closed, Y[:, -1], R_c, r0, grads, offsets)
+
+    def _note_roundoff(self, p: Phase) -> None:
+        """Raise the bound on the round-off of velocities synthesised from modes, per unit
+        of |q_l|, to cover phase ``p``."""
+        synth = (np.abs(p.modes) * p.omega @ np.abs(p.modes_inv)).sum(axis=1)
+        bound = np.finfo(float).eps * float(synth.max())
+        self._velocity_roundoff = max(self._velocity_roundoff, bound)
+
+    def next_phase(self, phase: Phase, j: int) -> Phase:
+        """The phase after switching function ``j`` of ``phase`` reached zero: contact j
+        closes if it was open, opens if it was closed."""
+        active = set(phase.active)
+        active.symmetric_difference_update({j})
+        return self.phase(active)
+
     # ------------------------------------------------------------------ state
     @property
     def amplitude_row(self) -> np.ndarray:
-        """Row ``r`` (n_l,) with ``-stop_side * q[contact_dof] = r · q_l`` in the open phase."""
-        m = self.model
-        return -m.stop_side * self.open.recover[m.contact_index]
+        """Row ``r`` (n_l,) with ``amplitude = r · q_l`` at the turning point t = 0.
+
+        Single contact on the amplitude DOF: ``-stop_side * q[contact_dof]`` in the open
+        phase (the excursion away from the stop). Otherwise the amplitude DOF's value,
+        signed so that it is positive at the start of the first-mode family (t = 0 is the
+        turning point where the first contact is farthest from its stop); a massless
+        amplitude DOF is taken in the open phase.
+        """
+        if self._amplitude is None:
+            from .._contacts import amplitude_sign, start_mode
+
+            m = self.model
+            sign = amplitude_sign(m)
+            amp = m.amplitude_dof
+            if sign != 0:
+                row = -sign * self.open.recover[int(np.searchsorted(m.c, amp))]
+            else:
+                _, phi = start_mode(m, 1)
+                sigma = -np.sign(phi[amp])
+                row = np.zeros(self.n_l)
+                if amp in set(m.l.tolist()):
+                    row[int(np.searchsorted(m.l, amp))] = sigma
+                else:
+                    row = sigma * self.open.recover[int(np.searchsorted(m.c, amp))]
+            self._amplitude = (sign, row)
+        return self._amplitude[1]
+
+    def amplitude_of(self, q: np.ndarray) -> np.ndarray:
+        """The amplitude measure of full states ``q`` (n_dof, n_t) at the amplitude DOF:
+        ``-side * q`` (single contact on that DOF) or ``|q|``; shape (n_t,)."""
+        self.amplitude_row  # noqa: B018 - fills the cache
+        sign = self._amplitude[0]
+        qa = q[self.model.amplitude_dof]
+        return -sign * qa if sign != 0 else np.abs(qa)
 
     def free_gap(self, q_l) -> np.ndarray:
-        """Free gap ``h = gap + a · q_l`` (m); ``q_l`` shape (n_l,) or (n_l, n_t)."""
+        """Free gaps ``h = gap + a · q_l`` (m) of a single-contact model, shape () or (n_t,);
+        with several contacts shape (n_contacts,) or (n_contacts, n_t)."""
         q_l = np.asarray(q_l, dtype=float)
-        return self.model.gap + self.gap_gradient @ q_l
+        if self.n_contacts == 1:
+            return self.model.gap + self.gap_gradient @ q_l
+        return self._gap.reshape((-1,) + (1,) * (q_l.ndim - 1)) + self.gap_gradients @ q_l
 
     def contact_force(self, q_l) -> np.ndarray:
-        """Contact force λ = k_c max(0, -h(q_l)) (N); shape () or (n_t,)."""
-        return self.contact_stiffness * np.maximum(0.0, -self.free_gap(q_l))
+        """Contact force λ (N): shape () or (n_t,) with one contact, (n_contacts,) or
+        (n_contacts, n_t) with several."""
+        return self.state_to_full(q_l)[1]
+
+    def active_sets(self, q_l) -> list:
+        """The closed contacts at each state (the solution of the contact LCP), a tuple per
+        column of ``q_l`` (n_l, n_t) (or one tuple for shape (n_l,))."""
+        q_l = np.asarray(q_l, dtype=float)
+        h = self._gap[:, None] + self.gap_gradients @ q_l.reshape(self.n_l, -1)
+        sets = _lcp_active_sets(self.delassus, h, self._dof)
+        return sets[0] if q_l.ndim == 1 else sets
 
     def state_to_full(self, q_l, v_l=None):
-        """All DOFs and the contact force from the DOFs with mass.
+        """All DOFs and the contact force(s) from the DOFs with mass.
 
         Parameters
         ----------
@@ -257,24 +261,51 @@ class PiecewiseLinearSystem:
         Returns
         -------
         q : ndarray, shape (n_dof,) or (n_dof, n_t)
-        lam : float or ndarray, shape (n_t,)
-            Contact force (N), >= 0.
+        lam : float or ndarray
+            Contact force (N), >= 0: shape () or (n_t,) with one contact, (n_contacts,) or
+            (n_contacts, n_t) with several.
         v : ndarray, like ``q`` (only if ``v_l`` is given)
-            The massless DOFs' velocities follow statically (the contact DOF's is zero
-            while the contact is closed).
+            The massless DOFs' velocities follow statically (a held DOF's is zero).
         """
         q_l = self._check_states("q_l", q_l)
+        if v_l is not None:
+            v_l = self._check_states("v_l", v_l, q_l.shape)
+        if self.n_contacts == 1:
+            return self._state_to_full_single(q_l, v_l)
+        Q = q_l.reshape(self.n_l, -1)
+        V = None if v_l is None else v_l.reshape(self.n_l, -1)
+        n_t = Q.shape[1]
+        q = np.zeros((self.model.n_dof, n_t))
+        v = np.zeros_like(q)
+        lam = np.zeros((self.n_contacts, n_t))
+        q[self.model.l] = Q
+        if V is not None:
+            v[self.model.l] = V
+        sets = self.active_sets(Q)
+        for key in set(sets):
+            cols = np.array([k for k, s in enumerate(sets) if s == key])
+            p = self.phase(key)
+            q[np.ix_(self.model.c, cols)] = p.recover @ Q[:, cols] + p.recover_offset[:, None]
+            if V is not None:
+                v[np.ix_(self.model.c, cols)] = p.recover @ V[:, cols]
+            if key:
+                k = list(key)
+                lam[np.ix_(k, cols)] = np.maximum(p.switch_values(Q[:, cols])[k], 0.0)
+        if q_l.ndim == 1:
+            q, v, lam = q[:, 0], v[:, 0], lam[:, 0]
+        return (q, lam) if v_l is None else (q, lam, v)
+
+    def _state_to_full_single(self, q_l, v_l):
         closed = self.free_gap(q_l) < 0
         q_o = self.open.recover @ q_l
         q_k = self.closed.recover @ q_l + self.closed.recover_offset.reshape((-1,) + (1,) * (q_l.ndim - 1))
         q = np.zeros((self.model.n_dof,) + q_l.shape[1:])
         q[self.model.l] = q_l
         q[self.model.c] = np.where(closed, q_k, q_o)
-        lam = np.where(closed, self.closed.switch_offset + self.closed.switch_grad @ q_l, 0.0)
+        lam = np.where(closed, self.closed.switch_offset[0] + self.closed.switch_grad[0] @ q_l, 0.0)
         lam = np.maximum(lam, 0.0)
         if v_l is None:
             return q, lam
-        v_l = self._check_states("v_l", v_l, q_l.shape)
         v = np.zeros_like(q)
         v[self.model.l] = v_l
         v[self.model.c] = np.where(closed, self.closed.recover @ v_l, self.open.recover @ v_l)
@@ -292,8 +323,34 @@ class PiecewiseLinearSystem:
         return (0.5 * (kinetic + potential)).astype(float)
 
     def initial_phase(self, q_l: np.ndarray, v_l: np.ndarray) -> Phase:
-        """The phase a motion starting at (q_l, v_l) begins in: by the sign of the free gap
-        h, and on the surface h = 0 by the sign of h' and then h'' (open if all vanish)."""
+        """The phase a motion starting at (q_l, v_l) begins in: the contacts the LCP closes
+        at q_l; a contact exactly on its switching surface (within round-off) goes by the
+        sign of its switching function's derivative, then second derivative, in that
+        phase (into the phase where it does not immediately leave)."""
+        if self.n_contacts == 1:
+            return self._initial_phase_single(q_l, v_l)
+        phase = self.phase(self.active_sets(q_l))
+        for _ in range(2 * self.n_contacts + 1):
+            alpha, beta = phase.modal_state(q_l, v_l)
+            w = phase.omega
+            u = phase.switch_values(q_l)
+            du = phase.switch_modal @ (w * beta)
+            ddu = -(phase.switch_modal @ (w**2 * alpha))
+            flip = None
+            for j in range(phase.n_switch):
+                scale = phase.switch_scale(alpha, beta, j)
+                if abs(u[j]) > _GRAZE_REL * scale or scale == 0.0:
+                    continue
+                dscale = float(np.abs(phase.switch_modal[j] * w) @ np.hypot(alpha, beta))
+                if du[j] < -_GRAZE_REL * dscale or (abs(du[j]) <= _GRAZE_REL * dscale and ddu[j] < 0):
+                    flip = j
+                    break
+            if flip is None:
+                return phase
+            phase = self.next_phase(phase, flip)
+        return phase
+
+    def _initial_phase_single(self, q_l, v_l) -> Phase:
         h = self.free_gap(q_l)
         a = self.gap_gradient
         scale = abs(self.model.gap) + float(np.abs(a) @ np.abs(q_l))
@@ -302,10 +359,10 @@ class PiecewiseLinearSystem:
         dh = a @ v_l
         alpha, beta = self.open.modal_state(q_l, v_l)
         w = self.open.omega
-        dscale = float(np.abs(self.open.switch_modal * w) @ np.hypot(alpha, beta))
+        dscale = float(np.abs(self.open.switch_modal[0] * w) @ np.hypot(alpha, beta))
         if abs(dh) > _GRAZE_REL * dscale:
             return self.open if dh > 0 else self.closed
-        ddh = -float(self.open.switch_modal @ (w**2 * alpha))
+        ddh = -float(self.open.switch_modal[0] @ (w**2 * alpha))
         return self.closed if ddh < 0 else self.open
 
     def _check_states(self, name, x, shape=None) -> np.ndarray:
@@ -323,9 +380,54 @@ class PiecewiseLinearSystem:
 
     def __repr__(self) -> str:
         f_o = self.open.omega[0] / (2 * np.pi)
-        f_c = self.closed.omega[0] / (2 * np.pi)
-        return (f"PiecewiseLinearSystem(n_l={self.n_l}, n_c={self.n_c}, f_open={f_o:.6g} Hz, "
-                f"f_closed={f_c:.6g} Hz, k_c={self.contact_stiffness:.6g} N/m)")
+        if self.n_contacts == 1:
+            f_c = self.closed.omega[0] / (2 * np.pi)
+            return (f"PiecewiseLinearSystem(n_l={self.n_l}, n_c={self.n_c}, f_open={f_o:.6g} Hz, "
+                    f"f_closed={f_c:.6g} Hz, k_c={self.contact_stiffness:.6g} N/m)")
+        return (f"PiecewiseLinearSystem(n_l={self.n_l}, n_c={self.n_c}, contacts={self.n_contacts}, "
+                f"f_open={f_o:.6g} Hz, phases built={len(self._phases)})")
+
+
+def _lcp_active_sets(G: np.ndarray, h: np.ndarray, dofs: np.ndarray) -> list:
+    """The closed contacts of the LCP ``g = h + G λ >= 0, λ >= 0, gᵀλ = 0`` for each column
+    of ``h`` (n_contacts, n_t), by enumeration of the active sets in order of size (the
+    first feasible one; sets closing both stops of one DOF are skipped). A column no set
+    solves exactly (round-off at a boundary) gets the set of least violation.
+    Enumeration is meant for the few contacts of the exact reference (2^n sets)."""
+    n, n_t = h.shape
+    if n > 16:
+        raise ValueError(f"the exact reference enumerates contact states: {n} contacts are too many (<= 16)")
+    best = [None] * n_t
+    violation = np.full(n_t, np.inf)
+    todo = np.ones(n_t, dtype=bool)
+    for size in range(n + 1):
+        for J in itertools.combinations(range(n), size):
+            if len({int(dofs[i]) for i in J}) < size:
+                continue
+            cols = np.flatnonzero(todo)
+            if not len(cols):
+                return best
+            Jl = list(J)
+            N = [i for i in range(n) if i not in J]
+            H = h[:, cols]
+            if size:
+                try:
+                    lam = -np.linalg.solve(G[np.ix_(Jl, Jl)], H[Jl])
+                except np.linalg.LinAlgError:
+                    continue
+                g = H[N] + G[np.ix_(N, Jl)] @ lam if N else np.zeros((0, len(cols)))
+            else:
+                lam = np.zeros((0, len(cols)))
+                g = H
+            viol = np.maximum(0.0, -np.concatenate([lam, g])).max(axis=0) if n else np.zeros(len(cols))
+            for k, col in enumerate(cols):
+                if viol[k] == 0.0:
+                    best[col] = J
+                    todo[col] = False
+                elif viol[k] < violation[col]:
+                    violation[col] = viol[k]
+                    best[col] = J
+    return best
 
 
 def _accurate_solve(K: np.ndarray, B: np.ndarray) -> np.ndarray:

@@ -11,16 +11,17 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ... import _validate as check
-from .system import _CHUNK, _CHUNK_FIRST, _GRAZE_REL, _KEEP_REL, _RTOL, Phase, PiecewiseLinearSystem
+from .phase import _CHUNK, _CHUNK_FIRST, _GRAZE_REL, _KEEP_REL, _RTOL, Phase
+from .system import PiecewiseLinearSystem
 
 __all__ = ["Event", "Trajectory", "integrate"]
 
 logger = logging.getLogger(__name__)
 
 
-def _first_switch(phase: Phase, alpha: np.ndarray, beta: np.ndarray, t_max: float,
+def _first_switch(phase: Phase, j: int, alpha: np.ndarray, beta: np.ndarray, t_max: float,
                   samples_per_period: int, t_ref: float):
-    """First time in (0, t_max] at which the phase's switching function crosses to <= 0.
+    """First time in (0, t_max] at which the phase's switching function ``j`` crosses to <= 0.
 
     Returns
     -------
@@ -29,10 +30,10 @@ def _first_switch(phase: Phase, alpha: np.ndarray, beta: np.ndarray, t_max: floa
     grazes : list of (float, float)
         (local time, value of u) of grazing minima passed without switching.
     """
-    c = phase.switch_modal
+    c = phase.switch_modal[j]
     amp = np.abs(c) * np.hypot(alpha, beta)
-    u_s = phase.switch_static
-    scale = phase.switch_scale(alpha, beta)
+    u_s = phase.switch_static[j]
+    scale = phase.switch_scale(alpha, beta, j)
     if t_max <= 0.0 or scale == 0.0:
         return None, []
     keep = amp > _KEEP_REL * scale
@@ -129,10 +130,13 @@ class Event:
     kind : {"close", "open", "graze"}
         ``"close"``: g_N reached 0 (the contact closes); ``"open"``: λ reached 0;
         ``"graze"``: g_N touched 0 tangentially (zero contact force), no switch.
+    contact : int
+        Which contact (index into ``model.contacts``).
     """
 
     time: float
     kind: str
+    contact: int = 0
 
 
 @dataclass(frozen=True, eq=False)
@@ -177,9 +181,17 @@ class Trajectory:
         return [(s.phase.name, s.t_start, s.t_end) for s in self._segments]
 
     @property
+    def active_sets(self) -> list[tuple[tuple, float, float]]:
+        """(closed contacts, start time, end time) of each phase, in order."""
+        return [(s.phase.active, s.t_start, s.t_end) for s in self._segments]
+
+    @property
     def n_contacts(self) -> int:
-        """Number of closed phases."""
-        return sum(s.phase.name == "closed" for s in self._segments)
+        """Number of contact phases: with one contact the closed phases; with several the
+        closings of any contact plus the contacts closed at t = 0."""
+        if self.system.n_contacts == 1:
+            return sum(s.phase.name == "closed" for s in self._segments)
+        return sum(e.kind == "close" for e in self.events) + len(self._segments[0].phase.active)
 
     def final_state(self) -> tuple[np.ndarray, np.ndarray]:
         """(q_l, v_l) at ``t_end``, each shape (n_l,)."""
@@ -229,7 +241,8 @@ class Trajectory:
         q, v : ndarray, shape (n_dof, n_t) (or (n_dof,) for scalar t)
             Displacements/rotations (m, rad) and velocities of all DOFs.
         lam : ndarray, shape (n_t,) (or scalar)
-            Contact force (N).
+            Contact force (N); with several contacts one row per contact,
+            shape (n_contacts, n_t) (or (n_contacts,)).
         """
         q_l, v_l = self.state_l(t)
         q, lam, v = self.system.state_to_full(q_l, v_l)
@@ -244,7 +257,8 @@ class Trajectory:
         return self.evaluate(t)[1]
 
     def contact_force(self, t) -> np.ndarray:
-        """Contact force λ (N) at times ``t``, shape (n_t,)."""
+        """Contact force λ (N) at times ``t``, shape (n_t,) ((n_contacts, n_t) with several
+        contacts)."""
         return self.evaluate(t)[2]
 
     def __repr__(self) -> str:
@@ -287,15 +301,23 @@ def integrate(model_or_system, q_l0, v_l0, t_end: float, *, sensitivity: bool = 
     max_events = check.integer("max_events", max_events, minimum=1)
     t_ref = 2 * np.pi / system._omega_ref
     phase = system.initial_phase(q, v)
-    other = {"open": system.closed, "closed": system.open}
     t = 0.0
     segments, events = [], []
     Tr = np.eye(2 * system.n_l) if sensitivity else None
     n_zero = 0
     while True:
         alpha, beta = phase.modal_state(q, v)
-        t_sw, grazes = _first_switch(phase, alpha, beta, t_end - t, samples_per_period, t_ref)
-        events.extend(Event(t + tg, "graze") for tg, _ in grazes)
+        # the first of the phase's switching functions to reach zero (each searched only
+        # up to the earliest switch found so far)
+        t_sw, j_sw, grazes = None, None, []
+        for j in range(phase.n_switch):
+            t_j, g_j = _first_switch(phase, j, alpha, beta, (t_end - t) if t_sw is None else t_sw,
+                                     samples_per_period, t_ref)
+            grazes.extend((tg, j) for tg, _ in g_j)
+            if t_j is not None and (t_sw is None or t_j < t_sw):
+                t_sw, j_sw = t_j, j
+        grazes.sort()
+        events.extend(Event(t + tg, "graze", j) for tg, j in grazes if t_sw is None or tg < t_sw)
         duration = (t_end - t) if t_sw is None else t_sw
         t_next = t_end if t_sw is None else t + duration
         if duration > 0 or t_sw is None or not segments:
@@ -306,11 +328,11 @@ def integrate(model_or_system, q_l0, v_l0, t_end: float, *, sensitivity: bool = 
             break
         q, v, _ = phase.state(alpha, beta, duration)
         n_zero = n_zero + 1 if duration == 0 else 0
-        if n_zero > 4:
+        if n_zero > 4 * system.n_contacts:
             raise RuntimeError(f"event location stalled at t = {t!r} s (repeated zero-length phases)")
         t = t_next
-        events.append(Event(t, "close" if phase.name == "open" else "open"))
+        events.append(Event(t, "open" if j_sw in phase.active else "close", j_sw))
         if len(events) > max_events:
             raise ValueError(f"more than max_events = {max_events} switches before t_end = {t_end!r} s")
-        phase = other[phase.name]
+        phase = system.next_phase(phase, j_sw)
     return Trajectory(system, segments, events, Tr)

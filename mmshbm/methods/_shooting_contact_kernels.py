@@ -1,0 +1,581 @@
+"""Numba kernels of the shooting baseline with several contacts (or contacts on DOFs
+with mass): the contact LCP followed along a step, the step's force sum and its
+derivatives, the time step and its sensitivities (:mod:`mmshbm.methods.shooting`).
+
+The contact forces λ (m,) at fixed free gaps h = gap + A q solve the LCP
+
+    g = h + G λ >= 0,   λ >= 0,   gᵀλ = 0
+
+(G the Delassus matrix of the massless contact DOFs, 1/k_p on the diagonal of a penalty
+spring on a DOF with mass). λ(h) is continuous and piecewise linear: on the region of an
+active set J, λ_J = −G_JJ⁻¹ h_J. Along a straight path h(s) = h0 + s (h1 − h0) it is
+followed exactly by principal pivoting (:func:`_lcp_path`): on each piece λ and g are
+affine in s, and the piece ends where an active λ_j or an inactive g_i reaches zero.
+
+Band storage and tangent layout as in :mod:`mmshbm.methods._shooting_kernels`. The two
+band kernels used here are copies of that module's: numba's on-disk cache does not see
+edits to a callee in another file, so a kernel and its callees live in one file.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ..core.kernels import JIT_OPTIONS
+
+__all__ = ["lcp_solve"]
+
+_MAX_NEWTON = 60
+# Tangent columns per block (as in _shooting_kernels).
+_BLOCK = 16
+
+
+@njit(**JIT_OPTIONS)
+def _band_solve(L, b):
+    """In place: b <- A⁻¹ b with L the band Cholesky factor of A; b shape (n,)."""
+    p = L.shape[0] - 1
+    n = L.shape[1]
+    for i in range(n):
+        s = b[i]
+        for k in range(max(0, i - p), i):
+            s -= L[i - k, k] * b[k]
+        b[i] = s / L[0, i]
+    for i in range(n - 1, -1, -1):
+        s = b[i]
+        for k in range(i + 1, min(n, i + p + 1)):
+            s -= L[k - i, i] * b[k]
+        b[i] = s / L[0, i]
+
+
+@njit(**JIT_OPTIONS)
+def _band_symv(ab, x, out):
+    """out <- A x for symmetric A in lower band storage; x, out shape (n,)."""
+    p = ab.shape[0] - 1
+    n = ab.shape[1]
+    for i in range(n):
+        out[i] = ab[0, i] * x[i]
+    for d in range(1, p + 1):
+        for j in range(n - d):
+            c = ab[d, j]
+            out[j + d] += c * x[j]
+            out[j] += c * x[j + d]
+
+
+@njit(**JIT_OPTIONS)
+def _inverse_sub(G, idx, nJ, Ginv, work):
+    """In place: Ginv[:nJ, :nJ] <- (G[idx, idx])⁻¹ for the first nJ entries of ``idx``, by
+    Gauss–Jordan elimination with partial pivoting. False if singular."""
+    for a in range(nJ):
+        for b in range(nJ):
+            work[a, b] = G[idx[a], idx[b]]
+            Ginv[a, b] = 1.0 if a == b else 0.0
+    for col in range(nJ):
+        piv = col
+        big = abs(work[col, col])
+        for r in range(col + 1, nJ):
+            if abs(work[r, col]) > big:
+                big = abs(work[r, col])
+                piv = r
+        if not big > 0.0:
+            return False
+        if piv != col:
+            for b in range(nJ):
+                tmp = work[col, b]
+                work[col, b] = work[piv, b]
+                work[piv, b] = tmp
+                tmp = Ginv[col, b]
+                Ginv[col, b] = Ginv[piv, b]
+                Ginv[piv, b] = tmp
+        d = 1.0 / work[col, col]
+        for b in range(nJ):
+            work[col, b] *= d
+            Ginv[col, b] *= d
+        for r in range(nJ):
+            if r != col:
+                f = work[r, col]
+                if f != 0.0:
+                    for b in range(nJ):
+                        work[r, b] -= f * work[col, b]
+                        Ginv[r, b] -= f * Ginv[col, b]
+    return True
+
+
+@njit(**JIT_OPTIONS)
+def _lcp_path(G, h0, h1, act, integral, lam1, F, D0, D1, idx, Ginv, work):
+    """Follow the LCP solution λ(h(s)) along h(s) = h0 + s (h1 − h0), s from 0 to 1.
+
+    act : (m,) bool, the active set valid at h0 on entry, the one at h1 on exit.
+    integral : also accumulate F = 2 ∫₀¹ λ ds (N) and its derivatives D0 = ∂F/∂h0,
+        D1 = ∂F/∂h1 (m, m) (exact: λ is linear on each piece and continuous, so
+        F = Σ (s_k+1 − s_k)(λ(s_k) + λ(s_k+1)), D1 = Σ J_k (s_k+1² − s_k²),
+        D0 = Σ J_k ((1 − s_k)² − (1 − s_k+1)²) with J_k = ∂λ/∂h on piece k).
+    lam1 : (m,) output, λ(h1). idx (m,) int, Ginv, work (m, m): work arrays.
+    Returns the number of pieces, or −1 if the path does not end (degenerate pivoting)
+    or meets a singular G_JJ.
+    """
+    m = h0.shape[0]
+    if integral:
+        for i in range(m):
+            F[i] = 0.0
+            for j in range(m):
+                D0[i, j] = 0.0
+                D1[i, j] = 0.0
+    s0 = 0.0
+    pieces = 0
+    while True:
+        pieces += 1
+        if pieces > 4 * m + 8:
+            return -1
+        nJ = 0
+        for i in range(m):
+            if act[i]:
+                idx[nJ] = i
+                nJ += 1
+        if nJ and not _inverse_sub(G, idx, nJ, Ginv, work):
+            return -1
+        # λ_J(s) = −Ginv h_J(s): value at s0 and slope; g(s) = h(s) + G_:J λ_J(s)
+        s_next = 1.0
+        leave = -1
+        for a in range(nJ):
+            val = 0.0
+            slope = 0.0
+            for b in range(nJ):
+                jb = idx[b]
+                val -= Ginv[a, b] * (h0[jb] + s0 * (h1[jb] - h0[jb]))
+                slope -= Ginv[a, b] * (h1[jb] - h0[jb])
+            lam1[idx[a]] = val  # λ at s0 (reused below)
+            work[a, 0] = slope  # (work's column 0 is free once Ginv is formed)
+            if slope < 0.0:
+                s = s0 - val / slope if val > 0.0 else s0
+                if s < s_next:
+                    s_next = s
+                    leave = idx[a]
+        for i in range(m):
+            if act[i]:
+                continue
+            val = h0[i] + s0 * (h1[i] - h0[i])
+            slope = h1[i] - h0[i]
+            for a in range(nJ):
+                val += G[i, idx[a]] * lam1[idx[a]]
+                slope += G[i, idx[a]] * work[a, 0]
+            if slope < 0.0:
+                s = s0 - val / slope if val > 0.0 else s0
+                if s < s_next:
+                    s_next = s
+                    leave = i
+        if s_next >= 1.0:
+            s_next = 1.0
+            leave = -1
+        ds = s_next - s0
+        if integral and nJ:
+            for a in range(nJ):
+                ia = idx[a]
+                F[ia] += ds * (2.0 * lam1[ia] + ds * work[a, 0])
+            c1 = s_next * s_next - s0 * s0
+            c0 = (1.0 - s0) * (1.0 - s0) - (1.0 - s_next) * (1.0 - s_next)
+            for a in range(nJ):
+                for b in range(nJ):
+                    D1[idx[a], idx[b]] -= c1 * Ginv[a, b]
+                    D0[idx[a], idx[b]] -= c0 * Ginv[a, b]
+        if leave < 0:
+            for i in range(m):
+                lam1[i] = 0.0
+            for a in range(nJ):
+                val = 0.0
+                for b in range(nJ):
+                    val -= Ginv[a, b] * h1[idx[b]]
+                lam1[idx[a]] = max(val, 0.0)
+            return pieces
+        act[leave] = not act[leave]
+        s0 = s_next
+
+
+@njit(**JIT_OPTIONS)
+def _lcp_jacobian(G, act, J, idx, Ginv, work):
+    """J <- ∂λ/∂h = −E_J G_JJ⁻¹ E_Jᵀ (m, m) for the active set ``act``. False if singular."""
+    m = act.shape[0]
+    for i in range(m):
+        for j in range(m):
+            J[i, j] = 0.0
+    nJ = 0
+    for i in range(m):
+        if act[i]:
+            idx[nJ] = i
+            nJ += 1
+    if nJ and not _inverse_sub(G, idx, nJ, Ginv, work):
+        return False
+    for a in range(nJ):
+        for b in range(nJ):
+            J[idx[a], idx[b]] = -Ginv[a, b]
+    return True
+
+
+@njit(**JIT_OPTIONS)
+def _lcp_point(G, h, act, lam, idx, Ginv, work):
+    """The LCP solution at h (λ (m,) and the active set ``act``, outputs), by following
+    the path from a point with every free gap positive (λ = 0 there) to h. Returns the
+    number of pieces, or −1 (see :func:`_lcp_path`)."""
+    m = h.shape[0]
+    start = np.empty(m)
+    big = 1.0
+    for i in range(m):
+        big = max(big, abs(h[i]))
+    for i in range(m):
+        start[i] = abs(h[i]) + big
+        act[i] = False
+    dummy = np.empty((0, 0))
+    return _lcp_path(G, start, h, act, False, lam, lam, dummy, dummy, idx, Ginv, work)
+
+
+@njit(**JIT_OPTIONS)
+def _force_sum_multi(G, h0, h1, act0, lam0, J0, avf, act1, lam1, F, D0, D1, idx, Ginv, work):
+    """The step's force sum F (m,) and its derivatives D0 = ∂F/∂h0, D1 = ∂F/∂h1 (m, m):
+    2 ∫₀¹ λ(h0 + s(h1 − h0)) ds (avf) or λ(h0) + λ(h1) (trapezoidal, λ(h0) = lam0 and
+    ∂λ/∂h(h0) = J0 given). act1, lam1: the active set and λ at h1. False on failure."""
+    m = h0.shape[0]
+    for i in range(m):
+        act1[i] = act0[i]
+    # one call site of the path (numba inlines callees: fewer copies compile faster)
+    if _lcp_path(G, h0, h1, act1, avf, lam1, F, D0, D1, idx, Ginv, work) < 0:
+        return False
+    if avf:
+        return True
+    if not _lcp_jacobian(G, act1, D1, idx, Ginv, work):
+        return False
+    for i in range(m):
+        F[i] = lam0[i] + lam1[i]
+        for j in range(m):
+            D0[i, j] = J0[i, j]
+    return True
+
+
+@njit(**JIT_OPTIONS)
+def _step_forces(G, AZ, h0, hy, act0, lam0, J0, F_prev, avf, h1, act1, lam1, F, D0, D1, idx, Ginv, work,
+                 r, dlt, Mat, h_base, allidx, Inv):
+    """Solve h1 = hy + (A Z) F(h0, h1) for the free gaps at the step's end (m,), in place.
+
+    F is the step's force sum (:func:`_force_sum_multi`). Newton on this piecewise-smooth
+    equation, which is monotone (I − AZ D1 is invertible: AZ and −D1 are positive
+    semidefinite), from hy + AZ F_prev; a full step that does not reduce the residual is
+    halved (up to 30 times). Converged when the residual or the update is at round-off
+    (exact: on each piece of the path F is smooth, and for the trapezoidal rule linear).
+    Returns the Newton iterations, or −1 without convergence.
+    """
+    m = h0.shape[0]
+    eps = 2.220446049250313e-16
+    for i in range(m):
+        acc = hy[i]
+        for j in range(m):
+            acc += AZ[i, j] * F_prev[j]
+        h1[i] = acc
+    rn_prev = np.inf
+    backs = 0
+    rn = 0.0
+    scale = 0.0
+    final = False
+    for it in range(_MAX_NEWTON + 1):
+        if not _force_sum_multi(G, h0, h1, act0, lam0, J0, avf, act1, lam1, F, D0, D1, idx, Ginv, work):
+            return -1
+        if final:  # the forces at the h1 of an update at round-off
+            return it
+        scale = 0.0
+        rn = 0.0
+        for i in range(m):
+            acc = 0.0
+            for j in range(m):
+                acc += AZ[i, j] * F[j]
+            r[i] = h1[i] - hy[i] - acc
+            scale = max(scale, abs(hy[i]), abs(h1[i]), abs(acc))
+            rn = max(rn, abs(r[i]))
+        if rn <= 4.0 * eps * scale:
+            return it + 1
+        if it == _MAX_NEWTON:
+            break
+        if rn >= rn_prev and backs < 30 and it > 0:
+            backs += 1
+            for i in range(m):
+                dlt[i] *= 0.5
+                h1[i] = h_base[i] - dlt[i]
+            continue
+        backs = 0
+        rn_prev = rn
+        for i in range(m):
+            h_base[i] = h1[i]
+            for j in range(m):
+                acc = 0.0
+                for k in range(m):
+                    acc += AZ[i, k] * D1[k, j]
+                Mat[i, j] = (1.0 if i == j else 0.0) - acc
+        if not _inverse_sub(Mat, allidx, m, Inv, work):
+            return -1
+        dn = 0.0
+        for i in range(m):
+            acc = 0.0
+            for j in range(m):
+                acc += Inv[i, j] * r[j]
+            dlt[i] = acc
+            h1[i] = h_base[i] - acc
+            dn = max(dn, abs(acc))
+        final = dn <= 4.0 * eps * scale
+    if rn <= 1e3 * eps * scale:
+        return _MAX_NEWTON  # stalled at a round-off floor (F is that of the last h1)
+    return -1
+
+
+@njit(**JIT_OPTIONS)
+def _tangent_step_multi(Sf, Mb, Kb, A, Z, F0, Cm, h, q, v, qn, dq, dv, dh, Wb, Yb, AD, T):
+    """One step of the tangent columns dq, dv (n, n_par) with several contacts, in place:
+
+        (S − Aᵀ F1 A) dq1 = M(c1 dq0 + c2 dv0 + e(c3 (q1 − q0) − c1 v0)) − K dq0 + Aᵀ F0 A dq0
+        dv1 = (2/h)(dq1 − dq0) − dv0 − e (2/h²)(q1 − q0)
+
+    solved as Y = S⁻¹(right-hand side), dq1 = Y + Z Cm (A Y) (Woodbury, Z = S⁻¹Aᵀ,
+    Cm = (I − F1 A Z)⁻¹ F1). A (m, n), Z (n, m), F0, Cm (m, m); Wb, Yb (n, _BLOCK),
+    AD, T (m, _BLOCK) work arrays.
+    """
+    n, npar = dq.shape
+    m = A.shape[0]
+    p = Mb.shape[0] - 1
+    c1 = 4.0 / (h * h)
+    c2 = 4.0 / h
+    c3 = 8.0 / (h * h * h)
+    c5 = 2.0 / h
+    c6 = 2.0 / (h * h)
+    for c0 in range(0, npar, _BLOCK):
+        nb = min(_BLOCK, npar - c0)
+        for i in range(n):
+            base = c3 * (qn[i] - q[i]) - c1 * v[i]
+            for j in range(nb):
+                Wb[i, j] = c1 * dq[i, c0 + j] + c2 * dv[i, c0 + j] + dh[c0 + j] * base
+        # AD = A dq0, T = F0 AD
+        for k in range(m):
+            for j in range(nb):
+                AD[k, j] = 0.0
+            for i in range(n):
+                aki = A[k, i]
+                if aki != 0.0:
+                    for j in range(nb):
+                        AD[k, j] += aki * dq[i, c0 + j]
+        for k in range(m):
+            for j in range(nb):
+                acc = 0.0
+                for l2 in range(m):
+                    acc += F0[k, l2] * AD[l2, j]
+                T[k, j] = acc
+        # Y = M W − K dq + Aᵀ T
+        for i in range(n):
+            m0 = Mb[0, i]
+            k0 = Kb[0, i]
+            for j in range(nb):
+                acc = m0 * Wb[i, j] - k0 * dq[i, c0 + j]
+                for k in range(m):
+                    acc += A[k, i] * T[k, j]
+                Yb[i, j] = acc
+        for d in range(1, p + 1):
+            for r in range(n - d):
+                md = Mb[d, r]
+                kd = Kb[d, r]
+                for j in range(nb):
+                    Yb[r + d, j] += md * Wb[r, j] - kd * dq[r, c0 + j]
+                    Yb[r, j] += md * Wb[r + d, j] - kd * dq[r + d, c0 + j]
+        for i in range(n):
+            for k in range(max(0, i - p), i):
+                lik = Sf[i - k, k]
+                for j in range(nb):
+                    Yb[i, j] -= lik * Yb[k, j]
+            inv = 1.0 / Sf[0, i]
+            for j in range(nb):
+                Yb[i, j] *= inv
+        for i in range(n - 1, -1, -1):
+            for k in range(i + 1, min(n, i + p + 1)):
+                lki = Sf[k - i, i]
+                for j in range(nb):
+                    Yb[i, j] -= lki * Yb[k, j]
+            inv = 1.0 / Sf[0, i]
+            for j in range(nb):
+                Yb[i, j] *= inv
+        # dq1 = Y + Z Cm (A Y)
+        for k in range(m):
+            for j in range(nb):
+                acc = 0.0
+                for i in range(n):
+                    acc += A[k, i] * Yb[i, j]
+                AD[k, j] = acc
+        for k in range(m):
+            for j in range(nb):
+                acc = 0.0
+                for l2 in range(m):
+                    acc += Cm[k, l2] * AD[l2, j]
+                T[k, j] = acc
+        for i in range(n):
+            for k in range(m):
+                zik = Z[i, k]
+                if zik != 0.0:
+                    for j in range(nb):
+                        Yb[i, j] += zik * T[k, j]
+        for i in range(n):
+            base = c6 * (qn[i] - q[i])
+            for j in range(nb):
+                col = c0 + j
+                dv[i, col] = c5 * (Yb[i, j] - dq[i, col]) - dv[i, col] - dh[col] * base
+                dq[i, col] = Yb[i, j]
+
+
+@njit(**JIT_OPTIONS)
+def _integrate_multi(Sf, Pb, Mb, Kb, A, Z, AZ, G, gap, h, n_steps, avf, q, v, dq, dv, dh, Q, V, LAM):
+    """Integrate ``n_steps`` steps of size ``h`` (s) with several contacts, in place.
+
+    One step (F the force sum (m,) of the scheme, h_k = gap + A q_k the free gaps):
+
+        S q1 = P q0 + (4/h) M v0 + Aᵀ F(h0, h1),    v1 = (2/h)(q1 − q0) − v0
+
+    so h1 = hy + (A Z) F(h0, h1) with hy the free gaps of the contact-free predictor y and
+    Z = S⁻¹ Aᵀ; :func:`_step_forces` solves it, q1 = y + Z F.
+
+    Parameters as :func:`_integrate`, with A (m, n) the free-gap gradients, Z (n, m),
+    AZ = A Z (m, m), G (m, m) the Delassus matrix, gap (m,), and LAM (n_steps+1, m) the
+    contact forces at the steps (stored when Q has rows).
+
+    Returns the number of steps that end with a contact closed, or −1 − k if the contact
+    problem of step k could not be solved.
+    """
+    n = q.shape[0]
+    m = A.shape[0]
+    npar = dq.shape[1]
+    store = Q.shape[0] > 0
+    Wb = np.empty((n, _BLOCK))
+    Yb = np.empty((n, _BLOCK))
+    AD = np.empty((m, _BLOCK))
+    T = np.empty((m, _BLOCK))
+    w = np.empty(n)
+    y = np.empty(n)
+    t = np.empty(n)
+    qn = np.empty(n)
+    h0 = np.empty(m)
+    hy = np.empty(m)
+    h1 = np.empty(m)
+    act0 = np.zeros(m, dtype=np.bool_)
+    act1 = np.zeros(m, dtype=np.bool_)
+    h_base = np.empty(m)
+    lam0 = np.zeros(m)
+    lam1 = np.zeros(m)
+    F = np.zeros(m)
+    F_prev = np.zeros(m)
+    D0 = np.zeros((m, m))
+    D1 = np.zeros((m, m))
+    J0 = np.zeros((m, m))
+    Cm = np.zeros((m, m))
+    Mat = np.zeros((m, m))
+    idx = np.empty(m, dtype=np.int64)
+    Ginv = np.empty((m, m))
+    work = np.empty((m, m))
+    r = np.empty(m)
+    dlt = np.zeros(m)
+    allidx = np.arange(m)
+    Inv = np.empty((m, m))
+    c2 = 4.0 / h
+    closed = 0
+    for k in range(m):
+        acc = gap[k]
+        for i in range(n):
+            acc += A[k, i] * q[i]
+        h0[k] = acc
+    if _lcp_point(G, h0, act0, lam0, idx, Ginv, work) < 0:
+        return -1
+    if store:
+        for i in range(n):
+            Q[0, i] = q[i]
+            V[0, i] = v[i]
+        for k in range(m):
+            LAM[0, k] = lam0[k]
+    for step in range(n_steps):
+        if not avf and not _lcp_jacobian(G, act0, J0, idx, Ginv, work):  # ∂λ/∂h at h0
+            return -1 - step
+        _band_symv(Pb, q, y)
+        for i in range(n):
+            w[i] = c2 * v[i]
+        _band_symv(Mb, w, t)
+        for i in range(n):
+            y[i] += t[i]
+        _band_solve(Sf, y)
+        for k in range(m):
+            acc = gap[k]
+            for i in range(n):
+                acc += A[k, i] * y[i]
+            hy[k] = acc
+        if _step_forces(G, AZ, h0, hy, act0, lam0, J0, F_prev, avf, h1, act1, lam1, F, D0, D1, idx, Ginv,
+                        work, r, dlt, Mat, h_base, allidx, Inv) < 0:
+            return -1 - step
+        any_closed = False
+        for k in range(m):
+            if act1[k]:
+                any_closed = True
+        if any_closed:
+            closed += 1
+        for i in range(n):
+            acc = y[i]
+            for k in range(m):
+                acc += Z[i, k] * F[k]
+            qn[i] = acc
+        if npar:
+            # Cm = (I − D1 AZ)⁻¹ D1
+            for i in range(m):
+                for j in range(m):
+                    acc = 0.0
+                    for k in range(m):
+                        acc += D1[i, k] * AZ[k, j]
+                    Mat[i, j] = (1.0 if i == j else 0.0) - acc
+            if not _inverse_sub(Mat, allidx, m, Inv, work):
+                return -1 - step
+            for i in range(m):
+                for j in range(m):
+                    acc = 0.0
+                    for k in range(m):
+                        acc += Inv[i, k] * D1[k, j]
+                    Cm[i, j] = acc
+            _tangent_step_multi(Sf, Mb, Kb, A, Z, D0, Cm, h, q, v, qn, dq, dv, dh, Wb, Yb, AD, T)
+        for i in range(n):
+            v[i] = (2.0 / h) * (qn[i] - q[i]) - v[i]
+            q[i] = qn[i]
+        for k in range(m):
+            h0[k] = h1[k]
+            act0[k] = act1[k]
+            lam0[k] = lam1[k]
+            F_prev[k] = F[k]
+        if store:
+            for i in range(n):
+                Q[step + 1, i] = q[i]
+                V[step + 1, i] = v[i]
+            for k in range(m):
+                LAM[step + 1, k] = lam1[k]
+    return closed
+
+
+def lcp_solve(G: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The solution of the LCP g = h + G λ >= 0, λ >= 0, gᵀλ = 0 for each column of ``h``.
+
+    Parameters
+    ----------
+    G : ndarray, shape (m, m)
+        Symmetric positive semidefinite, with G_JJ nonsingular on the active sets met.
+    h : ndarray, shape (m,) or (m, n_t)
+
+    Returns
+    -------
+    lam : ndarray, like ``h``
+    active : ndarray of bool, like ``h``
+    """
+    G = np.ascontiguousarray(G, dtype=np.float64)
+    H = np.asarray(h, dtype=np.float64)
+    Hc = H.reshape(H.shape[0], -1)
+    m, n_t = Hc.shape
+    lam = np.zeros((m, n_t))
+    act = np.zeros((m, n_t), dtype=bool)
+    idx, Ginv, work = np.empty(m, dtype=np.int64), np.empty((m, m)), np.empty((m, m))
+    a, lk = np.zeros(m, dtype=np.bool_), np.zeros(m)
+    for j in range(n_t):
+        if _lcp_point(G, np.ascontiguousarray(Hc[:, j]), a, lk, idx, Ginv, work) < 0:
+            raise RuntimeError(f"the contact LCP has no unique solution at h = {Hc[:, j]}")
+        lam[:, j], act[:, j] = lk, a
+    return lam.reshape(H.shape), act.reshape(H.shape)
