@@ -56,7 +56,7 @@ def _reference_matrices(order: int, lam: float, mu: float, rho: float):
     w = basis.dx[0]  # (n_qp,) quadrature weights
     nb = len(basis.basis)  # local basis functions, in the element's local order
     G = np.array([basis.basis[a][0].grad[:, :, 0, :] for a in range(nb)])  # (nb, i, p, qp): ∂_p N_a,i
-    V = np.array([basis.basis[a][0].value[:, 0, :] for a in range(nb)])  # (nb, i, qp)
+    V = np.array([np.asarray(basis.basis[a][0])[:, 0, :] for a in range(nb)])  # (nb, i, qp)
     K = np.empty((3, 3, nb, nb))
     for p in range(3):
         for q in range(3):
@@ -126,7 +126,8 @@ def solid_beam_matrices(beam, n_length: int = 40, n_width: int = 2, n_height: in
     L, b, h = beam.length, beam.width, beam.height
     x = mesh1d.node_coordinates(mesh1d.graded_lengths(L, n_length, grading))
     x[-1] = L
-    m = MeshHex.init_tensor(x, np.linspace(-b / 2, b / 2, n_width + 1), np.linspace(-h / 2, h / 2, n_height + 1))
+    y, z = np.linspace(-b / 2, b / 2, n_width + 1), np.linspace(-h / 2, h / 2, n_height + 1)
+    m = MeshHex.init_tensor(x, y, z)
     element = _element(order)
     lam = beam.E * beam.nu / ((1 + beam.nu) * (1 - 2 * beam.nu))
     mu = beam.E / (2 * (1 + beam.nu))
@@ -159,7 +160,7 @@ def solid_beam_matrices(beam, n_length: int = 40, n_width: int = 2, n_height: in
 
         @BilinearForm
         def mass(u, v, w):
-            return beam.rho * sum(u.value[i] * v.value[i] for i in range(3))
+            return beam.rho * sum(u[i] * v[i] for i in range(3))
 
         M = asm(mass, basis).tocsr()
         K, M = (0.5 * (K + K.T)).tocsr(), (0.5 * (M + M.T)).tocsr()
@@ -223,7 +224,8 @@ def rebuild_solid(description: dict) -> Model:
 
     try:
         beam = TimoshenkoBeam(**{f.name: description[f.name] for f in fields(TimoshenkoBeam)})
-        return solid_beam_model(beam, description["n_length"], description["n_width"], description["n_height"],
-                                description["grading"], description["order"], description["massless_tip"])
+        d = description
+        return solid_beam_model(beam, d["n_length"], d["n_width"], d["n_height"], d["grading"], d["order"],
+                                d["massless_tip"])
     except KeyError as err:
         raise ValueError(f"description lacks the entry {err.args[0]!r}") from None

@@ -89,7 +89,8 @@ class ReducedPenaltyHBMProblem:
         self.H = check_harmonics(harmonics)[0]
         self.mode = check.integer("mode", mode, minimum=1)
         if self.mode > len(model.l):
-            raise ValueError(f"mode must be <= the number of DOFs with mass ({len(model.l)}), got {self.mode}")
+            raise ValueError(f"mode must be <= the number of DOFs with mass ({len(model.l)}), "
+                             f"got {self.mode}")
         self.amplitude_dof = model.amplitude_dof  # ValueError with several contacts and none named
         self.cond = make_condensation(model, backend, harmonics=self.H, mode=self.mode)
         c = model.c
