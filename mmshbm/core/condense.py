@@ -226,8 +226,17 @@ def _band_storage(A: sp.spmatrix, kl: int) -> np.ndarray:
     return ab
 
 
-#: ``"auto"`` uses the modal back end from this many DOFs with mass (measured, see
-#: :func:`make_condensation`)
+#: ``"auto"`` uses the modal back end from this many DOFs with mass. Measured (beam, H = 5,
+#: one BLAS thread): a modal evaluation costs 3.3 µs at any size against 5, 9, 13, 23, 54,
+#: 108, 321 and 682 µs for the banded LU at n_l = 6, 14, 22, 40, 98, 198, 598, 998, and its
+#: reduction (0.4-15 ms up to n_l = 1000) is repaid after 15-70 evaluations (400 at
+#: n_l = 998), far fewer than a backbone makes: the modal back end is the faster one from
+#: n_l ≈ 6 on. "auto" still keeps the banded LU below 100 DOFs with mass, i.e. on the
+#: default 8- and 21-element beams, until MMS-HBM regularises the poles of the condensed
+#: stiffness (DESIGN §6 "Poles"): there H = 5 crosses 5Ω = ω_1 of the clamped-tip beam
+#: (285.7 Hz) near 1.6 gaps, and whether the continuation steps over that pole depends on
+#: round-off (both back ends agree to 2e-11 in D_k, but only the banded branch happens to
+#: get past it on 21 elements; on 100 elements it is the other way round).
 MODAL_CROSSOVER = 100
 
 

@@ -21,7 +21,7 @@ trial function) an element of sides (l_x, l_y, l_z) and volume V has
 K_e = Σ_pq V/(l_p l_q) K̂⁽ᵖᑫ⁾ and M_e = V M̂, exactly. scikit-fem assembles the ten
 reference matrices on one element; the mesh's elements are then scaled and scattered
 in a few vectorised NumPy operations. This equals scikit-fem's own ``asm`` on the whole
-mesh to round-off (tested) and is ~20× faster on 10⁵ DOFs (1.2 against 22 s measured).
+mesh to round-off (tested) and is ~7× faster on 10⁵ DOFs (3 against 22 s measured).
 """
 
 from __future__ import annotations
