@@ -189,8 +189,6 @@ def solid_beam_model(beam, n_length: int = 40, n_width: int = 2, n_height: int =
         tip-face node on its u_z (gap ``beam.gap``, side +1), ordered by (y, z);
         ``amplitude_dof`` on the centre line; ``description`` with ``kind = "SolidBeam"``.
     """
-    from dataclasses import asdict
-
     if not isinstance(massless_tip, bool | np.bool_):
         raise TypeError(f"massless_tip must be a bool, got {type(massless_tip).__name__} {massless_tip!r}")
     M, K, loc, comp = solid_beam_matrices(beam, n_length, n_width, n_height, grading, order)
@@ -207,7 +205,8 @@ def solid_beam_model(beam, n_length: int = 40, n_width: int = 2, n_height: int =
     vertical = np.flatnonzero(tip & (comp == 2))
     vertical = vertical[np.lexsort((loc[2, vertical], loc[1, vertical]))]
     centre = vertical[int(np.argmin(np.hypot(loc[1, vertical], loc[2, vertical])))]
-    description = {"kind": "SolidBeam", **asdict(beam), "n_length": int(n_length), "n_width": int(n_width),
+    data = {name: getattr(beam, name) for name in _BEAM_FIELDS}
+    description = {"kind": "SolidBeam", **data, "n_length": int(n_length), "n_width": int(n_width),
                    "n_height": int(n_height), "grading": float(grading), "order": int(order),
                    "massless_tip": bool(massless_tip)}
     return Model.from_matrices(M, K, contact_dof=vertical.tolist(), gap=beam.gap, stop_side=1,
@@ -216,16 +215,18 @@ def solid_beam_model(beam, n_length: int = 40, n_width: int = 2, n_height: int =
 
 def rebuild_solid(description: dict) -> Model:
     """Rebuild a solid beam model from the ``description`` of :func:`solid_beam_model`."""
-    from .beam import TimoshenkoBeam
+    from types import SimpleNamespace
 
     if description.get("kind") != "SolidBeam":
         raise ValueError(f"description is not of a SolidBeam model: kind={description.get('kind')!r}")
-    from dataclasses import fields
-
     try:
-        beam = TimoshenkoBeam(**{f.name: description[f.name] for f in fields(TimoshenkoBeam)})
+        beam = SimpleNamespace(**{name: description[name] for name in _BEAM_FIELDS})
         d = description
         return solid_beam_model(beam, d["n_length"], d["n_width"], d["n_height"], d["grading"], d["order"],
                                 d["massless_tip"])
     except KeyError as err:
         raise ValueError(f"description lacks the entry {err.args[0]!r}") from None
+
+
+#: the beam data a solid model's description records (:class:`~mmshbm.fe.beam.TimoshenkoBeam`'s fields)
+_BEAM_FIELDS = ("length", "width", "height", "E", "rho", "nu", "shear_factor", "gap")
