@@ -111,19 +111,21 @@ def test_solid_penalty_backbone_against_timoshenko(beam):
     assert np.all((ratio > 0) & (ratio < 1.5e-2)), ratio
 
 
-@pytest.mark.skip(reason="needs multi-contact MMS-HBM")
 def test_solid_mms_hbm_backbone_against_timoshenko(beam):
-    """MMS-HBM on the solid (25 contacts under the tip face) against the Timoshenko beam at
-    H = 5: relative to each model's linear frequency the backbones agree within 1.5 % up to
-    2 gaps, the solid's above (see the penalty version of this test; measured there with
-    H = 5 on 16 x 1 x 1 and 24 x 2 x 2 elements: +0.43, +0.47, +0.60 % at 1.2, 1.5, 2 gaps)."""
+    """MMS-HBM on the solid (9 contacts under the tip face, modal condensation) against the
+    Timoshenko beam at H = 5: relative to each model's linear frequency the solid's backbone
+    lies 1-1.7 % above the beam's up to 2 gaps (measured +1.65, +0.98, +1.52 % at 1.2, 1.5,
+    2 gaps, converged in the step size): the tip face held flat on the plane is a stiffer
+    support than the beam's point contact (closed-phase vertical bending relative to the
+    open frequency 4.38 against 4.31)."""
     gaps = (1.2, 1.5, 2.0)
     solid, timo = beam.solid_model(16, 1, 1), beam.model(21)
     bs = mmshbm.backbone(solid, harmonics=5, max_amplitude=2.1e-3, backend="modal")
     bt = mmshbm.backbone(timo, harmonics=5, max_amplitude=2.1e-3)
-    assert bs.status == "bound:amplitude"
+    assert bs.status == bt.status == "bound:amplitude"
+    assert bs.solver.cond.backend == "modal" and bs.solver.cond.n_modes < 30
     ratio = _normalised(bs, solid, gaps) / _normalised(bt, timo, gaps) - 1
-    assert np.all((ratio > 0) & (ratio < 1.5e-2)), ratio
+    assert np.all((ratio > 0.5e-2) & (ratio < 2.5e-2)), ratio
 
 
 def test_large_model_is_never_densified(beam, monkeypatch):

@@ -283,14 +283,24 @@ class ModalCondensation:
             raise SingularDynamicStiffness(
                 f"K_ll - ({k}·{omega:.6g} rad/s)^2 M_ll is singular: harmonic {k} of Ω sits on the "
                 f"fixed-interface eigenfrequency {self.omega_j[j]:.9g} rad/s (mode index {j})")
-        if not self._warned and H * abs(omega) > _LEFT_OUT_WARNING * self._omega_next:
+        return (D, dD) if derivative else D
+
+    def check_range(self, omega: float, harmonics: int) -> bool:
+        """Warn (once, :class:`~mmshbm.ModelWarning`) if harmonic H of Ω (rad/s) reaches 0.8 ×
+        the first left-out mode, where the truncation misses that mode's pole; returns
+        whether Ω is inside. For converged points (e.g. from a problem's ``monitor``): a
+        Newton iterate may wander far out and back, so :meth:`dynamic_stiffness` does not
+        check."""
+        H = check.integer("harmonics", harmonics, minimum=1)
+        inside = H * abs(float(omega)) <= _LEFT_OUT_WARNING * self._omega_next
+        if not inside and not self._warned:
             self._warned = True
             f_top = H * abs(omega) / (2 * np.pi)
             warnings.warn(f"harmonic {H} of Ω = {omega / (2 * np.pi):.6g} Hz reaches {f_top:.6g} Hz, near "
                           "or past the first mode the modal condensation leaves out "
                           f"({self.cutoff:.6g} Hz): its pole is missing; build it with a higher "
                           "max_frequency, harmonics or cutoff", ModelWarning, stacklevel=2)
-        return (D, dD) if derivative else D
+        return inside
 
     def recover(self, omega: float, Qc: np.ndarray) -> np.ndarray:
         """Coefficients of the DOFs with mass (``model.l`` order), shape (n_l, 2H+1), from the

@@ -268,6 +268,8 @@ class ReducedPenaltyHBMProblem:
         (N: the largest force of any contact)."""
         a, omega = self.unpack(u)
         D, dD = self._condensed(omega, True)
+        if hasattr(self.cond, "check_range"):  # modal: a converged point beyond the truncation warns
+            self.cond.check_range(omega, self.H)
         q = self._amplitude_signal(a, omega)
         amplitude = _refined_max(-self._away_side * q) if self._away_side else _refined_max(np.abs(q))
         _, qc, lam = self.contact_signals(u)
