@@ -230,14 +230,14 @@ def _band_storage(A: sp.spmatrix, kl: int) -> np.ndarray:
 #: one BLAS thread): a modal evaluation costs 3.3 µs at any size against 5, 9, 13, 23, 54,
 #: 108, 321 and 682 µs for the banded LU at n_l = 6, 14, 22, 40, 98, 198, 598, 998, and its
 #: reduction (0.4-15 ms up to n_l = 1000) is repaid after 15-70 evaluations (400 at
-#: n_l = 998), far fewer than a backbone makes: the modal back end is the faster one from
-#: n_l ≈ 6 on. "auto" still keeps the banded LU below 100 DOFs with mass, i.e. on the
-#: default 8- and 21-element beams, until MMS-HBM regularises the poles of the condensed
-#: stiffness (DESIGN §6 "Poles"): there H = 5 crosses 5Ω = ω_1 of the clamped-tip beam
-#: (285.7 Hz) near 1.6 gaps, and whether the continuation steps over that pole depends on
-#: round-off (both back ends agree to 2e-11 in D_k, but only the banded branch happens to
-#: get past it on 21 elements; on 100 elements it is the other way round).
-MODAL_CROSSOVER = 100
+#: n_l = 998), far fewer than a backbone makes. Below ~20 DOFs with mass the two differ
+#: by less than 10 µs per evaluation and keep the banded LU (the 8-element beam); from
+#: 20 on (the default 21-element beam) the modal one. With the LU, round-off decided
+#: whether a branch got past the pole 5Ω = ω_1 near 1.6 gaps; with MMS-HBM's exact
+#: projection both back ends pass it (21 elements: 87 and 86 points to 10 gaps, 2 gaps at
+#: 57.06321 and 57.06322 Hz; 100 elements: the banded branch stops with ds_min at H = 5,
+#: the modal one reaches 10 gaps).
+MODAL_CROSSOVER = 20
 
 
 def make_condensation(model: Model, backend: str = "auto", *, harmonics: int = 5, mode: int = 1,
