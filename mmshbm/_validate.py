@@ -82,7 +82,9 @@ def symmetric(name: str, A: sp.csr_matrix, rtol: float = 1e-10) -> None:
     asym = abs(A - A.T)
     worst = asym.max() if asym.nnz else 0.0
     if worst > rtol * scale:
-        i, j = np.unravel_index(np.argmax(asym.toarray()), A.shape)
+        coo = asym.tocoo()  # sparse: a large model must not be densified to name the entry
+        k = int(np.argmax(coo.data))
+        i, j = int(coo.row[k]), int(coo.col[k])
         raise ValueError(
             f"{name} must be symmetric: {name}[{i},{j}] = {float(A[i, j])!r} but "
             f"{name}[{j},{i}] = {float(A[j, i])!r}"

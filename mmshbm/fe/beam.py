@@ -179,6 +179,15 @@ class TimoshenkoBeam:
         return Model.from_matrices(M, K, contact_dof=contact_dof, gap=self.gap, stop_side=+1,
                                    description=description)
 
+    def solid_model(self, n_length: int = 40, n_width: int = 2, n_height: int = 2, grading: float = 10.0,
+                    order: int = 2, massless_tip: bool = True) -> Model:
+        """This beam as a 3-D solid (scikit-fem hexahedra): clamped root face, massless tip
+        layer, a rigid plane under the tip face with one contact per tip-face node's vertical
+        DOF; see :func:`mmshbm.fe.solid.solid_beam_model` for the parameters."""
+        from .solid import solid_beam_model
+
+        return solid_beam_model(self, n_length, n_width, n_height, grading, order, massless_tip)
+
     @classmethod
     def rebuild(cls, description: dict) -> Model:
         """Rebuild a model from the ``description`` of :meth:`model` (e.g. loaded from a file)."""

@@ -44,7 +44,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _validate as check
-from ..core.condense import Condensation
+from ..core.condense import make_condensation
 from ..core.contact_kernels import _mmshbm_eval, _mmshbm_monitor_multi
 from ..core.harmonics import check_harmonics
 from ..model.contact import admissible_intervals
@@ -76,8 +76,8 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin):
         complementarity problem does not depend on it; Newton's conditioning does.
     mode : int
         Which linear mode (1-based) the branch starts from.
-    backend : {"auto", "banded", "splu"}
-        Linear solver of the condensation.
+    backend : {"auto", "banded", "splu", "modal"}
+        Linear solver of the condensation (:func:`~mmshbm.core.condense.make_condensation`).
     projection : {"exact", "sampled"}
         Harmonic projection of the contact law (see the module docstring).
     poles : bool
@@ -108,7 +108,7 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin):
         if projection not in _PROJECTIONS:
             raise ValueError(f"projection must be one of {_PROJECTIONS}, got {projection!r}")
         self.projection = projection
-        self.cond = Condensation(model, backend)
+        self.cond = make_condensation(model, backend, harmonics=self.H, mode=self.mode)
         self.n_c = len(model.c)
         c_list = model.c.tolist()
         dofs, lo, hi = admissible_intervals(model.contacts)

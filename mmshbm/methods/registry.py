@@ -21,6 +21,7 @@ __all__ = ["METHODS", "make_problem", "method_options"]
 METHODS = {
     "mmshbm": "mmshbm.methods.mms_hbm:MMSHBMProblem",
     "penalty": "mmshbm.methods.penalty_hbm:PenaltyHBMProblem",
+    "penalty-reduced": "mmshbm.methods.penalty_reduced:ReducedPenaltyHBMProblem",
     "shooting": "mmshbm.methods.shooting:ShootingProblem",
 }
 

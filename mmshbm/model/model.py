@@ -373,9 +373,14 @@ class Model:
         if n_l <= _DENSE_EIG_LIMIT or n > n_l // 2:
             lam, phi = _lowest_eigenpairs_dense(self.reduced_stiffness.toarray(), b["M_ll"].toarray(), n)
         else:
-            # a fixed start vector makes ARPACK (and so every branch started from its mode) reproducible
-            lam, phi = spla.eigsh(self.reduced_stiffness, k=n, M=b["M_ll"], sigma=0.0, which="LM",
-                                  v0=np.ones(n_l))
+            # a fixed start vector makes ARPACK (and so every branch started from its mode) reproducible;
+            # shift-invert with a minimum-degree LU (symmetric, diagonal pivots): on 3-D meshes its
+            # solves are ~4x cheaper than with scipy's default column ordering
+            K_red = self.reduced_stiffness
+            lu = spla.splu(sp.csc_matrix(K_red), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                           options={"SymmetricMode": True})
+            op = spla.LinearOperator(K_red.shape, matvec=lu.solve, dtype=float)
+            lam, phi = spla.eigsh(K_red, k=n, M=b["M_ll"], sigma=0.0, which="LM", v0=np.ones(n_l), OPinv=op)
             order = np.argsort(lam)
             lam, phi = lam[order], phi[:, order]
         modes = np.zeros((self.n_dof, n))
@@ -405,7 +410,11 @@ class Model:
             K_red = sub.reduced_stiffness
         else:
             K_red = b["K_ll"]
-        lam = _lowest_eigenpairs_dense(K_red.toarray(), b["M_ll"].toarray(), 1)[0][0]
+        if K_red.shape[0] <= _DENSE_EIG_LIMIT:
+            lam = _lowest_eigenpairs_dense(K_red.toarray(), b["M_ll"].toarray(), 1)[0][0]
+        else:
+            lam = spla.eigsh(K_red, k=1, M=b["M_ll"], sigma=0.0, which="LM", v0=np.ones(K_red.shape[0]),
+                             return_eigenvectors=False)[0]
         f_closed = np.sqrt(lam) / (2 * np.pi)
         return 2.0 / (1.0 / f_open + 1.0 / f_closed)
 
@@ -436,19 +445,26 @@ def _lowest_eigenpairs_dense(K: np.ndarray, M: np.ndarray, n: int) -> tuple[np.n
 def _require_positive_definite(A, what: str) -> None:
     """Raise ValueError unless the symmetric matrix ``A`` is positive definite.
 
-    Uses LU without pivoting in the natural order (= LDLᵀ for a symmetric matrix):
-    by Sylvester's criterion all pivots are positive exactly when A is positive definite.
+    Uses LU with diagonal pivots after a symmetric fill-reducing permutation P (minimum
+    degree on AᵀA + A; = LDLᵀ of P A Pᵀ for a symmetric matrix): by Sylvester's criterion
+    all pivots are positive exactly when A is positive definite. The ordering keeps 3-D
+    models cheap (the natural order of a 15 000-DOF solid took 411 s and 4.4 GiB, the
+    minimum-degree order 0.1 s); if SuperLU had to leave the diagonal (a zero pivot) the
+    matrix is not positive definite.
     """
     if sp.issparse(A):
         n = A.shape[0]
         if n == 0:
             return
         try:
-            lu = spla.splu(sp.csc_matrix(A), permc_spec="NATURAL", diag_pivot_thresh=0.0,
+            lu = spla.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                            options={"SymmetricMode": True})
             pivots = lu.U.diagonal()
         except RuntimeError:
             raise ValueError(f"{what} is singular (is the structure fixed?)") from None
+        if not np.array_equal(lu.perm_r, lu.perm_c):
+            raise ValueError(f"{what} is singular or indefinite (a zero pivot): is the structure fixed, and "
+                             "are M and K positive (semi)definite?")
     else:
         A = np.asarray(A)
         if A.size == 0:
