@@ -302,13 +302,15 @@ class ModalCondensation:
                           "max_frequency, harmonics or cutoff", ModelWarning, stacklevel=2)
         return inside
 
-    def recover(self, omega: float, Qc: np.ndarray) -> np.ndarray:
+    def recover(self, omega: float, Qc: np.ndarray, exclude=()) -> np.ndarray:
         """Coefficients of the DOFs with mass (``model.l`` order), shape (n_l, 2H+1), from the
         NLvib-ordered coefficients ``Qc`` (n_c, 2H+1) of the massless DOFs: Q_l,k = −Z_k Q_c,k,
 
             Z_k = Z_0 + Σ_{j<=m} φ_j b_jᵀ ω²/(ω_j²(ω_j² − ω²)) + Σ_{i=1..q} ω^{2i} Ṽ_i,
 
-        exact with all modes; truncated, the left-out modes enter to order ω^{2q} (q = 2)."""
+        exact with all modes; truncated, the left-out modes enter to order ω^{2q} (q = 2).
+        ``exclude`` pairs (k, j) leave mode j's term out of harmonic k, as in
+        :meth:`dynamic_stiffness` (the caller adds −φ_j η_jk (kΩ)²/ω_j² itself)."""
         Qc = np.asarray(Qc, dtype=float)
         if Qc.ndim != 2 or Qc.shape[0] != self.n_c or Qc.shape[1] % 2 != 1:
             raise ValueError(f"Qc must have shape ({self.n_c}, 2H+1), got {Qc.shape}")
@@ -317,6 +319,10 @@ class ModalCondensation:
         k = np.repeat(np.arange(H + 1), 2)[1:]  # harmonic of each column
         x = (k * omega) ** 2
         den = self._w2[None, :] - x[:, None]
+        excluded = np.zeros(den.shape, dtype=bool)
+        for kk, j in exclude:
+            excluded[k == kk, j] = True
+        den = np.where(excluded, 1.0, den)
         if np.any(np.abs(den) <= _POLE_RTOL * self._w2[None, :]):
             raise SingularDynamicStiffness(f"a harmonic of Ω = {omega:.6g} rad/s sits on a fixed-interface "
                                            "eigenfrequency: the DOFs with mass are unbounded there")
@@ -326,7 +332,7 @@ class ModalCondensation:
             self._V = [red.V[i] + red.phi[:, left] @ (red.B[left] / red.omega[left, None] ** (2 * i + 2))
                        for i in range(KRYLOV_BLOCKS)]
             self._Z0 = self._V[0] + self.phi_j @ (self.b_j / self._w2[:, None])
-        c = x[:, None] / (self._w2[None, :] * den)  # (2H+1, m)
+        c = np.where(excluded, 0.0, x[:, None] / (self._w2[None, :] * den))  # (2H+1, m)
         Z = self._Z0 @ Qc + self.phi_j @ ((self.b_j @ Qc) * c.T)
         if not self.complete:
             for i in range(1, KRYLOV_BLOCKS):

@@ -65,15 +65,20 @@ class PoleSet:
         self.cond = cond
         self.H = int(harmonics)
         lo, hi = float(omega_range[0]) * 0.97, float(omega_range[1]) * 1.03
-        w, phi = _clamped_modes(model, cond, self.H * hi)
+        # the modal back end (mmshbm.core.modal) has its modes and leaves a term out itself
+        self.modal = getattr(cond, "backend", None) == "modal"
+        if self.modal:
+            w, phi = np.asarray(cond.omega_j, dtype=float), np.asarray(cond.phi_j, dtype=float)
+        else:
+            w, phi = _clamped_modes(model, cond, self.H * hi)
         pairs = [(k, j) for k in range(1, self.H + 1) for j in range(len(w)) if lo <= w[j] / k <= hi]
         self.pairs = pairs
         self.n = len(pairs)
         self.modes_w = w
-        self.phi = phi  # (n_l, n_modes), RCM order of the condensation
+        self.phi = phi  # (n_l, n_modes): RCM order (banded, splu) or model.l order (modal)
         self.omega2 = np.array([w[j] ** 2 for _, j in pairs])
         self.k = np.array([k for k, _ in pairs], dtype=np.int64)
-        B = cond.K_lc.T @ phi  # (n_c, n_modes)
+        B = np.asarray(cond.b_j, dtype=float).T if self.modal else cond.K_lc.T @ phi  # (n_c, n_modes)
         self.B = B
         self.b = np.ascontiguousarray(np.array([B[:, j] for _, j in pairs]).reshape(self.n, cond.n_c))
         self._by_k = {}
@@ -115,6 +120,12 @@ class PoleSet:
         None unless ``derivative``)."""
         c = self.cond
         H = self.H
+        if self.modal:  # its regular part lacks the static b_j b_jᵀ/ω_j² of the pole modes
+            out = c.dynamic_stiffness(omega, H, derivative=derivative, exclude=self.pairs)
+            D, dD = out if derivative else (out, None)
+            for p, (k, _) in enumerate(self.pairs):
+                D[k] += np.outer(self.b[p], self.b[p]) / self.omega2[p]
+            return D, dD
         try:
             out = c.dynamic_stiffness(omega, H, derivative=derivative)
             D, dD = out if derivative else (out, None)
@@ -142,6 +153,11 @@ class PoleSet:
         c = self.cond
         Qc = np.asarray(Qc, dtype=float)
         H = (Qc.shape[1] - 1) // 2
+        if self.modal:  # q_l,k = −Z_excl a_k − φ_j η_jk (kΩ)²/ω_j²
+            Ql = c.recover(omega, Qc, exclude=self.pairs)
+            for p, (k, j) in enumerate(self.pairs):
+                Ql[:, 2 * k - 1] -= self.phi[:, j] * eta[p] * (k * omega) ** 2 / self.omega2[p]
+            return Ql
         Ql = np.empty((c.n_l, 2 * H + 1))
         Ql[c.perm, 0] = -c._Z0 @ Qc[:, 0]
         for k in range(1, H + 1):

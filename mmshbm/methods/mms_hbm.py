@@ -280,6 +280,8 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin):
         family, rather than a superharmonic or an internal resonance) and modal_shares
         (:meth:`modal_shares`)."""
         a, omega = self.unpack(u)
+        if getattr(self.cond, "backend", None) == "modal":
+            self.cond.check_range(omega, self.H)  # warns once past the modes kept
         D, dD = self._condensed(omega, True)
         out = np.empty(3)
         n_fine = self._cos_fine.shape[1]
