@@ -273,7 +273,7 @@ class PenaltyHBMProblem:
         length = self.gap if self.gap > 0 else 1.0
         shape = np.abs(self.mode_shape)
         s = np.maximum(shape, 1e-3 * shape.max())
-        c = self.model.c
+        c = self.model.c if self.model.massless_contacts else np.array([self.cd])  # temporary (issue 17)
         rho = np.linalg.norm(shape / s) / np.linalg.norm(shape[c] / s[c])
         self.xscale = length * rho * s
         self.colscale = np.concatenate([np.tile(self.xscale, self.H + 1), [self.omega_ref]])
@@ -438,4 +438,8 @@ def _condensed_stiffness_of(D0: np.ndarray, w: np.ndarray) -> float:
 def _condensed_contact_stiffness(model: Model) -> float:
     """k_c = (w_cᵀ D_0⁻¹ w_c)⁻¹ (N/m): the static stiffness of the structure at the contact
     DOF, D_0 = K_cc − K_cl K_ll⁻¹ K_lc."""
+    if not model.massless_contacts:  # temporary (issue 17): static stiffness at a contact DOF with mass
+        from ..model.transforms import static_contact_stiffness
+
+        return float(static_contact_stiffness(model)[0])
     return _condensed_stiffness_of(Condensation(model).D0, np.asarray(model.w_c, dtype=float))
