@@ -167,7 +167,7 @@ class Model:
 
     def with_contact_layer(self, stiffness=None) -> Model:
         """The structure as it is, plus a massless contact node per contact joined to the
-        contact DOF by a spring of ``stiffness`` (N/m; one, or one per contact; default 10⁴
+        contact DOF by a spring of ``stiffness`` (N/m; one, or one per contact; default 10⁵
         times the static stiffness at the contact), the stops moved onto the new nodes: a
         model MMS-HBM can run without removing any mass. See
         :func:`mmshbm.model.transforms.with_contact_layer`."""
