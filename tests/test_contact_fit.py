@@ -50,8 +50,8 @@ def test_noise_free_measurement_gives_back_the_stiffness(full_mass, synthetic, t
 def test_noisy_measurement_is_recovered_within_its_stated_uncertainty(full_mass, synthetic):
     """0.1 % frequency noise: k within 2σ, and σ what the known noise level predicts
     (σ_n/‖J‖, Gauss-Newton), up to the scatter of the residual estimate (m = 9).
-    Monte Carlo over 40 noise draws (docs/fe_models.md): empirical std of ln k 0.140, mean
-    stated σ 0.125 (σ_n/‖J‖ = 0.128), the 95 % interval holds k in 39 of 40."""
+    Monte Carlo over 40 noise draws (docs/fe_models.md): empirical std of ln k 0.138, mean
+    stated σ 0.122 (σ_n/‖J‖ = 0.128), the 95 % interval holds k in 39 of 40."""
     noise = 1e-3
     rng = np.random.default_rng(7)
     measured = MeasuredBackbone.from_arrays(synthetic * (1 + noise * rng.standard_normal(len(synthetic))),
@@ -71,8 +71,8 @@ def test_a_nearly_rigid_contact_is_only_a_lower_bound(full_mass):
     f = backbone_frequencies(full_mass.with_contact_layer(1e7 * K_S), AMPLITUDES[:3])
     rng = np.random.default_rng(3)
     measured = MeasuredBackbone.from_arrays(f * (1 + 1e-3 * rng.standard_normal(3)), AMPLITUDES[:3])
-    _, report = fit_contact_stiffness(full_mass, measured, initial=1e6 * K_S)
-    assert not report.identifiable
+    _, report = fit_contact_stiffness(full_mass, measured, initial=1e6 * K_S, max_iterations=2)
+    assert not report.identifiable and report.relative_std > 1
     assert any("lower bound" in n or "hardly depends on k" in n for n in report.notes)
 
 

@@ -261,7 +261,8 @@ def _first_crossing(amp: np.ndarray, a: float) -> int | None:
 
 
 def fit_contact_stiffness(model, measured, harmonics: int = 5, *, method: str = "mmshbm",
-                          initial: float | None = None, amplitude_range=None, **options):
+                          initial: float | None = None, amplitude_range=None,
+                          max_iterations: int | None = None, **options):
     """Fit the stiffness of a contact layer to a measured backbone.
 
     Parameters
@@ -281,6 +282,9 @@ def fit_contact_stiffness(model, measured, harmonics: int = 5, *, method: str = 
     amplitude_range : (float, float), optional
         Use only measured points with amplitudes in this range (m); default every point
         above the gap.
+    max_iterations : int, optional
+        Cap on the optimiser's residual evaluations (each is one backbone; the Jacobian costs
+        two more per iteration); default scipy's.
     **options
         Passed to :func:`mmshbm.backbone` (``n_samples``, continuation options).
 
@@ -352,8 +356,12 @@ def fit_contact_stiffness(model, measured, harmonics: int = 5, *, method: str = 
 
         p0 = math.log(check.positive("initial", initial))
         p0 = min(max(p0, p_lo), p_hi)
+    if max_iterations is not None:
+        from .. import _validate as check
+
+        max_iterations = check.integer("max_iterations", max_iterations, minimum=1)
     sol = least_squares(residuals, [p0], jac=jacobian, method="trf", bounds=([p_lo], [p_hi]),
-                        xtol=1e-10, ftol=1e-12, gtol=1e-12)
+                        xtol=1e-8, ftol=1e-10, gtol=1e-10, max_nfev=max_iterations)
     p = float(sol.x[0])
     k = math.exp(p)
     r = residuals(np.array([p]))
@@ -366,7 +374,8 @@ def fit_contact_stiffness(model, measured, harmonics: int = 5, *, method: str = 
         s2 = float(r @ r) / (m - 1)
         sigma = math.sqrt(s2) / float(np.linalg.norm(J))
         q = float(student.ppf(0.975, m - 1))
-        interval = (k * math.exp(-q * sigma), k * math.exp(q * sigma))
+        with np.errstate(over="ignore"):  # a flat fit: the interval reaches inf
+            interval = (float(k * np.exp(-q * sigma)), float(k * np.exp(q * sigma)))
     else:
         sigma, interval = math.nan, (math.nan, math.nan)
         notes.append("one point (or no sensitivity): no uncertainty")
