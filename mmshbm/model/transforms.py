@@ -29,8 +29,8 @@ the structure at the contact DOF, k_s = (e_tᵀ K⁻¹ e_t)⁻¹ (for a cantilev
 is a spring in series with the structure, so the backbone's distance to the rigid limit
 (k → ∞, a rigid stop on the DOF with mass) falls like k_s/k: measured with MMS-HBM (H = 5) on
 the 21-element cantilever of ``docs/fe_models.md``, rate 1.00 per decade, and at 10⁵ k_s at
-most 6.6e-6 in frequency between grazing and the first corner (10³ k_s: 6.6e-4, 10⁴ k_s:
-6.6e-5). That is far below the harmonic truncation error at any practical H, while the
+most 6.7e-6 in frequency between grazing and the first corner (10³ k_s: 6.7e-4, 10⁴ k_s:
+6.8e-5). That is far below the harmonic truncation error at any practical H, while the
 contact problem stays well conditioned: continuation works up to 10⁸ k_s and fails at 10⁹ k_s.
 A measured contact stiffness (:func:`mmshbm.analysis.identification.fit_contact_stiffness`)
 should replace it when there is one.
