@@ -1,4 +1,6 @@
-"""Material identification: Young's modulus and density from measured linear frequencies.
+"""Material identification: Young's modulus and density from measured linear frequencies
+(and, in :mod:`mmshbm.analysis.contact_fit`, re-exported here, the contact-layer stiffness
+from a measured backbone: :func:`fit_contact_stiffness`).
 
 The seed paper fits only E and ρ of the beam model to the measured linear eigenfrequencies
 (contact open). What the frequencies can tell: in the Timoshenko model every stiffness
@@ -29,8 +31,9 @@ import scipy.linalg as la
 from scipy.optimize import least_squares
 
 from .. import _validate as check
+from .contact_fit import ContactFitReport, fit_contact_stiffness
 
-__all__ = ["fit_material", "FitReport", "beam_frequencies"]
+__all__ = ["fit_material", "FitReport", "beam_frequencies", "fit_contact_stiffness", "ContactFitReport"]
 
 log = logging.getLogger(__name__)
 

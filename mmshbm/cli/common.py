@@ -66,12 +66,37 @@ def beam(args):
 
 
 def model(args):
+    """The model of the options: ``--model-file`` or the default beam, converted by
+    ``--contact-layer K`` / ``--massless-contact [DOF ...]`` (the beam then starts from its
+    full-mass model: the tip keeps its mass)."""
+    layer = getattr(args, "contact_layer", None)
+    massless = getattr(args, "massless_contact", None)
+    if layer is not None and massless is not None:
+        raise ValueError("--contact-layer and --massless-contact are two ways to the same end: give one")
+    convert = layer is not None or massless is not None
     if getattr(args, "model_file", None):
         from ..model.model import Model
 
         model = Model.from_npz(args.model_file)
-        return model.with_gap(args.gap) if args.gap is not None else model
-    return beam(args).model(args.elements, grading=args.grading)
+        if args.gap is not None:
+            model = model.with_gap(args.gap)
+    else:
+        model = beam(args).model(args.elements, grading=args.grading, massless_tip=not convert)
+    if layer is not None:
+        model = model.with_contact_layer(None if layer == "default" else layer)
+    elif massless is not None:
+        model = model.with_massless_contact(massless or None)
+    return model
+
+
+def stiffness(text: str):
+    """``--contact-layer`` value: a stiffness (N/m) or ``default``."""
+    if text.strip().lower() == "default":
+        return "default"
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a stiffness in N/m or 'default', got {text!r}") from None
 
 
 def has_grid(study) -> bool:
@@ -102,8 +127,9 @@ def out_option(p):
     """--out."""
     p.add_argument("--out", default="out", help="output folder (default ./out)")
 
-def beam_options(p, elements=True, model_file=True):
-    """The default beam's options (and --model-file)."""
+def beam_options(p, elements=True, model_file=True, conversions=None):
+    """The default beam's options (and --model-file, and with it, unless ``conversions`` is
+    False, --contact-layer / --massless-contact)."""
     if elements:
         p.add_argument("--elements", type=int, default=21, help="beam elements (default 21)")
     p.add_argument("--grading", type=float, default=10.0, help="root/tip element length ratio")
@@ -112,5 +138,14 @@ def beam_options(p, elements=True, model_file=True):
     p.add_argument("--rho", type=float, default=None, help="density (kg/m^3) (default 7850)")
     if model_file:
         p.add_argument("--model-file", default=None,
-                       help="a user model (.npz of Model.save_npz) instead of the beam")
+                       help="a user model (.npz of Model.save_npz) instead of the beam; its contact DOF may "
+                            "carry mass (runs with --method penalty, or convert it for MMS-HBM)")
+    if conversions if conversions is not None else model_file:
+        g = p.add_mutually_exclusive_group()
+        g.add_argument("--contact-layer", type=stiffness, default=None, metavar="K",
+                       help="keep the contact DOF's mass and join a massless contact node to it by a spring "
+                            "of K N/m ('default': 1e5 x the static stiffness at the contact)")
+        g.add_argument("--massless-contact", type=int, nargs="*", default=None, metavar="DOF",
+                       help="remove the mass of the contact node's DOFs (or of the DOFs given); reports the "
+                            "mass removed and the frequency shift")
     out_option(p)

@@ -165,6 +165,25 @@ class Model:
             raise ValueError(f"amplitude_dof must be in [0, {self.n_dof - 1}], got {dof}")
         return replace(self, _amplitude_dof=dof)
 
+    def with_contact_layer(self, stiffness=None) -> Model:
+        """The structure as it is, plus a massless contact node per contact joined to the
+        contact DOF by a spring of ``stiffness`` (N/m; one, or one per contact; default 10⁵
+        times the static stiffness at the contact), the stops moved onto the new nodes: a
+        model MMS-HBM can run without removing any mass. See
+        :func:`mmshbm.model.transforms.with_contact_layer`."""
+        from .transforms import with_contact_layer
+
+        return with_contact_layer(self, stiffness)
+
+    def with_massless_contact(self, dofs=None) -> Model:
+        """The model with the mass rows and columns of the contact node's DOFs (or ``dofs``)
+        zeroed; warns (:class:`~mmshbm.ModelWarning`) and records in the description how much
+        mass that removed and how far the lowest eigenfrequencies moved. See
+        :func:`mmshbm.model.transforms.with_massless_contact`."""
+        from .transforms import with_massless_contact
+
+        return with_massless_contact(self, dofs)
+
     # ------------------------------------------------------------------ contacts
     @property
     def n_contacts(self) -> int:
