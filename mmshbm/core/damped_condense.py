@@ -155,23 +155,10 @@ class DampedCondensation:
             off = CPhi - np.diag(np.diag(CPhi))
             if np.abs(off).max() > _MODAL_RTOL * max(np.abs(np.diag(CPhi)).max(), 1e-300):
                 return None
-        w2 = (2 * np.pi * freqs) ** 2
-        # K⁻¹ on the massless DOFs and the loads, the static residual R = K⁻¹ − Σ φφᵀ/ω²
-        K = model.K.toarray()
-        n_dof = model.n_dof
-        rhs = np.zeros((n_dof, self.n_c + self.B.shape[1]), dtype=complex)
-        rhs[c, np.arange(self.n_c)] = 1.0
-        rhs[l, self.n_c:] = self.B
-        X = la.solve(K, rhs.real, assume_a="pos") + 1j * la.solve(K, rhs.imag, assume_a="pos")
-        beta = Phi_l.T @ self.B  # modal loads (n_l, m)
-        inv_w2 = 1.0 / w2
         self._Phi_l, self._Phi_c = Phi_l, Phi_c
-        self._w2, self._gamma = w2, gamma
-        self._beta = beta
-        self._R_cc = X[c, :self.n_c].real - (Phi_c * inv_w2) @ Phi_c.T
-        self._R_cB = X[c, self.n_c:] - (Phi_c * inv_w2) @ beta
-        self._R_lc = X[l, :self.n_c].real - (Phi_l * inv_w2) @ Phi_c.T
-        self._R_lB = X[l, self.n_c:] - (Phi_l * inv_w2) @ beta
+        self._w2, self._gamma = (2 * np.pi * freqs) ** 2, gamma
+        self._beta = Phi_l.T @ self.B  # modal loads (n_modes, m)
+        self._Kcc_inv = la.inv(self.K_cc)
         return True
 
     # ------------------------------------------------------------------ evaluation
@@ -190,54 +177,79 @@ class DampedCondensation:
         H = int(harmonics)
         if H < 1:
             raise ValueError(f"harmonics must be >= 1, got {H}")
-        if self.backend == "modal":
-            return self._evaluate_modal(omega, H, xi, derivative, xi_derivative, recover)
-        return self._evaluate_direct(omega, H, xi, derivative, xi_derivative, recover)
+        with np.errstate(over="ignore", invalid="ignore"):  # a wild Newton iterate: non-finite -> failed step
+            if self.backend == "modal":
+                return self._evaluate_modal(omega, H, xi, derivative, xi_derivative, recover)
+            return self._evaluate_direct(omega, H, xi, derivative, xi_derivative, recover)
 
     def _evaluate_modal(self, omega, H, xi, derivative, xi_derivative, recover):
+        """The receptance form with the nearest mode of each harmonic taken out by a rank-one
+        update (module docstring): D_k = B − (Bφ)(Bφ)ᵀ/g, B = A⁻¹, A = K_cc⁻¹ + Σ_{m≠j}
+        φ_m d_m φ_mᵀ, g = 1/d_j + φᵀBφ, with φ = φ_c,j of the mode j nearest kΩ: regular
+        even where d_j is infinite (a harmonic on an undamped open mode, the linear EPMC)."""
         k = np.arange(1, H + 1, dtype=float)
-        w = k * omega  # (H,)
+        w = k * omega
         gamma = self._gamma - xi
-        denom = self._w2[None, :] - (w**2)[:, None] + 1j * w[:, None] * gamma[None, :]
-        if np.any(denom == 0):
-            raise SingularDynamicStiffness(f"a harmonic of Ω = {omega:.6g} rad/s sits on an undamped mode")
-        d = 1.0 / denom  # (H, n_modes)
+        inv_d = self._w2[None, :] - (w**2)[:, None] + 1j * w[:, None] * gamma[None, :]  # (H, n_m)
+        j = np.argmin(np.abs(inv_d) / self._w2[None, :], axis=1)
+        rows = np.arange(H)
+        inv_dj = inv_d[rows, j].copy()
+        inv_d[rows, j] = 1.0
+        d = 1.0 / inv_d
+        d[rows, j] = 0.0  # far modes only
         Pc = self._Phi_c
-        Hcc = self._R_cc[None] + np.einsum("im,km,jm->kij", Pc, d, Pc)
+        A = self._Kcc_inv[None] + np.einsum("im,km,jm->kij", Pc, d, Pc)
         try:
-            Dk = np.linalg.inv(Hcc)
+            B = np.linalg.inv(A)
         except np.linalg.LinAlgError:
-            raise SingularDynamicStiffness(
-                f"the receptance at the massless DOFs is singular at Ω = {omega:.6g}") \
-                from None
+            raise SingularDynamicStiffness(f"condensation singular at Ω = {omega:.6g} rad/s") from None
+        phi = Pc[:, j].T  # (H, n_c)
+        Bphi = np.einsum("kij,kj->ki", B, phi)
+        g = inv_dj + np.einsum("ki,ki->k", phi, Bphi)
+        if np.any(g == 0):
+            raise SingularDynamicStiffness(f"condensation singular at Ω = {omega:.6g} rad/s")
         n_c = self.n_c
         D = np.empty((H + 1, n_c, n_c), dtype=complex)
         D[0] = self.D0
-        D[1:] = Dk
-        HcB = self._R_cB + (Pc * d[0]) @ self._beta  # (n_c, m)
-        P = Dk[0] @ HcB
+        D[1:] = B - np.einsum("ki,kj->kij", Bphi, Bphi) / g[:, None, None]
+        beta = self._beta
+        h_far = Pc @ (d[0][:, None] * beta)  # (n_c, m)
+        beta_j = beta[j[0]]  # (m,)
+        P = D[1] @ h_far + np.outer(Bphi[0], beta_j) / g[0]
+
+        def derivatives(dd_far, d_inv_j):
+            """dD (H+1, n_c, n_c) and dP (n_c, m) for the derivatives dd of the far d's and
+            of 1/d_j."""
+            dA = np.einsum("im,km,jm->kij", Pc, dd_far, Pc)
+            dB = -B @ dA @ B
+            dBphi = np.einsum("kij,kj->ki", dB, phi)
+            dg = d_inv_j + np.einsum("ki,ki->k", phi, dBphi)
+            out = np.zeros_like(D)
+            out[1:] = (dB - (np.einsum("ki,kj->kij", dBphi, Bphi) + np.einsum("ki,kj->kij", Bphi, dBphi))
+                       / g[:, None, None] + np.einsum("ki,kj->kij", Bphi, Bphi) * (dg / g**2)[:, None, None])
+            dh = Pc @ (dd_far[0][:, None] * beta)
+            dP = out[1] @ h_far + D[1] @ dh + (np.outer(dBphi[0], beta_j) * g[0] - np.outer(Bphi[0], beta_j)
+                                               * dg[0]) / g[0] ** 2
+            return out, dP
+
         dD = dDx = dP = dPx = None
         if derivative:
-            dd = d**2 * (k[:, None] * (2 * w[:, None] - 1j * gamma[None, :]))
-            dH = np.einsum("im,km,jm->kij", Pc, dd, Pc)
-            dD = np.zeros_like(D)
-            dD[1:] = -Dk @ dH @ Dk
-            dP = dD[1] @ HcB + Dk[0] @ ((Pc * dd[0]) @ self._beta)
+            # ∂(1/d)/∂Ω = k(−2ω + iγ), ∂d/∂Ω = −d² ∂(1/d)/∂Ω
+            dinv = k[:, None] * (-2 * w[:, None] + 1j * gamma[None, :])
+            dD, dP = derivatives(-d**2 * dinv, dinv[rows, j])
         if xi_derivative:
-            dx = 1j * w[:, None] * d**2
-            dHx = np.einsum("im,km,jm->kij", Pc, dx, Pc)
-            dDx = np.zeros_like(D)
-            dDx[1:] = -Dk @ dHx @ Dk
-            dPx = dDx[1] @ HcB + Dk[0] @ ((Pc * dx[0]) @ self._beta)
+            dinv = np.broadcast_to(-1j * w[:, None], d.shape)
+            dDx, dPx = derivatives(-d**2 * dinv, dinv[rows, j])
         Z = Y = None
         if recover:
             Pl = self._Phi_l
-            Hlc = self._R_lc[None] + np.einsum("im,km,jm->kij", Pl, d, Pc)
             Z = np.empty((H + 1, self.n_l, n_c), dtype=complex)
             Z[0] = self.Z0
-            Z[1:] = -Hlc @ Dk
-            HlB = self._R_lB + (Pl * d[0]) @ self._beta
-            Y = HlB - Hlc[0] @ P
+            # H_lc D = Σ_far φ_l d φ_cᵀ D + φ_l,j (Bφ)ᵀ/g
+            far = np.einsum("im,km,jm->kij", Pl, d, Pc) @ D[1:]
+            Z[1:] = -(far + np.einsum("ik,kj->kij", Pl[:, j], Bphi / g[:, None]))
+            resid = beta - Pc.T @ P  # β_m − φ_c,mᵀ P̂ (n_m, m)
+            Y = Pl @ (d[0][:, None] * resid) + np.outer(Pl[:, j[0]], beta_j - Bphi[0] @ h_far) / g[0]
         return CondensedHarmonics(float(omega), float(xi), D, dD, dDx, P, dP, dPx, Z, Y)
 
     def _evaluate_direct(self, omega, H, xi, derivative, xi_derivative, recover):

@@ -22,6 +22,8 @@ METHODS = {
     "mmshbm": "mmshbm.methods.mms_hbm:MMSHBMProblem",
     "penalty": "mmshbm.methods.penalty_hbm:PenaltyHBMProblem",
     "shooting": "mmshbm.methods.shooting:ShootingProblem",
+    # damped nonlinear modes (issue 14): mmshbm.backbone(damped_model) dispatches here
+    "epmc": "mmshbm.methods.epmc:EPMCProblem",
 }
 
 _CONTINUATION_FIELDS = {f.name for f in dataclasses.fields(ContinuationOptions)}
