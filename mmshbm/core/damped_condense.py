@@ -29,11 +29,18 @@ Two back ends, identical in exact arithmetic (tests compare them):
     ``Model.with_damping`` is, and the model has at most :data:`DENSE_LIMIT` DOFs with
     mass). With all n_l mass-normalised open modes φ_j (massless entries following
     statically), γ_j = φ_jᵀ C φ_j − ξ and d_j(ω) = 1/(ω_j² − ω² + iωγ_j), the receptance
-    of the whole model is H(ω) = R + Σ_j φ_j φ_jᵀ d_j(ω), with the static residual
-    R = K⁻¹ − Σ_j φ_j φ_jᵀ/ω_j² (the flexibility of the massless subspace). By the Schur
-    complement D_k = H_cc(kΩ)⁻¹, and P̂_1 = D_1 H_cl(Ω) B̂ (the force f needed for Q̂_c
-    given the load), so that each harmonic costs O(n_l n_c²) and derivatives follow from
-    ∂d_j/∂Ω = k d_j² (2ω − iγ_j), ∂d_j/∂ξ = iω d_j² and ∂D = −D ∂H D.
+    of the whole model is exactly
+
+        H(ω) = (K + iωC − ω²M)⁻¹ = Σ_j φ_j φ_jᵀ d_j(ω) + E_c K_cc⁻¹ E_cᵀ
+
+    (multiply by K − ω²M + iωC: Φ_lΦ_lᵀ = M_ll⁻¹ and φ_c = −K_cc⁻¹K_cl φ_l give the
+    identity). By the Schur complement D_k = H_cc(kΩ)⁻¹, and P̂_1 = D_1 H_cl(Ω) B̂ (the
+    force f needed for Q̂_c given the load). Where a harmonic sits on an open mode d_j
+    blows up (the linear EPMC sits exactly there: γ_1 = 0), so the mode j nearest kΩ is
+    taken out of the sum by a rank-one (Woodbury) update, which stays regular:
+    D_k = B − (Bφ)(Bφ)ᵀ/g with A = K_cc⁻¹ + Σ_{m≠j} φ_m d_m φ_mᵀ, B = A⁻¹, φ = φ_c,j and
+    g = 1/d_j + φᵀBφ. Cost O(n_l n_c²) per harmonic; derivatives from
+    ∂(1/d_j)/∂Ω = k(−2ω + iγ_j), ∂(1/d_j)/∂ξ = −iω.
 ``"direct"`` (any C): S_k factored per harmonic; dense (batched LAPACK) up to
     :data:`DENSE_LIMIT` DOFs with mass, SuperLU above.
 """

@@ -69,7 +69,8 @@ class EPMCProblem(DampedHBMBase):
         super().__init__(model, harmonics, n_samples, r, backend, "MMS-HBM (EPMC)", projection=projection)
         self.mode = check.integer("mode", mode, minimum=1)
         if self.mode > self.cond.n_l:
-            raise ValueError(f"mode must be <= the number of DOFs with mass ({self.cond.n_l}), got {self.mode}")
+            raise ValueError(f"mode must be <= the number of DOFs with mass ({self.cond.n_l}), "
+                             f"got {self.mode}")
         freqs, modes = model.linear_modes(self.mode)
         phi = modes[:, -1]
         c = model.c
