@@ -387,15 +387,19 @@ class DampedHBMBase:
             F -= self.first_harmonic_vector(P_hat)
         return F
 
-    def contact_force_max(self, F: np.ndarray) -> float:
-        """Largest force (N) any stop exerts over the period, from the needed force F at the
-        contact DOFs (degree-H signal on a fine grid, ≥ 0)."""
+    def contact_force_max(self, x: np.ndarray, F: np.ndarray) -> float:
+        """Largest force (N) any stop exerts over the period: the peak of the degree-H force
+        signal −f (+f for a stop on the − side) over the stretch where the proximal argument
+        p = q − f/r is beyond the stop; exactly 0 when it never is (no contact: the force
+        signal is then round-off)."""
         best = 0.0
         for j, i in enumerate(self.contact_rows):
-            f = self._E_fine @ F[self._coef_index[i]]
-            if np.isfinite(self.hi[j]):
+            idx = self._coef_index[i]
+            f = self._E_fine @ F[idx]
+            p = self._E_fine @ x[idx] - f / self.r[j]
+            if np.isfinite(self.hi[j]) and np.any(p > self.hi[j]):
                 best = max(best, refined_max(-f))
-            if np.isfinite(self.lo[j]):
+            if np.isfinite(self.lo[j]) and np.any(p < self.lo[j]):
                 best = max(best, refined_max(f))
         return max(best, 0.0)
 

@@ -187,7 +187,8 @@ class EPMCProblem(DampedHBMBase):
         Q = self.full_coefficients(x, ch, None)
         F = self.needed_force(x, ch.D, None)
         return {"frequency": omega / (2 * np.pi), "amplitude": self.amplitude(Q[self.amplitude_dof]),
-                "energy": _mean_energy(self.model, Q, omega), "contact_force_max": self.contact_force_max(F),
+                "energy": _mean_energy(self.model, Q, omega),
+                "contact_force_max": self.contact_force_max(x, F),
                 "damping_ratio": xi / (2 * omega), "xi": xi}
 
     def floquet_multipliers(self, u: np.ndarray) -> np.ndarray:

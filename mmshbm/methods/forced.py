@@ -342,7 +342,8 @@ class ForcedResponseProblem(DampedHBMBase):
         q = Q[self.amplitude_dof]
         F = self.needed_force(x, ch.D, s * ch.P[:, 0])
         rec = {"frequency": omega / (2 * np.pi), "amplitude": self.amplitude(q), "phase": self.phase(q),
-               "energy": _mean_energy(self.model, Q, omega), "contact_force_max": self.contact_force_max(F)}
+               "energy": _mean_energy(self.model, Q, omega),
+               "contact_force_max": self.contact_force_max(x, F)}
         if self.stability:
             mu = self.floquet_multipliers(u)
             rec["floquet_max"] = float(np.abs(mu[0]))
