@@ -197,6 +197,18 @@ def synthesis_matrix(H: int, tau: np.ndarray) -> np.ndarray:
     return E
 
 
+def fine_samples(coeffs: np.ndarray, n: int) -> np.ndarray:
+    """Samples at τ_j = 2πj/n (j = 0..n-1) of trigonometric polynomials with NLvib-ordered
+    coefficients ``coeffs`` (..., 2H+1), n > 2H, by an inverse real FFT (no dense synthesis
+    matrix: cheaper, and no multithreaded BLAS call)."""
+    coeffs = np.asarray(coeffs, dtype=float)
+    H = (coeffs.shape[-1] - 1) // 2
+    spec = np.zeros(coeffs.shape[:-1] + (n // 2 + 1,), dtype=complex)
+    spec[..., 0] = coeffs[..., 0]
+    spec[..., 1:H + 1] = 0.5 * (coeffs[..., 1::2] - 1j * coeffs[..., 2::2])
+    return np.fft.irfft(spec, n=n, axis=-1) * n
+
+
 def refined_max(y: np.ndarray) -> float:
     """Largest value of a periodic sampled signal, refined by a parabola through the peak."""
     j = int(np.argmax(y))
@@ -281,9 +293,7 @@ class DampedHBMBase:
         for j, i in enumerate(self.contact_rows):
             self.rowscale[self._coef_index[i]] = self.r[j] * length
         k = np.arange(1, self.H + 1)
-        n_fine = max(512, 8 * self.N)
-        self._tau_fine = 2 * np.pi * np.arange(n_fine) / n_fine
-        self._E_fine = synthesis_matrix(self.H, self._tau_fine)
+        self._n_fine = max(512, 2 ** int(np.ceil(np.log2(16 * (2 * self.H + 1)))))
         self._k = k
         self._cache: tuple | None = None
 
@@ -395,8 +405,8 @@ class DampedHBMBase:
         best = 0.0
         for j, i in enumerate(self.contact_rows):
             idx = self._coef_index[i]
-            f = self._E_fine @ F[idx]
-            p = self._E_fine @ x[idx] - f / self.r[j]
+            f, q = fine_samples(np.vstack([F[idx], x[idx]]), self._n_fine)
+            p = q - f / self.r[j]
             if np.isfinite(self.hi[j]) and np.any(p > self.hi[j]):
                 best = max(best, refined_max(-f))
             if np.isfinite(self.lo[j]) and np.any(p < self.lo[j]):
@@ -407,7 +417,7 @@ class DampedHBMBase:
         """The amplitude of the amplitude DOF's coefficients (2H+1,): for the contact DOF of a
         single-contact model the largest excursion away from the stop (the backbone
         convention), otherwise the largest |q| over the period (m)."""
-        q = self._E_fine @ q_coeffs
+        q = fine_samples(q_coeffs, self._n_fine)
         contacts = self.model.contacts
         if len(contacts) == 1 and self.model.amplitude_dof == contacts[0].dof and self._away_convention:
             return refined_max(-contacts[0].side * q)

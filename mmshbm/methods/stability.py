@@ -45,7 +45,7 @@ from scipy.optimize import brentq
 from ..core.special_points import SpecialPoint
 from ..model.contact import admissible_intervals
 from ..model.model import Model
-from ._damped_hbm import synthesis_matrix
+from ._damped_hbm import fine_samples, synthesis_matrix
 
 __all__ = ["FloquetSolver", "classify", "conservative_multipliers"]
 
@@ -158,9 +158,8 @@ class FloquetSolver:
         default max(512, 32 (2H+1)), brackets it)."""
         Ql = np.asarray(Ql, dtype=float)
         H = (Ql.shape[1] - 1) // 2
-        n = n_grid or max(512, 32 * (2 * H + 1))
+        n = n_grid or max(512, 2 ** int(np.ceil(np.log2(32 * (2 * H + 1)))))
         tau = 2 * np.pi * np.arange(n + 1) / n
-        E = synthesis_matrix(H, tau)
         closed = self.phase_at(Ql[:, 0] + Ql[:, 1::2].sum(axis=1))
         t, segments = 0.0, []
         for _ in range(4 * n):
@@ -171,7 +170,8 @@ class FloquetSolver:
             coef[:, 0] += w0
             scale = np.abs(W) @ np.abs(Ql).sum(axis=1) + np.abs(w0) + 1e-300
             i0 = int(np.searchsorted(tau, t, side="right"))
-            vals = coef @ E[i0:].T  # (n_sw, n_g)
+            grid = fine_samples(coef, n)
+            vals = np.concatenate([grid, grid[:, :1]], axis=1)[:, i0:]  # (n_sw, n_g), τ = 2π repeats τ = 0
             neg = vals < -1e-12 * scale[:, None]
             first = np.where(neg.any(axis=1), neg.argmax(axis=1), vals.shape[1])
             k = int(np.argmin(first))
