@@ -241,6 +241,45 @@ class ForcedResponseProblem(DampedHBMBase):
         x[2 * self.n_c:3 * self.n_c] = -Qc.imag
         return self.pack(x, omega)
 
+    def start_point(self, frequency: float, max_iter: int = 30) -> np.ndarray:
+        """Scaled unknowns of a converged response at ``frequency`` (Hz): the linear response
+        when it stays off the stops, otherwise continued from a force level that does (σ from
+        below the gap up to 1 in steps, Newton at fixed Ω, the step halved on failure).
+        Falls back to the linear response (the continuation's first corrector then tries)."""
+        u_lin = self.linear_point(frequency)
+        x_lin, omega = self.unpack(u_lin)
+        peak = max(abs(x_lin[self.n_c + i]) + abs(x_lin[2 * self.n_c + i]) for i in self.contact_rows)
+        length = self.model.gap if self.model.gap > 0 else np.inf
+        if not np.isfinite(length) or peak < 0.9 * length:
+            return u_lin
+        sigma, x = 0.5 * length / peak, x_lin * (0.5 * length / peak)
+        step = sigma
+        for _ in range(200):
+            target = min(1.0, sigma + step)
+            y = x * (target / sigma)
+            ok = False
+            for _ in range(max_iter):
+                R, Jx, _, _ = self.residual_parts(y, omega, target, True)
+                if not np.all(np.isfinite(R)):
+                    break
+                if np.abs(R / self.rowscale).max() < 1e-10:
+                    ok = True
+                    break
+                try:
+                    y = y - np.linalg.solve(Jx, R)
+                except np.linalg.LinAlgError:
+                    break
+            if ok:
+                x, sigma = y, target
+                if sigma >= 1.0:
+                    return self.pack(x, omega)
+                step *= 1.5
+            else:
+                step *= 0.5
+                if step < 1e-6:
+                    break
+        return u_lin
+
     def initial_tangent(self, u: np.ndarray | None = None) -> np.ndarray:
         """Increasing Ω."""
         t = np.zeros(self.n_unknowns)
@@ -279,24 +318,35 @@ class ForcedResponseProblem(DampedHBMBase):
         return R, J
 
     # ------------------------------------------------------------------ results
+    def _state(self, u: np.ndarray) -> tuple[np.ndarray, float, float]:
+        """(x, Ω, σ) of the scaled unknowns (σ = 1: the force as given)."""
+        x, omega = self.unpack(u)
+        return x, omega, 1.0
+
     def coefficients(self, u: np.ndarray) -> np.ndarray:
         """NLvib-ordered coefficients of all DOFs, shape (n_dof, 2H+1)."""
-        x, omega = self.unpack(u)
+        x, omega, sigma = self._state(u)
+        return self._coefficients(x, omega, sigma)
+
+    def _coefficients(self, x: np.ndarray, omega: float, sigma: float) -> np.ndarray:
         ch = self._condensed(omega, recover=True)
         s, _ = self.excitation.scale(omega)
-        return self.full_coefficients(x, ch, s * ch.Y[:, 0])
+        return self.full_coefficients(x, ch, sigma * s * ch.Y[:, 0])
 
     def needed_force_coefficients(self, u: np.ndarray) -> np.ndarray:
         """F (n_x,): the force (N) the structure needs at the massless DOFs (the stop's
         reaction at a contact DOF is −F there for a stop on the + side)."""
-        x, omega = self.unpack(u)
+        x, omega, sigma = self._state(u)
+        return self._needed(x, omega, sigma)
+
+    def _needed(self, x: np.ndarray, omega: float, sigma: float) -> np.ndarray:
         ch = self._condensed(omega)
         s, _ = self.excitation.scale(omega)
-        return self.needed_force(x, ch.D, s * ch.P[:, 0])
+        return self.needed_force(x, ch.D, sigma * s * ch.P[:, 0])
 
     def time_signals(self, u: np.ndarray, dofs=None, n_samples: int = 256):
         """(t (n_samples,) s, q (n_dofs, n_samples)) over one period (all DOFs when None)."""
-        _, omega = self.unpack(u)
+        _, omega, _ = self._state(u)
         Q = self.coefficients(u)
         if dofs is not None:
             dofs = np.atleast_1d(np.asarray(dofs))
@@ -309,7 +359,7 @@ class ForcedResponseProblem(DampedHBMBase):
     def contact_force(self, u: np.ndarray, n_samples: int = 256):
         """(t (n_samples,) s, λ (n_contacts, n_samples) N): the force of each stop (>= 0 in
         the exact law; the degree-H signal may dip below)."""
-        _, omega = self.unpack(u)
+        _, omega, _ = self._state(u)
         F = self.needed_force_coefficients(u)
         tau = 2 * np.pi * np.arange(check.integer("n_samples", n_samples, minimum=1)) / n_samples
         E = synthesis_matrix(self.H, tau)
@@ -335,36 +385,32 @@ class ForcedResponseProblem(DampedHBMBase):
     def monitor(self, u: np.ndarray) -> dict:
         """frequency (Hz), amplitude (m), phase (rad), energy (J), contact_force_max (N), and
         with stability floquet_max, stable, floquet (multipliers, complex (2 n_l,))."""
-        x, omega = self.unpack(u)
-        ch = self._condensed(omega, recover=True)
-        s, _ = self.excitation.scale(omega)
-        Q = self.full_coefficients(x, ch, s * ch.Y[:, 0])
+        x, omega, sigma = self._state(u)
+        return self._record(x, omega, sigma)
+
+    def _record(self, x: np.ndarray, omega: float, sigma: float) -> dict:
+        Q = self._coefficients(x, omega, sigma)
         q = Q[self.amplitude_dof]
-        F = self.needed_force(x, ch.D, s * ch.P[:, 0])
+        F = self._needed(x, omega, sigma)
         rec = {"frequency": omega / (2 * np.pi), "amplitude": self.amplitude(q), "phase": self.phase(q),
                "energy": _mean_energy(self.model, Q, omega),
                "contact_force_max": self.contact_force_max(x, F)}
         if self.stability:
-            mu = self.floquet_multipliers(u)
+            mu = self._multipliers(Q, omega)
             rec["floquet_max"] = float(np.abs(mu[0]))
             rec["stable"] = float(np.abs(mu[0]) <= 1.0 + 1e-6)
             rec["floquet"] = mu
         return rec
 
-    def prox_arguments(self, u: np.ndarray) -> np.ndarray:
-        """p = q − f/r of each contact DOF (its switching function's coefficients),
-        shape (n_dof_contacts, 2H+1)."""
-        x, _ = self.unpack(u)
-        F = self.needed_force_coefficients(u)
-        return np.array([x[self._coef_index[i]] - F[self._coef_index[i]] / self.r[j]
-                         for j, i in enumerate(self.contact_rows)])
-
-    def floquet_multipliers(self, u: np.ndarray) -> np.ndarray:
-        """Floquet multipliers of the orbit at ``u`` (monodromy of the piecewise-linear
-        flow along it, :mod:`mmshbm.methods.stability`), sorted by decreasing modulus."""
+    def _multipliers(self, Q: np.ndarray, omega: float) -> np.ndarray:
         from .stability import FloquetSolver
 
         if self._floquet is None:
             self._floquet = FloquetSolver(self.model)
-        _, omega = self.unpack(u)
-        return self._floquet.multipliers(self.coefficients(u)[self.model.l], omega)
+        return self._floquet.multipliers(Q[self.model.l], omega)
+
+    def floquet_multipliers(self, u: np.ndarray) -> np.ndarray:
+        """Floquet multipliers of the orbit at ``u`` (monodromy of the piecewise-linear
+        flow along it, :mod:`mmshbm.methods.stability`), sorted by decreasing modulus."""
+        x, omega, sigma = self._state(u)
+        return self._multipliers(self._coefficients(x, omega, sigma), omega)

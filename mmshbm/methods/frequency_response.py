@@ -138,7 +138,8 @@ def frequency_response(model: Model, force, frequency_range, harmonics: int = 5,
         progress = tqdm(desc=f"{method} frequency response", unit="pt", leave=False, disable=None)
     t0 = time.perf_counter()
     try:
-        res = continue_branch(problem, problem.linear_point(f0), problem.initial_tangent(), copts,
+        start = problem.start_point(f0) if hasattr(problem, "start_point") else problem.linear_point(f0)
+        res = continue_branch(problem, start, problem.initial_tangent(), copts,
                               callback=callback, progress=progress)
     finally:
         if progress is not None:
