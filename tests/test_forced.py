@@ -73,7 +73,7 @@ def test_linear_response_below_the_gap_is_the_closed_form(beam):
     assert resp.floquet_max[0] == pytest.approx(np.exp(-0.01 * w * T), rel=1e-8)
 
 
-@pytest.mark.parametrize("projection", ["interval", "sampled"])
+@pytest.mark.parametrize("projection", ["exact", "sampled"])
 def test_jacobian_matches_finite_differences(osc, beam, projection):
     rng = np.random.default_rng(3)
     for model, F, H in ((osc, F_OSC, 4), (beam, np.eye(beam.n_dof)[12] * 5.0, 3)):

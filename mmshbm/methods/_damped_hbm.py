@@ -25,15 +25,15 @@ The other massless DOFs: R = f. R is projected on harmonics 0..H; with
 
     R = F + r φ(x_i − F/r),    ∂R/∂x_i = r G,    ∂R/∂F = I − G.
 
-``_interval_projection`` (default) locates the switching instants (roots of p − hi and
-p − lo) and integrates the pieces in closed form, so R is C¹ in x; ``_sampled_projection``
-evaluates φ and G by AFT on N samples (a sample switching state is a kink of the
-residual). The lead's C¹ projection (``mmshbm.core.contact_projection.project_contact(p,
-lo, hi) -> (r, G)``) has the same signature: to switch, set ``self._project =
-project_contact`` in :meth:`DampedHBMBase.__init__` (marked ``PROJECTION``).
+The projection is the lead's :func:`mmshbm.core.contact_kernels.project_contact`: by default
+exact (the switching instants, roots of p − hi and p − lo, located and the pieces integrated
+in closed form, so R is C¹ in x), or sampled by AFT on N samples (``projection="sampled"``; a
+sample switching state is a kink of the residual).
 """
 
 from __future__ import annotations
+
+import functools
 
 import numpy as np
 
@@ -46,144 +46,17 @@ from ..model.model import Model
 __all__: list[str] = []
 
 
-def _sampled_projection(H: int, N: int):
-    """``project(p, lo, hi) -> (r, G)`` by sampling on N points.
+def contact_projection(projection: str, H: int, N: int):
+    """``project(p, lo, hi) -> (r, G)``: the lead's :func:`mmshbm.core.contact_kernels.project_contact`,
+    exact (``"exact"``: switching instants located, pieces integrated in closed form, C¹)
+    or sampled on N points (``"sampled"``, AFT)."""
+    from ..core.contact_kernels import project_contact
 
-    p : (2H+1,) NLvib-ordered coefficients of a trigonometric polynomial; lo, hi : bounds
-    (±inf allowed). r : (2H+1,) the projection on harmonics 0..H of
-    (p − hi)₊ − (lo − p)₊ evaluated at τ_j = 2πj/N; G : (2H+1, 2H+1) its derivative in p
-    (the projection of the active indicator times each basis function).
-    """
-    tau = 2 * np.pi * np.arange(N) / N
-    E = np.empty((N, 2 * H + 1))
-    E[:, 0] = 1.0
-    k = np.arange(1, H + 1)
-    E[:, 1::2] = np.cos(np.outer(tau, k))
-    E[:, 2::2] = np.sin(np.outer(tau, k))
-    P = E.T * (2.0 / N)
-    P[0] *= 0.5
-
-    def project(p, lo, hi):
-        s = E @ p
-        up = s - hi
-        down = lo - s
-        active_up = up > 0
-        active_down = down > 0
-        val = np.where(active_up, up, 0.0) - np.where(active_down, down, 0.0)
-        act = (active_up | active_down).astype(float)
-        return P @ val, (P * act) @ E
-
-    return project
-
-
-def _interval_projection(H: int, n_grid: int | None = None):
-    """``project(p, lo, hi) -> (r, G)`` with the switching instants located: C¹ in p.
-
-    (p − hi)₊ − (lo − p)₊ = (p − hi)·1_A + (p − lo)·1_B with A = {p > hi}, B = {p < lo}.
-    The roots of p − hi and p − lo on [0, 2π) are bracketed on a grid of ``n_grid``
-    points (default max(64, 16 (2H+1))) and polished by Newton's method (vectorised,
-    kept in the bracket); over the resulting intervals the projections are closed-form
-    integrals of products of sines and cosines, r = P_A (p − hi e₀) + P_B (p − lo e₀),
-    and because the integrand vanishes at the moving limits G = ∂r/∂p = P_A + P_B exactly
-    (no boundary terms). A tangential touch between two grid points can be missed; the
-    error is then of second order in the missed excursion. The lead's
-    ``mmshbm.core.contact_projection.project_contact`` does the same job.
-    """
-    n = n_grid or max(64, 16 * (2 * H + 1))
-    tau = 2 * np.pi * np.arange(n + 1) / n
-    E = synthesis_matrix(H, tau)
-    k = np.arange(1, H + 1)
-    two = np.arange(0, 2 * H + 1)
-    norm = np.full(2 * H + 1, 1.0 / np.pi)
-    norm[0] = 0.5 / np.pi
-    jj, kk = np.meshgrid(np.arange(H + 1), np.arange(H + 1), indexing="ij")
-    dif, som = np.abs(jj - kk), jj + kk
-    sgn = np.sign(jj - kk)
-    cos_rows = np.r_[0, 2 * k - 1]  # index of cos jτ (j = 0: the constant)
-    sin_rows = 2 * k
-
-    def evaluate(p, t):
-        t = np.asarray(t)
-        c, s = np.cos(np.multiply.outer(t, k)), np.sin(np.multiply.outer(t, k))
-        val = p[0] + c @ p[1::2] + s @ p[2::2]
-        der = (s * -k) @ p[1::2] + (c * k) @ p[2::2]
-        return val, der
-
-    def roots(p, bound, y):
-        """Roots of p − bound from the grid samples y = p(τ_g) − bound, and the sign of
-        p − bound just after each."""
-        idx = np.flatnonzero(np.sign(y[:-1]) != np.sign(y[1:]))
-        if not len(idx):
-            return np.empty(0)
-        a, b = tau[idx], tau[idx + 1]
-        ya, yb = y[idx], y[idx + 1]
-        t = np.where(yb != ya, a - ya * (b - a) / np.where(yb != ya, yb - ya, 1.0), a)
-        for _ in range(8):
-            v, d = evaluate(p, t)
-            step = np.where(d != 0, (v - bound) / np.where(d != 0, d, 1.0), 0.0)
-            t_new = np.clip(t - step, a, b)
-            if np.all(np.abs(t_new - t) <= 4e-16 * (1 + np.abs(t))):
-                t = t_new
-                break
-            t = t_new
-        return t
-
-    def integrals(intervals):
-        """Σ over intervals of ∫ cos nτ and ∫ sin nτ, n = 0..2H."""
-        Ci = np.zeros(2 * H + 1)
-        Si = np.zeros(2 * H + 1)
-        for a, b in intervals:
-            Ci[0] += b - a
-            n_ = two[1:]
-            Ci[1:] += (np.sin(n_ * b) - np.sin(n_ * a)) / n_
-            Si[1:] += (np.cos(n_ * a) - np.cos(n_ * b)) / n_
-        return Ci, Si
-
-    def gram(intervals):
-        """P[m, n] = norm_m ∫ b_m b_n over the intervals (NLvib basis)."""
-        Ci, Si = integrals(intervals)
-        cc = 0.5 * (Ci[dif] + Ci[som])           # ∫ cos jτ cos kτ
-        ss = 0.5 * (Ci[dif] - Ci[som])           # ∫ sin jτ sin kτ
-        sc = 0.5 * (Si[som] + sgn * Si[dif])     # ∫ sin jτ cos kτ
-        G = np.empty((2 * H + 1, 2 * H + 1))
-        G[np.ix_(cos_rows, cos_rows)] = cc
-        G[np.ix_(sin_rows, sin_rows)] = ss[1:, 1:]
-        G[np.ix_(sin_rows, cos_rows)] = sc[1:, :]
-        G[np.ix_(cos_rows, sin_rows)] = sc[1:, :].T
-        return G * norm[:, None]
-
-    def active_intervals(p, bound, y, above):
-        t = roots(p, bound, y)
-        cuts = np.concatenate([[0.0], np.sort(t), [2 * np.pi]])
-        out = []
-        for a, b in zip(cuts[:-1], cuts[1:], strict=True):
-            if b <= a:
-                continue
-            v, _ = evaluate(p, 0.5 * (a + b))
-            if (v > bound) if above else (v < bound):
-                out.append((a, b))
-        return out
-
-    def project(p, lo, hi):
-        y = E @ p
-        r = np.zeros(2 * H + 1)
-        G = np.zeros((2 * H + 1, 2 * H + 1))
-        for bound, above in ((hi, True), (lo, False)):
-            if not np.isfinite(bound):
-                continue
-            s = y - bound
-            if (above and s.max() <= 0) or (not above and s.min() >= 0):
-                # no sample beyond the bound: a dip between samples is of second order
-                continue
-            intervals = active_intervals(p, bound, s, above)
-            if not intervals:
-                continue
-            P = gram(intervals)
-            r += P @ p - bound * P[:, 0]
-            G += P
-        return r, G
-
-    return project
+    if projection == "exact":
+        return project_contact
+    if projection == "sampled":
+        return functools.partial(project_contact, exact=False, n_samples=N)
+    raise ValueError(f"projection must be 'exact' or 'sampled', got {projection!r}")
 
 
 def synthesis_matrix(H: int, tau: np.ndarray) -> np.ndarray:
@@ -236,7 +109,7 @@ class DampedHBMBase:
         condensed static stiffness 1/(D_0⁻¹)_ii.
     backend : {"auto", "modal", "direct"}
         Solver of the complex condensation (:mod:`mmshbm.core.damped_condense`).
-    projection : {"interval", "sampled"}
+    projection : {"exact", "sampled"}
         The contact projection: switching instants located and the pieces integrated in
         closed form (C¹ residual, default), or sampled on N points (AFT; kinks where a
         sample changes state, on which semismooth Newton can cycle: on the default beam's
@@ -246,7 +119,7 @@ class DampedHBMBase:
     """
 
     def __init__(self, model: Model, harmonics: int, n_samples: int | None, r: float | None, backend: str,
-                 who: str, rhs: np.ndarray | None = None, projection: str = "interval"):
+                 who: str, rhs: np.ndarray | None = None, projection: str = "exact"):
         if not isinstance(model, Model):
             raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
         model.require_massless_contacts(who)
@@ -264,14 +137,7 @@ class DampedHBMBase:
         stiff = 1.0 / np.diag(flex)[self.contact_rows]
         self.contact_stiffness = stiff
         self.r = stiff.copy() if r is None else np.full(len(dofs), check.positive("r", r))
-        # PROJECTION: the lead's mmshbm.core.contact_projection.project_contact(p, lo, hi) has the
-        # signature of both private versions here; to use it: self._project = project_contact
-        if projection == "interval":
-            self._project = _interval_projection(self.H)
-        elif projection == "sampled":
-            self._project = _sampled_projection(self.H, self.N)
-        else:
-            raise ValueError(f"projection must be 'interval' or 'sampled', got {projection!r}")
+        self._project = contact_projection(projection, self.H, self.N)
         self.projection = projection
         self._coef_index = [np.arange(self.n_coef) * self.n_c + i for i in range(self.n_c)]
         # scales: the first open mode's shape on the massless DOFs, the gap as length

@@ -65,7 +65,7 @@ class EPMCProblem(DampedHBMBase):
     method = "epmc"
 
     def __init__(self, model: Model, harmonics: int = 5, n_samples: int | None = None, r: float | None = None,
-                 mode: int = 1, backend: str = "auto", projection: str = "interval"):
+                 mode: int = 1, backend: str = "auto", projection: str = "exact"):
         super().__init__(model, harmonics, n_samples, r, backend, "MMS-HBM (EPMC)", projection=projection)
         self.mode = check.integer("mode", mode, minimum=1)
         if self.mode > self.cond.n_l:

@@ -202,7 +202,7 @@ class ForcedResponseProblem(DampedHBMBase):
 
     def __init__(self, model: Model, force, harmonics: int = 5, n_samples: int | None = None,
                  r: float | None = None, backend: str = "auto", stability: bool | str = "auto",
-                 projection: str = "interval"):
+                 projection: str = "exact"):
         excitation = force if isinstance(force, Excitation) else harmonic_force(model, force)
         if isinstance(force, Excitation):
             harmonic_force(model, force.vector)  # validate length and massless DOFs

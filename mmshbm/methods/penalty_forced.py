@@ -27,7 +27,7 @@ from .. import _validate as check
 from ..core.harmonics import check_harmonics
 from ..model.contact import admissible_intervals
 from ..model.model import Model
-from ._damped_hbm import _interval_projection, _sampled_projection, fine_samples, refined_max
+from ._damped_hbm import contact_projection, fine_samples, refined_max
 from .forced import Excitation, harmonic_force
 from .mms_hbm import _mean_energy
 
@@ -51,7 +51,7 @@ class PenaltyForcedProblem:
         k_p (N/m); default 10³ k_c.
     n_samples : int, optional
         Samples of the sampled projection.
-    projection : {"sampled", "interval"}
+    projection : {"sampled", "exact"}
         Sampled AFT (default, as the conservative penalty-HBM) or the located intervals (on
         the default beam the latter stalls at grazing: the penalty Jacobian's √ε growth as a
         contact interval opens slows Newton below the tolerance).
@@ -89,12 +89,7 @@ class PenaltyForcedProblem:
         else:
             kp = check.positive("penalty_stiffness", penalty_stiffness)
             self.penalty_stiffness = np.full(len(dofs), kp)
-        if projection == "interval":
-            self._project = _interval_projection(H)
-        elif projection == "sampled":
-            self._project = _sampled_projection(H, self.N)
-        else:
-            raise ValueError(f"projection must be 'interval' or 'sampled', got {projection!r}")
+        self._project = contact_projection(projection, H, self.N)
         self.stability = False
         # constant block matrices: L(Ω) = L_K + Ω L_C + Ω² L_M
         K, M = model.K.tocsr(), model.M.tocsr()

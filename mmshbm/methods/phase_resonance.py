@@ -46,7 +46,7 @@ class PhaseResonanceProblem(ForcedResponseProblem):
     _away_convention = True
 
     def __init__(self, model: Model, force=None, harmonics: int = 5, n_samples: int | None = None,
-                 r: float | None = None, backend: str = "auto", projection: str = "interval"):
+                 r: float | None = None, backend: str = "auto", projection: str = "exact"):
         if force is None:
             raise ValueError("phase resonance needs the force pattern: force=...")
         if isinstance(force, dict):
