@@ -107,7 +107,7 @@ def test_base_excitation_and_bad_input(osc, beam):
 
 @pytest.fixture(scope="module")
 def osc_response(osc):
-    return mmshbm.frequency_response(osc, F_OSC, (0.1, 0.3), harmonics=40)
+    return mmshbm.frequency_response(osc, F_OSC, (0.1, 0.3), harmonics=20)
 
 
 def test_exact_forced_reference_is_exact(osc):
@@ -183,3 +183,10 @@ def test_response_files_round_trip(osc_response, tmp_path):
     with pytest.raises(ValueError, match="not a saved mmshbm FrequencyResponse"):
         np.savez(tmp_path / "x.npz", metadata=np.array('{"format": "other"}'))
         FrequencyResponse.load(tmp_path / "x.npz")
+
+
+def test_mmshbm_load_reads_responses(osc_response, tmp_path):
+    path = osc_response.save(tmp_path / "r.npz")
+    back = mmshbm.load(path, attach_solver=True)
+    assert isinstance(back, FrequencyResponse) and back.solver is not None
+    np.testing.assert_array_equal(back.amplitude, osc_response.amplitude)
