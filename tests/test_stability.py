@@ -73,3 +73,25 @@ def test_classify_names_the_crossings():
     # trivial multipliers are left out
     stable, _ = classify(np.array([[1.0 + 1e-3, 1.0 - 1e-3, 0.3]]), trivial=2)
     assert stable.tolist() == [True]
+
+
+def test_branch_stability_of_a_damped_mode():
+    """Below the gap the EPMC cancels mode 1's damping (its pair sits at +1: one trivial, one
+    neutral) and every other mode decays; the conservative backbone's two trivial multipliers
+    are left out."""
+    from mmshbm.methods.stability import branch_stability
+
+    beam = mmshbm.default_beam().model(4)
+    b = mmshbm.backbone(beam.with_damping(modal_ratio=0.02), harmonics=3, max_amplitude=2e-3)
+    mu, stable, _ = branch_stability(b)
+    below = b.amplitude < 0.99 * beam.gap
+    w = 2 * np.pi * beam.linear_frequencies(2)
+    T = 1 / b.frequency[0]
+    mod = np.sort(np.abs(mu[0]))[::-1]
+    assert mod[0] == pytest.approx(1.0, abs=1e-9) and mod[1] == pytest.approx(1.0, abs=1e-9)
+    # mode 2 decays with its damping less the EPMC's ξ = 2 ζ ω_1
+    assert mod[2] == pytest.approx(np.exp(-(0.02 * w[1] - 0.02 * w[0]) * T), rel=1e-6)
+    assert stable[below].all()
+    cons = mmshbm.backbone(beam, harmonics=3, max_amplitude=2e-3)
+    mu_c, stable_c, _ = branch_stability(cons)
+    assert np.abs(np.abs(mu_c[0]) - 1).max() < 1e-9 and stable_c[0]

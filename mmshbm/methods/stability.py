@@ -47,7 +47,7 @@ from ..model.contact import admissible_intervals
 from ..model.model import Model
 from ._damped_hbm import fine_samples, synthesis_matrix
 
-__all__ = ["FloquetSolver", "classify", "conservative_multipliers"]
+__all__ = ["FloquetSolver", "classify", "conservative_multipliers", "branch_stability"]
 
 
 class FloquetSolver:
@@ -367,3 +367,30 @@ def classify(multipliers: np.ndarray, trivial: int = 0, tol: float = 1e-6,
             continue  # the continuation's fold is this crossing
         special.append(SpecialPoint(kind, i, multiplier=[float(m.real), float(m.imag)], unstable=int(b.size)))
     return stable, special
+
+
+def branch_stability(branch, tol: float = 1e-6):
+    """Floquet multipliers, stability and bifurcations of every point of a backbone
+    (:class:`~mmshbm.results.branch.Branch` of method "mmshbm" (conservative: two trivial
+    multipliers) or "epmc" (damped mode, flow with C − ξM: one trivial multiplier)).
+
+    Returns
+    -------
+    multipliers : ndarray, complex, shape (n_points, 2 n_l)
+    stable : ndarray of bool, shape (n_points,)
+    special : list of SpecialPoint
+        As :func:`classify`.
+    """
+    solver = branch._require_solver()
+    if branch.method == "epmc":
+        mu = np.array([solver.floquet_multipliers(u) for u in branch.states])
+        trivial = 1
+    elif branch.method == "mmshbm":
+        mu = np.array([conservative_multipliers(solver, u) for u in branch.states])
+        trivial = 2
+    else:
+        raise ValueError(f"branch_stability handles MMS-HBM backbones ('mmshbm', 'epmc'), "
+                         f"got {branch.method!r}")
+    folds = [p.index for p in branch.special_points if p.kind == "fold"]
+    stable, special = classify(mu, trivial=trivial, tol=tol, folds=folds)
+    return mu, stable, special
