@@ -1,16 +1,19 @@
-"""Reading any mmshbm results file: a saved :class:`~mmshbm.results.branch.Branch` or a
-:class:`~mmshbm.analysis.studies.Study`, whichever the file holds."""
+"""Reading any mmshbm results file: a saved :class:`~mmshbm.results.branch.Branch`, a
+:class:`~mmshbm.analysis.studies.Study` or a :class:`~mmshbm.results.response.FrequencyResponse`,
+whichever the file holds."""
 
 from __future__ import annotations
 
 from .analysis.studies import STUDY_FORMAT, Study
 from .results.branch import BRANCH_FORMAT, Branch, read_archive
+from .results.response import RESPONSE_FORMAT, FrequencyResponse
 
 __all__ = ["load"]
 
 
 def load(path, attach_solver: bool = False):
-    """Read a saved :class:`Branch` or :class:`Study`, whichever the file holds.
+    """Read a saved :class:`Branch`, :class:`Study` or :class:`FrequencyResponse`, whichever the
+    file holds.
 
     Raises
     ------
@@ -22,4 +25,9 @@ def load(path, attach_solver: bool = False):
         return Branch.load(path, attach_solver=attach_solver)
     if meta.get("format") == STUDY_FORMAT:
         return Study.load(path, attach_solver=attach_solver)
+    if meta.get("format") == RESPONSE_FORMAT:  # issue 14
+        response = FrequencyResponse.load(path)
+        if attach_solver:
+            response.attach_solver()
+        return response
     raise ValueError(f"{str(path)!r} holds neither a Branch nor a Study (format {meta.get('format')!r})")

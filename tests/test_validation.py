@@ -150,7 +150,7 @@ CASES = [
      lambda t: mmshbm.backbone(osc(), bounds={"frequncy": (0, 1)}), ValueError,
      r"bounds on unknown quantity 'frequncy'; the problem monitors \['amplitude'"),
     ("method", "method='harmonic'", lambda t: mmshbm.backbone(osc(), method="harmonic"), ValueError,
-     r"unknown method 'harmonic'; choose one of \['mmshbm', 'penalty', 'penalty-reduced', 'shooting'\]"),
+     r"unknown method 'harmonic'; choose one of \[.*'mmshbm', 'penalty',.* 'shooting'\]"),
     ("option", "misspelt continuation option ds_mx=1",
      lambda t: mmshbm.backbone(osc(), ds_mx=1.0), TypeError,
      r"unknown option 'ds_mx' \(did you mean 'ds_max'\?\) for method 'mmshbm'"),

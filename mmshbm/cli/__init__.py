@@ -1,4 +1,4 @@
-"""Command line: ``mmshbm modes | backbone | study | fit | bench | plot``.
+"""Command line: ``mmshbm modes | backbone | study | fit | bench | plot | frf``.
 
 Every subcommand writes its files into ``--out`` (default ``out/``) and prints one line
 per file written. Bad input becomes a one-line message on stderr and exit code 2, never
@@ -12,7 +12,8 @@ Examples::
     mmshbm study -H 1 3 5 7 --elements 8 21 --param gap=0.001,0.002
     mmshbm fit 45.8 286.5 --fit E          # Young's modulus from measured frequencies
     mmshbm plot out/backbone.npz --points 1.5 3 6
-    mmshbm bench --quick"""
+    mmshbm bench --quick
+    mmshbm frf --force 2.3 --range 40 60   # forced response, 0.5 % modal damping, stability"""
 
 from __future__ import annotations
 
@@ -21,12 +22,12 @@ import logging
 import sys
 
 from .. import __version__
-from . import backbone, bench, common, fit, modes, plot, study
+from . import backbone, bench, common, fit, frf, modes, plot, study
 
 log = logging.getLogger("mmshbm")
 
 #: the subcommands, in the order ``mmshbm -h`` lists them; each module has register(sub) and run(args)
-COMMANDS = (modes, backbone, study, fit, bench, plot)
+COMMANDS = (modes, backbone, study, fit, bench, plot, frf)
 
 
 def build_parser() -> argparse.ArgumentParser:

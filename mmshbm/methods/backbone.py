@@ -35,8 +35,10 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
         The structure, e.g. ``mmshbm.default_beam().model(21)``.
     harmonics : int
         Highest harmonic H of the Fourier ansatz (harmonic-balance methods).
-    method : {"mmshbm", "penalty", "shooting"}
-        MMS-HBM, or one of the baselines.
+    method : {"mmshbm", "penalty", "shooting", "epmc"}
+        MMS-HBM, or one of the baselines. A model with damping (``model.damping``) gets
+        its damped nonlinear mode with "mmshbm" ("epmc", :mod:`mmshbm.methods.epmc`; the
+        branch's ``damping_ratio`` is ξ/(2Ω)).
     max_amplitude : float, optional
         Stop at this amplitude (m) of the contact DOF; default 10 gaps.
     start_amplitude : float, optional
@@ -78,6 +80,10 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
         raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
     if not isinstance(method, str) or method not in METHODS:
         raise ValueError(f"unknown method {method!r}; choose one of {sorted(METHODS)}")
+    # --- issue 14: the backbone of a damped model is its damped nonlinear mode (EPMC) ---
+    if method == "mmshbm" and model.damping is not None:
+        method = "epmc"
+    # --- end issue 14 ---
     if method != "shooting":
         check.integer("harmonics", harmonics, minimum=1)
     if callback is not None and not callable(callback):

@@ -158,6 +158,44 @@ class Model:
         contacts = contacts_from(dofs, gap, sides, self.n_dof)
         return replace(self, contacts=contacts)
 
+    def with_damping(self, modal_ratio=None, rayleigh=None) -> Model:
+        """The same structure with viscous damping on its DOFs with mass (replacing any
+        damping it had); see :mod:`mmshbm.model.damping`.
+
+        Parameters
+        ----------
+        modal_ratio : float or sequence of float, optional
+            Damping ratio ζ >= 0 of every open-contact mode, or (ζ_1, ..., ζ_m) of the m
+            lowest modes (the others undamped).
+        rayleigh : (float, float), optional
+            (α in 1/s, β in s) >= 0: C = α M + β K on the DOFs with mass (K with the
+            massless DOFs condensed statically). Both forms
+            given: their sum.
+
+        Returns
+        -------
+        Model
+            With ``damping`` set and the call recorded in ``description["transforms"]``.
+
+        Raises
+        ------
+        ValueError, TypeError
+            Neither form given, negative damping, more ratios than modes, a bad pair.
+        """
+        from .damping import damping_matrix
+
+        C = damping_matrix(self, modal_ratio, rayleigh)
+        args = {}
+        if modal_ratio is not None:
+            args["modal_ratio"] = (float(modal_ratio) if np.ndim(modal_ratio) == 0
+                                   else [float(z) for z in np.ravel(modal_ratio)])
+        if rayleigh is not None:
+            args["rayleigh"] = [float(rayleigh[0]), float(rayleigh[1])]
+        description = dict(self.description)
+        description["transforms"] = list(description.get("transforms", [])) + [
+            {"name": "with_damping", "args": args}]
+        return replace(self, damping=C, description=description)
+
     def with_amplitude_dof(self, dof: int) -> Model:
         """The same model with its amplitude measured at ``dof``."""
         dof = check.integer("amplitude_dof", dof)

@@ -108,6 +108,12 @@ class Branch:
         return len(self.frequency)
 
     @property
+    def damping_ratio(self) -> np.ndarray:
+        """Modal damping ratio ξ/(2Ω) per point of a damped nonlinear mode (method "epmc",
+        issue 14); zeros for a conservative backbone."""
+        return np.asarray(self.records.get("damping_ratio", np.zeros(len(self))), dtype=float)
+
+    @property
     def completed(self) -> bool:
         """True when the branch ended on a requested bound or the step budget."""
         return self.status.startswith("bound:") or self.status == "max_steps"

@@ -1,0 +1,202 @@
+"""Damped nonlinear modes by MMS-HBM: the extended periodic motion concept (EPMC).
+
+Krack (2015) defines the nonlinear mode of a damped structure as the periodic solution
+of the *autonomous* system with an artificial negative mass-proportional damping −ξM
+that compensates the dissipation,
+
+    M q'' + (C − ξ M) q' + K q = Σ w_i λ_i,       Signorini at every stop,
+
+with ξ (1/s) an unknown along with the motion and Ω. The modal damping ratio of the
+nonlinear mode is D = ξ/(2Ω); for a linear structure with modal damping ζ_j it gives
+Ω = ω_j and D = ζ_j exactly (the mode's damping 2ζ_jω_j − ξ vanishes), and with C = 0
+it gives ξ = 0 and the conservative backbone (tests check both).
+
+Here the massless DOFs carry the full cosine and sine series (the damped mode is not
+time-symmetric), the linear structure is condensed per harmonic with
+S_k = K_ll + ikΩ(C_ll − ξM_ll) − (kΩ)²M_ll (:mod:`mmshbm.core.damped_condense`), and the
+contact residual is that of :mod:`mmshbm.methods._damped_hbm`. Unknowns
+u = [x, ξ, Ω] (scaled): n_c(2H+1) + 2 numbers. Equations: the n_c(2H+1) projected
+residuals and a *phase anchor*, the sine coefficient of the anchor DOF's fundamental set
+to zero (the amplitude DOF, or the first contact DOF when that one carries mass), since
+a time shift of a solution is a solution. The amplitude is not normalised: the
+coefficients are physical, so the family is a curve in (x, ξ, Ω) that pseudo-arclength
+continuation follows from the linear mode; ξ takes the rank the conservative family's
+energy identity removes, so the bordered Jacobian stays regular at C = 0.
+
+Ω is the last unknown (the continuation's folds are folds in frequency, as for
+backbones).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import _validate as check
+from ..model.model import Model
+from ._damped_hbm import DampedHBMBase, synthesis_matrix
+from .mms_hbm import _mean_energy
+
+__all__ = ["EPMCProblem"]
+
+
+class EPMCProblem(DampedHBMBase):
+    """Damped nonlinear mode (EPMC) by MMS-HBM, as a continuation problem.
+
+    Parameters
+    ----------
+    model : Model
+        Massless contact DOFs; damping optional (zero damping gives the conservative mode).
+    harmonics : int
+        H >= 1.
+    n_samples, r, backend, projection
+        As in :class:`~mmshbm.methods._damped_hbm.DampedHBMBase`.
+    mode : int
+        The linear mode (1-based) the branch starts from.
+
+    Notes
+    -----
+    Scaled unknowns ``u = [x / xscale, ξ / ω_ref, Ω / ω_ref]``. Monitored per point:
+    frequency (Hz), amplitude (m: for a single contact the contact DOF's largest
+    excursion away from the stop, as for backbones; else the largest |q| of
+    ``model.amplitude_dof``), energy (J), contact_force_max (N), damping_ratio
+    (ξ/(2Ω)), xi (1/s).
+    """
+
+    method = "epmc"
+
+    def __init__(self, model: Model, harmonics: int = 5, n_samples: int | None = None, r: float | None = None,
+                 mode: int = 1, backend: str = "auto", projection: str = "exact"):
+        super().__init__(model, harmonics, n_samples, r, backend, "MMS-HBM (EPMC)", projection=projection)
+        self.mode = check.integer("mode", mode, minimum=1)
+        if self.mode > self.cond.n_l:
+            raise ValueError(f"mode must be <= the number of DOFs with mass ({self.cond.n_l}), "
+                             f"got {self.mode}")
+        freqs, modes = model.linear_modes(self.mode)
+        phi = modes[:, -1]
+        c = model.c
+        try:
+            amp_dof = model.amplitude_dof
+        except ValueError:
+            amp_dof = model.contacts[0].dof
+        i_amp = int(np.searchsorted(c, amp_dof))
+        self.anchor = i_amp if i_amp < len(c) and c[i_amp] == amp_dof else int(self.contact_rows[0])
+        ref = abs(phi[amp_dof])
+        if not ref > 1e-12 * np.max(np.abs(phi)):
+            raise ValueError(f"linear mode {self.mode} does not move the amplitude DOF {amp_dof}")
+        self.mode_shape = phi[c] / ref
+        self.mode_frequency = float(freqs[-1])
+        C = model.damping
+        self.mode_xi = float(phi @ (C @ phi)) if C is not None else 0.0  # 2 ζ ω for a mass-normalised mode
+        self.amplitude_dof = amp_dof
+        self._anchor_col = 2 * self.n_c + self.anchor  # the sine of harmonic 1 is block 2
+        self.colscale = np.concatenate([self.xscale, [self.omega_ref, self.omega_ref]])
+        self.n_unknowns = self.n_x + 2
+
+    # ------------------------------------------------------------------ unknowns
+    def unpack(self, u: np.ndarray) -> tuple[np.ndarray, float, float]:
+        """Scaled unknowns -> (x (n_x,) m/rad, ξ (1/s), Ω (rad/s))."""
+        if np.shape(u) != (self.n_unknowns,):
+            raise ValueError(f"u must have shape ({self.n_unknowns},), got {np.shape(u)}")
+        y = np.asarray(u, dtype=float) * self.colscale
+        return y[:-2], float(y[-2]), float(y[-1])
+
+    def pack(self, x: np.ndarray, xi: float, omega: float) -> np.ndarray:
+        return np.concatenate([np.asarray(x, dtype=float), [xi, omega]]) / self.colscale
+
+    def linear_point(self, amplitude: float) -> np.ndarray:
+        """Scaled unknowns of the linear mode with amplitude ``amplitude`` (m) at the
+        amplitude DOF (cosine, toward the stop at τ = 0), ξ = φᵀCφ, Ω = ω_mode."""
+        amplitude = check.positive("amplitude", amplitude)
+        x = np.zeros(self.n_x)
+        x[self.n_c:2 * self.n_c] = amplitude * self.mode_shape
+        return self.pack(x, self.mode_xi, 2 * np.pi * self.mode_frequency)
+
+    def initial_tangent(self) -> np.ndarray:
+        """Growing amplitude at constant ξ and Ω."""
+        t = self.linear_point(1.0)
+        t[-2:] = 0.0
+        return t / np.linalg.norm(t)
+
+    # ------------------------------------------------------------------ residual
+    def evaluate(self, u: np.ndarray, jacobian: bool = True):
+        """Scaled residual (n_x + 1,) and, if asked, its Jacobian (n_x + 1, n_x + 2)."""
+        x, xi, omega = self.unpack(u)
+        ch = self._condensed(omega, xi, jacobian, jacobian)
+        Dx = self.real_blocks(ch.D)
+        F = Dx @ x
+        R = np.empty(self.n_x + 1)
+        if not jacobian:
+            R[:-1] = self.contact_residual(x, F, None, None)[0] / self.rowscale
+            R[-1] = u[self._anchor_col]
+            return R
+        dFp = np.column_stack([self.real_blocks(ch.dD_dxi) @ x, self.real_blocks(ch.dD_domega) @ x])
+        Rx, Jx, Jp = self.contact_residual(x, F, Dx, dFp)
+        R[:-1] = Rx / self.rowscale
+        R[-1] = u[self._anchor_col]
+        J = np.zeros((self.n_x + 1, self.n_x + 2))
+        J[:-1, :-2] = Jx * self.xscale[None, :]
+        J[:-1, -2:] = Jp * self.omega_ref
+        J[:-1] /= self.rowscale[:, None]
+        J[-1, self._anchor_col] = 1.0
+        return R, J
+
+    # ------------------------------------------------------------------ results
+    def coefficients(self, u: np.ndarray) -> np.ndarray:
+        """NLvib-ordered coefficients of all DOFs, shape (n_dof, 2H+1)."""
+        x, xi, omega = self.unpack(u)
+        return self.full_coefficients(x, self._condensed(omega, xi, recover=True), None)
+
+    def time_signals(self, u: np.ndarray, dofs=None, n_samples: int = 256):
+        """(t (n_samples,) s, q (n_dofs, n_samples)) over one period (all DOFs when None)."""
+        _, _, omega = self.unpack(u)
+        Q = self.coefficients(u)
+        if dofs is not None:
+            dofs = np.atleast_1d(np.asarray(dofs))
+            if dofs.dtype.kind not in "iu" or np.any((dofs < 0) | (dofs >= self.model.n_dof)):
+                raise ValueError(f"dofs must be integer indices in [0, {self.model.n_dof - 1}], got {dofs}")
+            Q = Q[dofs]
+        tau, q = self.signals(Q, n_samples)
+        return tau / omega, q
+
+    def contact_force(self, u: np.ndarray, n_samples: int = 256):
+        """(t (n_samples,) s, λ (n_samples,) N) of the first contact (all contacts: rows of
+        a (n_contacts, n_samples) array when there are several)."""
+        x, xi, omega = self.unpack(u)
+        F = self.needed_force(x, self._condensed(omega, xi).D, None)
+        n_samples = check.integer("n_samples", n_samples, minimum=1)
+        tau = 2 * np.pi * np.arange(n_samples) / n_samples
+        E = synthesis_matrix(self.H, tau)
+        c = self.model.c
+        lam = np.array([-ct.side * (E @ F[self._coef_index[int(np.searchsorted(c, ct.dof))]])
+                        for ct in self.model.contacts])
+        return tau / omega, (lam[0] if len(lam) == 1 else lam)
+
+    def harmonic_content(self, u: np.ndarray, dof: int | None = None) -> np.ndarray:
+        """|Q̂_k|, k = 0..H, of ``dof`` (default the amplitude DOF); shape (H+1,)."""
+        dof = self.amplitude_dof if dof is None else check.integer("dof", dof)
+        if not 0 <= dof < self.model.n_dof:
+            raise ValueError(f"dof must be in [0, {self.model.n_dof - 1}], got {dof}")
+        Q = self.coefficients(u)[dof]
+        return np.concatenate([[abs(Q[0])], np.hypot(Q[1::2], Q[2::2])])
+
+    def monitor(self, u: np.ndarray) -> dict:
+        """frequency (Hz), amplitude (m), energy (J), contact_force_max (N),
+        damping_ratio (ξ/(2Ω)), xi (1/s)."""
+        x, xi, omega = self.unpack(u)
+        ch = self._condensed(omega, xi, recover=True)
+        Q = self.full_coefficients(x, ch, None)
+        F = self.needed_force(x, ch.D, None)
+        return {"frequency": omega / (2 * np.pi), "amplitude": self.amplitude(Q[self.amplitude_dof]),
+                "energy": _mean_energy(self.model, Q, omega),
+                "contact_force_max": self.contact_force_max(x, F),
+                "damping_ratio": xi / (2 * omega), "xi": xi}
+
+    def floquet_multipliers(self, u: np.ndarray) -> np.ndarray:
+        """Floquet multipliers of the EPMC orbit (the flow with C − ξM; one trivial +1),
+        sorted by decreasing modulus (:mod:`mmshbm.methods.stability`)."""
+        from .stability import FloquetSolver
+
+        if getattr(self, "_floquet", None) is None:
+            self._floquet = FloquetSolver(self.model)
+        _, xi, omega = self.unpack(u)
+        return self._floquet.multipliers(self.coefficients(u)[self.model.l], omega, xi)

@@ -1,0 +1,96 @@
+"""The forced baselines (penalty harmonic balance, shooting) against the exact reference
+on the one-DOF oscillator, and their Jacobians against finite differences (issue 14)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import mmshbm
+from mmshbm.core.continuation import newton
+from mmshbm.methods.exact.forced import forced_orbit
+from mmshbm.methods.forced import ForcedResponseProblem
+from mmshbm.methods.penalty_forced import PenaltyForcedProblem
+from mmshbm.methods.shooting_forced import ShootingForcedProblem
+
+F = np.array([0.1, 0.0])
+FREQ = 0.185  # Hz: on the upper branch, one contact per period
+
+
+@pytest.fixture(scope="module")
+def osc():
+    return mmshbm.OneDofOscillator(1, 1, 4, 1).model().with_damping(modal_ratio=0.02)
+
+
+@pytest.fixture(scope="module")
+def exact_orbit(osc):
+    """The exact upper-branch orbit, started from MMS-HBM (H = 20) at FREQ."""
+    resp = mmshbm.frequency_response(osc, F, (0.1, 0.2), harmonics=20, stability=False)
+    i = int(np.flatnonzero((resp.frequency > FREQ - 0.004) & (resp.amplitude > 1.5))[0])
+    p = ForcedResponseProblem(osc, F, harmonics=20, stability=False)
+    u = _at_frequency(p, p.pack(resp.solver.unpack(resp.states[i])[0], 2 * np.pi * FREQ))
+    Q = p.coefficients(u)
+    k = np.arange(1, 21)
+    w = 2 * np.pi * FREQ
+    z0 = np.array([Q[0, 0] + Q[0, 1::2].sum(), w * (k * Q[0, 2::2]).sum()])
+    orbit = forced_orbit(osc, F, FREQ, guess=z0)
+    assert orbit.converged and orbit.n_contacts == 1
+    return orbit
+
+
+def _at_frequency(problem, u):
+    t = np.zeros(problem.n_unknowns)
+    t[-1] = 1.0
+    return newton(problem, u, t, u.copy(), 1e-12, 40, 1e-14)[0]
+
+
+def _fd(problem, u, h=1e-7):
+    R, J = problem.evaluate(u)
+    J = J.toarray() if hasattr(J, "toarray") else J
+    Jfd = np.empty_like(J)
+    for j in range(len(u)):
+        e = np.zeros(len(u))
+        e[j] = h
+        Jfd[:, j] = (problem.evaluate(u + e, False) - problem.evaluate(u - e, False)) / (2 * h)
+    return np.abs(J - Jfd).max() / np.abs(J).max()
+
+
+def test_jacobians_match_finite_differences(osc):
+    rng = np.random.default_rng(11)
+    pen = PenaltyForcedProblem(osc, F, harmonics=4)
+    u = pen.linear_point(0.17)
+    u[:-1] += 0.3 * rng.standard_normal(len(u) - 1)
+    u[2 + 1] += 2.0  # the contact DOF's cosine: into the stop
+    assert _fd(pen, u) < 1e-6
+    sh = ShootingForcedProblem(osc, F, steps_per_period=64)
+    u = sh.linear_point(0.17)
+    u[:-1] += 0.3 * rng.standard_normal(len(u) - 1)
+    u[0] += 2.0
+    assert _fd(sh, u) < 1e-6
+
+
+def test_shooting_converges_at_order_two(osc, exact_orbit):
+    errors, mults = [], []
+    for N in (128, 256, 512):
+        sh = ShootingForcedProblem(osc, F, steps_per_period=N)
+        u = _at_frequency(sh, sh.pack(exact_orbit.z0, 2 * np.pi * FREQ))
+        z, _ = sh.unpack(u)
+        errors.append(np.abs(z - exact_orbit.z0).max() / np.abs(exact_orbit.z0).max())
+        mults.append(np.abs(np.sort_complex(sh.floquet_multipliers(u))
+                            - np.sort_complex(exact_orbit.multipliers)).max())
+    rates = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert np.all(rates > 1.8) and errors[-1] < 2e-4  # measured rates 2.00, 2.00; 1.2e-4 at N = 512
+    assert mults[-1] < mults[0] and mults[-1] < 1e-3
+
+
+def test_penalty_approaches_the_exact_orbit(osc, exact_orbit):
+    errs = []
+    ref = exact_orbit.fourier(1, 20)
+    for kp_factor in (1e2, 1e4):
+        pen = PenaltyForcedProblem(osc, F, harmonics=20, penalty_stiffness=kp_factor * 0.8)
+        Q = np.zeros(pen.n * pen.n_coef)
+        Q.reshape(pen.n_coef, pen.n)[:, 1] = ref
+        Q.reshape(pen.n_coef, pen.n)[:, 0] = exact_orbit.fourier(0, 20)
+        u = _at_frequency(pen, pen.pack(Q, 2 * np.pi * FREQ))
+        errs.append(np.abs(pen.coefficients(u)[1] - ref).max() / np.abs(ref).max())
+    assert errs[1] < errs[0] < 0.1 and errs[1] < 0.01
