@@ -26,6 +26,7 @@ import itertools
 import logging
 import multiprocessing
 import time
+import warnings
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
@@ -33,6 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import _validate as check
+from .._warnings import BranchWarning
 from ..results.branch import (
     Branch,
     branch_from_payload,
@@ -41,6 +43,7 @@ from ..results.branch import (
     versions,
     write_archive,
 )
+from ..results.diagnostics import incomplete_reason
 from .tables import ConvergenceFit, FrequencyTable, format_convergence
 
 __all__ = ["run_study", "figure2_study", "Study", "RunSpec", "FrequencyTable", "ConvergenceFit",
@@ -132,8 +135,11 @@ def _execute(spec: RunSpec) -> Branch:
     max_amplitude = spec.max_amplitude
     if max_amplitude is not None and spec.unit == "gap":
         max_amplitude *= model.gap
-    branch = backbone(model, harmonics=spec.harmonics, method=spec.method, max_amplitude=max_amplitude,
-                      **spec.options)
+    with warnings.catch_warnings():
+        # recorded in branch.metadata["checks"]; run_study warns once per run, on the parent side
+        warnings.simplefilter("ignore", BranchWarning)
+        branch = backbone(model, harmonics=spec.harmonics, method=spec.method, max_amplitude=max_amplitude,
+                          **spec.options)
     branch.solver = None
     return branch
 
@@ -242,8 +248,16 @@ class Study:
                 values = values[order]
                 fixed = {a: self.runs[idx[0]].get(a) for a in others if a in self.runs[idx[0]]}
                 for j, amp in enumerate(table.amplitudes):
-                    fits.append(ConvergenceFit.fit(vary, fixed, float(amp), table.unit, values,
-                                                   table.frequency[idx, j]))
+                    fit = ConvergenceFit.fit(vary, fixed, float(amp), table.unit, values,
+                                             table.frequency[idx, j])
+                    missing = [i for i in idx if not np.isfinite(table.frequency[i, j])]
+                    if missing:
+                        fit.note = "; ".join(
+                            f"{vary}={self.runs[i][vary]} does not reach it"
+                            + ("" if self.branches[i].completed
+                               else f" ({incomplete_reason(self.branches[i].status)})")
+                            for i in missing)
+                    fits.append(fit)
         return fits
 
     def report(self, amplitudes, unit: str = "gap") -> str:
@@ -257,6 +271,7 @@ class Study:
         fits = self.convergence(amplitudes, unit)
         if fits:
             parts.append(format_convergence(fits))
+        parts.append(self.summary())
         return "\n\n".join(parts)
 
     def to_csv(self, path, amplitudes, unit: str = "gap") -> Path:
@@ -294,9 +309,24 @@ class Study:
                 b.attach_solver()
         return cls(runs=runs, branches=branches, metadata=dict(meta.get("metadata", {})))
 
+    def summary(self) -> str:
+        """Text: how many runs reached their bounds, which did not and why, and the runs
+        whose checks found something (:meth:`Branch.check`)."""
+        done = sum(b.completed for b in self.branches)
+        lines = [f"{len(self)} runs: {done} reached their bounds, {len(self) - done} incomplete"]
+        for coords, b in self:
+            if not b.completed:
+                lines.append(f"  incomplete: {_coords_text(coords)}: {_reached(b)}"
+                             f"{incomplete_reason(b.status, b.metadata)} (status {b.status!r})")
+        for coords, b in self:
+            for f in b.findings:
+                if f.kind != "incomplete":
+                    lines.append(f"  {f.kind.replace('_', ' ')}: {_coords_text(coords)}: {f.message}")
+        return "\n".join(lines)
+
     def __repr__(self) -> str:
-        status = sum(b.completed for b in self.branches)
-        return f"Study({len(self)} runs over {self.axes}, {status} completed)"
+        done = sum(b.completed for b in self.branches)
+        return f"Study({len(self)} runs over {self.axes}, {done} completed, {len(self) - done} incomplete)"
 
 
 # ---------------------------------------------------------------------- running
@@ -371,9 +401,13 @@ def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
         grid["elements"] = [int(n) for n in (elements or (8, 21))]
         grid["grading"] = grading
     log.info("study: %d runs in %.2f s (%s)", len(specs), elapsed, kind)
-    return Study(runs=[dict(s.coords) for s in specs], branches=branches,
-                 metadata={"grid": grid, "executor": kind, "workers": workers, "elapsed_s": elapsed,
-                           "model_file": str(model) if isinstance(model, str | Path) else None})
+    study = Study(runs=[dict(s.coords) for s in specs], branches=branches,
+                  metadata={"grid": grid, "executor": kind, "workers": workers, "elapsed_s": elapsed,
+                            "model_file": str(model) if isinstance(model, str | Path) else None})
+    for coords, branch in study:
+        for finding in branch.findings:
+            warnings.warn(f"run {_coords_text(coords)}: {finding.message}", BranchWarning, stacklevel=2)
+    return study
 
 
 def grid_specs(beam=None, *, model=None, harmonics=(1, 3, 5), elements=None, methods=("mmshbm",),
@@ -543,6 +577,18 @@ def _matrix_source(model) -> dict:
                      f"{name}_shape": np.array(A.shape)})
     return {"matrices": mats, "contact_dof": int(model.contact_dof), "gap": float(model.gap),
             "stop_side": int(model.stop_side), "description": dict(model.description)}
+
+
+def _coords_text(coords: dict) -> str:
+    return ", ".join(f"{k}={v}" for k, v in coords.items())
+
+
+def _reached(branch: Branch) -> str:
+    if not len(branch):
+        return "no point, "
+    gap = _gap(branch)
+    a = float(np.nanmax(branch.amplitude))
+    return f"stopped at {a / gap:.3g} gaps, " if gap > 0 else f"stopped at {a:.3g} m, "
 
 
 def _gap(branch: Branch) -> float:

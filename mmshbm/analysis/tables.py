@@ -144,6 +144,8 @@ class ConvergenceFit:
         runs; NaN with fewer than two usable runs.
     n_fit : int
         Number of runs in the fit.
+    note : str
+        Why runs are missing (e.g. the reference run stopped short of the amplitude).
     """
 
     vary: str
@@ -155,6 +157,7 @@ class ConvergenceFit:
     difference: np.ndarray
     rate: float
     n_fit: int
+    note: str = ""
 
     @classmethod
     def fit(cls, vary, fixed, amplitude, unit, values, frequency) -> ConvergenceFit:
@@ -181,15 +184,15 @@ def format_convergence(fits: Sequence[ConvergenceFit]) -> str:
     lines = ["Observed convergence rate p, |f - f_ref| ~ x^(-p), x = H or elements; reference = the finest "
              "run of each series (not the exact solution); p from a log-log least-squares fit "
              "(two points: a two-point slope)"]
-    head = ("vary", "fixed", "A", "x", "|f - f_ref| (Hz)", "p")
+    head = ("vary", "fixed", "A", "x", "|f - f_ref| (Hz)", "p", "note")
     rows = []
     for fit in fits:
         fixed = " ".join(f"{k}={v}" for k, v in fit.fixed.items())
         xs = ",".join(f"{v:g}" for v in fit.values)
-        diffs = ",".join("nan" if not np.isfinite(d) else f"{d:.3g}" for d in fit.difference[:-1])
+        diffs = ",".join("-" if not np.isfinite(d) else f"{d:.3g}" for d in fit.difference[:-1])
         unit = "gap" if fit.unit == "gap" else "m"
         rows.append((fit.vary, fixed, f"{fit.amplitude:g} {unit}", xs, diffs,
-                     "-" if math.isnan(fit.rate) else f"{fit.rate:.2f}"))
+                     "-" if math.isnan(fit.rate) else f"{fit.rate:.2f}", fit.note))
     widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(head)]
     fmt = "  ".join(f"{{:<{w}}}" for w in widths)
     return "\n".join([lines[0], fmt.format(*head), *(fmt.format(*r) for r in rows)])

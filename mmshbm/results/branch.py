@@ -109,8 +109,32 @@ class Branch:
 
     @property
     def completed(self) -> bool:
-        """True when the branch ended on a requested bound or the step budget."""
-        return self.status.startswith("bound:") or self.status == "max_steps"
+        """True when the branch reached its bounds (status ``"bound:<name>"``); a run that
+        ran out of steps (``"max_steps"``), of step size or failed is not completed."""
+        return self.status.startswith("bound:")
+
+    def check(self, thresholds=None, *, warn: bool = True) -> list:
+        """Check what this branch is (family of its starting mode, contact admissibility,
+        completeness): :func:`mmshbm.results.diagnostics.check_branch`. ``backbone``
+        does it for every branch it returns; call it on loaded or older branches.
+
+        Returns
+        -------
+        list of Finding
+            Also stored in ``metadata["checks"]``; one :class:`~mmshbm.BranchWarning`
+            each when ``warn``.
+        """
+        from .diagnostics import check_branch
+
+        return check_branch(self, thresholds, warn=warn, stacklevel=3)
+
+    @property
+    def findings(self) -> list:
+        """The findings of the last :meth:`check` (from ``metadata["checks"]``; empty when
+        never checked)."""
+        from .diagnostics import findings
+
+        return findings(self)
 
     @property
     def gap(self) -> float | None:
