@@ -11,11 +11,12 @@ def register(sub) -> None:
     """Add the subcommand to the subparsers ``sub``."""
     p = sub.add_parser("fit", help="Young's modulus (and density) from measured linear frequencies")
     common.beam_options(p, model_file=False)
-    p.add_argument("frequencies", type=float, nargs="+", help="measured frequencies (Hz)")
-    p.add_argument("--modes", type=int, nargs="+", default=None,
+    p.add_argument("frequencies", type=common.positive_float, nargs="+", help="measured frequencies (Hz)")
+    p.add_argument("--modes", type=common.positive_int, nargs="+", default=None,
                    help="their mode numbers (default 1 2 ...)")
     p.add_argument("--fit", nargs="+", default=["E"], choices=["E", "rho"], help="parameters (default E)")
-    p.add_argument("--mass", type=float, default=None, help="measured beam mass (kg), to fit E and rho")
+    p.add_argument("--mass", type=common.positive_float, default=None,
+                   help="measured beam mass (kg), to fit E and rho")
     p.set_defaults(func=run)
 
 

@@ -13,8 +13,9 @@ def register(sub) -> None:
     common.out_option(p)
     p.add_argument("file", help="a .npz written by Branch.save / Study.save (backbone, study)")
     p.add_argument("--kind", nargs="+", default=["all"],
-                   choices=["all", "backbone", "energy", "peak_force", "signals", "force", "harmonics"])
-    p.add_argument("--points", type=float, nargs="+", default=None,
+                   choices=["all", "backbone", "energy", "peak_force", "signals", "force", "harmonics"],
+                   help="which plots")
+    p.add_argument("--points", type=common.positive_float, nargs="+", default=None,
                    help="amplitudes (gaps) of the marked points (default 1.5 3 6)")
     p.add_argument("--measured", default=None, help="measured backbone CSV to overlay")
     p.set_defaults(func=run)

@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._files import apply_umask
 from ..core.special_points import special_from_json, special_to_json
 
 __all__ = ["Branch", "rebuild_model"]
@@ -271,9 +272,14 @@ class Branch:
         return branch
 
     def to_csv(self, path) -> Path:
-        """Write the per-point table to ``path`` (CSV, one header line, full precision):
+        """Write the per-point table to ``path`` (CSV, one header line):
         ``frequency_hz, amplitude_m, energy_j, contact_force_max_n, newton_iterations,
-        step_size``, then one column per one-dimensional entry of :attr:`records`.
+        step_size``, then one column per one-dimensional numeric entry of :attr:`records`
+        (e.g. ``mode_share``).
+
+        Numbers are written as Python's ``repr`` of the float: the shortest text that
+        reads back to the same double (``0.1``, not ``0.10000000000000001``), so the
+        file round-trips exactly; integers as integers; ``nan``/``inf`` as such.
 
         Returns
         -------
@@ -286,16 +292,17 @@ class Branch:
                  "step_size"]
         cols = [self.frequency, self.amplitude, self.energy, self.contact_force_max, self.newton_iterations,
                 self.step_size]
-        fmt = ["%.17g"] * 4 + ["%d", "%.17g"]
         for name, value in self.records.items():
             value = np.asarray(value)
             if value.ndim == 1 and len(value) == n and value.dtype.kind in "biuf":
                 names.append(name)
                 cols.append(value)
-                fmt.append("%.17g")
-        table = np.column_stack(cols) if n else np.empty((0, len(names)))
+        cols = [np.asarray(c) for c in cols]
+        cells = [[str(int(v)) for v in c] if c.dtype.kind in "biu" else [repr(float(v)) for v in c]
+                 for c in cols]
+        lines = [",".join(names)] + [",".join(row) for row in zip(*cells, strict=True)]
         path.parent.mkdir(parents=True, exist_ok=True)
-        np.savetxt(path, table, delimiter=",", fmt=fmt, comments="", header=",".join(names))
+        path.write_text("\n".join(lines) + "\n")
         return path
 
     def time_signals(self, point: int, dofs=None, n_samples: int = 256):
@@ -527,6 +534,7 @@ def write_archive(path, arrays: dict, meta: dict) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
+        apply_umask(fd)
         with os.fdopen(fd, "wb") as f:
             np.savez(f, **arrays, metadata=np.array(text))
         os.replace(tmp, path)
@@ -537,22 +545,79 @@ def write_archive(path, arrays: dict, meta: dict) -> Path:
 
 
 def read_archive(path) -> tuple[dict, dict]:
-    """Read an archive written by :func:`write_archive`: (arrays, metadata dict)."""
+    """Read an archive written by :func:`write_archive`: (arrays, metadata dict).
+
+    Raises
+    ------
+    ValueError
+        With its own message for each wrong input: a missing file, a folder, a text file,
+        a single NumPy array (``.npy``), another binary file, an archive holding Python
+        objects (never written by mmshbm and never loaded), a model file
+        (:meth:`Model.save_npz`), an archive without the metadata record, a corrupt record.
+    """
     path = Path(path)
+    where = str(path)
+    if not path.exists():
+        raise ValueError(f"{where!r}: no such file")
+    if path.is_dir():
+        raise ValueError(f"{where!r} is a folder, not a results file (.npz of Branch.save or Study.save)")
+    try:
+        with open(path, "rb") as f:
+            head = f.read(512)
+    except OSError as err:
+        raise ValueError(f"cannot read {where!r}: {err.strerror or err}") from None
+    _check_zip_head(where, head)
     try:
         with np.load(path, allow_pickle=False) as f:
-            data = {k: f[k] for k in f.files}
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile, AttributeError) as err:
-        raise ValueError(f"cannot read {str(path)!r}: {err}") from None
+            names = list(f.files)
+            data = {}
+            for k in names:
+                try:
+                    data[k] = f[k]
+                except ValueError as err:
+                    if "allow_pickle" in str(err) or "pickle" in str(err):
+                        raise ValueError(f"{where!r} holds Python objects (entry {k!r}), which mmshbm never "
+                                         "writes and does not load: not an mmshbm results file") from None
+                    raise
+    except ValueError as err:
+        if str(err).startswith(repr(where)):
+            raise
+        raise ValueError(f"{where!r} is a damaged .npz archive: {err}") from None
+    except (OSError, EOFError, zipfile.BadZipFile, AttributeError) as err:
+        raise ValueError(f"{where!r} is a damaged .npz archive: {err}") from None
     if "metadata" not in data:
-        raise ValueError(f"{str(path)!r} is not an mmshbm results file (no metadata record)")
+        if {"M", "K"} <= set(data) or {"M_data", "K_data"} <= set(data):
+            raise ValueError(f"{where!r} is a model file (Model.save_npz), not results: pass it as a model "
+                             "(--model-file, Model.from_npz)")
+        raise ValueError(f"{where!r} is an .npz archive but not an mmshbm results file (no metadata record; "
+                         f"entries {sorted(data)[:6]})")
     try:
         meta = json.loads(str(data.pop("metadata")))
     except json.JSONDecodeError as err:
-        raise ValueError(f"{str(path)!r} has a corrupt metadata record: {err}") from None
+        raise ValueError(f"{where!r} has a corrupt metadata record: {err}") from None
     if not isinstance(meta, dict):
-        raise ValueError(f"{str(path)!r} has a corrupt metadata record")
+        raise ValueError(f"{where!r} has a corrupt metadata record")
     return data, meta
+
+
+def _check_zip_head(where: str, head: bytes) -> None:
+    """Refuse with a message of its own any file that is not a zip (.npz) archive."""
+    if head.startswith(b"PK\x03\x04") or head.startswith(b"PK\x05\x06"):
+        return
+    if not head:
+        raise ValueError(f"{where!r} is empty, not a results file")
+    if head.startswith(b"\x93NUMPY"):
+        raise ValueError(f"{where!r} is a single NumPy array (.npy), not an mmshbm results file (.npz of "
+                         "Branch.save or Study.save)")
+    try:
+        head.decode("utf-8")
+        text = True
+    except UnicodeDecodeError as err:
+        text = err.start > len(head) - 4  # a multi-byte character cut by the 512-byte read
+    if text:
+        raise ValueError(f"{where!r} is a text file (CSV?), not an mmshbm results file (.npz of Branch.save "
+                         "or Study.save)")
+    raise ValueError(f"{where!r} is not an .npz archive (not a zip file): not an mmshbm results file")
 
 
 def _json_default(obj):
