@@ -41,4 +41,4 @@ def run(args) -> int:
     text.write_text(report.summary() + "\n")
     print(report.summary())
     common.wrote(path, text)
-    return 0 if report.success else 1
+    return 0 if report.success and report.identifiable else 1
