@@ -305,8 +305,23 @@ class Branch:
         path.write_text("\n".join(lines) + "\n")
         return path
 
-    def time_signals(self, point: int, dofs=None, n_samples: int = 256):
+    def time_signals(self, point: int, dofs=None, n_samples: int = 256, *, admissible: bool = False):
         """Displacements of ``dofs`` over one period at branch point ``point``.
+
+        Parameters
+        ----------
+        point : int
+            Branch point index.
+        dofs : sequence of int, optional
+            Model DOFs (default all).
+        n_samples : int
+            Samples per period.
+        admissible : bool
+            False (default): the method's own signals (for harmonic balance the truncated
+            Fourier series of every DOF, which may pass through the stop). True: the
+            massless DOFs from the exact static contact problem driven by the Fourier
+            motion of the DOFs with mass (no penetration; :mod:`mmshbm.methods.signals`);
+            the DOFs with mass are unchanged.
 
         Returns
         -------
@@ -315,11 +330,32 @@ class Branch:
         q : ndarray, shape (len(dofs), n_samples)
             Displacements (m) / rotations (rad); all DOFs when ``dofs`` is None.
         """
-        return self._require_solver().time_signals(self.states[self._index(point)], dofs, n_samples)
+        solver = self._require_solver()
+        u = self.states[self._index(point)]
+        if not admissible:
+            return solver.time_signals(u, dofs, n_samples)
+        t, q, _ = _entry_point("admissible_signals")(solver, u, n_samples)
+        if dofs is not None:
+            dofs = np.atleast_1d(np.asarray(dofs))
+            if dofs.dtype.kind not in "iu" or np.any((dofs < -q.shape[0]) | (dofs >= q.shape[0])):
+                raise ValueError(f"dofs must be integer indices in [0, {q.shape[0] - 1}], got {dofs}")
+            q = q[dofs]
+        return t, q
 
-    def contact_force(self, point: int, n_samples: int = 256):
-        """Contact force λ(t) (N) over one period at ``point``: returns (t, λ)."""
-        return self._require_solver().contact_force(self.states[self._index(point)], n_samples)
+    def contact_force(self, point: int, n_samples: int = 256, *, admissible: bool = False):
+        """Contact force λ(t) (N) over one period at ``point``: returns (t, λ).
+
+        ``admissible=False``: the method's own force (for MMS-HBM the truncated series,
+        which may pull); True: the exact static contact force driven by the DOFs with
+        mass (λ >= 0, exactly 0 while the contact is open). λ has shape (n_samples,),
+        or (n_contacts, n_samples) with several contacts when ``admissible``.
+        """
+        solver = self._require_solver()
+        u = self.states[self._index(point)]
+        if not admissible:
+            return solver.contact_force(u, n_samples)
+        t, _, lam = _entry_point("admissible_signals")(solver, u, n_samples)
+        return t, (lam[0] if lam.shape[0] == 1 else lam)
 
     def harmonic_content(self, point: int, dof: int | None = None) -> np.ndarray:
         """Amplitudes √(c_k² + s_k²) of harmonics 0..H of ``dof`` (default the contact DOF)
@@ -361,7 +397,8 @@ class Branch:
 #: the methods layer above this module, which therefore never imports them statically:
 #: like pickle, a branch finds them by their recorded names.
 _ENTRY_POINTS = {"make_problem": "mmshbm.methods.registry:make_problem",
-                 "backbone": "mmshbm.methods.backbone:backbone"}
+                 "backbone": "mmshbm.methods.backbone:backbone",
+                 "admissible_signals": "mmshbm.methods.signals:branch_signals"}
 
 
 def _entry_point(name: str):
