@@ -43,8 +43,7 @@ from ..results.branch import (
     versions,
     write_archive,
 )
-from ..results.diagnostics import incomplete_reason
-from .tables import ConvergenceFit, FrequencyTable, format_convergence
+from .tables import ConvergenceFit, FrequencyTable, coords_text, format_convergence, missing_note, summarize
 
 __all__ = ["run_study", "figure2_study", "Study", "RunSpec", "FrequencyTable", "ConvergenceFit",
            "STUDY_FORMAT"]
@@ -250,13 +249,8 @@ class Study:
                 for j, amp in enumerate(table.amplitudes):
                     fit = ConvergenceFit.fit(vary, fixed, float(amp), table.unit, values,
                                              table.frequency[idx, j])
-                    missing = [i for i in idx if not np.isfinite(table.frequency[i, j])]
-                    if missing:
-                        fit.note = "; ".join(
-                            f"{vary}={self.runs[i][vary]} does not reach it"
-                            + ("" if self.branches[i].completed
-                               else f" ({incomplete_reason(self.branches[i].status)})")
-                            for i in missing)
+                    fit.note = missing_note(vary, [self.runs[i] for i in idx],
+                                            [self.branches[i] for i in idx], table.frequency[idx, j])
                     fits.append(fit)
         return fits
 
@@ -310,19 +304,8 @@ class Study:
         return cls(runs=runs, branches=branches, metadata=dict(meta.get("metadata", {})))
 
     def summary(self) -> str:
-        """Text: how many runs reached their bounds, which did not and why, and the runs
-        whose checks found something (:meth:`Branch.check`)."""
-        done = sum(b.completed for b in self.branches)
-        lines = [f"{len(self)} runs: {done} reached their bounds, {len(self) - done} incomplete"]
-        for coords, b in self:
-            if not b.completed:
-                lines.append(f"  incomplete: {_coords_text(coords)}: {_reached(b)}"
-                             f"{incomplete_reason(b.status, b.metadata)} (status {b.status!r})")
-        for coords, b in self:
-            for f in b.findings:
-                if f.kind != "incomplete":
-                    lines.append(f"  {f.kind.replace('_', ' ')}: {_coords_text(coords)}: {f.message}")
-        return "\n".join(lines)
+        """Text: runs that reached their bounds, those that did not and why, and findings."""
+        return summarize(self.runs, self.branches)
 
     def __repr__(self) -> str:
         done = sum(b.completed for b in self.branches)
@@ -406,7 +389,7 @@ def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
                             "model_file": str(model) if isinstance(model, str | Path) else None})
     for coords, branch in study:
         for finding in branch.findings:
-            warnings.warn(f"run {_coords_text(coords)}: {finding.message}", BranchWarning, stacklevel=2)
+            warnings.warn(f"run {coords_text(coords)}: {finding.message}", BranchWarning, stacklevel=2)
     return study
 
 
@@ -577,18 +560,6 @@ def _matrix_source(model) -> dict:
                      f"{name}_shape": np.array(A.shape)})
     return {"matrices": mats, "contact_dof": int(model.contact_dof), "gap": float(model.gap),
             "stop_side": int(model.stop_side), "description": dict(model.description)}
-
-
-def _coords_text(coords: dict) -> str:
-    return ", ".join(f"{k}={v}" for k, v in coords.items())
-
-
-def _reached(branch: Branch) -> str:
-    if not len(branch):
-        return "no point, "
-    gap = _gap(branch)
-    a = float(np.nanmax(branch.amplitude))
-    return f"stopped at {a / gap:.3g} gaps, " if gap > 0 else f"stopped at {a:.3g} m, "
 
 
 def _gap(branch: Branch) -> float:

@@ -41,15 +41,16 @@ def run(args) -> int:
             if common.has_grid(data):
                 plotting.plot_figure2(data, marks=marks, measured=measured, path=path)
             else:
-                plotting.plot_backbone(data.branches, measured=measured, path=path)
+                plotting.plot_study(data, measured=measured, path=path)
             files.append(path)
-        styles = plotting.study_styles(data.runs)
+        styles, labels = plotting.study_styles(data.runs), plotting.study_labels(data.runs)
         if "energy" in kinds:
             files.append(out / f"{stem}_energy.png")
-            plotting.plot_frequency_energy(data.branches, styles=styles, path=files[-1])
+            plotting.plot_frequency_energy(data.branches, labels, styles=styles, path=files[-1])
         if "peak_force" in kinds:
             files.append(out / f"{stem}_peak_force.png")
-            plotting.plot_peak_contact_force(data.branches, measured=measured, styles=styles, path=files[-1])
+            plotting.plot_peak_contact_force(data.branches, labels, measured=measured, styles=styles,
+                                             path=files[-1])
         common.wrote(*files)
         return 0
     branch = data

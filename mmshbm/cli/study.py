@@ -34,7 +34,7 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from ..analysis import studies
-    from ..plotting import plot_backbone, plot_figure2
+    from ..plotting import plot_figure2, plot_study
 
     params = common.params(args.param)
     measured = common.measured(args)
@@ -74,7 +74,7 @@ def run(args) -> int:
     if args.figure2 or common.has_grid(study):
         plot_figure2(study, marks=marks, measured=measured, path=png)
     else:
-        plot_backbone(study.branches, measured=measured, path=png)
+        plot_study(study, measured=measured, path=png)
     files.append(png)
     print(report)
     print(repr(study))
