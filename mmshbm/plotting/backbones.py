@@ -19,6 +19,7 @@ from .common import (
     distinct_models,
     line_styles,
     log,
+    reference_frequencies,
 )
 
 
@@ -26,7 +27,7 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
                   marks=None, reference_lines: bool = True, modes: Sequence[int] = (2, 3),
                   max_order: int = 10,
                   ax=None, path=None, title: str | None = None, styles: Sequence[dict] | None = None,
-                  legend_loc: str = "upper left", special: bool = True) -> Figure:
+                  legend_loc: str = "best", special: bool = True) -> Figure:
     """Backbone curves: tip amplitude against frequency.
 
     Parameters
@@ -106,12 +107,13 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
         if np.any(np.isfinite(f_all)):
             lo, hi = float(np.nanmin(f_all)), float(np.nanmax(f_all))
             pad = 0.03 * (hi - lo if hi > lo else hi)
-            groups = [(model, [0])] if model is not None else distinct_models(branches)
-            for model_i, members in groups:
-                tag = "" if len(groups) == 1 else _model_tag(branches[members[0]], branches)
-                shade = _MODEL_COLORS[groups.index((model_i, members)) % len(_MODEL_COLORS)]
-                color = {} if len(groups) == 1 else dict(color_open=shade, color_zero=shade, color_ir=shade)
-                _reference_lines(ax, model_i, lo - pad, hi + pad, modes, max_order, tag=tag, **color)
+            groups = [(model, list(range(len(branches))))] if model is not None else distinct_models(branches)
+            lines = _merge_reference(groups, modes)
+            for m, (values, members) in enumerate(lines):
+                tag = "" if len(lines) == 1 else _model_tag([branches[i] for i in members], branches)
+                shade = _MODEL_COLORS[m % len(_MODEL_COLORS)]
+                color = {} if len(lines) == 1 else dict(color_open=shade, color_zero=shade, color_ir=shade)
+                _reference_lines(ax, values, lo - pad, hi + pad, modes, max_order, tag=tag, **color)
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel(ylabel)
     ax.set_ylim(bottom=0)
@@ -126,16 +128,36 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
 _MODEL_COLORS = ("k", "0.5", "tab:brown", "tab:olive", "tab:pink", "tab:cyan")
 
 
-def _model_tag(branch, branches) -> str:
-    """What distinguishes ``branch``'s model from the others': elements and/or gap."""
-    meta = branch.metadata.get("model", {})
-    parts = []
-    if len({b.metadata.get("model", {}).get("n_elements") for b in branches}) > 1 and "n_elements" in meta:
-        parts.append(f"{meta['n_elements']} el.")
-    gaps = {_gap(b) for b in branches}
-    if len(gaps) > 1:
-        parts.append(f"gap {_gap(branch) * 1e3:g} mm")
-    return ", ".join(parts) or branch_label(branch)
+def _merge_reference(groups, modes) -> list[tuple[tuple, list[int]]]:
+    """Reference frequencies per distinct model, models with equal ones (to 1e-9, e.g.
+    differing only in the gap) merged: [((f_lin, f_zero), branch indices), ...]."""
+    out: list[tuple[tuple, list[int]]] = []
+    for model, members in groups:
+        values = reference_frequencies(model, modes)
+        if values is None:
+            continue
+        for known, idx in out:
+            if np.allclose(known[0], values[0], rtol=1e-9, atol=0) and (
+                    (known[1] is None) == (values[1] is None)
+                    and (known[1] is None or np.isclose(known[1], values[1], rtol=1e-9, atol=0))):
+                idx.extend(members)
+                break
+        else:
+            out.append((values, list(members)))
+    return out
+
+
+def _model_tag(members, branches) -> str:
+    """What distinguishes the models of ``members`` from the other branches': elements,
+    else gap, else the first member's label."""
+    elements = {b.metadata.get("model", {}).get("n_elements") for b in members}
+    if len(elements) == 1 and None not in elements and \
+            len({b.metadata.get("model", {}).get("n_elements") for b in branches}) > 1:
+        return f"{elements.pop()} el."
+    gaps = {_gap(b) for b in members}
+    if len(gaps) == 1 and len({_gap(b) for b in branches}) > 1:
+        return f"gap {gaps.pop() * 1e3:g} mm"
+    return branch_label(members[0])
 
 
 #: markers of the special points drawn by :func:`plot_backbone`

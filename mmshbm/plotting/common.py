@@ -119,13 +119,10 @@ def _reference_lines(ax, model, fmin, fmax, modes, max_order, *, color_open="0.5
     """Vertical lines: linear f1, zero-gap limit, f_k/n of higher modes inside [fmin, fmax]
     (sparse eigen-solves: about 0.2 s on 1000 elements). ``tag`` names the model in the
     legend when several models are drawn."""
-    n = max(max(modes, default=1), 1)
-    try:
-        f_lin = model.linear_frequencies(n)
-        f_zero = model.zero_gap_frequency() if model.n_contacts == 1 and model.gap > 0 else None
-    except (ValueError, np.linalg.LinAlgError) as err:
-        log.info("no reference lines: %s", err)
+    values = reference_frequencies(model, modes) if not isinstance(model, tuple) else model
+    if values is None:
         return
+    f_lin, f_zero = values
     suffix = f" ({tag})" if tag else ""
     ax.axvline(f_lin[0], color=color_open, ls=":", lw=1.2, label=f"linear $f_1$ = {f_lin[0]:.2f} Hz{suffix}")
     if f_zero is not None:
@@ -143,6 +140,19 @@ def _reference_lines(ax, model, fmin, fmax, modes, max_order, *, color_open="0.5
                 ax.annotate(f"$f_{k}/{order}$", xy=(f, 0.0), xycoords=("data", "axes fraction"),
                             xytext=(2, 3), textcoords="offset points", ha="left", va="bottom", fontsize=8,
                             color=color_ir)
+
+
+def reference_frequencies(model, modes=(2, 3)) -> tuple[np.ndarray, float | None] | None:
+    """(linear frequencies of modes 1..max(modes) (Hz), zero-gap limit (Hz) or None) of
+    ``model`` (sparse eigen-solves on large models); None when they cannot be computed."""
+    n = max(max(modes, default=1), 1)
+    try:
+        f_lin = model.linear_frequencies(min(n, len(model.l)))
+        f_zero = model.zero_gap_frequency() if model.n_contacts == 1 and model.gap > 0 else None
+    except (ValueError, np.linalg.LinAlgError) as err:
+        log.info("no reference lines: %s", err)
+        return None
+    return f_lin, f_zero
 
 
 def distinct_models(branches) -> list[tuple[object, list[int]]]:

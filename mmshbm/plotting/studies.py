@@ -146,7 +146,8 @@ def plot_figure2(study, *, marks: Sequence[float] = (1.5, 3.0, 6.0), marked: dic
     plot_time_signals(mb, pts, dofs=dofs, axes=right[:len(dofs)])
     note = right[0].get_title(loc="left")
     right[0].set_title("", loc="left")
-    right[0].set_title(f"marked points ({branch_label(mb)}): tip motion and contact force\n{note}", fontsize=9)
+    head = f"marked points ({branch_label(mb)}): tip motion and contact force"
+    right[0].set_title(f"{head}\n{note}", fontsize=9)
     if len(dofs) < 2:
         right[1].set_visible(False)
     for ax in right[:2]:

@@ -20,8 +20,9 @@ study summaries):
     The contact force, as the method represents it, falls below
     −:attr:`CheckThresholds.negative_force` (default 0.05) times the point's peak force:
     a tensile contact force is not Signorini's. Forces below
-    :attr:`CheckThresholds.force_floor` times the branch's largest contact force (default
-    1e-6) are round-off and not reported.
+    :attr:`CheckThresholds.force_floor` (default 1e-9) times the larger of the branch's
+    largest contact force and k_c·gap (the static contact stiffness times the gap) are
+    round-off (Newton's tolerance leaves ~1e-9 N on the default beam) and not reported.
 ``"incomplete"``
     The branch ended short of its bounds (its status is not ``"bound:<name>"``: a step
     budget ``max_steps``, a step size below ``ds_min``, a failed start, ...).
@@ -66,7 +67,8 @@ class CheckThresholds:
     negative_force : float
         Allowed tensile contact force, as a fraction of the point's peak force.
     force_floor : float
-        Forces below this fraction of the branch's largest contact force are round-off.
+        Forces below this fraction of max(branch's largest contact force, k_c·gap) are
+        round-off.
     n_samples : int
         Time samples per period for the signal checks and for shooting's coefficients.
     """
@@ -74,7 +76,7 @@ class CheckThresholds:
     min_mode_share: float = 0.5
     penetration: float = 0.05
     negative_force: float = 0.05
-    force_floor: float = 1e-6
+    force_floor: float = 1e-9
     n_samples: int = 256
 
     def __post_init__(self):
@@ -262,6 +264,9 @@ def _contact(branch, solver, th: CheckThresholds) -> list[Finding]:
     gaps = np.array([c.gap for c in model.contacts], dtype=float)[:, None]
     f_all = np.asarray(branch.contact_force_max, dtype=float)
     f_scale = float(np.nanmax(np.abs(f_all))) if len(f_all) and np.any(np.isfinite(f_all)) else 0.0
+    k_c = getattr(solver, "contact_stiffness", None)
+    if k_c is not None and np.isfinite(k_c):
+        f_scale = max(f_scale, float(k_c) * float(np.max(gaps)))
     pen = np.full(len(branch), -np.inf)
     neg = np.zeros(len(branch))
     for i, u in enumerate(branch.states):
