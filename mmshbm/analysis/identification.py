@@ -1,6 +1,6 @@
 """Material identification: Young's modulus and density from measured linear frequencies.
 
-The seed paper fits only E and ρ of the beam model to the measured linear eigenfrequencies
+The paper (Part I) fits only E and ρ of the beam model to the measured linear eigenfrequencies
 (contact open). What the frequencies can tell: in the Timoshenko model every stiffness
 term is proportional to E (bending E·I, shear κ·G·A with G = E / (2 (1 + ν)) at fixed ν)
 and every mass term to ρ (ρ·A and rotary ρ·I), so K = E·K̂ and M = ρ·M̂ and

@@ -467,7 +467,7 @@ def grid_specs(beam=None, *, model=None, harmonics=(1, 3, 5), elements=None, met
 
 def figure2_study(beam=None, harmonics=(1, 3, 5), elements=(8, 21), executor="process", workers: int = 2,
                   verbose: bool = False, **options) -> Study:
-    """The runs of the seed paper's Figure 2: H in {1, 3, 5} × {8, 21} elements, MMS-HBM,
+    """The runs of Figure 2 of Part I of the paper: H in {1, 3, 5} × {8, 21} elements, MMS-HBM,
     up to 10 gaps (see :func:`mmshbm.plotting.plot_figure2`)."""
     return run_study(beam, harmonics=harmonics, elements=elements, executor=executor, workers=workers,
                      verbose=verbose, **options)

@@ -1,4 +1,4 @@
-"""Plots of studies: styles per run and the seed paper's Figure 2 layout."""
+"""Plots of studies: styles per run and the Figure 2 layout of the paper."""
 
 from __future__ import annotations
 
@@ -93,7 +93,7 @@ def plot_study(study, *, measured=None, path=None, title: str | None = None, ax=
 
 def plot_figure2(study, *, marks: Sequence[float] = (1.5, 3.0, 6.0), marked: dict | None = None,
                  measured=None, path=None, title: str | None = None) -> Figure:
-    """The seed paper's Figure 2 layout from a study over H and elements.
+    """The Figure 2 layout of Part I of the paper from a study over H and elements.
 
     Left: backbone curves (tip amplitude in gaps against frequency) of every run, colour
     by H, solid for the most elements and dashed for fewer, with the linear frequency,

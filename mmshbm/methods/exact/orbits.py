@@ -93,7 +93,7 @@ class PeriodicOrbit:
 
 def _guess(system: PiecewiseLinearSystem, amplitude: float) -> tuple[np.ndarray, float]:
     """The first open mode scaled to the amplitude, and the half period of the one-DOF
-    analogue (DESIGN.md section 4 item 2) with ω1, ω2 the first open and closed frequencies."""
+    analogue (docs/design.md §5) with ω1, ω2 the first open and closed frequencies."""
     phi = system.open.modes[:, 0]
     x = amplitude * phi / (system.amplitude_row @ phi)
     w1, w2 = system.open.omega[0], system.closed.omega[0]
