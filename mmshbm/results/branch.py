@@ -406,6 +406,10 @@ def _entry_point(name: str):
 def rebuild_model(description: dict, gap: float | None = None):
     """Rebuild a :class:`~mmshbm.model.Model` from its ``description``.
 
+    The ``transforms`` the description records (a list of ``{"name": ..., "args": ...}``
+    appended by the ``Model.with_*`` methods that change the structure) are applied in
+    order after the base model is built.
+
     Parameters
     ----------
     description : dict
@@ -413,10 +417,6 @@ def rebuild_model(description: dict, gap: float | None = None):
         (``kind = "TimoshenkoBeam"``) or of :class:`~mmshbm.fe.oscillator.OneDofOscillator`.
     gap : float, optional
         The model's gap (m) if it differs from the description's (``Model.with_gap``).
-
-    The ``transforms`` the description records (``[{"name": "with_damping", "args":
-    {...}}, ...]``, appended by the ``Model.with_*`` methods that change the structure)
-    are applied in order after the base model is built.
 
     Raises
     ------
