@@ -52,7 +52,17 @@ suppress_warnings = ["ref.python", "config.cache"]
 
 def _plain_math(app, what, name, obj, options, lines):
     """Docstrings write |x| for absolute values and ``ds *= a``: plain text, not reST
-    substitutions or emphasis. Escape them outside literal blocks and inline literals."""
+    substitutions or emphasis. Escape them outside literal blocks and inline literals.
+    An indented block of equations after a line ending in a single colon is shown as a
+    literal block (as ``::`` would)."""
+    for i in range(len(lines) - 1):
+        line = lines[i]
+        rest = next((x for x in lines[i + 1:] if x.strip()), "")
+        indent = len(line) - len(line.lstrip())
+        opens = line.rstrip().endswith(":") and not line.rstrip().endswith("::")
+        if (opens and not line.lstrip().startswith((":", "..")) and not lines[i + 1].strip()
+                and len(rest) - len(rest.lstrip()) > indent):
+            lines[i] = line.rstrip() + ":"
     literal = False
     for i, line in enumerate(lines):
         stripped = line.strip()
