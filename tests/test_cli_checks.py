@@ -211,3 +211,17 @@ def test_validators_accept_good_values():
     for bad in ("0", "-1", "inf", "nan", "x"):
         with pytest.raises(argparse.ArgumentTypeError):
             cli_common.positive_float(bad)
+
+
+def test_elements_beyond_memory_refused_before_assembly(tmp_path, capsys):
+    assert main(["backbone", "--elements", "100000000000", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "100000000000 elements" in err and "GiB of memory" in err
+
+
+def test_many_elements_announced(caplog):
+    from mmshbm.methods.limits import check_beam_elements
+
+    with caplog.at_level("WARNING", logger="mmshbm.methods.limits"):
+        check_beam_elements(100_000)
+    assert "minutes per backbone" in caplog.text

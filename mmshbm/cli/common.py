@@ -133,6 +133,9 @@ def model(args):
 
         model = Model.from_npz(args.model_file)
         return model.with_gap(args.gap) if args.gap is not None else model
+    from ..methods.limits import check_beam_elements
+
+    check_beam_elements(args.elements)  # before assembling anything
     return beam(args).model(args.elements, grading=args.grading)
 
 

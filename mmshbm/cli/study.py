@@ -37,6 +37,10 @@ def run(args) -> int:
     from ..plotting import plot_figure2, plot_study
 
     params = common.params(args.param)
+    if args.elements:
+        from ..methods.limits import check_beam_elements
+
+        check_beam_elements(max(args.elements))  # before any run assembles a model
     measured = common.measured(args)
     marks = tuple(args.amplitudes) if args.amplitudes else common.DEFAULT_MARKS
     executor = None if args.executor == "serial" else args.executor
