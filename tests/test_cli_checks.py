@@ -225,3 +225,10 @@ def test_many_elements_announced(caplog):
     with caplog.at_level("WARNING", logger="mmshbm.methods.limits"):
         check_beam_elements(100_000)
     assert "minutes per backbone" in caplog.text
+
+
+def test_plot_repeats_the_findings(tmp_path, capsys):
+    assert main(["backbone", *SMALL, "--max-steps", "3", "--out", str(tmp_path)]) == 1
+    capsys.readouterr()
+    assert main(["plot", str(tmp_path / "backbone.npz"), "--kind", "backbone", "--out", str(tmp_path)]) == 0
+    assert "mmshbm plot: warning: mmshbm branch ended short of its bounds" in capsys.readouterr().err

@@ -27,6 +27,7 @@ def run(args) -> int:
     from ..results.branch import Branch
 
     data = load(args.file)
+    _show_findings(data)
     measured = common.measured(args)
     out = common.out_dir(args)
     stem = Path(args.file).stem
@@ -78,3 +79,19 @@ def run(args) -> int:
         plotting.plot_harmonic_content(branch, pts[-1], path=files[-1])
     common.wrote(*files)
     return 0
+
+
+def _show_findings(data) -> None:
+    """Repeat what the checks found when the results were computed (a file from before
+    the checks is checked now), as warnings: a plot must not look more certain than the run."""
+    import warnings
+
+    from .._warnings import BranchWarning
+    from ..results.branch import Branch
+
+    pairs = [("", data)] if isinstance(data, Branch) else \
+        [(f"run {', '.join(f'{k}={v}' for k, v in r.items())}: ", b) for r, b in data]
+    for prefix, branch in pairs:
+        found = branch.findings if "checks" in branch.metadata else branch.check(warn=False)
+        for finding in found:
+            warnings.warn(prefix + finding.message, BranchWarning, stacklevel=2)
