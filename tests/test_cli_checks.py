@@ -207,6 +207,7 @@ def test_csv_numbers_short_and_exact(tmp_path):
 
 def test_validators_accept_good_values():
     assert cli_common.positive_int("3") == 3
+    assert cli_common.non_negative_float("0") == 0.0 and cli_common.non_negative_int("0") == 0
     assert cli_common.positive_float("1e-3") == 1e-3
     for bad in ("0", "-1", "inf", "nan", "x"):
         with pytest.raises(argparse.ArgumentTypeError):

@@ -87,6 +87,12 @@ def non_negative_int(text: str) -> int:
     return _number(text, int, "an integer >= 0", lambda v: v >= 0)
 
 
+def non_negative_float(text: str) -> float:
+    """argparse type: a finite number >= 0 (for options where 0 means something, e.g. no
+    damping)."""
+    return _number(text, float, "a finite number >= 0", lambda v: v >= 0)
+
+
 def out_dir(args) -> Path:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
