@@ -17,6 +17,7 @@ PACKAGE = pathlib.Path(__file__).resolve().parents[1] / "mmshbm"
 LAYERS = {
     "mmshbm._validate": 0,
     "mmshbm._warnings": 0,
+    "mmshbm._files": 0,
     "mmshbm.model": 1,
     "mmshbm.fe": 2,
     "mmshbm.core": 3,

@@ -59,7 +59,7 @@ def test_frequency_energy(branch):
 def test_time_signals_are_the_branch_signals(branch, tmp_path):
     pts = plotting.points_at(branch, [1.5e-3, 4e-3])
     assert branch.amplitude[pts[0]] >= 1.5e-3 > branch.amplitude[pts[0] - 1]
-    fig = plotting.plot_time_signals(branch, pts, path=tmp_path / "t.png")
+    fig = plotting.plot_time_signals(branch, pts, path=tmp_path / "t.png", signals="series")
     model = branch.get_model()
     assert len(fig.axes) == len(model.c) == 2  # tip deflection and tip rotation
     t, q = branch.time_signals(pts[1], dofs=[int(d) for d in model.c], n_samples=256)

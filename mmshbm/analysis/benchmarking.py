@@ -19,7 +19,7 @@ References (column ``reference``):
 * one-DOF oscillator: the closed form :meth:`~mmshbm.fe.oscillator.OneDofOscillator.frequency`;
 * beam: :func:`mmshbm.methods.exact.periodic_orbit` started from the MMS-HBM (H = 5) orbit, if it
   converges; otherwise a high-H MMS-HBM run if H = 25 and H = 40 agree to a tenth of the
-  target; otherwise (*equal H*, DESIGN.md section 4: "compare on the beam at equal H")
+  target; otherwise (*equal H*, docs/design.md §5: "compare methods on the beam at equal H")
   the H = 5 MMS-HBM solution with N = 1024 samples, i.e. the nonlinear mode of the
   5-harmonic problem converged in N. Then both harmonic-balance methods use H = 5
   (MMS-HBM's only free resolution is N; penalty-HBM is tuned in k_p) and shooting, which
@@ -57,7 +57,7 @@ _PENALTY_H = ((5, 9, 15, 25, 40), (9, 15, 25))
 _PENALTY_FACTORS = ((1e2, 1e3, 1e4, 1e5, 1e6), (1e3, 1e4, 1e5))
 _STEPS = ((32, 64, 128, 256, 512, 1024, 2048, 4096), (64, 128, 256, 512, 1024))
 _BEAM_STEPS = ((128, 256, 512, 1024, 2048), (128, 256))
-#: equal-H fallback on the beam: the seed's H, and the N of the reference solution
+#: equal-H fallback on the beam: the paper's H, and the N of the reference solution
 _EQUAL_H = 5
 _REFERENCE_N = 1024
 #: high-H reference check on the beam

@@ -2,7 +2,7 @@
 (and, in :mod:`mmshbm.analysis.contact_fit`, re-exported here, the contact-layer stiffness
 from a measured backbone: :func:`fit_contact_stiffness`).
 
-The seed paper fits only E and ρ of the beam model to the measured linear eigenfrequencies
+The paper (Part I) fits only E and ρ of the beam model to the measured linear eigenfrequencies
 (contact open). What the frequencies can tell: in the Timoshenko model every stiffness
 term is proportional to E (bending E·I, shear κ·G·A with G = E / (2 (1 + ν)) at fixed ν)
 and every mass term to ρ (ρ·A and rotary ρ·I), so K = E·K̂ and M = ρ·M̂ and
@@ -42,6 +42,11 @@ _FITTABLE = ("E", "rho")
 _COND_LIMIT = 1e6
 #: step (in log parameters) of the central-difference Jacobian
 _FD_STEP = 1e-3
+#: a fit whose rms relative frequency error exceeds this does not reproduce the data: the
+#: parameters are then not identified whatever the conditioning (a model error dominates)
+_RMS_LIMIT = 0.05
+#: nor are parameters whose standard deviation exceeds this fraction of their value
+_STD_LIMIT = 0.5
 
 
 @dataclass(frozen=True)
@@ -69,7 +74,9 @@ class FitReport:
     condition_number : float
         Their ratio (inf when one vanishes).
     identifiable : bool
-        True when the condition number is below 1e6.
+        True when the condition number is below 1e6, the fitted model reproduces the
+        frequencies (rms relative error at most 5 %) and no parameter's relative standard
+        deviation exceeds 50 %.
     relative_std : dict
         Standard deviation of each parameter relative to its value, from the residual
         variance and (JᵀJ)⁻¹; NaN when not identifiable or with no redundancy.
@@ -255,12 +262,27 @@ def fit_material(beam, measured_frequencies, n_elements: int = 21, *, modes=None
         cov = s2 * la.inv(sol.jac.T @ sol.jac)
         std = {name: float(math.sqrt(max(cov[i, i], 0.0))) for i, name in enumerate(fit)}
     rel = f_fit / f_meas - 1.0
+    rms = float(np.sqrt(np.mean(rel**2)))
+    order = np.argsort(modes)
+    if np.any(np.diff(f_meas[order]) <= 0):
+        notes.append("the measured frequencies do not increase with the mode number: they cannot be "
+                     "these modes' eigenfrequencies")
+    if rms > _RMS_LIMIT:
+        identifiable = False
+        notes.append(f"the fitted model misses the measured frequencies by {100 * rms:.3g} % rms (more than "
+                     f"{100 * _RMS_LIMIT:g} %): the data and the model disagree, so nothing is identified; "
+                     "check the mode numbers and the geometry")
+    wide = [name for name, v in std.items() if np.isfinite(v) and v > _STD_LIMIT]
+    if wide:
+        identifiable = False
+        notes.append(f"{', '.join(wide)} uncertain by more than {100 * _STD_LIMIT:g} % (relative standard "
+                     "deviation)")
     values = {name: float(getattr(fitted, name)) for name in _FITTABLE}
     message = sol.message if sol.success else f"not converged: {sol.message}"
     report = FitReport(
         parameters=fit, initial=x0, values=values, modes=modes.astype(int), measured=f_meas,
         initial_frequencies=f_initial, frequencies=f_fit, relative_residuals=rel,
-        rms_relative_error=float(np.sqrt(np.mean(rel**2))), mass=mass, model_mass=float(fitted.rho * volume),
+        rms_relative_error=rms, mass=mass, model_mass=float(fitted.rho * volume),
         singular_values=sv, condition_number=cond, identifiable=identifiable, relative_std=std,
         ratio=values["E"] / values["rho"], success=bool(sol.success), message=message, nfev=int(sol.nfev),
         notes=notes)

@@ -103,8 +103,10 @@ def load_measured(path) -> MeasuredBackbone:
     where = str(path)
     try:
         text = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as err:
-        raise ValueError(f"cannot read measured file {where!r}: {err}") from None
+    except UnicodeDecodeError:
+        raise ValueError(f"measured file {where!r} is not a text (CSV) file: it has binary content") from None
+    except OSError as err:
+        raise ValueError(f"cannot read measured file {where!r}: {err.strerror or err}") from None
     lines = [(n, line) for n, line in enumerate(text.splitlines(), start=1)
              if line.strip() and not line.lstrip().startswith("#")]
     if not lines:

@@ -26,6 +26,7 @@ import itertools
 import logging
 import multiprocessing
 import time
+import warnings
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
@@ -33,6 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import _validate as check
+from .._warnings import BranchWarning
 from ..results.branch import (
     Branch,
     branch_from_payload,
@@ -41,7 +43,7 @@ from ..results.branch import (
     versions,
     write_archive,
 )
-from .tables import ConvergenceFit, FrequencyTable, format_convergence
+from .tables import ConvergenceFit, FrequencyTable, coords_text, format_convergence, missing_note, summarize
 
 __all__ = ["run_study", "figure2_study", "Study", "RunSpec", "FrequencyTable", "ConvergenceFit",
            "STUDY_FORMAT"]
@@ -132,8 +134,11 @@ def _execute(spec: RunSpec) -> Branch:
     max_amplitude = spec.max_amplitude
     if max_amplitude is not None and spec.unit == "gap":
         max_amplitude *= model.gap
-    branch = backbone(model, harmonics=spec.harmonics, method=spec.method, max_amplitude=max_amplitude,
-                      **spec.options)
+    with warnings.catch_warnings():
+        # recorded in branch.metadata["checks"]; run_study warns once per run, on the parent side
+        warnings.simplefilter("ignore", BranchWarning)
+        branch = backbone(model, harmonics=spec.harmonics, method=spec.method, max_amplitude=max_amplitude,
+                          **spec.options)
     branch.solver = None
     return branch
 
@@ -242,8 +247,11 @@ class Study:
                 values = values[order]
                 fixed = {a: self.runs[idx[0]].get(a) for a in others if a in self.runs[idx[0]]}
                 for j, amp in enumerate(table.amplitudes):
-                    fits.append(ConvergenceFit.fit(vary, fixed, float(amp), table.unit, values,
-                                                   table.frequency[idx, j]))
+                    fit = ConvergenceFit.fit(vary, fixed, float(amp), table.unit, values,
+                                             table.frequency[idx, j])
+                    fit.note = missing_note(vary, [self.runs[i] for i in idx],
+                                            [self.branches[i] for i in idx], table.frequency[idx, j])
+                    fits.append(fit)
         return fits
 
     def report(self, amplitudes, unit: str = "gap") -> str:
@@ -257,6 +265,7 @@ class Study:
         fits = self.convergence(amplitudes, unit)
         if fits:
             parts.append(format_convergence(fits))
+        parts.append(self.summary())
         return "\n\n".join(parts)
 
     def to_csv(self, path, amplitudes, unit: str = "gap") -> Path:
@@ -294,9 +303,13 @@ class Study:
                 b.attach_solver()
         return cls(runs=runs, branches=branches, metadata=dict(meta.get("metadata", {})))
 
+    def summary(self) -> str:
+        """Text: runs that reached their bounds, those that did not and why, and findings."""
+        return summarize(self.runs, self.branches)
+
     def __repr__(self) -> str:
-        status = sum(b.completed for b in self.branches)
-        return f"Study({len(self)} runs over {self.axes}, {status} completed)"
+        done = sum(b.completed for b in self.branches)
+        return f"Study({len(self)} runs over {self.axes}, {done} completed, {len(self) - done} incomplete)"
 
 
 # ---------------------------------------------------------------------- running
@@ -371,9 +384,13 @@ def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
         grid["elements"] = [int(n) for n in (elements or (8, 21))]
         grid["grading"] = grading
     log.info("study: %d runs in %.2f s (%s)", len(specs), elapsed, kind)
-    return Study(runs=[dict(s.coords) for s in specs], branches=branches,
-                 metadata={"grid": grid, "executor": kind, "workers": workers, "elapsed_s": elapsed,
-                           "model_file": str(model) if isinstance(model, str | Path) else None})
+    study = Study(runs=[dict(s.coords) for s in specs], branches=branches,
+                  metadata={"grid": grid, "executor": kind, "workers": workers, "elapsed_s": elapsed,
+                            "model_file": str(model) if isinstance(model, str | Path) else None})
+    for coords, branch in study:
+        for finding in branch.findings:
+            warnings.warn(f"run {coords_text(coords)}: {finding.message}", BranchWarning, stacklevel=2)
+    return study
 
 
 def grid_specs(beam=None, *, model=None, harmonics=(1, 3, 5), elements=None, methods=("mmshbm",),
@@ -450,7 +467,7 @@ def grid_specs(beam=None, *, model=None, harmonics=(1, 3, 5), elements=None, met
 
 def figure2_study(beam=None, harmonics=(1, 3, 5), elements=(8, 21), executor="process", workers: int = 2,
                   verbose: bool = False, **options) -> Study:
-    """The runs of the seed paper's Figure 2: H in {1, 3, 5} × {8, 21} elements, MMS-HBM,
+    """The runs of Figure 2 of Part I of the paper: H in {1, 3, 5} × {8, 21} elements, MMS-HBM,
     up to 10 gaps (see :func:`mmshbm.plotting.plot_figure2`)."""
     return run_study(beam, harmonics=harmonics, elements=elements, executor=executor, workers=workers,
                      verbose=verbose, **options)

@@ -10,7 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["FrequencyTable", "ConvergenceFit", "format_convergence"]
+from ..results.diagnostics import incomplete_reason
+
+__all__ = ["FrequencyTable", "ConvergenceFit", "format_convergence", "summarize", "coords_text"]
 
 
 @dataclass
@@ -144,6 +146,8 @@ class ConvergenceFit:
         runs; NaN with fewer than two usable runs.
     n_fit : int
         Number of runs in the fit.
+    note : str
+        Why runs are missing (e.g. the reference run stopped short of the amplitude).
     """
 
     vary: str
@@ -155,6 +159,7 @@ class ConvergenceFit:
     difference: np.ndarray
     rate: float
     n_fit: int
+    note: str = ""
 
     @classmethod
     def fit(cls, vary, fixed, amplitude, unit, values, frequency) -> ConvergenceFit:
@@ -181,15 +186,66 @@ def format_convergence(fits: Sequence[ConvergenceFit]) -> str:
     lines = ["Observed convergence rate p, |f - f_ref| ~ x^(-p), x = H or elements; reference = the finest "
              "run of each series (not the exact solution); p from a log-log least-squares fit "
              "(two points: a two-point slope)"]
-    head = ("vary", "fixed", "A", "x", "|f - f_ref| (Hz)", "p")
+    head = ("vary", "fixed", "A", "x", "|f - f_ref| (Hz)", "p", "note")
     rows = []
     for fit in fits:
         fixed = " ".join(f"{k}={v}" for k, v in fit.fixed.items())
         xs = ",".join(f"{v:g}" for v in fit.values)
-        diffs = ",".join("nan" if not np.isfinite(d) else f"{d:.3g}" for d in fit.difference[:-1])
+        diffs = ",".join("-" if not np.isfinite(d) else f"{d:.3g}" for d in fit.difference[:-1])
         unit = "gap" if fit.unit == "gap" else "m"
         rows.append((fit.vary, fixed, f"{fit.amplitude:g} {unit}", xs, diffs,
-                     "-" if math.isnan(fit.rate) else f"{fit.rate:.2f}"))
+                     "-" if math.isnan(fit.rate) else f"{fit.rate:.2f}", fit.note))
     widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(head)]
     fmt = "  ".join(f"{{:<{w}}}" for w in widths)
     return "\n".join([lines[0], fmt.format(*head), *(fmt.format(*r) for r in rows)])
+
+
+def coords_text(coords: dict) -> str:
+    """``{"harmonics": 7, "elements": 21}`` -> ``"harmonics=7, elements=21"``."""
+    return ", ".join(f"{k}={v}" for k, v in coords.items())
+
+
+def summarize(runs: Sequence[dict], branches: Sequence) -> str:
+    """How many runs reached their bounds, which did not and why (with the amplitude
+    they stopped at), and what the branch checks found (``branch.findings``)."""
+    done = sum(b.completed for b in branches)
+    lines = [f"{len(runs)} runs: {done} reached their bounds, {len(runs) - done} incomplete"]
+    for coords, b in zip(runs, branches, strict=True):
+        if not b.completed:
+            lines.append(f"  incomplete: {coords_text(coords)}: {_reached(b)}"
+                         f"{incomplete_reason(b.status, b.metadata)} (status {b.status!r})")
+    for coords, b in zip(runs, branches, strict=True):
+        found = [_short(f) for f in b.findings if f.kind != "incomplete"]
+        if found:
+            lines.append(f"  checks: {coords_text(coords)}: {'; '.join(found)}")
+    return "\n".join(lines)
+
+
+def _short(finding) -> str:
+    v = finding.value
+    if finding.kind == "left_family":
+        return f"left its mode's family at points {finding.first}..{finding.last} (share down to {v:.2g})"
+    if finding.kind == "penetration":
+        return f"contact DOF through the stop by up to {v:.3g} gaps"
+    if finding.kind == "negative_force":
+        return f"contact force pulls, down to {abs(v):.3g} of its peak"
+    return finding.kind
+
+
+def _reached(branch) -> str:
+    if not len(branch):
+        return "no point, "
+    gap = branch.gap
+    a = float(np.nanmax(branch.amplitude))
+    return f"stopped at {a / gap:.3g} gaps, " if gap else f"stopped at {a:.3g} m, "
+
+
+def missing_note(vary: str, runs: Sequence[dict], branches: Sequence, frequency) -> str:
+    """Why runs of a convergence series have no frequency at the amplitude (NaN entries of
+    ``frequency``): they never reach it, and why they stopped when they are incomplete."""
+    notes = []
+    for r, b, f in zip(runs, branches, frequency, strict=True):
+        if not np.isfinite(f):
+            why = "" if b.completed else f" ({incomplete_reason(b.status, b.metadata)})"
+            notes.append(f"{vary}={r[vary]} does not reach it{why}")
+    return "; ".join(notes)

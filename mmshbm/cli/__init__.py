@@ -1,14 +1,17 @@
-"""Command line: ``mmshbm modes | backbone | study | fit | bench | plot | frf``.
+"""Nonlinear modes (backbone curves) of structures with impact, by MMS-HBM.
 
-Every subcommand writes its files into ``--out`` (default ``out/``) and prints one line
-per file written. Bad input becomes a one-line message on stderr and exit code 2, never
-a traceback; a branch that stops before its bounds gives exit code 1.
+Every subcommand writes its files into --out (default out/) and prints one line per
+file written. Exit codes: 0 when every branch reached its bounds; 1 when a branch ended
+short of them (step budget, step size, failed start); 2 for bad input (a one-line
+message on stderr, never a traceback). Warnings about what a result is (another family
+of motions, contact violated by the truncated series, short of its bounds) are printed
+as "warning:" lines on stderr.
 
-Examples::
+Examples:
 
     mmshbm backbone                        # default beam, 21 elements, H = 5
     mmshbm backbone -H 3 --elements 8 --measured measured.csv
-    mmshbm study --figure2                 # the seed's Figure 2 and its table
+    mmshbm study --figure2                 # Figure 2 of the paper and its table
     mmshbm study -H 1 3 5 7 --elements 8 21 --param gap=0.001,0.002
     mmshbm fit 45.8 286.5 --fit E          # Young's modulus from measured frequencies
     mmshbm plot out/backbone.npz --points 1.5 3 6
@@ -20,8 +23,10 @@ from __future__ import annotations
 import argparse
 import logging
 import sys
+import warnings
 
 from .. import __version__
+from .._warnings import MmshbmWarning
 from . import backbone, bench, common, fit, frf, modes, plot, study
 
 log = logging.getLogger("mmshbm")
@@ -32,15 +37,16 @@ COMMANDS = (modes, backbone, study, fit, bench, plot, frf)
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``mmshbm`` argument parser."""
-    parser = common.Parser(prog="mmshbm", description=__doc__.splitlines()[0],
-                           formatter_class=argparse.RawDescriptionHelpFormatter,
-                           epilog="\n".join(__doc__.splitlines()[6:]))
+    lines = __doc__.splitlines()
+    parser = common.Parser(prog="mmshbm", description="\n".join(lines[:8]), formatter_class=common.Formatter,
+                           epilog="\n".join(lines[9:]))
     parser.add_argument("--version", action="version", version=f"mmshbm {__version__}")
     parser.add_argument("-v", "--verbose", action="count", default=0,
                         help="more output: -v progress bars (on a terminal) and info logs, -vv debug logs")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=common.Parser)
     for command in COMMANDS:
         command.register(sub)
+    common.finish_subparsers(sub)
     return parser
 
 
@@ -62,7 +68,10 @@ def main(argv: list[str] | None = None) -> int:
         root.addHandler(handler)
     root.setLevel(level)
     try:
-        return args.func(args)
+        with warnings.catch_warnings():
+            warnings.simplefilter("always", MmshbmWarning)
+            warnings.showwarning = _one_line_warning(args.command)
+            return args.func(args)
     except common.USER_ERRORS as err:
         message = str(err).splitlines()[0] if str(err) else type(err).__name__
         print(f"mmshbm {args.command}: error: {message}", file=sys.stderr)
@@ -70,6 +79,19 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("mmshbm: interrupted", file=sys.stderr)
         return 130
+
+
+def _one_line_warning(command: str):
+    """A ``warnings.showwarning`` that prints the package's warnings as one line each."""
+    default = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, MmshbmWarning):
+            print(f"mmshbm {command}: warning: {message}", file=sys.stderr)
+        else:
+            default(message, category, filename, lineno, file, line)
+
+    return show
 
 
 if __name__ == "__main__":  # pragma: no cover

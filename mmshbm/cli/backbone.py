@@ -11,10 +11,13 @@ def register(sub) -> None:
     """Add the subcommand to the subparsers ``sub``."""
     p = sub.add_parser("backbone", help="first nonlinear mode: backbone.csv/.npz/.png")
     common.beam_options(p)
-    p.add_argument("-H", "--harmonics", type=int, default=5, help="harmonics (default 5)")
-    p.add_argument("--method", default="mmshbm", choices=["mmshbm", "penalty", "shooting"])
-    p.add_argument("--max-amplitude", type=float, default=None, help="in gaps (default 10)")
-    p.add_argument("--max-steps", type=int, default=None, help="continuation step budget")
+    p.add_argument("-H", "--harmonics", type=common.positive_int, default=5, help="harmonics H (default 5)")
+    p.add_argument("--method", default="mmshbm", choices=["mmshbm", "penalty", "shooting"],
+                   help="MMS-HBM or a baseline")
+    p.add_argument("--max-amplitude", type=common.positive_float, default=None,
+                   help="largest amplitude, in gaps (default 10)")
+    p.add_argument("--max-steps", type=common.positive_int, default=None,
+                   help="continuation step budget (default 1000); a run that uses it up exits 1")
     p.add_argument("--measured", default=None, help="measured backbone CSV to overlay")
     p.add_argument("--checkpoint", default=None, metavar="FILE",
                    help="write converged points to FILE as they go")
@@ -28,7 +31,7 @@ def run(args) -> int:
 
     measured = common.measured(args)
     model = common.model(args)
-    max_amp = args.max_amplitude * model.gap if args.max_amplitude else None
+    max_amp = args.max_amplitude * model.gap if args.max_amplitude is not None else None
     extra = {}
     if args.checkpoint:
         Path(args.checkpoint).parent.mkdir(parents=True, exist_ok=True)
@@ -47,4 +50,4 @@ def run(args) -> int:
         plot_frequency_energy(branch, path=files[-1])
     print(repr(branch))
     common.wrote(*files)
-    return 0 if branch.completed else 1
+    return common.exit_code([branch])

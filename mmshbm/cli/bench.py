@@ -10,11 +10,15 @@ def register(sub) -> None:
     p = sub.add_parser("bench", help="MMS-HBM against penalty-HBM and shooting at equal accuracy")
     common.out_option(p)
     p.add_argument("--quick", action="store_true", help="a fast, rough run")
-    p.add_argument("--model", default="beam21", choices=["beam21", "beam8", "oscillator"])
-    p.add_argument("--target", type=float, default=None, help="relative frequency accuracy (default 1e-4)")
-    p.add_argument("--methods", nargs="+", default=None, choices=["mmshbm", "penalty", "shooting"])
-    p.add_argument("--repeats", type=int, default=None, help="timing repeats")
-    p.add_argument("--amplitude", type=float, default=None, help="amplitude (gaps) compared at (default 2)")
+    p.add_argument("--model", default="beam21", choices=["beam21", "beam8", "oscillator"],
+                   help="the benchmark model")
+    p.add_argument("--target", type=common.positive_float, default=None,
+                   help="relative frequency accuracy (default 1e-4)")
+    p.add_argument("--methods", nargs="+", default=None, choices=["mmshbm", "penalty", "shooting"],
+                   help="methods (default all three)")
+    p.add_argument("--repeats", type=common.positive_int, default=None, help="timing repeats (default 3)")
+    p.add_argument("--amplitude", type=common.positive_float, default=None,
+                   help="amplitude (gaps) compared at (default 2)")
     p.set_defaults(func=run)
 
 

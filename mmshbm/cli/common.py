@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import math
 import sys
 from pathlib import Path
 
@@ -30,10 +31,77 @@ class Parser(argparse.ArgumentParser):
         raise Usage(f"{self.prog}: error: {message}")
 
 
+class Formatter(argparse.RawDescriptionHelpFormatter):
+    """Plain-text help: descriptions as written, and every option's default shown
+    ("(default: X)") unless its help text already names it."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        default = action.default
+        quiet = (argparse._HelpAction, argparse._VersionAction, argparse._CountAction)
+        if ("default" in text or default is None or default is False or default is argparse.SUPPRESS
+                or isinstance(action, quiet) or not action.option_strings):
+            return text
+        if isinstance(default, list | tuple):
+            default = " ".join(str(d) for d in default)
+        return f"{text} (default: {str(default).replace('%', '%%')})".lstrip()
+
+
+def finish_subparsers(sub) -> None:
+    """Give every subcommand (also those registered later by other modules) plain-text
+    help with defaults, a description, and the global ``-v`` after the subcommand."""
+    for name, p in sub.choices.items():
+        p.formatter_class = Formatter
+        if p.description is None:
+            helps = {a.dest: a.help for a in sub._choices_actions}
+            p.description = helps.get(name)
+        if not any("-v" in a.option_strings for a in p._actions):
+            p.add_argument("-v", "--verbose", action="count", default=argparse.SUPPRESS,
+                           help="more output (as before the subcommand): -v progress bars and info logs, "
+                                "-vv debug logs")
+
+
+# ---------------------------------------------------------------------- option types
+def _number(text: str, kind, what: str, ok) -> float:
+    try:
+        value = kind(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be {what}, got {text!r}") from None
+    if kind is float and not math.isfinite(value) or not ok(value):
+        raise argparse.ArgumentTypeError(f"must be {what}, got {text!r}")
+    return value
+
+
+def positive_int(text: str) -> int:
+    """argparse type: an integer >= 1."""
+    return _number(text, int, "an integer >= 1", lambda v: v >= 1)
+
+
+def positive_float(text: str) -> float:
+    """argparse type: a finite number > 0 (0 is refused, not ignored)."""
+    return _number(text, float, "a finite number > 0", lambda v: v > 0)
+
+
+def non_negative_int(text: str) -> int:
+    """argparse type: an integer >= 0."""
+    return _number(text, int, "an integer >= 0", lambda v: v >= 0)
+
+
+def non_negative_float(text: str) -> float:
+    """argparse type: a finite number >= 0 (for options where 0 means something, e.g. no
+    damping)."""
+    return _number(text, float, "a finite number >= 0", lambda v: v >= 0)
+
+
 def out_dir(args) -> Path:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     return out
+
+
+def exit_code(branches) -> int:
+    """0 when every branch reached its bounds, else 1 (their warnings say why)."""
+    return 0 if all(b.completed for b in branches) else 1
 
 
 def wrote(*paths) -> None:
@@ -81,6 +149,9 @@ def model(args):
         if args.gap is not None:
             model = model.with_gap(args.gap)
     else:
+        from ..methods.limits import check_beam_elements
+
+        check_beam_elements(args.elements)  # before assembling anything
         model = beam(args).model(args.elements, grading=args.grading, massless_tip=not convert)
     if layer is not None:
         model = model.with_contact_layer(None if layer == "default" else layer)
@@ -127,15 +198,16 @@ def out_option(p):
     """--out."""
     p.add_argument("--out", default="out", help="output folder (default ./out)")
 
+
 def beam_options(p, elements=True, model_file=True, conversions=None):
     """The default beam's options (and --model-file, and with it, unless ``conversions`` is
     False, --contact-layer / --massless-contact)."""
     if elements:
-        p.add_argument("--elements", type=int, default=21, help="beam elements (default 21)")
-    p.add_argument("--grading", type=float, default=10.0, help="root/tip element length ratio")
-    p.add_argument("--gap", type=float, default=None, help="gap (m) (default: the beam's, 1 mm)")
-    p.add_argument("--E", type=float, default=None, help="Young's modulus (Pa) (default 210e9)")
-    p.add_argument("--rho", type=float, default=None, help="density (kg/m^3) (default 7850)")
+        p.add_argument("--elements", type=positive_int, default=21, help="beam elements (default 21)")
+    p.add_argument("--grading", type=positive_float, default=10.0, help="root/tip element length ratio")
+    p.add_argument("--gap", type=positive_float, default=None, help="gap (m) (default: the beam's, 1 mm)")
+    p.add_argument("--E", type=positive_float, default=None, help="Young's modulus (Pa) (default 210e9)")
+    p.add_argument("--rho", type=positive_float, default=None, help="density (kg/m^3) (default 7850)")
     if model_file:
         p.add_argument("--model-file", default=None,
                        help="a user model (.npz of Model.save_npz) instead of the beam; its contact DOF may "
@@ -145,7 +217,7 @@ def beam_options(p, elements=True, model_file=True, conversions=None):
         g.add_argument("--contact-layer", type=stiffness, default=None, metavar="K",
                        help="keep the contact DOF's mass and join a massless contact node to it by a spring "
                             "of K N/m ('default': 1e5 x the static stiffness at the contact)")
-        g.add_argument("--massless-contact", type=int, nargs="*", default=None, metavar="DOF",
+        g.add_argument("--massless-contact", type=non_negative_int, nargs="*", default=None, metavar="DOF",
                        help="remove the mass of the contact node's DOFs (or of the DOFs given); reports the "
                             "mass removed and the frequency shift")
     out_option(p)

@@ -15,16 +15,19 @@ def register(sub) -> None:
     p = sub.add_parser("fit", help="Young's modulus (and density) from measured linear frequencies; "
                                    "the contact stiffness from a measured backbone (--measured)")
     common.beam_options(p, model_file=True, conversions=False)
-    p.add_argument("frequencies", type=float, nargs="*", help="measured linear frequencies (Hz)")
-    p.add_argument("--modes", type=int, nargs="+", default=None,
+    p.add_argument("frequencies", type=common.positive_float, nargs="*",
+                   help="measured linear frequencies (Hz)")
+    p.add_argument("--modes", type=common.positive_int, nargs="+", default=None,
                    help="their mode numbers (default 1 2 ...)")
     p.add_argument("--fit", nargs="+", default=["E"], choices=["E", "rho"], help="parameters (default E)")
-    p.add_argument("--mass", type=float, default=None, help="measured beam mass (kg), to fit E and rho")
+    p.add_argument("--mass", type=common.positive_float, default=None,
+                   help="measured beam mass (kg), to fit E and rho")
     p.add_argument("--measured", default=None, metavar="CSV",
                    help="measured backbone (frequency, amplitude columns): fit the stiffness of a contact "
                         "layer on the model with the tip's mass (after E from the frequencies, if given)")
-    p.add_argument("-H", "--harmonics", type=int, default=5, help="harmonics of the backbones (default 5)")
-    p.add_argument("--initial", type=float, default=None, metavar="K",
+    p.add_argument("-H", "--harmonics", type=common.positive_int, default=5,
+                   help="harmonics of the backbones (default 5)")
+    p.add_argument("--initial", type=common.positive_float, default=None, metavar="K",
                    help="start value of the contact stiffness (N/m) (default: a scan)")
     p.set_defaults(func=run)
 
@@ -58,7 +61,7 @@ def run(args) -> int:
             "beam": {k: getattr(beam, k) for k in ("length", "width", "height", "E", "rho", "nu", "gap")},
             "message": report.message, "notes": report.notes})
         texts.append(report.summary())
-        ok = ok and report.success
+        ok = ok and report.success and report.identifiable
     if measured is not None:
         if args.model_file:
             from ..model.model import Model

@@ -15,24 +15,27 @@ def register(sub) -> None:
                                    "dashed. Default: the default beam with 0.5 %% modal damping, a force at "
                                    "the last node with mass.")
     common.beam_options(p)
-    p.add_argument("-H", "--harmonics", type=int, default=5, help="harmonics (default 5)")
+    p.add_argument("-H", "--harmonics", type=common.positive_int, default=5, help="harmonics (default 5)")
     p.add_argument("--method", default="mmshbm", choices=["mmshbm", "penalty", "shooting"])
-    p.add_argument("--damping", type=float, default=0.005,
+    p.add_argument("--damping", type=common.non_negative_float, default=0.005,
                    help="modal damping ratio of every mode (default 0.005)")
-    p.add_argument("--rayleigh", type=float, nargs=2, default=None, metavar=("ALPHA", "BETA"),
+    p.add_argument("--rayleigh", type=common.non_negative_float, nargs=2, default=None,
+                   metavar=("ALPHA", "BETA"),
                    help="Rayleigh damping alpha (1/s) and beta (s) instead of --damping")
-    p.add_argument("--force", type=float, default=2.3, help="force amplitude (N) (default 2.3)")
-    p.add_argument("--force-dof", type=int, default=None,
+    p.add_argument("--force", type=common.positive_float, default=2.3,
+                   help="force amplitude (N) (default 2.3)")
+    p.add_argument("--force-dof", type=common.non_negative_int, default=None,
                    help="DOF the force acts on (default: the last DOF with mass before the contact DOF)")
-    p.add_argument("--base-acceleration", type=float, default=None, metavar="A",
+    p.add_argument("--base-acceleration", type=common.positive_float, default=None, metavar="A",
                    help="excite the support instead: acceleration amplitude (m/s^2) (beam models)")
-    p.add_argument("--range", type=float, nargs=2, default=(40.0, 60.0), metavar=("F0", "F1"),
+    p.add_argument("--range", type=common.positive_float, nargs=2, default=(40.0, 60.0), metavar=("F0", "F1"),
                    help="excitation frequency range in Hz (default 40 60)")
-    p.add_argument("--max-steps", type=int, default=None, help="continuation step budget")
+    p.add_argument("--max-steps", type=common.positive_int, default=None, help="continuation step budget")
     p.add_argument("--phase-resonance", action="store_true",
                    help="also the phase-resonance backbone with the damped (EPMC) and conservative backbones "
                         "(phase_resonance.png/.csv)")
-    p.add_argument("--max-amplitude", type=float, default=6.0, help="phase resonance: in gaps (default 6)")
+    p.add_argument("--max-amplitude", type=common.positive_float, default=6.0,
+                   help="phase resonance: in gaps (default 6)")
     p.add_argument("--measured", default=None, help="measured backbone CSV to overlay")
     p.set_defaults(func=run)
 

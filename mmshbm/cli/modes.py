@@ -9,7 +9,7 @@ def register(sub) -> None:
     """Add the subcommand to the subparsers ``sub``."""
     p = sub.add_parser("modes", help="linear frequencies (contact open)")
     common.beam_options(p)
-    p.add_argument("-n", type=int, default=3, help="number of modes (default 3)")
+    p.add_argument("-n", type=common.positive_int, default=3, help="number of modes (default 3)")
     p.set_defaults(func=run)
 
 

@@ -13,8 +13,9 @@ def register(sub) -> None:
     common.out_option(p)
     p.add_argument("file", help="a .npz written by Branch.save / Study.save (backbone, study)")
     p.add_argument("--kind", nargs="+", default=["all"],
-                   choices=["all", "backbone", "energy", "peak_force", "signals", "force", "harmonics"])
-    p.add_argument("--points", type=float, nargs="+", default=None,
+                   choices=["all", "backbone", "energy", "peak_force", "signals", "force", "harmonics"],
+                   help="which plots")
+    p.add_argument("--points", type=common.positive_float, nargs="+", default=None,
                    help="amplitudes (gaps) of the marked points (default 1.5 3 6)")
     p.add_argument("--measured", default=None, help="measured backbone CSV to overlay")
     p.set_defaults(func=run)
@@ -26,6 +27,7 @@ def run(args) -> int:
     from ..results.branch import Branch
 
     data = load(args.file)
+    _show_findings(data)
     measured = common.measured(args)
     out = common.out_dir(args)
     stem = Path(args.file).stem
@@ -40,15 +42,16 @@ def run(args) -> int:
             if common.has_grid(data):
                 plotting.plot_figure2(data, marks=marks, measured=measured, path=path)
             else:
-                plotting.plot_backbone(data.branches, measured=measured, path=path)
+                plotting.plot_study(data, measured=measured, path=path)
             files.append(path)
-        styles = plotting.study_styles(data.runs)
+        styles, labels = plotting.study_styles(data.runs), plotting.study_labels(data.runs)
         if "energy" in kinds:
             files.append(out / f"{stem}_energy.png")
-            plotting.plot_frequency_energy(data.branches, styles=styles, path=files[-1])
+            plotting.plot_frequency_energy(data.branches, labels, styles=styles, path=files[-1])
         if "peak_force" in kinds:
             files.append(out / f"{stem}_peak_force.png")
-            plotting.plot_peak_contact_force(data.branches, measured=measured, styles=styles, path=files[-1])
+            plotting.plot_peak_contact_force(data.branches, labels, measured=measured, styles=styles,
+                                             path=files[-1])
         common.wrote(*files)
         return 0
     branch = data
@@ -76,3 +79,19 @@ def run(args) -> int:
         plotting.plot_harmonic_content(branch, pts[-1], path=files[-1])
     common.wrote(*files)
     return 0
+
+
+def _show_findings(data) -> None:
+    """Repeat what the checks found when the results were computed (a file from before
+    the checks is checked now), as warnings: a plot must not look more certain than the run."""
+    import warnings
+
+    from .._warnings import BranchWarning
+    from ..results.branch import Branch
+
+    pairs = [("", data)] if isinstance(data, Branch) else \
+        [(f"run {', '.join(f'{k}={v}' for k, v in r.items())}: ", b) for r, b in data]
+    for prefix, branch in pairs:
+        found = branch.findings if "checks" in branch.metadata else branch.check(warn=False)
+        for finding in found:
+            warnings.warn(prefix + finding.message, BranchWarning, stacklevel=2)

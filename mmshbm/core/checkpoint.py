@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._files import apply_umask
 from .continuation import ContinuationState
 from .special_points import SpecialPoint, special_from_json, special_to_json
 
@@ -184,6 +185,7 @@ class CheckpointWriter:
         body = _line(self.header) + "".join(_line(p) for p in points)
         fd, tmp = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=".tmp", dir=directory)
         try:
+            apply_umask(fd)
             with os.fdopen(fd, "w", encoding="utf-8") as f:
                 f.write(body)
                 f.flush()

@@ -142,7 +142,7 @@ class TimoshenkoBeam:
         Parameters
         ----------
         n_elements : int
-            Number of elements, >= 1 (the seed paper uses 8 and 21).
+            Number of elements, >= 1 (the paper uses 8 and 21).
         grading : float
             Ratio of the root to the tip element length, > 0 (1.0 = uniform).
         massless_tip : bool

@@ -2,7 +2,7 @@
 
 The beam runs from the root (x = 0, clamped) to the tip (x = length, contact). A graded
 mesh refines toward the tip so that dropping the tip node's mass changes the structure
-little (seed paper, Figure 1).
+little (Schreyer, Peter & Leine 2018, Part I, Figure 1).
 """
 
 from __future__ import annotations

@@ -72,7 +72,7 @@ class OneDofOscillator:
 
     def period(self, amplitude) -> np.ndarray:
         """Closed-form period (s) of the free motion of largest excursion ``amplitude`` (m)
-        away from the stop (DESIGN.md section 4, item 2).
+        away from the stop (docs/design.md §5).
 
         T = (2/ω1) arccos(−g0/A) + (2/ω2) arccos(k1 g0 / ((k1+k2) B)) for A > g0,
         B = √((k1 g0/(k1+k2))² + (ω1/ω2)² (A² − g0²)); T = 2π/ω1 for A <= g0.

@@ -18,6 +18,7 @@ from ..core.resonances import internal_resonances
 from ..core.special_points import SpecialPoint
 from ..model.model import Model
 from ..results.branch import Branch
+from .limits import check_resources
 from .registry import _CONTINUATION_FIELDS, METHODS, make_problem
 
 __all__ = ["backbone"]
@@ -47,7 +48,8 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
         Further bounds on recorded quantities, e.g. ``{"frequency": (0, 60)}`` (Hz),
         ``{"energy": (0, 1.0)}`` (J).
     verbose : bool
-        Show a progress bar (tqdm) with Ω, amplitude, ds and Newton iterations.
+        Show a progress bar (tqdm) that counts the amplitude toward ``max_amplitude`` (in
+        gaps), with the frequency and the number of points.
     callback : callable(u, record), optional
         Called with every converged point.
     checkpoint : str or Path, optional
@@ -112,6 +114,7 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
         options["harmonics"] = harmonics
     checkpoint = _path_argument("checkpoint", checkpoint)
     resume = _path_argument("resume", resume)
+    check_resources(model, method, options)  # before any allocation: a clear error, not a MemoryError
     problem = make_problem(model, method, **options)
     header = _checkpoint_header(model, method, problem, options)
 
@@ -134,10 +137,7 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
 
     progress = None
     if verbose:
-        from tqdm.auto import tqdm
-
-        progress = tqdm(desc=f"{method} backbone", unit="pt", total=copts.max_steps + 1, leave=False,
-                        disable=None)
+        progress, callback = _amplitude_progress(method, max_amplitude, gap, callback)
     t0 = time.perf_counter()
     try:
         if previous is not None and _finished(previous, copts):
@@ -145,7 +145,7 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
         else:
             res = continue_branch(problem, None if state else problem.linear_point(start_amplitude),
                                   None if state else problem.initial_tangent(), copts, callback=callback,
-                                  progress=progress, resume=state,
+                                  progress=None, resume=state,
                                   on_point=writer.point if writer is not None else None)
         if writer is not None:
             writer.end(res.status)
@@ -187,12 +187,38 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     extra = {}
     if _BRANCH_HAS_RECORDS:
         extra["records"] = {k: v for k, v in rec.items() if k not in _BRANCH_COLUMNS}
-    return Branch(
+    branch = Branch(
         frequency=column("frequency"), amplitude=amp, energy=column("energy"),
         contact_force_max=column("contact_force_max"), newton_iterations=res.newton_iterations,
         step_size=res.step_size, states=res.u, status=res.status, method=method,
         harmonics=int(getattr(problem, "H", 0)), special_points=special, metadata=metadata,
         solver=problem, residual_histories=res.residual_histories, **extra)
+    branch.check()  # records mode_share, warns (BranchWarning) when the branch is not what it seems
+    return branch
+
+
+def _amplitude_progress(method: str, max_amplitude: float, gap: float, callback):
+    """A tqdm bar that counts the amplitude (in gaps, else mm) toward its bound, and the
+    callback that moves it (then calls the user's ``callback``)."""
+    from tqdm.auto import tqdm
+
+    scale, unit = (gap, "gap") if gap > 0 else (1e-3, "mm")
+    total = max_amplitude / scale
+    bar = tqdm(desc=f"{method} backbone", unit=unit, total=total, leave=False, disable=None,
+               bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.3g}/{total:.3g} " + unit
+               + " [{elapsed}{postfix}]")
+    points = [0]
+
+    def advance(u, record):
+        points[0] += 1
+        bar.n = min(max(float(record.get("amplitude", 0.0)) / scale, 0.0), total)
+        f = float(record.get("frequency", float("nan")))
+        bar.set_postfix_str(f"{f:.4g} Hz, {points[0]} points", refresh=False)
+        bar.refresh()
+        if callback is not None:
+            callback(u, record)
+
+    return bar, advance
 
 
 _BRANCH_COLUMNS = ("frequency", "amplitude", "energy", "contact_force_max")

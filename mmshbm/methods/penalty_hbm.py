@@ -1,6 +1,6 @@
 """Baseline 1: classical harmonic balance on all DOFs, the stop as a penalty spring.
 
-This is how general harmonic-balance tools treat contact (DESIGN.md section 3). Every DOF
+This is how general harmonic-balance tools treat contact (docs/design.md §5). Every DOF
 of the finite-element model is expanded, and the rigid stop becomes a one-sided spring of
 stiffness k_p at the contact DOF:
 

@@ -1,7 +1,7 @@
 """Baseline 2: time-domain shooting with an energy-conserving trapezoidal rule.
 
 Because the contact DOFs are massless they follow the DOFs with mass ``l`` statically
-(DESIGN.md section 1; the docstring of :mod:`mmshbm.methods.exact`): at fixed ``q_l`` the contact
+(docs/design.md §1; the docstring of :mod:`mmshbm.methods.exact`): at fixed ``q_l`` the contact
 problem of one contact is a scalar LCP with the solution λ = k_c max(0, −h(q_l)), free gap
 h(q_l) = gap + a·q_l, a = −K_lc K_cc⁻¹ w_c and k_c = 1/(w_cᵀ K_cc⁻¹ w_c). The motion of
 the DOFs with mass is the continuous, piecewise-linear system

@@ -462,17 +462,7 @@ class Model:
         f_open = self.linear_frequencies(1)[0]
         closed = np.setdiff1d(np.arange(self.n_dof), [contact.dof])
         sub = Model(self.M[closed][:, closed], self.K[closed][:, closed], (Contact(0, 0.0, 1),))
-        b = sub.blocks
-        if len(sub.c):
-            K_red = sub.reduced_stiffness
-        else:
-            K_red = b["K_ll"]
-        if K_red.shape[0] <= _DENSE_EIG_LIMIT:
-            lam = _lowest_eigenpairs_dense(K_red.toarray(), b["M_ll"].toarray(), 1)[0][0]
-        else:
-            lam = spla.eigsh(K_red, k=1, M=b["M_ll"], sigma=0.0, which="LM", v0=np.ones(K_red.shape[0]),
-                             return_eigenvectors=False)[0]
-        f_closed = np.sqrt(lam) / (2 * np.pi)
+        f_closed = sub.linear_frequencies(1)[0]  # sparse eigen-solve on large models
         return 2.0 / (1.0 / f_open + 1.0 / f_closed)
 
     def __repr__(self) -> str:

@@ -15,17 +15,19 @@ own axes. Every function returns the figure.
 - :func:`plot_harmonic_content`: bar chart of |Q_k| at one point.
 - :func:`plot_peak_contact_force`: largest contact force against frequency, with the
   measured peak forces.
-- :func:`plot_figure2`: the seed paper's Figure 2 layout from a study.
+- :func:`plot_figure2`: the paper's Figure 2 layout from a study over H and elements.
+- :func:`plot_study`: the backbones of a study over any coordinates (each branch in
+  units of its own gap, every varying coordinate in the labels).
 - :func:`plot_frequency_response`, :func:`plot_phase_resonance`, :func:`plot_damping_ratio`:
-  forced responses (unstable parts dashed), phase resonance, damped modes (issue 14)."""
+  forced responses (unstable parts dashed), phase resonance, damped modes."""
 
 from .backbones import plot_backbone, plot_frequency_energy, plot_peak_contact_force
 from .common import _gap, branch_label, dof_label, points_at
 from .response import plot_damping_ratio, plot_frequency_response, plot_phase_resonance
 from .signals import plot_contact_force, plot_harmonic_content, plot_time_signals
-from .studies import plot_figure2, study_styles
+from .studies import plot_figure2, plot_study, study_labels, study_styles, varying_axes
 
 __all__ = ["plot_backbone", "plot_frequency_energy", "plot_time_signals", "plot_contact_force",
            "plot_harmonic_content", "plot_figure2", "plot_peak_contact_force", "study_styles", "points_at",
-           "branch_label", "dof_label", "_gap", "plot_frequency_response", "plot_phase_resonance",
-           "plot_damping_ratio"]
+           "plot_study", "study_labels", "varying_axes", "branch_label", "dof_label", "_gap",
+           "plot_frequency_response", "plot_phase_resonance", "plot_damping_ratio"]

@@ -13,11 +13,13 @@ from .common import (
     _figure,
     _finish,
     _gap,
-    _model,
     _overlay_measured,
     _reference_lines,
     branch_label,
+    distinct_models,
+    line_styles,
     log,
+    reference_frequencies,
 )
 
 
@@ -25,7 +27,7 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
                   marks=None, reference_lines: bool = True, modes: Sequence[int] = (2, 3),
                   max_order: int = 10,
                   ax=None, path=None, title: str | None = None, styles: Sequence[dict] | None = None,
-                  legend_loc: str = "upper left") -> Figure:
+                  legend_loc: str = "best", special: bool = True) -> Figure:
     """Backbone curves: tip amplitude against frequency.
 
     Parameters
@@ -36,20 +38,25 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
     measured : MeasuredBackbone or path, optional
         A measured backbone to overlay (``mmshbm.analysis.measured.load_measured`` reads CSV).
     model : Model, optional
-        For the reference lines (default the first branch's model).
+        For the reference lines (default: every distinct model of the branches).
     marks : sequence of (branch index, point index), optional
         Points to mark and number 1, 2, ... (e.g. those of :func:`plot_time_signals`).
     reference_lines : bool
         Mark the linear frequency f_1, the zero-gap limit and f_k/n for ``modes`` k and
-        orders n = 2..``max_order`` that fall inside the plotted frequency range.
+        orders n = 2..``max_order`` that fall inside the plotted frequency range, once
+        per distinct model (in that model's colour when there are several).
     ax : matplotlib Axes, optional
         Draw there instead of a new figure.
     path : str or Path, optional
         Write the figure there.
     styles : sequence of dict, optional
-        Line keyword arguments per branch.
+        Line keyword arguments per branch (default :func:`line_styles`).
     legend_loc : str
         Legend position (matplotlib ``loc``).
+    special : bool
+        Mark the special points: folds (▲), branch points (■), internal resonances (◆,
+        labelled k:j), jumps (the skipped stretch dotted), and the end of every branch
+        that stopped short of its bounds (✕, with the reason).
 
     Returns
     -------
@@ -57,48 +64,151 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
 
     Notes
     -----
-    The amplitude axis is in multiples of the gap when the first branch's gap is
-    positive, otherwise in mm.
+    The amplitude axis is in multiples of each branch's own gap when every gap is
+    positive (branches with different gaps are comparable), otherwise in mm.
     """
     branches = _as_list(branches)
     if not branches:
         raise ValueError("no branches to plot")
     fig, ax = _figure(ax, (6.4, 4.6))
-    gap = _gap(branches[0])
-    scale, ylabel = (gap, "tip amplitude / gap") if gap > 0 else (1e-3, "tip amplitude (mm)")
+    gaps = [_gap(b) for b in branches]
+    per_gap = all(g > 0 for g in gaps)
+    scales = gaps if per_gap else [1e-3] * len(branches)
+    if per_gap:
+        ylabel = "tip amplitude / gap" if len(set(gaps)) == 1 else "tip amplitude / its gap"
+    else:
+        ylabel = "tip amplitude (mm)"
     labels = list(labels) if labels is not None else [branch_label(b) for b in branches]
     if len(labels) != len(branches):
         raise ValueError(f"{len(labels)} labels for {len(branches)} branches")
+    if styles is None:
+        styles = line_styles(len(branches))
+    colors = []
     for i, (b, label) in enumerate(zip(branches, labels, strict=True)):
-        style = dict(styles[i]) if styles is not None else {}
-        ax.plot(b.frequency, b.amplitude / scale, label=label, **({"lw": 1.4} | style))
+        style = {"lw": 1.4} | dict(styles[i])
+        (line,) = ax.plot(b.frequency, b.amplitude / scales[i], label=label, **style)
+        colors.append(line.get_color())
+        if special:
+            _special_points(ax, b, scales[i], line.get_color())
     if measured is not None:
         if not hasattr(measured, "frequency"):
             from ..analysis.measured import load_measured
 
             measured = load_measured(measured)
-        _overlay_measured(ax, measured, scale)
+        _overlay_measured(ax, measured, scales[0])
     for n, (bi, pi) in enumerate(marks or (), start=1):
         b = branches[bi]
-        ax.plot(b.frequency[pi], b.amplitude[pi] / scale, "o", color=_POINT_COLORS[(n - 1) % 6], ms=7,
+        ax.plot(b.frequency[pi], b.amplitude[pi] / scales[bi], "o", color=_POINT_COLORS[(n - 1) % 6], ms=7,
                 mec="w", zorder=5)
-        ax.annotate(str(n), (b.frequency[pi], b.amplitude[pi] / scale), xytext=(-9, 4),
+        ax.annotate(str(n), (b.frequency[pi], b.amplitude[pi] / scales[bi]), xytext=(-9, 4),
                     textcoords="offset points", fontsize=10, fontweight="bold", zorder=6)
     if reference_lines:
-        model = model if model is not None else _model(branches[0])
-        if model is not None:
-            f_all = np.concatenate([b.frequency for b in branches if len(b)])
+        f_all = np.concatenate([b.frequency for b in branches if len(b)] or [np.array([np.nan])])
+        if np.any(np.isfinite(f_all)):
             lo, hi = float(np.nanmin(f_all)), float(np.nanmax(f_all))
             pad = 0.03 * (hi - lo if hi > lo else hi)
-            _reference_lines(ax, model, lo - pad, hi + pad, modes, max_order)
+            groups = [(model, list(range(len(branches))))] if model is not None else distinct_models(branches)
+            lines = _merge_reference(groups, modes)
+            for m, (values, members) in enumerate(lines):
+                tag = "" if len(lines) == 1 else _model_tag([branches[i] for i in members], branches)
+                shade = _MODEL_COLORS[m % len(_MODEL_COLORS)]
+                color = {} if len(lines) == 1 else dict(color_open=shade, color_zero=shade, color_ir=shade)
+                _reference_lines(ax, values, lo - pad, hi + pad, modes, max_order, tag=tag, **color)
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel(ylabel)
     ax.set_ylim(bottom=0)
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8, loc=legend_loc)
+    _legend(ax, fontsize=8, loc=legend_loc)
     if title:
         ax.set_title(title)
     return _finish(fig, path)
+
+
+#: colours of the reference lines when several models are drawn
+_MODEL_COLORS = ("k", "0.5", "tab:brown", "tab:olive", "tab:pink", "tab:cyan")
+
+
+def _merge_reference(groups, modes) -> list[tuple[tuple, list[int]]]:
+    """Reference frequencies per distinct model, models with equal ones (to 1e-9, e.g.
+    differing only in the gap) merged: [((f_lin, f_zero), branch indices), ...]."""
+    out: list[tuple[tuple, list[int]]] = []
+    for model, members in groups:
+        values = reference_frequencies(model, modes)
+        if values is None:
+            continue
+        for known, idx in out:
+            if np.allclose(known[0], values[0], rtol=1e-9, atol=0) and (
+                    (known[1] is None) == (values[1] is None)
+                    and (known[1] is None or np.isclose(known[1], values[1], rtol=1e-9, atol=0))):
+                idx.extend(members)
+                break
+        else:
+            out.append((values, list(members)))
+    return out
+
+
+def _model_tag(members, branches) -> str:
+    """What distinguishes the models of ``members`` from the other branches': elements,
+    else gap, else the first member's label."""
+    elements = {b.metadata.get("model", {}).get("n_elements") for b in members}
+    if len(elements) == 1 and None not in elements and \
+            len({b.metadata.get("model", {}).get("n_elements") for b in branches}) > 1:
+        return f"{elements.pop()} el."
+    gaps = {_gap(b) for b in members}
+    if len(gaps) == 1 and len({_gap(b) for b in branches}) > 1:
+        return f"gap {gaps.pop() * 1e3:g} mm"
+    return branch_label(members[0])
+
+
+#: markers of the special points drawn by :func:`plot_backbone`
+SPECIAL_MARKERS = {"fold": "^", "branch_point": "s", "internal_resonance": "D"}
+
+
+def _special_points(ax, branch, scale: float, color) -> None:
+    n = len(branch)
+    f, a = branch.frequency, branch.amplitude / scale
+    seen = set()
+    for sp in branch.special_points:
+        kind, i = sp[0], int(sp[1])
+        if not 0 <= i < n:
+            continue
+        data = getattr(sp, "data", {}) or {}
+        if kind in SPECIAL_MARKERS:
+            label = None if kind in seen else kind.replace("_", " ")
+            seen.add(kind)
+            ax.plot(f[i], a[i], SPECIAL_MARKERS[kind], color=color, mfc="w", ms=5.5, mew=1.2, zorder=4,
+                    label=label)
+            if kind == "internal_resonance":
+                k, j = data.get("k", data.get("harmonic")), data.get("j", data.get("mode"))
+                if k is not None and j is not None:
+                    ax.annotate(f"{k}:{j}", (f[i], a[i]), xytext=(4, -9), textcoords="offset points",
+                                fontsize=7, color=color)
+        elif kind == "jump" and i > 0:
+            label = None if "jump" in seen else "jump (skipped)"
+            seen.add("jump")
+            ax.plot(f[i - 1 : i + 1], a[i - 1 : i + 1], ls=":", color=color, lw=1.0, zorder=3, label=label)
+            lo_hi = next((data[k] for k in ("skipped", "amplitude_interval", "interval", "amplitudes")
+                          if k in data), None)
+            if lo_hi is not None and len(lo_hi) == 2:
+                ax.annotate(f"skipped {lo_hi[0] / scale:.3g}–{lo_hi[1] / scale:.3g}", (f[i], a[i]),
+                            xytext=(4, 4), textcoords="offset points", fontsize=7, color=color)
+    if n and not branch.status.startswith("bound:"):
+        ax.plot(f[-1], a[-1], "x", color=color, ms=8, mew=2, zorder=6,
+                label=None if "_stopped" in seen else "stopped short of its bounds")
+        ax.annotate(branch.status.split(":")[0].split(" (")[0], (f[-1], a[-1]), xytext=(5, 2),
+                    textcoords="offset points", fontsize=7, color=color)
+
+
+def _legend(ax, **kwargs) -> None:
+    """A legend without repeated entries (same label drawn for several lines)."""
+    handles, labels = ax.get_legend_handles_labels()
+    seen, keep = set(), []
+    for h, lab in zip(handles, labels, strict=True):
+        if lab and not lab.startswith("_") and lab not in seen:
+            seen.add(lab)
+            keep.append((h, lab))
+    if keep:
+        ax.legend(*zip(*keep, strict=True), **kwargs)
 
 
 def plot_frequency_energy(branches, labels: Sequence[str] | None = None, *, ax=None, path=None,

@@ -1,4 +1,4 @@
-"""Plots of studies: styles per run and the seed paper's Figure 2 layout."""
+"""Plots of studies: styles per run and the Figure 2 layout of the paper."""
 
 from __future__ import annotations
 
@@ -8,25 +8,92 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from .backbones import plot_backbone
-from .common import _H_COLORS, _finish, _gap, branch_label, points_at
+from .common import _H_COLORS, _finish, _gap, branch_label, line_styles, points_at
 from .signals import plot_contact_force, plot_time_signals
 
 
+def varying_axes(runs: Sequence[dict]) -> list[str]:
+    """The coordinates whose value differs between ``runs``: ``harmonics`` and ``elements``
+    first (colour and dash pattern of the paper's Figure 2), then the others in order of
+    first appearance."""
+    names: list[str] = []
+    for r in runs:
+        names += [k for k in r if k not in names]
+    varying = [k for k in names if len({repr(r.get(k)) for r in runs}) > 1]
+    first = [k for k in ("harmonics", "elements") if k in varying]
+    return first + [k for k in varying if k not in first]
+
+
+def study_labels(runs: Sequence[dict]) -> list[str]:
+    """Legend labels naming every coordinate that varies between ``runs``, e.g.
+    "H5, 21 el., gap=0.002" (H and elements short, other parameters as name=value)."""
+    axes = varying_axes(runs)
+    out = []
+    for r in runs:
+        parts = []
+        for k in axes:
+            v = r.get(k)
+            if k == "harmonics":
+                parts.append(f"H{v}")
+            elif k == "elements":
+                parts.append(f"{v} el.")
+            elif k == "method":
+                parts.append(str(v))
+            else:
+                parts.append(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}")
+        out.append(", ".join(parts) or "run")
+    return out
+
+
 def study_styles(runs: Sequence[dict]) -> list[dict]:
-    """Line styles for the runs of a study: colour by H, solid for the most elements,
-    dashed (or dotted, with three or more meshes) for fewer."""
-    elements = sorted({r.get("elements") for r in runs if r.get("elements") is not None})
+    """Distinct line styles for the runs of a study: colour by the first coordinate that
+    varies (by H with the paper's colours when that is H), dash pattern by the second,
+    markers by the third; when that does not make every run distinct (more values than
+    colours, or further varying coordinates), :func:`line_styles` of the run count."""
+    runs = list(runs)
+    axes = varying_axes(runs)
+    if not axes:
+        return line_styles(len(runs))
+    values = {k: list(dict.fromkeys(repr(r.get(k)) for r in runs)) for k in axes}
+    first = axes[0]
+    if len(axes) > 3 or len(values[first]) > 10 or any(len(values[k]) > 4 for k in axes[1:]):
+        return line_styles(len(runs))
     styles = []
     for r in runs:
-        finest = not elements or r.get("elements") == elements[-1]
-        ls = "-" if finest else ("--" if len(elements) < 3 else ":")
-        styles.append({"color": _H_COLORS.get(r.get("harmonics"), None), "ls": ls, "lw": 1.5})
+        i = values[first].index(repr(r.get(first)))
+        if first == "harmonics" and all(h in _H_COLORS for h in (x.get(first) for x in runs)):
+            color = _H_COLORS[r.get(first)]
+        else:
+            color = f"C{i}"
+        style = {"color": color, "ls": "-", "lw": 1.5}
+        if len(axes) > 1:
+            # the finest mesh / last value solid, others dashed, dotted, dash-dotted
+            vals = values[axes[1]]
+            j = len(vals) - 1 - vals.index(repr(r.get(axes[1])))
+            style["ls"] = ("-", "--", ":", "-.")[j]
+        if len(axes) > 2:
+            k = values[axes[2]].index(repr(r.get(axes[2])))
+            if k:
+                style.update(marker=("o", "s", "^")[k - 1], ms=3.5, markevery=0.1)
+        styles.append(style)
     return styles
+
+
+def plot_study(study, *, measured=None, path=None, title: str | None = None, ax=None, **kwargs) -> Figure:
+    """Backbone curves of every run of a study over any coordinates: each branch in units
+    of its own gap, labels naming every coordinate that varies (:func:`study_labels`),
+    distinct styles (:func:`study_styles`), reference lines per distinct model, special
+    points and the ends of runs that stopped short. ``kwargs`` go to :func:`plot_backbone`."""
+    runs = list(study.runs)
+    if not runs:
+        raise ValueError("the study is empty")
+    return plot_backbone(study.branches, study_labels(runs), measured=measured, styles=study_styles(runs),
+                         path=path, title=title, ax=ax, **kwargs)
 
 
 def plot_figure2(study, *, marks: Sequence[float] = (1.5, 3.0, 6.0), marked: dict | None = None,
                  measured=None, path=None, title: str | None = None) -> Figure:
-    """The seed paper's Figure 2 layout from a study over H and elements.
+    """The Figure 2 layout of Part I of the paper from a study over H and elements.
 
     Left: backbone curves (tip amplitude in gaps against frequency) of every run, colour
     by H, solid for the most elements and dashed for fewer, with the linear frequency,
@@ -58,7 +125,8 @@ def plot_figure2(study, *, marks: Sequence[float] = (1.5, 3.0, 6.0), marked: dic
     # order: the marked run last so that it is drawn on top
     order = sorted(range(len(runs)), key=lambda i: study.branches[i] is mb)
     branches = [study.branches[i] for i in order]
-    labels = [branch_label(b) for b in branches]
+    all_labels = study_labels(runs)
+    labels = [all_labels[i] for i in order]
     styles = [styles[i] for i in order]
 
     fig = Figure(figsize=(13.0, 7.0), layout="constrained")
@@ -70,13 +138,16 @@ def plot_figure2(study, *, marks: Sequence[float] = (1.5, 3.0, 6.0), marked: dic
     pts = points_at(mb, np.asarray(marks, dtype=float) * gap) if gap > 0 else []
     model = mb.get_model()
     marked_points = [(len(branches) - 1, p) for p in pts]
-    plot_backbone(branches, labels, measured=measured, model=model, marks=marked_points, ax=left,
-                  styles=styles, legend_loc="lower right")
+    plot_backbone(branches, labels, measured=measured, marks=marked_points, ax=left, styles=styles,
+                  legend_loc="lower right")
     left.set_title("backbone curves (first nonlinear mode)", fontsize=11)
     dofs = [int(d) for d in model.c]
     dofs = [model.contact_dof] + [d for d in dofs if d != model.contact_dof][:1]
     plot_time_signals(mb, pts, dofs=dofs, axes=right[:len(dofs)])
-    right[0].set_title(f"marked points ({branch_label(mb)}): tip motion and contact force", fontsize=11)
+    note = right[0].get_title(loc="left")
+    right[0].set_title("", loc="left")
+    head = f"marked points ({branch_label(mb)}): tip motion and contact force"
+    right[0].set_title(f"{head}\n{note}", fontsize=9)
     if len(dofs) < 2:
         right[1].set_visible(False)
     for ax in right[:2]:

@@ -16,20 +16,18 @@ so that time signals work again; :meth:`Branch.rerun` redoes the run from the fi
 from __future__ import annotations
 
 import importlib
-import json
 import logging
-import os
 import platform
-import tempfile
-import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..core.special_points import special_from_json, special_to_json
+from .archive import read_archive, write_archive
+from .models import _model_arrays, _model_from_arrays, rebuild_model  # noqa: F401 - rebuild_model is public here
 
-__all__ = ["Branch", "rebuild_model"]
+__all__ = ["Branch", "rebuild_model", "read_archive", "write_archive"]
 
 log = logging.getLogger(__name__)
 
@@ -115,8 +113,32 @@ class Branch:
 
     @property
     def completed(self) -> bool:
-        """True when the branch ended on a requested bound or the step budget."""
-        return self.status.startswith("bound:") or self.status == "max_steps"
+        """True when the branch reached its bounds (status ``"bound:<name>"``); a run that
+        ran out of steps (``"max_steps"``), of step size or failed is not completed."""
+        return self.status.startswith("bound:")
+
+    def check(self, thresholds=None, *, warn: bool = True) -> list:
+        """Check what this branch is (family of its starting mode, contact admissibility,
+        completeness): :func:`mmshbm.results.diagnostics.check_branch`. ``backbone``
+        does it for every branch it returns; call it on loaded or older branches.
+
+        Returns
+        -------
+        list of Finding
+            Also stored in ``metadata["checks"]``; one :class:`~mmshbm.BranchWarning`
+            each when ``warn``.
+        """
+        from .diagnostics import check_branch
+
+        return check_branch(self, thresholds, warn=warn, stacklevel=3)
+
+    @property
+    def findings(self) -> list:
+        """The findings of the last :meth:`check` (from ``metadata["checks"]``; empty when
+        never checked)."""
+        from .diagnostics import findings
+
+        return findings(self)
 
     @property
     def gap(self) -> float | None:
@@ -253,9 +275,14 @@ class Branch:
         return branch
 
     def to_csv(self, path) -> Path:
-        """Write the per-point table to ``path`` (CSV, one header line, full precision):
+        """Write the per-point table to ``path`` (CSV, one header line):
         ``frequency_hz, amplitude_m, energy_j, contact_force_max_n, newton_iterations,
-        step_size``, then one column per one-dimensional entry of :attr:`records`.
+        step_size``, then one column per one-dimensional numeric entry of :attr:`records`
+        (e.g. ``mode_share``).
+
+        Numbers are written as Python's ``repr`` of the float: the shortest text that
+        reads back to the same double (``0.1``, not ``0.10000000000000001``), so the
+        file round-trips exactly; integers as integers; ``nan``/``inf`` as such.
 
         Returns
         -------
@@ -268,20 +295,36 @@ class Branch:
                  "step_size"]
         cols = [self.frequency, self.amplitude, self.energy, self.contact_force_max, self.newton_iterations,
                 self.step_size]
-        fmt = ["%.17g"] * 4 + ["%d", "%.17g"]
         for name, value in self.records.items():
             value = np.asarray(value)
             if value.ndim == 1 and len(value) == n and value.dtype.kind in "biuf":
                 names.append(name)
                 cols.append(value)
-                fmt.append("%.17g")
-        table = np.column_stack(cols) if n else np.empty((0, len(names)))
+        cols = [np.asarray(c) for c in cols]
+        cells = [[str(int(v)) for v in c] if c.dtype.kind in "biu" else [repr(float(v)) for v in c]
+                 for c in cols]
+        lines = [",".join(names)] + [",".join(row) for row in zip(*cells, strict=True)]
         path.parent.mkdir(parents=True, exist_ok=True)
-        np.savetxt(path, table, delimiter=",", fmt=fmt, comments="", header=",".join(names))
+        path.write_text("\n".join(lines) + "\n")
         return path
 
-    def time_signals(self, point: int, dofs=None, n_samples: int = 256):
+    def time_signals(self, point: int, dofs=None, n_samples: int = 256, *, admissible: bool = False):
         """Displacements of ``dofs`` over one period at branch point ``point``.
+
+        Parameters
+        ----------
+        point : int
+            Branch point index.
+        dofs : sequence of int, optional
+            Model DOFs (default all).
+        n_samples : int
+            Samples per period.
+        admissible : bool
+            False (default): the method's own signals (for harmonic balance the truncated
+            Fourier series of every DOF, which may pass through the stop). True: the
+            massless DOFs from the exact static contact problem driven by the Fourier
+            motion of the DOFs with mass (no penetration; :mod:`mmshbm.methods.signals`);
+            the DOFs with mass are unchanged.
 
         Returns
         -------
@@ -290,11 +333,32 @@ class Branch:
         q : ndarray, shape (len(dofs), n_samples)
             Displacements (m) / rotations (rad); all DOFs when ``dofs`` is None.
         """
-        return self._require_solver().time_signals(self.states[self._index(point)], dofs, n_samples)
+        solver = self._require_solver()
+        u = self.states[self._index(point)]
+        if not admissible:
+            return solver.time_signals(u, dofs, n_samples)
+        t, q, _ = _entry_point("admissible_signals")(solver, u, n_samples)
+        if dofs is not None:
+            dofs = np.atleast_1d(np.asarray(dofs))
+            if dofs.dtype.kind not in "iu" or np.any((dofs < -q.shape[0]) | (dofs >= q.shape[0])):
+                raise ValueError(f"dofs must be integer indices in [0, {q.shape[0] - 1}], got {dofs}")
+            q = q[dofs]
+        return t, q
 
-    def contact_force(self, point: int, n_samples: int = 256):
-        """Contact force λ(t) (N) over one period at ``point``: returns (t, λ)."""
-        return self._require_solver().contact_force(self.states[self._index(point)], n_samples)
+    def contact_force(self, point: int, n_samples: int = 256, *, admissible: bool = False):
+        """Contact force λ(t) (N) over one period at ``point``: returns (t, λ).
+
+        ``admissible=False``: the method's own force (for MMS-HBM the truncated series,
+        which may pull); True: the exact static contact force driven by the DOFs with
+        mass (λ >= 0, exactly 0 while the contact is open). λ has shape (n_samples,),
+        or (n_contacts, n_samples) with several contacts when ``admissible``.
+        """
+        solver = self._require_solver()
+        u = self.states[self._index(point)]
+        if not admissible:
+            return solver.contact_force(u, n_samples)
+        t, _, lam = _entry_point("admissible_signals")(solver, u, n_samples)
+        return t, (lam[0] if lam.shape[0] == 1 else lam)
 
     def harmonic_content(self, point: int, dof: int | None = None) -> np.ndarray:
         """Amplitudes √(c_k² + s_k²) of harmonics 0..H of ``dof`` (default the contact DOF)
@@ -384,89 +448,13 @@ class Branch:
 #: the methods layer above this module, which therefore never imports them statically:
 #: like pickle, a branch finds them by their recorded names.
 _ENTRY_POINTS = {"make_problem": "mmshbm.methods.registry:make_problem",
-                 "backbone": "mmshbm.methods.backbone:backbone"}
+                 "backbone": "mmshbm.methods.backbone:backbone",
+                 "admissible_signals": "mmshbm.methods.signals:branch_signals"}
 
 
 def _entry_point(name: str):
     module, _, attr = _ENTRY_POINTS[name].partition(":")
     return getattr(importlib.import_module(module), attr)
-
-
-# ---------------------------------------------------------------------- models
-def rebuild_model(description: dict, gap: float | None = None):
-    """Rebuild a :class:`~mmshbm.model.Model` from its ``description``.
-
-    Parameters
-    ----------
-    description : dict
-        ``model.description`` of a :class:`~mmshbm.fe.beam.TimoshenkoBeam` model
-        (``kind = "TimoshenkoBeam"``) or of :class:`~mmshbm.fe.oscillator.OneDofOscillator`.
-    gap : float, optional
-        The model's gap (m) if it differs from the description's (``Model.with_gap``).
-
-    The ``transforms`` the description records (``[{"name": "with_damping", "args":
-    {...}}, ...]``, appended by the ``Model.with_*`` methods that change the structure)
-    are applied in order after the base model is built.
-
-    Raises
-    ------
-    ValueError
-        For any other kind of description (user matrices: store them in the file).
-    """
-    kind = description.get("kind") if isinstance(description, dict) else None
-    if kind == "TimoshenkoBeam":
-        from ..fe.beam import TimoshenkoBeam
-
-        model = TimoshenkoBeam.rebuild(description)
-    elif kind == "OneDofOscillator":
-        from ..fe.oscillator import OneDofOscillator
-
-        try:
-            model = OneDofOscillator(*(description[k] for k in ("m", "k1", "k2", "gap"))).model()
-        except KeyError as err:
-            raise ValueError(f"description lacks the entry {err.args[0]!r}") from None
-    else:
-        raise ValueError(f"a model of kind {kind!r} cannot be rebuilt from its description "
-                         "(save it with its matrices)")
-    for step in description.get("transforms", []):
-        try:
-            model = getattr(model, step["name"])(**dict(step.get("args", {})))
-        except (KeyError, AttributeError, TypeError) as err:
-            raise ValueError(f"cannot replay the model transform {step!r}: {err}") from None
-    if gap is not None:
-        gaps = [float(g) for g in np.atleast_1d(gap)]
-        if gaps != [c.gap for c in model.contacts]:
-            model = model.with_gap(gaps[0] if len(gaps) == 1 else gaps)
-    return model
-
-
-def _model_arrays(model) -> dict:
-    out = {}
-    mats = [("M", model.M), ("K", model.K)] + ([("C", model.damping)] if model.damping is not None else [])
-    for name, A in mats:
-        A = A.tocsr()
-        out.update({f"model_{name}_data": A.data, f"model_{name}_indices": A.indices,
-                    f"model_{name}_indptr": A.indptr, f"model_{name}_shape": np.array(A.shape)})
-    return out
-
-
-def _model_from_arrays(arrays: dict, info: dict):
-    import scipy.sparse as sp
-
-    from ..model.model import Model
-
-    mats = {}
-    for name in ("M", "K", "C"):
-        if f"model_{name}_data" not in arrays:
-            continue
-        d, i, p, shape = (arrays[f"model_{name}_{q}"] for q in ("data", "indices", "indptr", "shape"))
-        mats[name] = sp.csr_matrix((d, i, p), shape=tuple(int(v) for v in shape))
-    if "contacts" in info:
-        dofs, gaps, sides = (list(v) for v in zip(*info["contacts"], strict=True))
-    else:
-        dofs, gaps, sides = int(info["contact_dof"]), float(info["gap"]), int(info["stop_side"])
-    return Model.from_matrices(mats["M"], mats["K"], dofs, gaps, sides, dict(info.get("description", {})),
-                               damping=mats.get("C"), amplitude_dof=info.get("amplitude_dof"))
 
 
 # ---------------------------------------------------------------------- payloads
@@ -546,50 +534,3 @@ def branch_from_payload(arrays: dict, meta: dict, prefix: str = "") -> Branch:
                                info) if info.get("matrices") else None
     return Branch(**fields_, status=status, method=method, harmonics=harmonics, special_points=special,
                   metadata=metadata, residual_histories=list(histories), model=model, records=records)
-
-
-def write_archive(path, arrays: dict, meta: dict) -> Path:
-    """Write ``arrays`` and the JSON ``meta`` to the ``.npz`` file ``path`` (atomically)."""
-    path = Path(path)
-    if "metadata" in arrays:
-        raise ValueError("'metadata' is reserved for the JSON record")
-    text = json.dumps(meta, allow_nan=True, default=_json_default)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            np.savez(f, **arrays, metadata=np.array(text))
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
-
-
-def read_archive(path) -> tuple[dict, dict]:
-    """Read an archive written by :func:`write_archive`: (arrays, metadata dict)."""
-    path = Path(path)
-    try:
-        with np.load(path, allow_pickle=False) as f:
-            data = {k: f[k] for k in f.files}
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile, AttributeError) as err:
-        raise ValueError(f"cannot read {str(path)!r}: {err}") from None
-    if "metadata" not in data:
-        raise ValueError(f"{str(path)!r} is not an mmshbm results file (no metadata record)")
-    try:
-        meta = json.loads(str(data.pop("metadata")))
-    except json.JSONDecodeError as err:
-        raise ValueError(f"{str(path)!r} has a corrupt metadata record: {err}") from None
-    if not isinstance(meta, dict):
-        raise ValueError(f"{str(path)!r} has a corrupt metadata record")
-    return data, meta
-
-
-def _json_default(obj):
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, Path):
-        return str(obj)
-    raise TypeError(f"cannot store {type(obj).__name__} in the metadata")

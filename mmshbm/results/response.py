@@ -20,7 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from ..core.special_points import special_from_json, special_to_json
-from .branch import _model_arrays, _model_from_arrays, read_archive, rebuild_model, versions, write_archive
+from .branch import read_archive, versions, write_archive
+from .models import _model_arrays, _model_from_arrays, rebuild_model
 
 __all__ = ["FrequencyResponse"]
 

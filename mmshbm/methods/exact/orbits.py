@@ -98,7 +98,7 @@ class PeriodicOrbit:
 
 def _guess(system: PiecewiseLinearSystem, amplitude: float) -> tuple[np.ndarray, float]:
     """The first open mode scaled to the amplitude, and a half period: with one contact
-    that of the one-DOF analogue (DESIGN.md section 4 item 2) with ω1, ω2 the first open
+    that of the one-DOF analogue (docs/design.md §5) with ω1, ω2 the first open
     and closed frequencies; with several, the first return of the mode's modal velocity
     to zero along the exact motion from that start (π/ω1 if no contact closes before)."""
     if system.n_contacts > 1:

@@ -1,0 +1,355 @@
+"""Checks that say what a branch is: family, contact admissibility, completeness.
+
+A backbone is meant to be the nonlinear continuation of one linear mode up to a bound.
+:func:`check_branch` tells when a computed branch is something else, with one
+:class:`~mmshbm.BranchWarning` per kind of problem and a record in
+``branch.metadata["checks"]`` (saved with the branch, read by the command line and by
+study summaries):
+
+``"left_family"``
+    The starting mode's share of the period-mean kinetic energy (``records["mode_share"]``,
+    0..1, see :mod:`mmshbm.core.modal_energy`) falls below
+    :attr:`CheckThresholds.min_mode_share` (default 0.5): from there on the motion is
+    mostly another mode, e.g. a k:1 internal-resonance tongue or another family of
+    periodic motions. The message says where it leaves and whether it comes back.
+``"penetration"``
+    The contact DOF, as the method represents it (for harmonic balance the truncated
+    Fourier series), passes its stop by more than :attr:`CheckThresholds.penetration`
+    gaps (default 0.05).
+``"negative_force"``
+    The contact force, as the method represents it, falls below
+    −:attr:`CheckThresholds.negative_force` (default 0.05) times the point's peak force:
+    a tensile contact force is not Signorini's (checked where the contact DOF comes
+    within the penetration tolerance of its stop). Forces below
+    :attr:`CheckThresholds.force_floor` (default 1e-9) times the larger of the branch's
+    largest contact force and k_c·gap (the static contact stiffness times the gap) are
+    round-off (Newton's tolerance leaves ~1e-9 N on the default beam) and not reported.
+``"incomplete"``
+    The branch ended short of its bounds (its status is not ``"bound:<name>"``: a step
+    budget ``max_steps``, a step size below ``ds_min``, a failed start, ...).
+
+For harmonic balance the last two are truncation effects of the Fourier series (more
+harmonics reduce them); ``branch.time_signals(i, admissible=True)`` gives signals of the
+massless DOFs that satisfy the contact law exactly (:mod:`mmshbm.methods.signals`).
+
+The mode shares come from ``records["mode_share"]`` when the method recorded them,
+otherwise they are computed here from the solver's coefficients of all DOFs
+(``solver.coefficients(u)``, NLvib order) or, for shooting, from the Fourier transform
+of its time signals, with the model's open-contact linear modes.
+"""
+
+from __future__ import annotations
+
+import logging
+import warnings
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from .._warnings import BranchWarning
+
+__all__ = ["CheckThresholds", "Finding", "check_branch", "mode_shares", "findings", "incomplete_reason"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class CheckThresholds:
+    """The tolerances of :func:`check_branch` (all dimensionless).
+
+    Attributes
+    ----------
+    min_mode_share : float
+        A point belongs to the family of its starting mode while that mode carries at
+        least this share of the period-mean kinetic energy.
+    penetration : float
+        Allowed excursion of a contact DOF beyond its stop, in gaps (in amplitudes of the
+        point when the gap is 0).
+    negative_force : float
+        Allowed tensile contact force, as a fraction of the point's peak force.
+    force_floor : float
+        Forces below this fraction of max(branch's largest contact force, k_c·gap) are
+        round-off.
+    n_samples : int
+        Time samples per period for the signal checks and for shooting's coefficients.
+    """
+
+    min_mode_share: float = 0.5
+    penetration: float = 0.05
+    negative_force: float = 0.05
+    force_floor: float = 1e-9
+    n_samples: int = 256
+
+    def __post_init__(self):
+        for name in ("min_mode_share", "penetration", "negative_force", "force_floor"):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and np.isfinite(value) and value >= 0):
+                raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+        if not isinstance(self.n_samples, int) or self.n_samples < 8:
+            raise ValueError(f"n_samples must be an integer >= 8, got {self.n_samples!r}")
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One problem of a branch.
+
+    Attributes
+    ----------
+    kind : str
+        "left_family", "penetration", "negative_force" or "incomplete".
+    message : str
+        One line for a person.
+    first, last : int
+        The first and last branch point concerned (-1 when none, e.g. an empty branch).
+    value : float
+        The extreme value (lowest share, deepest penetration in gaps, most negative
+        force ratio; NaN for "incomplete").
+    """
+
+    kind: str
+    message: str
+    first: int = -1
+    last: int = -1
+    value: float = float("nan")
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["value"] = None if not np.isfinite(d["value"]) else float(d["value"])
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Finding:
+        value = d.get("value")
+        return cls(str(d["kind"]), str(d["message"]), int(d.get("first", -1)), int(d.get("last", -1)),
+                   float("nan") if value is None else float(value))
+
+
+def findings(branch) -> list[Finding]:
+    """The findings recorded in ``branch.metadata["checks"]`` by :func:`check_branch`
+    (empty when the branch was never checked)."""
+    return [Finding.from_dict(d) for d in branch.metadata.get("checks", [])]
+
+
+def check_branch(branch, thresholds: CheckThresholds | None = None, *, warn: bool = True,
+                 stacklevel: int = 2) -> list[Finding]:
+    """Check ``branch`` and record what it is.
+
+    Computes ``branch.records["mode_share"]`` if missing, stores the findings in
+    ``branch.metadata["checks"]`` (list of dicts) and the thresholds in
+    ``branch.metadata["check_thresholds"]``, and issues one :class:`BranchWarning` per
+    finding (unless ``warn`` is False).
+
+    Parameters
+    ----------
+    branch : Branch
+        A computed or loaded branch (its solver is rebuilt when needed; without a model
+        only the completeness check runs).
+    thresholds : CheckThresholds, optional
+    warn : bool
+        Issue the warnings.
+    stacklevel : int
+        Passed to :func:`warnings.warn`.
+
+    Returns
+    -------
+    list of Finding
+    """
+    th = CheckThresholds() if thresholds is None else thresholds
+    if not isinstance(th, CheckThresholds):
+        raise TypeError(f"thresholds must be a CheckThresholds, got {type(th).__name__}")
+    out: list[Finding] = []
+    solver = None
+    if len(branch):
+        try:
+            solver = branch._require_solver()
+        except RuntimeError as err:
+            log.info("branch checks without a solver: %s", err)
+    if solver is not None:
+        shares = branch.records.get("mode_share")
+        if shares is None or len(shares) != len(branch):
+            try:
+                shares = mode_shares(branch, n_samples=th.n_samples)
+                branch.records["mode_share"] = shares
+            except (ValueError, AttributeError, np.linalg.LinAlgError) as err:
+                log.info("no mode shares for this branch: %s", err)
+                shares = None
+        if shares is not None:
+            out += _family(branch, np.asarray(shares, dtype=float), th)
+        out += _contact(branch, solver, th)
+    if not branch.status.startswith("bound:"):
+        out.append(_incomplete(branch))
+    branch.metadata["checks"] = [f.to_dict() for f in out]
+    branch.metadata["check_thresholds"] = asdict(th)
+    if warn:
+        for f in out:
+            warnings.warn(f.message, BranchWarning, stacklevel=stacklevel + 1)
+    return out
+
+
+# ---------------------------------------------------------------------- mode shares
+def mode_shares(branch, mode: int | None = None, n_samples: int = 256) -> np.ndarray:
+    """Share (0..1) of the period-mean kinetic energy in linear mode ``mode`` (1-based;
+    default the branch's starting mode) at the fundamental harmonic, at every point, shape
+    (n_points,): the quantity that decides membership of the starting mode's family (as
+    MMS-HBM's ``records["mode_share"]``; energy of that mode in higher harmonics is a
+    superharmonic or an internal resonance, not the family).
+
+    Uses ``solver.coefficients(u)`` (all DOFs, NLvib order) when the solver has it, else
+    the DFT of ``solver.time_signals(u, None, n_samples)``.
+    """
+    from ..core.modal_energy import kinetic_energy_shares
+
+    solver = branch._require_solver()
+    model = branch.get_model()
+    if mode is None:
+        mode = int(getattr(solver, "mode", branch.metadata.get("method_options", {}).get("mode", 1)))
+    _, Phi = model.linear_modes(mode)
+    Phi = Phi[:, -1:]
+    proj = (model.M @ Phi).T
+    out = np.empty(len(branch))
+    for i, u in enumerate(branch.states):
+        omega = 2 * np.pi * float(branch.frequency[i])
+        Q = _coefficients(solver, u, n_samples)
+        shares, total = kinetic_energy_shares(Phi, proj, Q, omega, model.M)
+        out[i] = float(shares[0, 1]) if total > 0 else float("nan")
+    return out
+
+
+def _coefficients(solver, u, n_samples: int) -> np.ndarray:
+    if hasattr(solver, "coefficients"):
+        return solver.coefficients(u)
+    _, q = solver.time_signals(u, None, n_samples)
+    c = np.fft.rfft(q, axis=1) / q.shape[1]
+    H = n_samples // 2 - 1
+    Q = np.empty((q.shape[0], 2 * H + 1))
+    Q[:, 0] = c[:, 0].real
+    Q[:, 1::2] = 2 * c[:, 1 : H + 1].real
+    Q[:, 2::2] = -2 * c[:, 1 : H + 1].imag
+    return Q
+
+
+# ---------------------------------------------------------------------- checks
+def _where(branch, i: int) -> str:
+    gap = branch.gap
+    amp = branch.amplitude[i]
+    a = f"{amp / gap:.3g} gaps" if gap else f"{amp:.3g} m"
+    return f"point {i}, {branch.frequency[i]:.4g} Hz, {a}"
+
+
+def _family(branch, shares: np.ndarray, th: CheckThresholds) -> list[Finding]:
+    low = np.flatnonzero(shares < th.min_mode_share)
+    if not len(low):
+        return []
+    mode = int(branch.metadata.get("method_options", {}).get("mode", 1))
+    first, worst = int(low[0]), int(low[np.argmin(shares[low])])
+    back = np.flatnonzero(shares[first:] >= th.min_mode_share)
+    ended_low = shares[-1] < th.min_mode_share
+    head = (f"{branch.method} branch leaves the family of linear mode {mode}: that mode's share of the "
+            f"kinetic energy falls below {th.min_mode_share:g} at {_where(branch, first)} "
+            f"(lowest {shares[worst]:.3g} at point {worst})")
+    if ended_low:
+        tail = (f" and is {shares[-1]:.3g} at the end ({_where(branch, len(shares) - 1)}): "
+                "the rest of the branch is another family, not this mode's backbone")
+        last = len(shares) - 1
+    else:
+        last = first + int(back[0]) - 1
+        tail = (f"; it returns at point {last + 1} ({branch.frequency[last + 1]:.4g} Hz): the "
+                f"points {first}..{last} are an excursion into another mode (internal resonance)")
+    return [Finding("left_family", head + tail, first, last, float(shares[worst]))]
+
+
+def _contact(branch, solver, th: CheckThresholds) -> list[Finding]:
+    model = getattr(solver, "model", None)
+    if model is None or not hasattr(solver, "time_signals") or not hasattr(solver, "contact_force"):
+        return []
+    n = th.n_samples
+    dofs = [c.dof for c in model.contacts]
+    sides = np.array([c.side for c in model.contacts], dtype=float)[:, None]
+    gaps = np.array([c.gap for c in model.contacts], dtype=float)[:, None]
+    f_all = np.asarray(branch.contact_force_max, dtype=float)
+    f_scale = float(np.nanmax(np.abs(f_all))) if len(f_all) and np.any(np.isfinite(f_all)) else 0.0
+    k_c = getattr(solver, "contact_stiffness", None)  # a number, or one per contact DOF
+    k_c = None if k_c is None else float(np.max(np.atleast_1d(np.asarray(k_c, dtype=float))))
+    if k_c is not None and np.isfinite(k_c):
+        f_scale = max(f_scale, k_c * float(np.max(gaps)))
+    pen = np.full(len(branch), -np.inf)
+    neg = np.zeros(len(branch))
+    tau = 2 * np.pi * np.arange(n) / n
+    cheap = model.n_contacts == 1 and hasattr(solver, "contact_signals")
+    for i, u in enumerate(branch.states):
+        if cheap:  # the contact DOF and the force without recovering every DOF
+            _, q, lam = solver.contact_signals(u, tau)
+            q = np.atleast_2d(q)
+        else:
+            _, q = solver.time_signals(u, dofs, n)
+            lam = solver.contact_force(u, n)[1]
+        scale = np.where(gaps > 0, gaps, max(float(branch.amplitude[i]), 1e-300))
+        pen[i] = float(np.max((sides * q - gaps) / scale))
+        if pen[i] < -th.penetration:
+            continue  # the contact never comes near its stop: any force is Newton's residual
+        lam = np.atleast_2d(lam)
+        peak = max(float(np.max(lam)), th.force_floor * f_scale)
+        lo = float(np.min(lam))
+        if peak > 0 and lo < -th.force_floor * f_scale:
+            neg[i] = -lo / peak
+    out = []
+    bad = np.flatnonzero(pen > th.penetration)
+    if len(bad):
+        worst = int(bad[np.argmax(pen[bad])])
+        what = "truncated Fourier series of the contact DOF" if branch.harmonics else "contact DOF"
+        out.append(Finding(
+            "penetration",
+            f"{branch.method} branch: the {what} passes the stop by more than {th.penetration:g} gaps at "
+            f"{len(bad)} of {len(branch)} points, from {_where(branch, int(bad[0]))}; deepest "
+            f"{pen[worst]:.3g} gaps at point {worst} ({branch.frequency[worst]:.4g} Hz)"
+            + ("; more harmonics reduce it, branch.time_signals(i, admissible=True) gives admissible "
+               "signals" if branch.harmonics else ""),
+            int(bad[0]), int(bad[-1]), float(pen[worst])))
+    bad = np.flatnonzero(neg > th.negative_force)
+    if len(bad):
+        worst = int(bad[np.argmax(neg[bad])])
+        out.append(Finding(
+            "negative_force",
+            f"{branch.method} branch: the contact force changes sign (pulls) by more than "
+            f"{th.negative_force:g} of the peak force at {len(bad)} of {len(branch)} points, from "
+            f"{_where(branch, int(bad[0]))}; worst {neg[worst]:.3g} of the peak at point {worst}"
+            + (" (a truncation effect of the Fourier series)" if branch.harmonics else ""),
+            int(bad[0]), int(bad[-1]), float(-neg[worst])))
+    return out
+
+
+#: what an unfinished status means, by its first word
+_WHY = {
+    "max_steps": "the step budget ran out (raise max_steps, --max-steps)",
+    "ds_min": "the step size fell below ds_min (the corrector kept failing)",
+    "start": "the first point failed",
+    "interrupted": "the run was interrupted",
+}
+
+
+def incomplete_reason(status: str, metadata: dict | None = None) -> str:
+    """A short phrase saying why a branch with ``status`` ended short of its bounds."""
+    key = "start" if status.startswith("start") else status.split(":", 1)[0]
+    why = _WHY.get(key, status)
+    steps = dict(dict(metadata or {}).get("continuation", {})).get("max_steps")
+    if key == "max_steps" and steps is not None:
+        why = f"the step budget max_steps = {steps} ran out (raise max_steps, --max-steps)"
+    return why
+
+
+def _incomplete(branch) -> Finding:
+    n = len(branch)
+    bound = branch.metadata.get("max_amplitude")
+    reached = ""
+    if n:
+        gap = branch.gap
+        a = float(np.nanmax(branch.amplitude))
+        if gap:
+            reached = f" at {a / gap:.3g} gaps"
+            if bound:
+                reached += f" of {float(bound) / gap:.3g}"
+        else:
+            reached = f" at {a:.3g} m"
+    why = incomplete_reason(branch.status, branch.metadata)
+    return Finding("incomplete", f"{branch.method} branch ended short of its bounds{reached}: {why} "
+                   f"(status {branch.status!r}, {n} points)", n - 1, n - 1)
