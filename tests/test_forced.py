@@ -53,7 +53,9 @@ def _fd_check(problem, u, h=1e-7, rtol=1e-6):
 def test_linear_response_below_the_gap_is_the_closed_form(beam):
     F = np.zeros(beam.n_dof)
     F[10] = 1e-3
-    resp = mmshbm.frequency_response(beam, F, (30.0, 60.0), harmonics=3, newton_tol=1e-14)
+    # a Newton tolerance that the closed-form comparison to 1e-10 can rely on (the linear
+    # response near resonance amplifies a scaled residual of 1e-14 to ~2e-10; 1e-15 is reached)
+    resp = mmshbm.frequency_response(beam, F, (30.0, 60.0), harmonics=3, newton_tol=1e-15)
     assert resp.completed and len(resp) > 5 and resp.contact_force_max.max() == 0
     tip = beam.contact_dof
     worst = 0.0

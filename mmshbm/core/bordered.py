@@ -29,7 +29,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-__all__ = ["bordered_solve", "solve_bordered_sparse"]
+__all__ = ["bordered_solve", "bordered_solve_sign", "solve_bordered_sparse"]
 
 #: accept the block-elimination result when ‖[J; tᵀ]x − rhs‖∞ is below this times
 #: ‖[J; tᵀ]‖∞‖x‖∞ + ‖rhs‖∞ (a backward error near round-off)
@@ -107,21 +107,36 @@ def solve_bordered_sparse(J: sp.spmatrix, t: np.ndarray, rhs: np.ndarray) -> np.
 
 def bordered_solve(J, t: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     """Solve [J; tᵀ] x = rhs for dense or sparse J (all NaN when singular)."""
+    return bordered_solve_sign(J, t, rhs)[0]
+
+
+def bordered_solve_sign(J, t: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, float]:
+    """:func:`bordered_solve`, and the sign of det [J; tᵀ] (+1/−1; 0 when singular or for a
+    sparse J, whose determinant is not tracked)."""
     if not isinstance(J, np.ndarray) and sp.issparse(J):
-        return solve_bordered_sparse(J, t, rhs)  # block elimination, full LU fallback
+        return solve_bordered_sparse(J, t, rhs), 0.0  # block elimination, full LU fallback
     n = len(rhs)
     A = np.empty((n, n))
     A[:-1] = J
     A[-1] = t
     if n <= _SMALL_DENSE:
         x = np.empty(n)
-        if _small_dense_solver()(A, np.ascontiguousarray(rhs, dtype=float), np.empty((n, n)), x):
-            return np.full_like(rhs, np.nan)
-        return x
+        sign = np.zeros(1)
+        if _small_dense_solver()(A, np.ascontiguousarray(rhs, dtype=float), np.empty((n, n)), x, sign):
+            return np.full_like(rhs, np.nan), 0.0
+        return x, float(sign[0])
+    import scipy.linalg as la
+
     try:
-        return np.linalg.solve(A, rhs)
-    except np.linalg.LinAlgError:
-        return np.full_like(rhs, np.nan)
+        lu, piv = la.lu_factor(A, check_finite=False)
+    except (la.LinAlgError, ValueError):
+        return np.full_like(rhs, np.nan), 0.0
+    d = np.diag(lu)
+    if np.any(d == 0) or not np.all(np.isfinite(d)):
+        return np.full_like(rhs, np.nan), 0.0
+    swaps = np.count_nonzero(piv != np.arange(n))
+    sign = float(np.prod(np.sign(d))) * (-1.0 if swaps % 2 else 1.0)
+    return la.lu_solve((lu, piv), rhs, check_finite=False), sign
 
 
 #: bordered systems up to this size are solved by a Numba LU (LAPACK's call overhead

@@ -110,6 +110,7 @@ class Checkpoint:
             tangent=np.array(p[-1]["tangent"], dtype=float),
             ds=float(p[-1]["ds_next"]),
             steps=int(p[-1]["steps"]),
+            previous_tangent=np.array(p[-2]["tangent"], dtype=float) if len(p) > 1 else None,
         )
 
 

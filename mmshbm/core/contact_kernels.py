@@ -448,26 +448,47 @@ def _mmshbm_eval(D, dD, a, eta, omega, pole_k, pole_b, pole_w2, cdof, lo, hi, r,
 
 
 @njit(**JIT_OPTIONS)
-def _excursion_peak(y):
-    """Largest value of a periodic sampled signal, refined by a parabola through the
-    peak (the first sample of the maximum, as numpy.argmax)."""
-    n = y.shape[0]
+def _series_peak(c, s, cos_table, sin_table, y):
+    """Largest value of g = c_0 + Σ_k (c_k cos kτ + s_k sin kτ) over the period: the largest of
+    the samples ``y`` (= g on the table's grid, filled here), refined by safeguarded Newton
+    on g′ = 0 between its neighbours (to round-off)."""
+    N = y.shape[0]
+    H = c.shape[0] - 1
     j = 0
-    for i in range(1, n):
-        if y[i] > y[j]:
+    for i in range(N):
+        v = c[0]
+        for k in range(1, H + 1):
+            v += c[k] * cos_table[k, i] + s[k] * sin_table[k, i]
+        y[i] = v
+        if v > y[j]:
             j = i
-    ym = y[j - 1] if j > 0 else y[n - 1]
-    y0 = y[j]
-    yp = y[(j + 1) % n]
-    denom = ym - 2 * y0 + yp
-    if denom < 0:
-        return y0 - 0.125 * (yp - ym) ** 2 / denom
-    return y0
+    best = y[j]
+    h = _TWO_PI / N
+    lo = (j - 1) * h
+    hi = (j + 1) * h
+    tau = j * h
+    for _ in range(12):
+        g, g1, g2 = _trig_eval(c, s, tau)
+        if g > best:
+            best = g
+        if g2 >= 0.0:
+            break
+        step = g1 / g2
+        tau_new = tau - step
+        if tau_new <= lo or tau_new >= hi:
+            break
+        tau = tau_new
+        if abs(step) <= 1e-15:
+            g, g1, g2 = _trig_eval(c, s, tau)
+            if g > best:
+                best = g
+            break
+    return best
 
 
 @njit(**JIT_OPTIONS)
-def _mmshbm_monitor_multi(D, dD, a, eta, pole_k, pole_b, cdof, lo, hi, r, omega, amp_row, amp_sign, cos_fine,
-                          q_t, f_t, out):
+def _mmshbm_monitor_multi(D, dD, a, eta, pole_k, pole_b, cdof, lo, hi, r, omega, amp_row, amp_sign, cos_table,
+                          sin_table, c_w, s_w, y_t, out):
     """Amplitude, mean energy and peak contact force of a cosine MMS-HBM point.
 
     eta, pole_k, pole_b : pole unknowns and their harmonic and b_j (see ``_mmshbm_eval``);
@@ -475,13 +496,17 @@ def _mmshbm_monitor_multi(D, dD, a, eta, pole_k, pole_b, cdof, lo, hi, r, omega,
     amp_row  : (H+1,) cosine coefficients of the amplitude DOF's motion
     amp_sign : +1/−1: amplitude = max of amp_sign·q over the period (a single one-sided
                contact: the excursion away from the stop); 0: max |q|
-    cos_fine : (H+1, n_fine) cos kτ on a fine grid; q_t, f_t : (n_fine,) work
+    cos_table, sin_table : (>= H+1, N) cos kτ_j, sin kτ_j on the problem's sample grid
+    c_w, s_w : (H+1,) work; y_t : (N,) work
     out      : (3,) <- [amplitude, energy (J), peak contact force (N, exactly 0 when the
-               proximal active set is empty at every contact)]
+               proximal active set is empty at every sample of every contact)]
+
+    Peaks are located on the sample grid and refined by Newton on the series' derivative,
+    so they are exact to round-off.
     """
     H1 = D.shape[0]
     n_c = D.shape[1]
-    n_fine = cos_fine.shape[1]
+    N = y_t.shape[0]
     quad0 = 0.0
     quad = 0.0
     quad_m = 0.0
@@ -509,39 +534,55 @@ def _mmshbm_monitor_multi(D, dD, a, eta, pole_k, pole_b, cdof, lo, hi, r, omega,
             quad += qk
             quad_m += qm
     out[1] = 0.5 * quad0 + 0.25 * (quad - omega * quad_m)
-    for j in range(n_fine):
-        acc = 0.0
+    for k in range(H1):
+        s_w[k] = 0.0
+    if amp_sign != 0.0:
         for k in range(H1):
-            acc += amp_row[k] * cos_fine[k, j]
-        q_t[j] = amp_sign * acc if amp_sign != 0.0 else abs(acc)
-    out[0] = _excursion_peak(q_t)
+            c_w[k] = amp_sign * amp_row[k]
+        out[0] = _series_peak(c_w, s_w, cos_table, sin_table, y_t)
+    else:
+        for k in range(H1):
+            c_w[k] = amp_row[k]
+        up = _series_peak(c_w, s_w, cos_table, sin_table, y_t)
+        for k in range(H1):
+            c_w[k] = -amp_row[k]
+        down = _series_peak(c_w, s_w, cos_table, sin_table, y_t)
+        out[0] = up if up > down else down
     peak = 0.0
     for ic in range(cdof.shape[0]):
         i = cdof[ic]
-        active = False
-        for j in range(n_fine):
+        # the force series f_i (with the pole unknowns' share)
+        for k in range(H1):
+            fk = 0.0
+            for m in range(n_c):
+                fk += D[k, i, m] * a[k, m]
+            for p in range(pole_k.shape[0]):
+                if pole_k[p] == k:
+                    fk -= pole_b[p, i] * eta[p]
+            c_w[k] = fk
+        active_hi = False
+        active_lo = False
+        for j in range(N):
             q = 0.0
             f = 0.0
             for k in range(H1):
-                fk = 0.0
-                for m in range(n_c):
-                    fk += D[k, i, m] * a[k, m]
-                for p in range(pole_k.shape[0]):
-                    if pole_k[p] == k:
-                        fk -= pole_b[p, i] * eta[p]
-                q += a[k, i] * cos_fine[k, j]
-                f += fk * cos_fine[k, j]
-            p = q - f / r[ic]
-            lam = 0.0
-            if p > hi[ic]:
-                active = True
-                lam = -f
-            elif p < lo[ic]:
-                active = True
-                lam = f
-            f_t[j] = lam
-        if active:
-            v = _excursion_peak(f_t)
+                q += a[k, i] * cos_table[k, j]
+                f += c_w[k] * cos_table[k, j]
+            pj = q - f / r[ic]
+            if pj > hi[ic]:
+                active_hi = True
+            elif pj < lo[ic]:
+                active_lo = True
+        if active_hi:  # λ = −f at an upper stop
+            for k in range(H1):
+                c_w[k] = -c_w[k]
+            v = _series_peak(c_w, s_w, cos_table, sin_table, y_t)
+            for k in range(H1):
+                c_w[k] = -c_w[k]
+            if v > peak:
+                peak = v
+        if active_lo:  # λ = +f at a lower stop
+            v = _series_peak(c_w, s_w, cos_table, sin_table, y_t)
             if v > peak:
                 peak = v
     out[2] = peak

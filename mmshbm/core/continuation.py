@@ -18,6 +18,7 @@ bound by secant iteration in the arclength.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 from collections.abc import Callable
@@ -25,6 +26,7 @@ from collections.abc import Callable
 import numpy as np
 
 from .bordered import bordered_solve as _bordered_solve
+from .bordered import bordered_solve_sign as _bordered_solve_sign
 from .family import FamilyGuard, jump
 from .options import ContinuationOptions, ContinuationProblem, ContinuationResult, ContinuationState
 from .pinned import PinnedFailure
@@ -48,6 +50,14 @@ def newton(problem: ContinuationProblem, u: np.ndarray, tangent: np.ndarray, u_p
     <= ``step_tol`` with the residual <= √tol. Returns (u, iterations, residual
     history, Jacobian at u). Raises ``_Failure``.
     """
+    fast = getattr(problem, "fast_newton", None)
+    if fast is not None:  # a compiled loop for small dense problems (MMS-HBM, modal back end)
+        try:
+            out = fast(u, u_pred, tangent, tol, max_iter, step_tol)
+        except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError) as err:
+            raise _Failure(str(err)) from None
+        if out is not None:
+            return out
     history = []
     du_norm = np.inf
     for it in range(max_iter + 1):
@@ -74,9 +84,56 @@ def newton(problem: ContinuationProblem, u: np.ndarray, tangent: np.ndarray, u_p
         if not math.isfinite(du_norm):
             raise _Failure("singular Jacobian")
         u = u - du
+        if _predicted_converged(history, tol):
+            return u, it + 1, np.array(history + [_predicted(history)]), J
     raise _Failure(f"no convergence in {max_iter} iterations (residual {history[-1]:.2e})")
 
 
+
+
+def _curvature(t_old: np.ndarray, t_new: np.ndarray, ds: float):
+    """dt/ds over the last step (the second-order predictor's κ), or None after a jump or a
+    refinement (ds = 0) or across a sharp turn (the tangents more than ~26° apart)."""
+    if ds > 0 and float(t_new @ t_old) > 0.9:
+        return (t_new - t_old) / ds
+    return None
+
+
+def _next_step(ds: float, nit: int, hist, opt: ContinuationOptions) -> float:
+    """The next arclength step (before the ds_max cap) after a converged corrector."""
+    if opt.step_control == "effort":
+        return ds * (1 + opt.growth * ((opt.max_newton - nit) / opt.max_newton) ** 2)
+    r0 = float(hist[0]) if len(hist) else 0.0
+    factor = _MAX_GROWTH if r0 <= 0 else (opt.target_residual / r0) ** (1.0 / 3.0)
+    return ds * min(_MAX_GROWTH, max(0.5, factor))
+
+
+#: largest growth of the step from one point to the next (that of the effort rule at
+#: growth = 0.5): steps that double run into corners (grazing) of nonsmooth residuals
+_MAX_GROWTH = 1.5
+
+
+def _predicted(history: list) -> float:
+    """Residual after the next Newton step predicted from the last two, r_next = C r_k²,
+    C = r_k / r_{k−1}² (quadratic convergence)."""
+    r_prev, r = history[-2], history[-1]
+    return r * (r / r_prev) ** 2 if r_prev > 0 else math.inf
+
+
+def _predicted_converged(history: list, tol: float) -> bool:
+    """True when Newton has entered quadratic convergence (the last residual is at most
+    √tol, the last contraction at least tenfold) and the residual after the update just
+    made is predicted below tol/10: the point is accepted without evaluating it again
+    (the evaluation would accept it). Saves one evaluation per continuation step."""
+    if len(history) < 2 or tol < SKIP_MIN_TOL:
+        return False
+    r_prev, r = history[-2], history[-1]
+    return r <= math.sqrt(tol) and r <= 0.1 * r_prev and _predicted(history) <= 0.1 * tol
+
+
+#: the skip needs a tolerance well above the round-off floor of the scaled residual
+#: (~1e-13): below it a predicted residual is not one the arithmetic can deliver
+SKIP_MIN_TOL = 1e-11
 
 
 def _orientation(J, t: np.ndarray) -> float:
@@ -97,13 +154,20 @@ _DET_LIMIT = 400
 
 
 def _tangent(J, t_prev: np.ndarray) -> np.ndarray:
+    return _tangent_sign(J, t_prev)[0]
+
+
+def _tangent_sign(J, t_prev: np.ndarray) -> tuple[np.ndarray, float]:
+    """Unit tangent (oriented along ``t_prev``) and the sign of det [J; t] (0 if unknown):
+    det [J; t_prev] and det [J; t] share their sign when t·t_prev > 0, because both are the
+    cofactor vector of J (a multiple of t) dotted with the last row."""
     rhs = np.zeros(len(t_prev))
     rhs[-1] = 1.0
-    t = _bordered_solve(J, t_prev, rhs)
+    t, sign = _bordered_solve_sign(J, t_prev, rhs)
     if not np.all(np.isfinite(t)):
         raise _Failure("singular Jacobian at the tangent")
     t /= np.linalg.norm(t)
-    return t if t @ t_prev >= 0 else -t
+    return (t, sign) if t @ t_prev >= 0 else (-t, sign)
 
 
 def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray,
@@ -143,6 +207,8 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
         ValueError if ``options.bounds`` names a quantity the problem does not monitor.
     """
     opt = options or ContinuationOptions()
+    if opt.step_control == "auto":
+        opt = dataclasses.replace(opt, step_control=getattr(problem, "step_control", "effort"))
     if resume is None:
         us, recs, nits, dss, hists, special = [], [], [], [], [], [SpecialPoint("start", 0)]
     else:
@@ -192,6 +258,7 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
                 guard.observe(i, rec)
     amplitude_max = float(dict(opt.bounds).get("amplitude", (0.0, math.inf))[1])
     det_sign = {"last": 0.0}
+    curvature = {"k": None}  # dt/ds of the last step (second-order predictor)
 
     def jump_over(reason, step):
         """Jump beyond the family's frontier, fill the family back down from the landing
@@ -252,14 +319,18 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
             t = np.asarray(resume.tangent, dtype=float)
             ds, step = float(resume.ds), int(resume.steps)
             state.update(t=t, ds=ds, steps=step)
+            if resume.previous_tangent is not None and dss:
+                t_prev = np.asarray(resume.previous_tangent, dtype=float)
+                curvature["k"] = _curvature(t_prev, t, float(dss[-1]))
             _check_bound_names(opt.bounds, recs[-1])
             det_sign["last"] = _orientation_safe(problem, u, t)
         status = "max_steps"
         n_jumps = sum(1 for s in special if s[0] == "jump")
         while step < opt.max_steps:
             try:
-                u_new, nit, hist, J = _corrector(problem, u, t, ds, opt)
-                t_new = _tangent(J, t)
+                curv = curvature["k"] if opt.step_control == "residual" else None
+                u_new, nit, hist, J = _corrector(problem, u, t, ds, opt, curvature=curv)
+                t_new, sign = _tangent_sign(J, t)
                 if t_new @ t < math.cos(opt.max_angle) and ds > opt.corner_ds:
                     raise _Failure("tangent turned too far")
                 rec = _monitor(problem, u_new)
@@ -277,6 +348,7 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
                         step += 1
                         n_jumps += 1
                         ds = opt.ds
+                        curvature["k"] = None
                         if terminal:
                             status = terminal
                             break
@@ -302,6 +374,7 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
                         break
                     n_jumps += 1
                     ds = opt.ds
+                    curvature["k"] = None
                     if terminal:
                         status = terminal
                         break
@@ -312,14 +385,15 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
             new_special = []
             if t_new[-1] * t[-1] < 0 and min(abs(t_new[-1]), abs(t[-1])) > 1e-6:
                 new_special.append(SpecialPoint("fold", len(us)))
-            sign = _orientation(J, t_new)
             if sign and det_sign["last"] and sign != det_sign["last"]:
                 new_special.append(SpecialPoint("branch_point", len(us)))
             det_sign["last"] = sign or det_sign["last"]
             action = guard.observe(len(us), rec) if guard is not None else None
             ds_prev = ds
-            ds = min(opt.ds_max, ds * (1 + opt.growth * ((opt.max_newton - nit) / opt.max_newton) ** 2))
+            ds = min(opt.ds_max, _next_step(ds, nit, hist, opt))
             accept(u_new, nit, ds_prev, hist, rec, t_new, ds, step, new_special)
+            # κ ≈ dt/ds from the last step, for the next predictor (not across a fold's turn)
+            curvature["k"] = _curvature(t, t_new, ds_prev)
             u, t = u_new, t_new
             if action == "jump" and n_jumps < opt.max_jumps:
                 reason = "loop" if guard.left and guard.away <= opt.max_excursion else "excursion"
@@ -330,6 +404,7 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
                     break
                 n_jumps += 1
                 ds = opt.ds
+                curvature["k"] = None
                 if terminal:
                     status = terminal
                     break
@@ -393,10 +468,14 @@ def _check_bound_names(bounds, rec: dict) -> None:
                          f"{', '.join(map(repr, unknown))}; the problem monitors {sorted(rec)}")
 
 
-def _corrector(problem, u, t, ds, opt, start=None):
-    """Newton on the hyperplane t·(v − u − ds t) = 0, from ``start`` (a point on that
-    hyperplane; default the predictor u + ds t)."""
+def _corrector(problem, u, t, ds, opt, start=None, curvature=None):
+    """Newton on the hyperplane t·(v − u_pred) = 0 through the predictor u_pred = u + ds t
+    (+ ½ ds² κ with the branch's curvature vector κ, when given: a second-order predictor,
+    closer to the branch, so Newton needs fewer iterations), from ``start`` (a point on that
+    hyperplane; default the predictor)."""
     u_pred = u + ds * t
+    if curvature is not None:
+        u_pred = u_pred + 0.5 * ds * ds * curvature
     u_new, nit, hist, J = newton(problem, u_pred if start is None else start, t, u_pred, opt.newton_tol,
                                  opt.max_newton, opt.step_tol)
     if np.linalg.norm(u_new - u_pred) > 2.0 * ds + 10 * opt.newton_tol:

@@ -183,7 +183,7 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
         return u, nit, hist, rec, t
 
     if landing is not None:  # the problem's own landing (MMS-HBM: filtering the resonant harmonic)
-        excursion = recs[guard.frontier_index + 1:]
+        excursion = us[guard.frontier_index + 1:]  # the states of the excursion
         for origin in guard.origins(lambda i: float(recs[i]["amplitude"])):
             try:
                 u0, target = landing(us[origin], recs[origin], excursion, amplitude_max, frontier)

@@ -208,11 +208,13 @@ def _condensed_stiffness(Kb, Mb, kl, K_lc, K_cc, omega, harmonics, D, dD, AB, Z,
 
 # ---------------------------------------------------------------------------- small dense solve
 @njit(**JIT_OPTIONS)
-def _dense_solve(A, b, LU, x):
+def _dense_solve(A, b, LU, x, sign):
     """Solve A x = b by LU with partial pivoting (small dense systems, where LAPACK's call
-    overhead dominates). A (n, n) and b (n,) are read only; LU (n, n) is work. Returns 0,
-    or the 1-based column of an exactly zero pivot (x is then undefined)."""
+    overhead dominates). A (n, n) and b (n,) are read only; LU (n, n) is work; ``sign[0]``
+    receives the sign of det A (from the pivots and the row swaps). Returns 0, or the
+    1-based column of an exactly zero pivot (x and the sign are then undefined)."""
     n = A.shape[0]
+    s = 1.0
     for i in range(n):
         for j in range(n):
             LU[i, j] = A[i, j]
@@ -228,6 +230,7 @@ def _dense_solve(A, b, LU, x):
         if best == 0.0:
             return j + 1
         if p != j:
+            s = -s
             for c in range(n):
                 tmp = LU[j, c]
                 LU[j, c] = LU[p, c]
@@ -236,6 +239,8 @@ def _dense_solve(A, b, LU, x):
             x[j] = x[p]
             x[p] = tmp
         pivot = LU[j, j]
+        if pivot < 0.0:
+            s = -s
         for i in range(j + 1, n):
             factor = LU[i, j] / pivot
             if factor == 0.0:
@@ -248,4 +253,5 @@ def _dense_solve(A, b, LU, x):
         for c in range(i + 1, n):
             acc -= LU[i, c] * x[c]
         x[i] = acc / LU[i, i]
+    sign[0] = s
     return 0

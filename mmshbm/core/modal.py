@@ -339,6 +339,36 @@ class ModalCondensation:
                 Z += (self._V[i] @ Qc) * x[None, :] ** i
         return -Z
 
+    def projected_cosine_recovery(self, omega: float, a: np.ndarray, projector: np.ndarray,
+                                  exclude=()) -> np.ndarray:
+        """``projector @ Q_l,k`` of the cosine motion ``a`` (H+1, n_c) of the massless DOFs,
+        shape (n_p, H+1), without forming Q_l: the projections of Z_0, φ_j and Ṽ_i are
+        computed once per projector (n_p, n_l) and reused (e.g. modal coordinates
+        Φᵀ M q_l of a few modes, for their energy shares along a branch). Same formula and
+        ``exclude`` convention as :meth:`recover`."""
+        a = np.asarray(a, dtype=float)
+        key = id(projector)
+        cached = getattr(self, "_projections", {}).get(key)
+        if cached is None or cached[0] is not projector:
+            self.recover(0.0, np.zeros((self.n_c, 1)))  # builds Z_0 and Ṽ_i
+            P = np.asarray(projector, dtype=float)
+            cached = (projector, P @ self._Z0, P @ self.phi_j, [P @ V for V in self._V])
+            self._projections = {key: cached}
+        _, S0, S, SV = cached
+        H = a.shape[0] - 1
+        x = (np.arange(H + 1) * float(omega)) ** 2
+        den = self._w2[None, :] - x[:, None]
+        excluded = np.zeros(den.shape, dtype=bool)
+        for k, j in exclude:
+            excluded[k, j] = True
+        excluded[0] = True  # harmonic 0: static, c = 0
+        c = np.where(excluded, 0.0, x[:, None] / (self._w2[None, :] * np.where(excluded, 1.0, den)))
+        out = S0 @ a.T + S @ (c.T * (self.b_j @ a.T))
+        if not self.complete:
+            for i in range(1, KRYLOV_BLOCKS):
+                out += (SV[i] @ a.T) * x[None, :] ** i
+        return -out
+
     def _keep(self, H: int, exclude) -> np.ndarray:
         if self._keep_all.shape[0] != H + 1:
             self._keep_all = np.ones((H + 1, self.n_modes), dtype=np.uint8)

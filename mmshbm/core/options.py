@@ -46,6 +46,18 @@ class ContinuationOptions:
         ``step_tol``.
     max_newton : int
         Newton iterations per corrector before the step counts as failed.
+    step_control : {"auto", "residual", "effort"}
+        ``"auto"`` (default): the problem's ``step_control`` attribute if it has one (MMS-HBM:
+        ``"residual"``), else ``"effort"``. ``"residual"``: a second-order predictor
+        (tangent plus the curvature of
+        the last step) and the next step from the residual r₀ at the predictor, which
+        measures the predictor's error: ds ← ds·(target_residual/r₀)^(1/3), within
+        [ds/2, 1.5 ds]; Newton then typically needs two iterations. ``"effort"``: the tangent
+        predictor and ds *= 1 + growth·((max_newton − nit)/max_newton)² (mmshbm 0.1; the
+        same branches point for point; the right rule for stiff residuals such as
+        penalty-HBM's, whose size at the predictor says little about the step).
+    target_residual : float
+        r₀ aimed at by ``step_control="residual"`` (scaled residual at the predictor).
     growth : float
         ``a`` in ds *= 1 + a·((max_newton − nit)/max_newton)².
     max_angle : float
@@ -81,6 +93,8 @@ class ContinuationOptions:
     step_tol: float = 1e-8
     max_newton: int = 10
     growth: float = 0.5
+    step_control: str = "auto"
+    target_residual: float = 1e-3
     max_angle: float = math.radians(30.0)
     corner_ds: float = 1e-4
     bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
@@ -102,6 +116,10 @@ class ContinuationOptions:
         check.integer("max_newton", self.max_newton, minimum=1)
         check.positive("corner_ds", self.corner_ds)
         check.non_negative("growth", self.growth)
+        if self.step_control not in ("auto", "residual", "effort"):
+            raise ValueError(f"step_control must be 'auto', 'residual' or 'effort', "
+                             f"got {self.step_control!r}")
+        check.positive("target_residual", self.target_residual)
         if self.follow not in ("family", "path"):
             raise ValueError(f"follow must be 'family' or 'path', got {self.follow!r}")
         share = check.real_number("family_share", self.family_share)
@@ -180,6 +198,8 @@ class ContinuationState:
         Special points so far (no "endpoint").
     tangent : ndarray, shape (n,)
         Unit tangent at the last point.
+    previous_tangent : ndarray, shape (n,), optional
+        Unit tangent at the point before (the second-order predictor's curvature).
     ds : float
         The step to try next.
     steps : int
@@ -195,3 +215,4 @@ class ContinuationState:
     tangent: np.ndarray
     ds: float
     steps: int
+    previous_tangent: np.ndarray | None = None

@@ -167,6 +167,8 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
         above = np.flatnonzero(amp > gap * (1 + 1e-9))
         if len(above) and above[0] > 0:
             special.insert(1, SpecialPoint("grazing", int(above[0])))
+    if hasattr(problem, "branch_records") and n:  # records computed once for the whole branch
+        rec.update(problem.branch_records(res.u))
     if "modal_shares" in rec and hasattr(problem, "tracked_frequencies"):
         named = internal_resonances(rec["frequency"], rec["modal_shares"], problem.tracked_frequencies,
                                     getattr(problem, "mode", 1))

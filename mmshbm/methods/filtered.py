@@ -63,13 +63,12 @@ class FilteredProblem:
         return amplitude_and_gradient(self.problem, u)
 
 
-def _resonant_harmonic(rec: dict, mode: int, exclude) -> int | None:
+def _resonant_harmonic(problem, u: np.ndarray, mode: int, exclude) -> int | None:
     """The harmonic k >= 1 (not in ``exclude``) of the largest energy share of a mode
-    other than the starting one in ``rec["modal_shares"]``."""
-    shares = np.asarray(rec.get("modal_shares"))
-    if shares.ndim != 2:
+    other than the starting one at the point ``u`` (``problem.modal_shares``)."""
+    if not hasattr(problem, "modal_shares"):
         return None
-    shares = shares.copy()
+    shares = np.asarray(problem.modal_shares(u), dtype=float).copy()
     shares[mode - 1, :] = -1.0
     shares[:, 0] = -1.0
     for k in exclude:
@@ -126,8 +125,7 @@ def pass_resonance(problem, u_from: np.ndarray, amplitude_from: float, harmonic:
         if res.status != "bound:mode_share":
             break
         # another resonance: filter its harmonic too and go on from the last family point
-        last_rec = {k: v[-1] for k, v in res.records.items()}
-        k2 = _resonant_harmonic(last_rec, mode, filtered)
+        k2 = _resonant_harmonic(problem, res.u[-1], mode, filtered)
         if k2 is None or len(filtered) >= max_filtered:
             break
         filtered.append(k2)

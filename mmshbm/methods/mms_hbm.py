@@ -93,6 +93,8 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin):
     """
 
     method = "mmshbm"
+    #: the continuation's step rule for this problem (ContinuationOptions.step_control="auto")
+    step_control = "residual"
 
     def __init__(self, model: Model, harmonics: int = 5, n_samples: int | None = None,
                  r=None, mode: int = 1, backend: str = "auto", projection: str = "exact", poles: bool = True):
@@ -185,6 +187,8 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin):
         # the condensed stiffness of the last Ω (the monitor of a converged point reuses
         # the one of Newton's last evaluation)
         self._cached = (None, None, None)
+        #: residual (+ Jacobian) evaluations so far, the compiled corrector's included
+        self.evaluations = 0
         # fine grid for amplitude and peak force
         n_fine = max(512, 8 * N)
         self._tau_fine = 2 * np.pi * np.arange(n_fine) / n_fine
@@ -245,12 +249,90 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin):
             top = _held_frequency(model, self.contact_dofs, self.mode)
         return self.omega_ref, 2 * np.pi * max(top, self.linear_frequency)
 
+    # ------------------------------------------------------------------ compiled corrector
+    def _fast_setup(self):
+        """Data of the compiled corrector (:mod:`mmshbm.core.corrector_kernels`), or False
+        when it does not apply (a back end other than the modal one)."""
+        fast = getattr(self, "_fast", None)
+        if fast is not None:
+            return fast
+        cond = self.cond
+        if getattr(cond, "backend", None) != "modal":
+            self._fast = False
+            return False
+        from ..core.modal import _POLE_RTOL
+
+        H, n_c, m = self.H, self.n_c, cond.n_modes
+        keep = np.ones((H + 1, m), dtype=np.uint8)
+        static = np.zeros((H + 1, n_c, n_c))
+        if self.n_poles:
+            for p, (k, j) in enumerate(self.pole_set.pairs):
+                keep[k, j] = 0
+                static[k] += np.outer(self.pole_set.b[p], self.pole_set.b[p]) / self.pole_set.omega2[p]
+        n = self.n_unknowns
+        self._fast = {
+            "cond": (np.ascontiguousarray(cond.D0), np.ascontiguousarray(cond.b_j),
+                     np.ascontiguousarray(cond._w2), np.ascontiguousarray(cond.Rs), keep, static,
+                     float(_POLE_RTOL)),
+            "work": (np.empty((H + 1, n_c, n_c)), np.empty((H + 1, n_c, n_c)), np.empty(n - 1),
+                     np.empty((n - 1, n)), np.empty((n, n)), np.empty(n), np.empty((n, n)), np.empty(n),
+                     np.empty((H + 1, n_c)), np.empty(self.n_poles)),
+        }
+        return self._fast
+
+    def fast_newton(self, u0, u_pred, tangent, tol: float, max_iter: int, step_tol: float):
+        """Newton corrector on [R(u); t·(u − u_pred)] = 0 in one compiled loop (modal
+        condensation only; None otherwise, and the continuation's Python loop runs).
+
+        Returns (u, iterations, residual history, Jacobian at u), or raises ArithmeticError
+        with the reason (the continuation's failure)."""
+        from ..core import corrector_kernels as ck
+
+        fast = self._fast_setup()
+        if not fast:
+            return None
+        u = np.array(u0, dtype=float)
+        hist = np.empty(max_iter + 1)
+        D, dD, R, J, A, rhs, LU, du, a, eta = fast["work"]
+        u_pred = np.ascontiguousarray(u_pred, dtype=float)
+        tangent = np.ascontiguousarray(tangent, dtype=float)
+        status, it = ck._newton_modal(
+            u, u_pred, tangent, float(tol), float(step_tol), int(max_iter), self.n_c, self.H, self.colscale,
+            self.rowscale, *fast["cond"], self._pole_k, self._pole_b, self._pole_w2, self.cdof, self.lo,
+            self.hi, self.r_each, self.projection == "exact", self._cos_table, self._sin_table, self._tau,
+            hist, D, dD, R, J, A, rhs, LU, du, a, eta, np.zeros(1), *self._work)
+        self.evaluations += it if status == ck.SKIPPED else it + 1
+        if status == ck.CONVERGED:
+            self._cached = (float(u[-1] * self.colscale[-1]), D.copy(), dD.copy())
+            return u, int(it), hist[: it + 1].copy(), J.copy()
+        if status == ck.SKIPPED:  # D and J belong to the iterate before the last update
+            return u, int(it), hist[: it + 1].copy(), J.copy()
+        reason = {ck.NO_CONVERGENCE: f"no convergence in {max_iter} iterations (residual {hist[it]:.2e})",
+                  ck.NON_FINITE: "non-finite residual", ck.SINGULAR: "singular Jacobian",
+                  ck.POLE: "a harmonic of Ω sits on a fixed-interface eigenfrequency"}[status]
+        raise ArithmeticError(reason)
+
     # ------------------------------------------------------------------ residual
     def _condensed(self, omega: float, derivative: bool):
         """(D, dD) of :meth:`Condensation.dynamic_stiffness` at Ω (dD None unless
         ``derivative``), reusing the last result when Ω is the same number."""
         last, D, dD = self._cached
         if last == omega and (dD is not None or not derivative):
+            return D, dD
+        fast = self._fast_setup()
+        if fast:  # the modal kernel with the poles' terms left out and their static part added
+            from ..core._modal_kernels import _modal_dynamic_stiffness
+            from ..core.condense import SingularDynamicStiffness
+
+            D0, B, w2, Rs, keep, static, rtol = fast["cond"]
+            D = np.empty((self.H + 1, self.n_c, self.n_c))
+            dD = np.empty_like(D) if derivative else None
+            out = D if dD is None else dD
+            if _modal_dynamic_stiffness(D0, B, w2, Rs, omega, self.H, keep, rtol, D, out, derivative):
+                raise SingularDynamicStiffness(f"a harmonic of Ω = {omega:.6g} rad/s sits on a "
+                                               "fixed-interface eigenfrequency")
+            D += static
+            self._cached = (omega, D, dD)
             return D, dD
         if self.pole_set is not None and self.pole_set.n:
             D, dD = self.pole_set.dynamic_stiffness(omega, derivative)
@@ -262,7 +344,9 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin):
         return D, dD
 
     def evaluate(self, u: np.ndarray, jacobian: bool = True):
-        """Scaled residual ((H+1) n_c,) and, if asked, its Jacobian ((H+1) n_c, (H+1) n_c + 1)."""
+        """Scaled residual ((H+1) n_c + n_p,) and, if asked, its Jacobian
+        ((H+1) n_c + n_p, (H+1) n_c + n_p + 1). Counted in :attr:`evaluations`."""
+        self.evaluations += 1
         a, omega = self.unpack(u)
         D, dD = self._condensed(omega, jacobian)
         R = np.empty(self.n_unknowns - 1)
@@ -275,30 +359,28 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin):
 
     def monitor(self, u: np.ndarray) -> dict:
         """The per-point quantities of a backbone: frequency (Hz), amplitude (m), energy
-        (J), contact_force_max (N), mode_share (share of the kinetic energy in the starting
-        mode at the fundamental harmonic: what makes a point a member of the starting mode's
-        family, rather than a superharmonic or an internal resonance) and modal_shares
-        (:meth:`modal_shares`)."""
+        (J), contact_force_max (N) and mode_share (share of the kinetic energy in the
+        starting mode at the fundamental harmonic: what makes a point a member of the
+        starting mode's family, rather than a superharmonic or an internal resonance). The
+        table of every tracked mode and harmonic, ``modal_shares``, is added for the whole
+        branch at the end (:meth:`branch_records`)."""
         a, omega = self.unpack(u)
         if getattr(self.cond, "backend", None) == "modal":
             self.cond.check_range(omega, self.H)  # warns once past the modes kept
         D, dD = self._condensed(omega, True)
         out = np.empty(3)
-        n_fine = self._cos_fine.shape[1]
         a = np.ascontiguousarray(a)
         eta = self.unpack_eta(u)
         _mmshbm_monitor_multi(D, dD, a, eta, self._pole_k, self._pole_b, self.cdof, self.lo, self.hi,
                               self.r_each, omega, self._amplitude_row(a, omega, eta), self._amp_sign,
-                              self._cos_fine,
-                              np.empty(n_fine), np.empty(n_fine), out)
-        shares = self.modal_shares(u)
+                              self._cos_table, self._sin_table, np.empty(self.H + 1), np.empty(self.H + 1),
+                              np.empty(self.N), out)
         return {
             "frequency": omega / (2 * np.pi),
             "amplitude": float(out[0]),
             "energy": float(out[1]),
             "contact_force_max": float(out[2]),
-            "mode_share": float(shares[self.mode - 1, 1]),
-            "modal_shares": shares,
+            "mode_share": self.mode_share(u),
         }
 
 

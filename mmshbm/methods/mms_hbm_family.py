@@ -43,7 +43,7 @@ class FamilyMixin:
                        amplitude_min: float = 0.0):
         """Land on the family beyond the internal resonance the branch met after the family
         point ``u_from`` (record ``rec_from``): the resonant pair (harmonic k, mode j) is
-        the one whose energy share peaked over the ``excursion`` records; the branch is
+        the one whose energy share peaked over the ``excursion`` states; the branch is
         continued with harmonic k filtered out past kΩ = ω_j and released there
         (:func:`mmshbm.methods.filtered.pass_resonance`). Returns (u, amplitude). Used by
         the jumps of :mod:`mmshbm.core.family`; the landing lies above ``amplitude_min``."""
@@ -51,11 +51,8 @@ class FamilyMixin:
 
         freqs = self.tracked_frequencies
         best, pair = -1.0, None
-        for rec in excursion:
-            shares = np.asarray(rec.get("modal_shares"))
-            if shares.ndim != 2:
-                continue
-            shares = shares.copy()
+        for state in excursion:
+            shares = self.modal_shares(state).copy()
             shares[self.mode - 1, :] = -1.0
             shares[:, 0] = -1.0
             j, k = np.unravel_index(int(np.argmax(shares)), shares.shape)
@@ -142,6 +139,110 @@ class FamilyMixin:
         (:func:`~mmshbm.core.modal_energy.kinetic_energy_shares`)."""
         a, omega = self.unpack(u)
         freqs, Phi, MPhiT, M_ll = self._modal_basis()
-        Ql = self._recover(a, omega, self.unpack_eta(u))
+        eta = self.unpack_eta(u)
+        if getattr(self.cond, "backend", None) == "modal":
+            return self._modal_shares_projected(a, omega, eta, MPhiT)
+        Ql = self._recover(a, omega, eta)
         shares, _ = kinetic_energy_shares(Phi, MPhiT, Ql, omega, M_ll)
+        return shares
+
+    def mode_share(self, u: np.ndarray) -> float:
+        """Share of the period-mean kinetic energy in the starting mode at the fundamental
+        harmonic (the family test of :mod:`mmshbm.core.family`); with the modal back end
+        from one projected row, else from :meth:`modal_shares`."""
+        fast = self._fast_setup() if hasattr(self, "_fast_setup") else False
+        if not fast:
+            return float(self.modal_shares(u)[self.mode - 1, 1])
+        from ..core.corrector_kernels import _start_mode_share
+
+        data = getattr(self, "_share_data", None)
+        if data is None:
+            cond = self.cond
+            row = np.ascontiguousarray(self._modal_basis()[2][self.mode - 1:self.mode])
+            cond.projected_cosine_recovery(0.0, np.zeros((2, self.n_c)), row)  # builds the projections
+            _, S0, S, SV = cond._projections[id(row)]
+            sv = np.zeros((0, self.n_c)) if cond.complete else np.array([V[0] for V in SV[1:]])
+            pole_j = np.array([j for _, j in self.pole_set.pairs], dtype=np.int64) if self.n_poles \
+                else np.zeros(0, dtype=np.int64)
+            data = self._share_data = (row, np.ascontiguousarray(S0[0]), np.ascontiguousarray(S[0]),
+                                       np.ascontiguousarray(sv), pole_j)
+        row, s0, s, sv, pole_j = data
+        a, omega = self.unpack(u)
+        _, dD = self._condensed(omega, True)
+        D0, B, w2, Rs, keep, static, rtol = fast["cond"]
+        return float(_start_mode_share(np.ascontiguousarray(a), self.unpack_eta(u), omega, dD, self._pole_k,
+                                       pole_j, self._pole_w2, B, w2, keep, s0, s, sv))
+
+    def branch_records(self, states) -> dict:
+        """Per-point records computed once for a whole branch: ``modal_shares``, shape
+        (n_points, n_tracked, H+1) (:meth:`modal_shares`; with the modal back end for all
+        points at once)."""
+        states = np.asarray(states, dtype=float)
+        if not len(states):
+            return {"modal_shares": np.empty((0,))}
+        if getattr(self.cond, "backend", None) != "modal":
+            return {"modal_shares": np.array([self.modal_shares(u) for u in states])}
+        return {"modal_shares": self._modal_shares_all(states)}
+
+    def _modal_shares_all(self, states: np.ndarray) -> np.ndarray:
+        """:meth:`_modal_shares_projected` for many points at once, shape (n, n_t, H+1)."""
+        freqs, Phi, MPhiT, M_ll = self._modal_basis()
+        cond, H, n_c = self.cond, self.H, self.n_c
+        cond.projected_cosine_recovery(0.0, np.zeros((2, n_c)), MPhiT)  # builds the projections
+        _, S0, S, SV = cond._projections[id(MPhiT)]
+        X = states * self.colscale[None, :]
+        n_a = (H + 1) * n_c
+        a = X[:, :n_a].reshape(len(states), H + 1, n_c)
+        eta = X[:, n_a:n_a + self.n_poles]
+        omega = X[:, -1]
+        x = (np.arange(H + 1)[None, :] * omega[:, None]) ** 2  # (n, H+1)
+        w2 = cond._w2
+        keep = np.ones((H + 1, len(w2)), dtype=bool)
+        keep[0] = False
+        pairs = self.pole_set.pairs if self.n_poles else []
+        for k, j in pairs:
+            keep[k, j] = False
+        den = w2[None, None, :] - x[:, :, None]
+        c = np.where(keep[None], x[:, :, None] / (w2[None, None, :] * np.where(keep[None], den, 1.0)), 0.0)
+        Ba = np.einsum("mc,nkc->nkm", cond.b_j, a)
+        Y = np.einsum("tc,nkc->ntk", S0, a) + np.einsum("tm,nkm->ntk", S, c * Ba)
+        if not cond.complete:
+            for i in range(1, len(SV)):
+                Y += np.einsum("tc,nkc->ntk", SV[i], a) * x[:, None, :] ** i
+        Y = -Y
+        for p, (k, j) in enumerate(pairs):
+            Y[:, :, k] -= S[None, :, j] * (eta[:, p] * x[:, k] / self._pole_w2[p])[:, None]
+        quad = np.empty(len(states))
+        for i in range(len(states)):  # the total kinetic energy from the condensed stiffness
+            _, dD = self._condensed(float(omega[i]), True)
+            q = np.einsum("ki,kij,kj->k", a[i], dD, a[i])
+            for p, k in enumerate(self._pole_k):
+                q[k] -= 2.0 * k * k * omega[i] * eta[i, p] ** 2
+            quad[i] = q[1:].sum()
+        total = -omega / 8.0 * quad
+        shares = np.zeros((len(states), len(MPhiT), H + 1))
+        ok = total > 0
+        shares[ok, :, 1:] = 0.25 * x[ok, None, 1:] * Y[ok, :, 1:] ** 2 / total[ok, None, None]
+        return shares
+
+    def _modal_shares_projected(self, a, omega, eta, MPhiT) -> np.ndarray:
+        """:meth:`modal_shares` from the modal condensation's projections (no recovery of
+        the DOFs with mass): modal coordinates η_jk = −φ_jᵀ M Z_k a_k (minus the pole terms),
+        T_jk = ¼ (kΩ)² η_jk², and the total kinetic energy from the condensed stiffness,
+        T = −(Ω/8) Σ_k a_kᵀ ∂D_k/∂Ω a_k (with the pole unknowns' share)."""
+        pairs = self.pole_set.pairs if self.n_poles else []
+        Y = self.cond.projected_cosine_recovery(omega, a, MPhiT, exclude=pairs)  # (n_t, H+1)
+        x = (np.arange(self.H + 1) * omega) ** 2
+        if self.n_poles:
+            S = self.cond._projections[id(MPhiT)][2]  # Φᵀ M φ_j
+            for p, (k, j) in enumerate(pairs):
+                Y[:, k] -= S[:, j] * eta[p] * x[k] / self._pole_w2[p]
+        _, dD = self._condensed(omega, True)
+        quad = np.einsum("ki,kij,kj->k", a, dD, a)
+        for p, k in enumerate(self._pole_k):
+            quad[k] -= 2.0 * k * k * omega * eta[p] ** 2
+        total = -omega / 8.0 * quad[1:].sum()
+        shares = np.zeros((len(MPhiT), self.H + 1))
+        if total > 0:
+            shares[:, 1:] = 0.25 * x[None, 1:] * Y[:, 1:] ** 2 / total
         return shares

@@ -412,6 +412,18 @@ class Model:
         return (b["K_ll"] - correction).tocsc()
 
     def linear_modes(self, n: int = 1) -> tuple[np.ndarray, np.ndarray]:
+        """The ``n`` lowest modes with the contact open (see :meth:`_linear_modes`); the
+        result for each ``n`` is kept with the model (immutable), so a repeated call costs a
+        copy. (Not sliced from a larger solve: the same call gives the same bits whatever was
+        asked before.)"""
+        n = check.integer("n", n, minimum=1)
+        memo = self.__dict__.setdefault("_memo_modes", {})
+        if n not in memo:
+            memo[n] = self._linear_modes(n)
+        freqs, modes = memo[n]
+        return freqs.copy(), modes.copy()
+
+    def _linear_modes(self, n: int = 1) -> tuple[np.ndarray, np.ndarray]:
         """The ``n`` lowest modes with the contact open.
 
         Returns
@@ -457,7 +469,14 @@ class Model:
     def zero_gap_frequency(self) -> float:
         """Frequency (Hz) of the first mode's bilinear limit (gap → 0 or amplitude → ∞):
         half a period open, half a period with the contact DOF held at the stop,
-        f = 2 / (1/f_open + 1/f_closed)."""
+        f = 2 / (1/f_open + 1/f_closed). Kept with the model after the first call."""
+        memo = self.__dict__.get("_memo_zero_gap")
+        if memo is None:
+            memo = self._zero_gap_frequency()
+            self.__dict__["_memo_zero_gap"] = memo
+        return memo
+
+    def _zero_gap_frequency(self) -> float:
         contact = self._single("zero-gap limit")
         f_open = self.linear_frequencies(1)[0]
         closed = np.setdiff1d(np.arange(self.n_dof), [contact.dof])

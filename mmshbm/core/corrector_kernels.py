@@ -1,0 +1,168 @@
+"""A Newton corrector for MMS-HBM in one compiled loop (modal condensation).
+
+For small dense problems (MMS-HBM's usual case: (H+1)·n_c + n_p + 1 unknowns) the cost of
+a corrector step is dominated by Python: unpacking, the condensation call, the residual
+call, assembling and solving the bordered system. :func:`_newton_modal` does all of it in
+Numba — the condensed dynamic stiffness from fixed-interface modes
+(:func:`~mmshbm.core._modal_kernels._modal_dynamic_stiffness`, with the pole pairs left out
+and their static part added back, :mod:`mmshbm.core.poles`), the fused residual and
+Jacobian (:func:`~mmshbm.core.contact_kernels._mmshbm_eval`), the bordered LU
+(:func:`~mmshbm.core.kernels._dense_solve`) and the convergence test of
+:func:`mmshbm.core.continuation.newton` — so that an iteration costs its arithmetic. The
+numbers are those of the Python loop (the same kernels, in the same order).
+
+Caching: this kernel calls kernels of three other files. Numba's on-disk cache checks only
+the file of the function it caches; after editing a callee, clear ``__pycache__`` (CI and
+installs always start from a fresh cache).
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from ._modal_kernels import _modal_dynamic_stiffness
+from .contact_kernels import _mmshbm_eval
+from .kernels import JIT_OPTIONS, _dense_solve
+
+__all__ = []
+
+#: status codes of :func:`_newton_modal`
+CONVERGED, NO_CONVERGENCE, NON_FINITE, SINGULAR, POLE, SKIPPED = 0, 1, 2, 3, 4, 5
+
+
+@njit(**JIT_OPTIONS)
+def _newton_modal(u, u_pred, t, tol, step_tol, max_iter, n_c, H, colscale, rowscale,
+                  D0, B, w2, Rs, keep, static, pole_rtol,
+                  pole_k, pole_b, pole_w2, cdof, lo, hi, r, exact, cos_table, sin_table, tau_t,
+                  hist, D, dD, R, J, A, rhs, LU, du, a, eta, sign,
+                  F, dF, pc, ps, gc, g_t, dg_t, roots, C_hi, C_lo, S_w, P):
+    """Newton on [R(u); t·(u − u_pred)] = 0 from ``u`` (updated in place).
+
+    Converged when max(|R|∞, |t·(u − u_pred)|) <= tol, or when the last update's ∞-norm is
+    <= step_tol with the residual <= √tol. ``hist`` (max_iter+1,) receives the residual
+    norms; on return J (n−1, n) is the Jacobian at the last evaluated iterate and D, dD the
+    condensed stiffness there. Returns (status, iterations) with the status codes of this
+    module: SKIPPED is a convergence whose last update was not evaluated again, because
+    quadratic convergence predicted its residual below tol/10 (``hist[it]`` holds that
+    prediction; J, D and dD are those of the iterate before).
+
+    Condensation data: D0 (n_c, n_c), B (m, n_c), w2 (m,), Rs (P, n_c, n_c), keep (H+1, m)
+    uint8 (0: the mode's term is carried by a pole unknown), static (H+1, n_c, n_c) the
+    static part b_j b_jᵀ/ω_j² of those terms; the rest as :func:`_mmshbm_eval`.
+    """
+    n = u.shape[0]
+    n_a = (H + 1) * n_c
+    n_p = eta.shape[0]
+    du_norm = math.inf
+    for it in range(max_iter + 1):
+        for k in range(H + 1):
+            for i in range(n_c):
+                a[k, i] = u[k * n_c + i] * colscale[k * n_c + i]
+        for p in range(n_p):
+            eta[p] = u[n_a + p] * colscale[n_a + p]
+        omega = u[n - 1] * colscale[n - 1]
+        if _modal_dynamic_stiffness(D0, B, w2, Rs, omega, H, keep, pole_rtol, D, dD, True) != 0:
+            return POLE, it
+        for k in range(H + 1):
+            for i in range(n_c):
+                for j in range(n_c):
+                    D[k, i, j] += static[k, i, j]
+        _mmshbm_eval(D, dD, a, eta, omega, pole_k, pole_b, pole_w2, cdof, lo, hi, r, exact, cos_table,
+                     sin_table, tau_t, rowscale, colscale, True, R, J, F, dF, pc, ps, gc, g_t, dg_t, roots,
+                     C_hi, C_lo, S_w, P)
+        arc = 0.0
+        for i in range(n):
+            arc += t[i] * (u[i] - u_pred[i])
+        norm = abs(arc)
+        for i in range(n - 1):
+            v = abs(R[i])
+            if v > norm or v != v:
+                norm = v
+        hist[it] = norm
+        if not math.isfinite(norm):
+            return NON_FINITE, it
+        if norm <= tol or (du_norm <= step_tol and norm <= math.sqrt(tol)):
+            return CONVERGED, it
+        if it == max_iter:
+            break
+        for i in range(n - 1):
+            for j in range(n):
+                A[i, j] = J[i, j]
+            rhs[i] = R[i]
+        for j in range(n):
+            A[n - 1, j] = t[j]
+        rhs[n - 1] = arc
+        if _dense_solve(A, rhs, LU, du, sign) != 0:
+            return SINGULAR, it
+        du_norm = 0.0
+        for i in range(n):
+            v = abs(du[i])
+            if v > du_norm:
+                du_norm = v
+        if not math.isfinite(du_norm):
+            return SINGULAR, it
+        for i in range(n):
+            u[i] -= du[i]
+        # quadratic convergence predicts the next residual below tol/10: accept the updated
+        # point without evaluating it (as mmshbm.core.continuation._predicted_converged)
+        if it >= 1 and tol >= 1e-11:  # continuation.SKIP_MIN_TOL
+            r_prev = hist[it - 1]
+            if r_prev > 0.0 and norm <= math.sqrt(tol) and norm <= 0.1 * r_prev:
+                predicted = norm * (norm / r_prev) ** 2
+                if predicted <= 0.1 * tol:
+                    hist[it + 1] = predicted
+                    return SKIPPED, it + 1
+    return NO_CONVERGENCE, max_iter
+
+
+@njit(**JIT_OPTIONS)
+def _start_mode_share(a, eta, omega, dD, pole_k, pole_j, pole_w2, B, w2, keep, s0, s, sv):
+    """Share of the period-mean kinetic energy in one open-contact mode at the fundamental
+    harmonic (the starting mode's family test), from the modal condensation's projections
+    onto that mode (s0 = φᵀ M Z_0 (n_c,), s = φᵀ M φ_j (m,), sv (q, n_c) the projections of
+    the left-out modes' blocks Ṽ_1.., empty when the reduction is complete):
+
+        η = −(s0·a_1 + Σ_j keep[1, j] s_j (b_j·a_1) x/(ω_j²(ω_j² − x)) + Σ_i x^i sv_i·a_1)
+            − Σ_{poles of harmonic 1} s_j η_j1 x/ω_j²,       x = Ω²,
+        share = ¼ x η² / T,   T = −(Ω/8) Σ_{k>=1} (a_kᵀ ∂D_k/∂Ω a_k − 2k²Ω Σ_{poles of k} η²).
+
+    dD is the regular part of ∂D_k/∂Ω (poles left out). Returns 0 when T <= 0.
+    """
+    H1 = dD.shape[0]
+    n_c = dD.shape[1]
+    m = B.shape[0]
+    x = omega * omega
+    y = 0.0
+    for i in range(n_c):
+        y += s0[i] * a[1, i]
+    for j in range(m):
+        if keep[1, j] == 0:
+            continue
+        ba = 0.0
+        for i in range(n_c):
+            ba += B[j, i] * a[1, i]
+        y += s[j] * ba * x / (w2[j] * (w2[j] - x))
+    xi = 1.0
+    for q in range(sv.shape[0]):
+        xi *= x
+        for i in range(n_c):
+            y += xi * sv[q, i] * a[1, i]
+    y = -y
+    for p in range(pole_k.shape[0]):
+        if pole_k[p] == 1:
+            y -= s[pole_j[p]] * eta[p] * x / pole_w2[p]
+    quad = 0.0
+    for k in range(1, H1):
+        for i in range(n_c):
+            acc = 0.0
+            for j in range(n_c):
+                acc += dD[k, i, j] * a[k, j]
+            quad += a[k, i] * acc
+    for p in range(pole_k.shape[0]):
+        quad -= 2.0 * pole_k[p] * pole_k[p] * omega * eta[p] * eta[p]
+    total = -omega / 8.0 * quad
+    if total <= 0.0:
+        return 0.0
+    return 0.25 * x * y * y / total
