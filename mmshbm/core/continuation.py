@@ -273,7 +273,8 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
         points = filled + [(u_j, nit_j, hist_j, rec_j, t_j)]
         first = points[0][3]
         special_jump = SpecialPoint("jump", len(us), reason=reason, from_index=i_from, amplitude_from=A_from,
-                                    amplitude_to=float(first["amplitude"]), landing_amplitude=float(target),
+                                    amplitude_frontier=frontier, amplitude_to=float(first["amplitude"]),
+                                    landing_amplitude=float(target),
                                     frequency_from=float(recs[i_from].get("frequency", math.nan)),
                                     frequency_to=float(first.get("frequency", math.nan)))
         terminal = None

@@ -19,8 +19,15 @@ Kinds used by the package:
 ``"internal_resonance"``
     Harmonic ``k`` of the motion meets mode ``j`` (kΩ ≈ ω_j, energy in mode j peaks).
 ``"jump"``
-    The continuation left the starting mode's family and was restarted beyond the tongue;
-    ``data`` holds the skipped interval.
+    The continuation left the starting mode's family and was restarted beyond the tongue.
+    The point is the first one after the jump. ``data``: ``reason``; ``amplitude_frontier``
+    (m), the largest amplitude reached on the family before the jump, and ``amplitude_to``
+    (m), this point's: the family is not sampled between them (can be an empty
+    interval when the tongue splits the backbone in frequency only); ``from_index`` and
+    ``amplitude_from``, the family point the predictor was extrapolated from;
+    ``landing_amplitude`` (m), where the pinned solve landed (points between
+    ``amplitude_to`` and it were filled back down from the landing); ``frequency_from``,
+    ``frequency_to`` (Hz).
 ``"bound:<name>"``
     The branch stopped on a bound of a monitored quantity.
 """
