@@ -78,6 +78,13 @@ def test_frequency_at_is_the_point_refined_onto_that_amplitude(amplitude):
 def test_frequency_at_on_the_beam_and_inside_a_skipped_interval(beam21, h7):
     ref = mmshbm.backbone(beam21, harmonics=7, max_amplitude=3.0e-3)
     assert abs(h7.frequency_at(3.0e-3) / ref.frequency[-1] - 1) < 1e-9
+    # at the edge of a tongue: H = 5 leaves the family (mode 1's share < 1/2) just above 2
+    # gaps; at 2 gaps the point lies on the path segment that leaves the front, and is solved
+    h5 = mmshbm.backbone(beam21, harmonics=5)
+    ref = mmshbm.backbone(beam21, harmonics=5, max_amplitude=2.0e-3)
+    assert ref.records["on_family"][-1] == 1.0
+    assert abs(h5.frequency_at(2.0e-3) / ref.frequency[-1] - 1) < 1e-9
+    assert np.isnan(h5.frequency_at(2.02e-3))
     # at H = 15 the front skips amplitude intervals (measured 1.23-1.33, 2.15-2.66 and
     # 2.74-4.83 gaps): from its last point before a jump to the landing point the branch
     # has no point on the family, so the answer there is NaN, not a guess

@@ -25,6 +25,7 @@ import numpy as np
 
 from ..core.special_points import special_from_json, special_to_json
 from .archive import read_archive, write_archive
+from .family_points import family_front, frequency_at
 from .models import _model_arrays, _model_from_arrays, rebuild_model  # noqa: F401 - rebuild_model is public here
 
 __all__ = ["Branch", "rebuild_model", "read_archive", "write_archive"]
@@ -370,13 +371,7 @@ class Branch:
         points on the family (``records["on_family"]``, all points when the branch has no
         such record) whose amplitude is at least every earlier family point's. Excursions
         into internal-resonance tongues, and the way back down a loop, are left out."""
-        on = np.asarray(self.records.get("on_family", np.ones(len(self))), dtype=float) > 0.5
-        front, best = [], -np.inf
-        for i in range(len(self)):
-            if on[i] and self.amplitude[i] >= best * (1 - 1e-9):
-                front.append(i)
-                best = max(best, float(self.amplitude[i]))
-        return np.array(front, dtype=int)
+        return family_front(self)
 
     def frequency_at(self, amplitude: float, *, interpolate: bool = False, tol: float = 1e-10) -> float:
         """Frequency (Hz) of the backbone at ``amplitude`` (m).
@@ -386,8 +381,9 @@ class Branch:
         the two neighbouring points of the family front (:meth:`family_front`), so the
         answer is the one a run refined onto that amplitude gives (to the Newton
         tolerance), not a secant between continuation points. NaN where the front does not
-        reach the amplitude or skips it (inside an internal-resonance tongue that the
-        branch jumped or passed: see ``special_points``).
+        reach the amplitude, or where the starting mode's family does not exist there
+        (inside an internal-resonance tongue that the branch jumped or passed: see
+        ``special_points``; :mod:`mmshbm.results.family_points`).
 
         Parameters
         ----------
@@ -400,33 +396,7 @@ class Branch:
         tol : float
             Newton tolerance of the solve.
         """
-        from ..core.pinned import PinnedFailure, solve_at_amplitude
-
-        a = float(amplitude)
-        front = self.family_front()
-        A, f = self.amplitude, self.frequency
-        for i in front:
-            if np.isclose(A[i], a, rtol=1e-9, atol=0):
-                return float(f[i])
-        jumps = {int(s[1]) for s in self.special_points if s[0] == "jump"}
-        for i, j in zip(front[:-1], front[1:], strict=False):
-            if not (min(A[i], A[j]) <= a <= max(A[i], A[j])) or A[i] == A[j]:
-                continue
-            if j != i + 1 or j in jumps:
-                return float("nan")  # a skipped interval
-            s = (a - A[i]) / (A[j] - A[i])
-            if interpolate:
-                return float(f[i] + s * (f[j] - f[i]))
-            solver = self._require_solver()
-            u0 = self.states[i] + s * (self.states[j] - self.states[i])
-            try:
-                u, _, _, _ = solve_at_amplitude(solver, u0, a, tol=tol, max_iter=30)
-                value = float(solver.monitor(u)["frequency"])
-            except (PinnedFailure, ArithmeticError, ValueError) as err:
-                log.warning("frequency_at(%g): the pinned solve failed (%s); interpolating", a, err)
-                return float(f[i] + s * (f[j] - f[i]))
-            return value
-        return float("nan")
+        return frequency_at(self, amplitude, interpolate=interpolate, tol=tol)
 
     def _index(self, point: int) -> int:
         n = len(self)
