@@ -58,16 +58,43 @@ def test_special_points_and_short_end_marked():
     assert not branch.completed
     branch.special_points += [SpecialPoint("internal_resonance", 5, k=5, j=2, ratio=1.0),
                               SpecialPoint("fold", 7), SpecialPoint("branch_point", 8),
-                              SpecialPoint("jump", 10, skipped=[1.1, 1.4])]
+                              SpecialPoint("jump", 10, amplitude_frontier=1.1, amplitude_to=1.4)]
     ax = plotting.plot_backbone(branch).axes[0]
     labels = [line.get_label() for line in ax.get_lines()]
-    for name in ("internal resonance", "fold", "branch point", "jump (skipped)",
+    for name in ("internal resonance", "fold", "branch point", "jump (family not sampled)",
                  "stopped short of its bounds"):
         assert name in labels, name
     texts = [t.get_text() for t in ax.texts]
-    assert "5:2" in texts and "max_steps" in texts and any(t.startswith("skipped 1.1") for t in texts)
-    jump = next(line for line in ax.get_lines() if line.get_label() == "jump (skipped)")
+    assert "5Ω≈f₂" in texts and "max_steps" in texts and any(t.startswith("skipped 1.1") for t in texts)
+    jump = next(line for line in ax.get_lines() if line.get_label() == "jump (family not sampled)")
     np.testing.assert_array_equal(jump.get_xdata(), branch.frequency[9:11])
+
+
+def test_the_family_is_the_line_and_tongues_are_thin():
+    """H = 7 on the default beam goes up the 6:1 tongue and back: the branch's line is the
+    first mode's family front (NaN-broken at the jumps), the excursion a thin line, and
+    each jump is dotted from the family's last point before it."""
+    model = mmshbm.default_beam().model(21)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", BranchWarning)
+        branch = mmshbm.backbone(model, harmonics=7)
+    front = branch.family_front()
+    assert len(front) < len(branch)
+    ax = plotting.plot_backbone(branch, labels=["H7"]).axes[0]
+    main = next(line for line in ax.get_lines() if line.get_label() == "H7")
+    x = np.asarray(main.get_xdata(), dtype=float)
+    np.testing.assert_array_equal(x[np.isfinite(x)], branch.frequency[front])
+    thin = next(line for line in ax.get_lines() if line.get_label().startswith("off the family"))
+    xt = np.asarray(thin.get_xdata(), dtype=float)
+    np.testing.assert_array_equal(xt[np.isfinite(xt)], branch.frequency)
+    assert thin.get_linewidth() < main.get_linewidth()
+    jumps = [s for s in branch.special_points if s.kind == "jump"]
+    dotted = [line for line in ax.get_lines()
+              if line.get_linestyle() == ":" and line.get_color() == main.get_color()]
+    assert len(dotted) == len(jumps)
+    for s, line in zip(jumps, dotted, strict=True):
+        i0 = front[front < s.index][-1]
+        np.testing.assert_array_equal(line.get_xdata(), branch.frequency[[i0, s.index]])
 
 
 def test_signal_plots_say_what_they_show():

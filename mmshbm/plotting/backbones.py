@@ -55,8 +55,11 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
         Legend position (matplotlib ``loc``).
     special : bool
         Mark the special points: folds (▲), branch points (■), internal resonances (◆,
-        labelled k:j), jumps (the skipped stretch dotted), and the end of every branch
-        that stopped short of its bounds (✕, with the reason).
+        labelled kΩ≈f_j), jumps (dotted from the family's last point before the jump,
+        with the skipped amplitudes), and the end of every branch that stopped short of
+        its bounds (✕, with the reason). The starting mode's backbone (the family front,
+        :meth:`~mmshbm.Branch.family_front`) is the branch's line; points off the family
+        (internal-resonance tongues) are drawn thin.
 
     Returns
     -------
@@ -84,10 +87,17 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
     if styles is None:
         styles = line_styles(len(branches))
     colors = []
+    excursion_labelled = False
     for i, (b, label) in enumerate(zip(branches, labels, strict=True)):
         style = {"lw": 1.4} | dict(styles[i])
-        (line,) = ax.plot(b.frequency, b.amplitude / scales[i], label=label, **style)
+        f, a = _family_curve(b)
+        (line,) = ax.plot(f, a / scales[i], label=label, **style)
         colors.append(line.get_color())
+        if len(f) != len(b):  # the branch went into internal-resonance tongues: drawn thin
+            fp, ap = _broken_at_jumps(b)
+            ax.plot(fp, ap / scales[i], color=line.get_color(), lw=0.6, alpha=0.35,
+                    zorder=1, label=None if excursion_labelled else "off the family (internal resonance)")
+            excursion_labelled = True
         if special:
             _special_points(ax, b, scales[i], line.get_color())
     if measured is not None:
@@ -164,10 +174,57 @@ def _model_tag(members, branches) -> str:
 SPECIAL_MARKERS = {"fold": "^", "branch_point": "s", "internal_resonance": "D"}
 
 
+def _front(branch) -> np.ndarray | None:
+    """The family front's indices (:func:`mmshbm.results.family_points.family_front`), or
+    None when the branch records no family (every point is drawn)."""
+    records = getattr(branch, "records", None) or {}
+    if "on_family" not in records and "mode_share" not in records:
+        return None
+    from ..results.family_points import family_front
+
+    return family_front(branch)
+
+
+def _family_curve(branch) -> tuple[np.ndarray, np.ndarray]:
+    """(frequency, amplitude) of the starting mode's backbone in ``branch``: its family
+    front, broken (NaN) where the front skips points (a tongue or a jump); the whole
+    branch when it records no family or never leaves it."""
+    front = _front(branch)
+    if front is None or len(front) == len(branch):
+        return np.asarray(branch.frequency), np.asarray(branch.amplitude)
+    jumps = {int(sp[1]) for sp in branch.special_points if sp[0] == "jump"}
+    f, a = [], []
+    for n, i in enumerate(front):
+        if n and (i != front[n - 1] + 1 or i in jumps):
+            f.append(np.nan)
+            a.append(np.nan)
+        f.append(branch.frequency[i])
+        a.append(branch.amplitude[i])
+    return np.array(f), np.array(a)
+
+
+def _broken_at_jumps(branch) -> tuple[np.ndarray, np.ndarray]:
+    """(frequency, amplitude) of every point of ``branch``, NaN-broken before each jump
+    (the path is not continuous there)."""
+    n = len(branch)
+    cuts = sorted({int(sp[1]) for sp in branch.special_points if sp[0] == "jump" and 0 < int(sp[1]) < n})
+    f = np.insert(np.asarray(branch.frequency, dtype=float), cuts, np.nan)
+    a = np.insert(np.asarray(branch.amplitude, dtype=float), cuts, np.nan)
+    return f, a
+
+
+def resonance_label(k, j) -> str:
+    """The label of the internal resonance of harmonic k with mode j (1-based), e.g.
+    "5Ω≈f₂"."""
+    sub = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
+    return f"{k}Ω≈f{str(j).translate(sub)}"
+
+
 def _special_points(ax, branch, scale: float, color) -> None:
     n = len(branch)
     f, a = branch.frequency, branch.amplitude / scale
-    seen = set()
+    seen, named = set(), set()
+    front = _front(branch)
     for sp in branch.special_points:
         kind, i = sp[0], int(sp[1])
         if not 0 <= i < n:
@@ -180,17 +237,19 @@ def _special_points(ax, branch, scale: float, color) -> None:
                     label=label)
             if kind == "internal_resonance":
                 k, j = data.get("k", data.get("harmonic")), data.get("j", data.get("mode"))
-                if k is not None and j is not None:
-                    ax.annotate(f"{k}:{j}", (f[i], a[i]), xytext=(4, -9), textcoords="offset points",
-                                fontsize=7, color=color)
+                if k is not None and j is not None and (k, j) not in named:
+                    named.add((k, j))
+                    ax.annotate(resonance_label(k, j), (f[i], a[i]), xytext=(4, -9),
+                                textcoords="offset points", fontsize=7, color=color)
         elif kind == "jump" and i > 0:
-            label = None if "jump" in seen else "jump (skipped)"
+            label = None if "jump" in seen else "jump (family not sampled)"
             seen.add("jump")
-            ax.plot(f[i - 1 : i + 1], a[i - 1 : i + 1], ls=":", color=color, lw=1.0, zorder=3, label=label)
-            lo_hi = next((data[k] for k in ("skipped", "amplitude_interval", "interval", "amplitudes")
-                          if k in data), None)
-            if lo_hi is not None and len(lo_hi) == 2:
-                ax.annotate(f"skipped {lo_hi[0] / scale:.3g}–{lo_hi[1] / scale:.3g}", (f[i], a[i]),
+            before = front[front < i] if front is not None else np.array([i - 1])
+            i0 = int(before[-1]) if len(before) else i - 1
+            ax.plot([f[i0], f[i]], [a[i0], a[i]], ls=":", color=color, lw=1.0, zorder=3, label=label)
+            lo, hi = data.get("amplitude_frontier"), data.get("amplitude_to")
+            if lo is not None and hi is not None and hi > lo * 1.01:
+                ax.annotate(f"skipped {lo / scale:.3g}–{hi / scale:.3g}", (f[i], a[i]),
                             xytext=(4, 4), textcoords="offset points", fontsize=7, color=color)
     if n and not branch.status.startswith("bound:"):
         ax.plot(f[-1], a[-1], "x", color=color, ms=8, mew=2, zorder=6,
