@@ -139,6 +139,46 @@ def _extrapolated(us: list, recs: list, clean: list, amplitude: float) -> np.nda
     return sum(c * xt ** (deg - p) for p, c in enumerate(coef))
 
 
+def _nearer_landing(problem, u_front, frontier: float, u_land, landing: float, predictor,
+                    amplitude_max: float, step: float, accept):
+    """A landing on the family nearer the frontier than ``landing``: the filtered passage
+    of an internal resonance lands where the resonant harmonic is released, which can be
+    well beyond the tongue (the family may reappear between two tongues). Tries
+    amplitudes frontier·(1 + step·2^i) and the midpoints between them, upwards, up to the
+    landing, from the state interpolated between the frontier point and the landing and
+    from the problem's family predictor (from the frontier and back from the landing);
+    returns (u, iterations, history, record, tangent, amplitude) of the lowest one on the
+    family, or None."""
+    if landing <= frontier * (1.0 + 2.0 * step):
+        return None
+    grid = []
+    i = 0
+    while True:
+        a = frontier * (1.0 + step * 2.0**i)
+        if a >= landing * (1.0 - step):
+            break
+        grid.append(a)
+        i += 1
+    grid = sorted(set(grid) | {0.5 * (p + q) for p, q in zip(grid, grid[1:] + [landing], strict=True)})
+    for a in grid:
+        s = (a - frontier) / (landing - frontier)
+        starts = [(1.0 - s) * u_front + s * u_land]
+        if predictor is not None:
+            for u_from, a_from in ((u_front, frontier), (u_land, landing)):
+                try:
+                    starts.append(predictor(u_from, a_from, a, amplitude_max))
+                except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
+                    pass
+        for u0 in starts:
+            try:
+                u, nit, hist, rec, t = accept(u0, a, math.nan)
+            except (PinnedFailure, ArithmeticError, ValueError) as err:
+                log.debug("nearer landing at %.4g: %s", a, err)
+                continue
+            return u, nit, hist, rec, t, a
+    return None
+
+
 def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, amplitude_max: float,
          newton_tol: float, max_newton: int, monitor) -> tuple:
     """Land on the family beyond the frontier.
@@ -188,6 +228,10 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
             try:
                 u0, target = landing(us[origin], recs[origin], excursion, amplitude_max, frontier)
                 u, nit, hist, rec, t = accept(u0, target, math.nan)
+                nearer = _nearer_landing(problem, us[guard.frontier_index], frontier, u, target, predictor,
+                                         amplitude_max, step, accept)
+                if nearer is not None:
+                    u, nit, hist, rec, t, target = nearer
                 return u, nit, hist, rec, t, target, origin
             except (PinnedFailure, ArithmeticError, ValueError, RuntimeError) as err:
                 last_error = f"filtered passage: {err}"
