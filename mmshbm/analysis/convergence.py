@@ -133,8 +133,7 @@ class ConvergenceFit:
         if n < 4:
             note = "a rate needs 4 runs"
         elif not np.all(np.isfinite(frequency[-4:])):
-            missing = [f"{v:g}" for v, f in zip(values[-4:], frequency[-4:], strict=True)
-                       if not np.isfinite(f)]
+            missing = [f"{v:g}" for v, f in zip(values, frequency, strict=True) if not np.isfinite(f)]
             note = f"no value at {symbol} = {', '.join(missing)}"
         else:
             s = steps[-3:]

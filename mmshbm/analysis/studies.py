@@ -41,17 +41,10 @@ from ..results.branch import (
     versions,
     write_archive,
 )
+from .convergence import ConvergenceFit, format_convergence
 from .executors import run_specs
 from .runspec import RunSpec, build_model, execute, matrix_source
-from .tables import (
-    ConvergenceFit,
-    FrequencyTable,
-    coords_text,
-    format_cells,
-    format_convergence,
-    series_note,
-    summarize,
-)
+from .tables import FrequencyTable, coords_text, format_cells, series_note, summarize
 
 __all__ = ["run_study", "figure2_study", "monte_carlo", "Study", "RunSpec", "FrequencyTable",
            "ConvergenceFit", "STUDY_FORMAT", "execute", "build_model"]

@@ -12,10 +12,8 @@ from pathlib import Path
 import numpy as np
 
 from ..results.diagnostics import incomplete_reason
-from .convergence import ConvergenceFit, format_convergence
 
-__all__ = ["FrequencyTable", "ConvergenceFit", "format_convergence", "format_cells", "summarize",
-           "coords_text"]
+__all__ = ["FrequencyTable", "format_cells", "summarize", "coords_text", "series_note"]
 
 
 @dataclass

@@ -32,7 +32,7 @@ from pathlib import Path
 
 from .. import _validate as check
 
-__all__ = ["ThroughputRun", "Throughput", "measure_throughput", "DEFAULT_RANGES"]
+__all__ = ["ThroughputRun", "Throughput", "measure_throughput", "machine_ceiling", "DEFAULT_RANGES"]
 
 log = logging.getLogger(__name__)
 
@@ -99,7 +99,8 @@ class Throughput:
         one task), ``pickle_ms_per_backbone`` (dumps + loads of one result in this process),
         ``per_backbone_ms`` (serial time / n).
     machine : dict
-        ``cpu_count`` and ``loadavg`` (1, 5, 15 min) before and after.
+        ``cpu_count``, ``loadavg_before``/``_after`` (1, 5, 15 min) and
+        ``ceiling_before``/``_after`` (:func:`machine_ceiling`).
     """
 
     n: int
@@ -128,7 +129,10 @@ class Throughput:
         lines.append("efficiency = serial time / (workers x wall); busy = time in tasks / (workers x wall)")
         m = self.machine
         lines.append(f"machine: {m['cpu_count']} CPUs, load average {m['loadavg_before'][0]:.2f} before, "
-                     f"{m['loadavg_after'][0]:.2f} after (1 min)")
+                     f"{m['loadavg_after'][0]:.2f} after (1 min); efficiency it gives "
+                     f"{self.runs[-1].workers} processes of perfectly parallel work: "
+                     f"{m['ceiling_before']:.0%} before, {m['ceiling_after']:.0%} after "
+                     "(the ceiling of the efficiencies above)")
         return "\n".join(lines)
 
     def to_json(self, path) -> Path:
@@ -146,6 +150,34 @@ def _warm_worker(spec, pause: float = 0.0):
     execute(spec)
     time.sleep(pause)
     return os.getpid()
+
+
+def _spin(n: int) -> float:
+    """A fixed amount of pure-Python arithmetic (no I/O, no memory traffic); returns its
+    wall time in the process that runs it."""
+    t0 = time.perf_counter()
+    x = 0.0
+    for i in range(n):
+        x += (i % 7) * 0.5
+    return time.perf_counter() - t0
+
+
+def machine_ceiling(workers: int = 2, seconds: float = 0.3) -> float:
+    """The parallel efficiency this machine gives right now to ``workers`` processes of
+    perfectly parallel work: t(one copy alone) / t(``workers`` copies at once in a warm
+    process pool). 1 on idle cores; about 2/3 when one other busy process shares two
+    cores. An upper bound for the efficiency of any study measured at the same time."""
+    import concurrent.futures as cf
+    import multiprocessing
+
+    n = max(1, int(seconds * 2e7))
+    with cf.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        list(pool.map(_spin, [1000] * workers))  # start the workers
+        alone = min(_spin(n) for _ in range(2))
+        t0 = time.perf_counter()
+        list(pool.map(_spin, [n] * workers))
+        together = time.perf_counter() - t0
+    return alone / together
 
 
 def _same(a, b) -> bool:
@@ -217,7 +249,8 @@ def measure_throughput(n: int = 1000, *, harmonics: int = 3, elements: int = 8, 
     grid = {"harmonics": (harmonics,), "elements": (elements,), "samples": samples,
             "max_amplitude": max_amplitude, "unit": "gap"}
     specs = grid_specs(**grid)
-    machine = {"cpu_count": os.cpu_count(), "loadavg_before": list(os.getloadavg())}
+    machine = {"cpu_count": os.cpu_count(), "loadavg_before": list(os.getloadavg()),
+               "ceiling_before": machine_ceiling(workers) if executors else 1.0}
 
     execute(specs[0])  # compile or load the kernels in this process
     t0 = time.perf_counter()
@@ -274,6 +307,7 @@ def measure_throughput(n: int = 1000, *, harmonics: int = 3, elements: int = 8, 
                     study = run_study(executor=client, workers=workers, chunksize=chunksize, **grid)
                     record(name, True, study)
     machine["loadavg_after"] = list(os.getloadavg())
+    machine["ceiling_after"] = machine_ceiling(workers) if executors else 1.0
     result.machine = machine
     return result
 
