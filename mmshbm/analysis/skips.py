@@ -189,12 +189,19 @@ def explain(branch, amplitude: float, frequency: float, intervals: list[Skip] | 
 
 
 def caution(branch, amplitude: float, intervals: list[Skip] | None = None) -> str:
-    """A warning for a finite table value at ``amplitude`` (m): it lies within
-    :data:`JUMP_NEIGHBOURHOOD` of a skipped interval across which the frequency jumps (the
-    front is discontinuous there, and which side a cell lands on depends on where the jump
-    happened to land). "" otherwise."""
+    """A warning for a finite table value at ``amplitude`` (m): it lies inside a skipped
+    interval (found on the path segment next to the front, where the starting mode still
+    holds its family share: the edge of a tongue), or within :data:`JUMP_NEIGHBOURHOOD` of
+    a skipped interval across which the frequency jumps (the front is discontinuous there,
+    and which side a cell lands on depends on where the jump happened to land). ""
+    otherwise."""
     intervals = skips(branch) if intervals is None else intervals
     gap = _gaps(branch)
+    for s in intervals:
+        if s.lo < amplitude < s.hi and s.width > WIDE * s.hi:
+            what = s.resonance_text() or "an excursion off the family"
+            return (f"at the edge of {what}: inside the interval {_interval(s.lo, s.hi, gap)} the front "
+                    "skips, on the path next to it where the first mode still holds its family share")
     for s in intervals:
         near = s.lo * (1 - JUMP_NEIGHBOURHOOD) <= amplitude <= s.hi * (1 + JUMP_NEIGHBOURHOOD)
         if near and s.discontinuous:
@@ -204,19 +211,39 @@ def caution(branch, amplitude: float, intervals: list[Skip] | None = None) -> st
     return ""
 
 
+def _family_share(branch) -> float:
+    return float(dict(branch.metadata.get("continuation") or {}).get("family_share", 0.5))
+
+
 def _weights(branch, amplitude: float):
-    """(i, j, s) with the point at ``amplitude`` (m) = (1 − s)·point i + s·point j on the
-    family front, or None where the front has no value there."""
+    """(i, j, s) with the point at ``amplitude`` (m) ≈ (1 − s)·point i + s·point j where
+    :meth:`Branch.frequency_at` finds it: on the segment between two neighbouring front
+    points, or, inside a skipped interval, on the path segment that leaves the last front
+    point or arrives at the next one while the starting mode keeps its family share
+    (interpolated); None where the front has no value."""
     front = branch.family_front()
     A = np.asarray(branch.amplitude, dtype=float)
     for i in front:
         if np.isclose(A[i], amplitude, rtol=1e-9, atol=0):
             return int(i), int(i), 0.0
+    jumps = {int(p[1]) for p in branch.special_points if p[0] == "jump"}
+    share = branch.records.get("mode_share")
     for i, j in zip(front[:-1], front[1:], strict=False):
-        if A[i] <= amplitude <= A[j] and A[j] > A[i]:
-            if j != i + 1:
-                return None
-            return int(i), int(j), float((amplitude - A[i]) / (A[j] - A[i]))
+        i, j = int(i), int(j)
+        if not A[i] <= amplitude <= A[j] or A[j] == A[i]:
+            continue
+        if j == i + 1 and j not in jumps:
+            return i, j, float((amplitude - A[i]) / (A[j] - A[i]))
+        edges = []
+        if i + 1 not in jumps and A[i] <= amplitude <= A[i + 1]:
+            edges.append((i, i + 1))
+        if j not in jumps and j - 1 != i and A[j - 1] <= amplitude <= A[j]:
+            edges.append((j - 1, j))
+        for p, q in edges:
+            t = float((amplitude - A[p]) / (A[q] - A[p]))
+            if share is not None and (1 - t) * share[p] + t * share[q] >= _family_share(branch):
+                return p, q, t
+        return None
     return None
 
 
