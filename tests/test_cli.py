@@ -113,7 +113,7 @@ def test_study_figure2(tmp_path, capsys):
     study = load(tmp_path / "figure2.npz")
     f = study.branch(harmonics=5, elements=21).frequency_at(1.5 * 1e-3)
     assert f"{f:.10g}" == lines[6].split(",")[3]
-    assert "Observed convergence rate" in (tmp_path / "figure2_table.txt").read_text()
+    assert "Convergence: steps between successive runs" in (tmp_path / "figure2_table.txt").read_text()
 
 
 def test_study_grid_with_parameter(tmp_path):

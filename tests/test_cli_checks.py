@@ -39,7 +39,7 @@ def test_study_counts_incomplete_runs_and_says_why(tmp_path, capsys):
     assert "incomplete)" in out  # Study(... n completed, m incomplete)
     assert "run method=mmshbm, elements=4, harmonics=3: mmshbm branch ended short" in err
     table = (tmp_path / "study_table.txt").read_text()
-    assert "does not reach it" in table  # the convergence rows say why they are empty
+    assert "not reached: stopped at" in table  # the empty cells and convergence rows say why
 
 
 @pytest.mark.parametrize("argv, name", [

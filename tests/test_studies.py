@@ -81,13 +81,14 @@ def test_progress_bar_off_when_not_a_terminal(capsys):
 
 
 def test_convergence_rate_recovers_a_known_power_law():
-    H = np.array([1.0, 2.0, 4.0, 8.0, 64.0])
+    H = np.array([1.0, 2.0, 4.0, 8.0, 64.0])  # uneven refinement ratios
     f = 50.0 + 3.0 * H**-2.5
-    f[-1] = 50.0 + 3.0 * 64.0**-2.5
     fit = studies.ConvergenceFit.fit("harmonics", {}, 1.0, "gap", H, f)
-    # against the finest run (not the limit): close to 2.5, exactly 2.5 as the reference -> limit
-    assert fit.rate == pytest.approx(2.5, abs=0.02)
-    assert fit.n_fit == 4
+    np.testing.assert_allclose(fit.local_rates, 2.5, rtol=1e-8)  # exact for a pure power law
+    assert fit.rate == pytest.approx(2.5, rel=1e-8) and fit.n_fit == 4 and fit.rate_note == ""
+    # the Richardson estimate is the finest run's true error
+    assert fit.error_estimate == pytest.approx(3.0 * 64.0**-2.5, rel=1e-6)
+    assert fit.spread == pytest.approx(f[2] - f[4])
     assert np.isnan(studies.ConvergenceFit.fit("elements", {}, 1.0, "gap", H[:2], f[:2]).rate)
 
 
@@ -98,7 +99,7 @@ def test_convergence_series(serial):
     assert ("elements", (("harmonics", 3), ("method", "mmshbm"))) in by
     for fit in fits:
         assert fit.difference[-1] == 0 and np.isfinite(fit.difference).all()
-    assert "Observed convergence rate" in serial.report([2.0])
+    assert "Convergence: steps between successive runs" in serial.report([2.0])
 
 
 def test_parameter_axis_scales_frequency_exactly():

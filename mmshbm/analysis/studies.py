@@ -21,10 +21,8 @@ the solver is rebuilt on the parent side when a per-point method needs it.
 
 from __future__ import annotations
 
-import concurrent.futures as cf
 import itertools
 import logging
-import multiprocessing
 import time
 import warnings
 from collections.abc import Iterator, Mapping, Sequence
@@ -43,10 +41,13 @@ from ..results.branch import (
     versions,
     write_archive,
 )
-from .tables import ConvergenceFit, FrequencyTable, coords_text, format_convergence, missing_note, summarize
+from .convergence import ConvergenceFit, format_convergence
+from .executors import run_specs
+from .runspec import RunSpec, build_model, execute, matrix_source
+from .tables import FrequencyTable, coords_text, format_cells, series_note, summarize
 
-__all__ = ["run_study", "figure2_study", "Study", "RunSpec", "FrequencyTable", "ConvergenceFit",
-           "STUDY_FORMAT"]
+__all__ = ["run_study", "figure2_study", "monte_carlo", "Study", "RunSpec", "FrequencyTable",
+           "ConvergenceFit", "STUDY_FORMAT", "execute", "build_model"]
 
 log = logging.getLogger(__name__)
 
@@ -54,93 +55,6 @@ STUDY_FORMAT = "mmshbm.Study"
 FORMAT_VERSION = 1
 #: grid coordinates that are not parameters
 _AXES = ("method", "elements", "harmonics")
-
-
-# ---------------------------------------------------------------------- runs
-@dataclass(frozen=True)
-class RunSpec:
-    """Everything a worker needs for one run; picklable, no solver or model objects.
-
-    Attributes
-    ----------
-    index : int
-        Position of the run in the study.
-    coords : dict
-        The run's grid coordinates, e.g. ``{"method": "mmshbm", "elements": 21,
-        "harmonics": 5, "gap": 0.001}``.
-    source : dict
-        How to build the model: ``{"beam": {TimoshenkoBeam fields}, "n_elements": n,
-        "grading": g}``, ``{"file": path, "gap": g or None}`` (a :meth:`Model.save_npz`
-        file) or ``{"matrices": {CSR parts}, "contact_dof", "gap", "stop_side",
-        "description"}``.
-    harmonics : int
-        H.
-    method : str
-        "mmshbm", "penalty" or "shooting".
-    max_amplitude : float or None
-        Largest amplitude, in m (``unit="m"``) or in gaps of the run's model.
-    unit : {"m", "gap"}
-        Unit of ``max_amplitude``.
-    options : dict
-        Further keyword arguments of :func:`mmshbm.backbone`.
-    """
-
-    index: int
-    coords: dict
-    source: dict
-    harmonics: int
-    method: str
-    max_amplitude: float | None
-    unit: str
-    options: dict
-
-
-def build_model(source: dict):
-    """The :class:`~mmshbm.model.Model` described by a :attr:`RunSpec.source`."""
-    from ..model.model import Model
-
-    if "beam" in source:
-        from ..fe.beam import TimoshenkoBeam
-
-        return TimoshenkoBeam(**source["beam"]).model(source["n_elements"], source["grading"])
-    if "file" in source:
-        model = Model.from_npz(source["file"])
-    elif "matrices" in source:
-        import scipy.sparse as sp
-
-        parts, mats = source["matrices"], []
-        for name in ("M", "K"):
-            d, i, p, shape = (parts[f"{name}_{q}"] for q in ("data", "indices", "indptr", "shape"))
-            mats.append(sp.csr_matrix((d, i, p), shape=tuple(int(v) for v in shape)))
-        model = Model.from_matrices(mats[0], mats[1], source["contact_dof"], source["gap"],
-                                    source["stop_side"], source.get("description"))
-    else:
-        raise ValueError(f"unknown model source with keys {sorted(source)}")
-    gap = source.get("gap")
-    return model if gap is None or gap == model.gap else model.with_gap(gap)
-
-
-def execute(spec: RunSpec) -> Branch:
-    """Run one grid point (this is what workers execute); the branch comes back without
-    its solver, which holds unpicklable FFT plans. Thread executors are safe: every
-    thread has its own FFTW plans and buffers (:func:`mmshbm.core.harmonics.transform`)."""
-    return _execute(spec)
-
-
-def _execute(spec: RunSpec) -> Branch:
-    from ..methods.backbone import backbone
-
-    model = build_model(spec.source)
-    max_amplitude = spec.max_amplitude
-    if max_amplitude is not None and spec.unit == "gap":
-        max_amplitude *= model.gap
-    with warnings.catch_warnings():
-        # recorded in branch.metadata["checks"]; run_study warns once per run, on the parent side
-        warnings.simplefilter("ignore", BranchWarning)
-        branch = backbone(model, harmonics=spec.harmonics, method=spec.method, max_amplitude=max_amplitude,
-                          **spec.options)
-    branch.solver = None
-    return branch
 
 
 # ---------------------------------------------------------------------- study
@@ -194,7 +108,7 @@ class Study:
 
     # ------------------------------------------------------------------ tables
     def table(self, amplitudes, unit: str = "gap") -> FrequencyTable:
-        """Frequency (Hz) of every run at ``amplitudes``.
+        """Frequency (Hz) of every run at ``amplitudes``, with notes.
 
         Parameters
         ----------
@@ -205,32 +119,57 @@ class Study:
         Returns
         -------
         FrequencyTable
-            ``frequency`` has shape (n_runs, n_amplitudes); NaN where a branch never
-            reaches the amplitude. The first crossing along the branch is used
-            (:meth:`Branch.frequency_at`).
+            ``frequency`` has shape (n_runs, n_amplitudes): the point solved at that
+            amplitude on the branch's family front (:meth:`Branch.frequency_at`); NaN where
+            the front does not reach it or skips it. ``notes`` says why for every NaN (the
+            internal resonance whose tongue was skipped, or why the run stopped) and
+            cautions values next to a jump of the family (:mod:`mmshbm.analysis.skips`);
+            ``mode_share`` is the starting mode's share of the kinetic energy there and
+            ``partner`` the strongest other mode (k, j, share).
         """
+        from .skips import explain, mode_share_at, partner_at, skips
+
         amps = _amplitudes(amplitudes)
         unit = _unit(unit)
-        f = np.array([[b.frequency_at(a * (_gap(b) if unit == "gap" else 1.0)) for a in amps]
-                      for b in self.branches]).reshape(len(self), len(amps))
+        n = len(self)
+        f = np.full((n, len(amps)), np.nan)
+        share = np.full((n, len(amps)), np.nan)
+        notes, partner = [], []
+        for i, b in enumerate(self.branches):
+            scale = _gap(b) if unit == "gap" else 1.0
+            intervals = skips(b)
+            notes.append([])
+            partner.append([])
+            for j, a in enumerate(amps):
+                f[i, j] = b.frequency_at(a * scale)
+                share[i, j] = mode_share_at(b, a * scale)
+                partner[i].append(partner_at(b, a * scale))
+                notes[i].append(explain(b, a * scale, f[i, j], intervals))
         return FrequencyTable(axes=self.axes, runs=[dict(r) for r in self.runs], amplitudes=amps, unit=unit,
-                              frequency=f, status=[b.status for b in self.branches])
+                              frequency=f, status=[b.status for b in self.branches], notes=notes,
+                              mode_share=share, partner=partner)
 
-    def convergence(self, amplitudes, unit: str = "gap") -> list[ConvergenceFit]:
-        """Observed convergence rates in H and in the number of elements.
+    def convergence(self, amplitudes, unit: str = "gap", *, table: FrequencyTable | None = None
+                    ) -> list[ConvergenceFit]:
+        """Observed convergence in H and in the number of elements.
 
         For every series of runs that differ only in ``harmonics`` (or only in
-        ``elements``) and every amplitude, the reference is the series' finest run (the
-        largest H or most elements) — not the exact solution — and the rate p is minus
-        the least-squares slope of log|f − f_ref| against log H (or log n_elements) over
-        the other runs, so that |f − f_ref| ∝ H^(−p). Runs whose difference is below
-        1e-12 f_ref or NaN are left out; fewer than two remaining runs give p = NaN.
+        ``elements``) and every amplitude: the successive differences, the local orders of
+        three consecutive runs, a rate only where the two finest local orders agree, and
+        the spread of the three finest runs (:mod:`mmshbm.analysis.convergence`). No
+        exact solution is assumed; compare with :mod:`mmshbm.methods.exact` for errors
+        against the truth.
+
+        Parameters
+        ----------
+        table : FrequencyTable, optional
+            :meth:`table` of the same amplitudes, if already computed.
 
         Returns
         -------
         list of ConvergenceFit
         """
-        table = self.table(amplitudes, unit)
+        table = self.table(amplitudes, unit) if table is None else table
         fits = []
         for vary in ("harmonics", "elements"):
             others = [a for a in self.axes if a != vary]
@@ -240,7 +179,7 @@ class Study:
                     groups.setdefault(tuple(_hashable(r.get(a)) for a in others), []).append(i)
             for idx in groups.values():
                 values = np.array([self.runs[i][vary] for i in idx], dtype=float)
-                if len(set(values)) < 2:
+                if len(set(values)) < 2 or len(set(values)) < len(values):
                     continue
                 order = np.argsort(values)
                 idx = [idx[j] for j in order]
@@ -249,23 +188,33 @@ class Study:
                 for j, amp in enumerate(table.amplitudes):
                     fit = ConvergenceFit.fit(vary, fixed, float(amp), table.unit, values,
                                              table.frequency[idx, j])
-                    fit.note = missing_note(vary, [self.runs[i] for i in idx],
-                                            [self.branches[i] for i in idx], table.frequency[idx, j])
+                    fit.note = series_note(vary, [self.runs[i] for i in idx], table.frequency[idx, j],
+                                            [table.notes[i][j] for i in idx])
                     fits.append(fit)
         return fits
 
     def report(self, amplitudes, unit: str = "gap") -> str:
-        """Text: the frequency table and the convergence rates (what the CLI prints)."""
+        """Text: the frequency table (with the reason for every empty cell), elements × H
+        matrices, convergence, what each run met (jumps, skipped intervals, resonances),
+        the study's wall time and the summary (what the CLI prints)."""
         table = self.table(amplitudes, unit)
         parts = [table.to_text()]
         if {"harmonics", "elements"} <= set(self.axes):
             pivot = table.pivot_text()
             if pivot:
                 parts.append(pivot)
-        fits = self.convergence(amplitudes, unit)
+        fits = self.convergence(amplitudes, unit, table=table)
         if fits:
             parts.append(format_convergence(fits))
+        if any(b.records.get("on_family") is not None for b in self.branches):
+            parts.append(format_cells(self.runs, self.branches, self.axes))
         parts.append(self.summary())
+        elapsed = self.metadata.get("elapsed_s")
+        if elapsed is not None:
+            text = f"wall time: {len(self)} runs in {elapsed:.1f} s, {self.metadata.get('executor', '?')}"
+            if self.metadata.get("tasks") and self.metadata.get("executor") != "serial":
+                text += f", {self.metadata['tasks']} tasks of up to {self.metadata['chunksize']} runs"
+            parts.append(text)
         return "\n\n".join(parts)
 
     def to_csv(self, path, amplitudes, unit: str = "gap") -> Path:
@@ -315,9 +264,10 @@ class Study:
 # ---------------------------------------------------------------------- running
 def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
               elements: Sequence[int] | None = None, methods: Sequence[str] = ("mmshbm",),
-              params: Mapping[str, Sequence] | None = None, grading: float = 10.0,
-              max_amplitude: float | None = None, unit: str = "m", executor="process", workers: int = 2,
-              verbose: bool = False, **options) -> Study:
+              params: Mapping[str, Sequence] | None = None, samples: Mapping[str, Sequence] | None = None,
+              grading: float = 10.0, max_amplitude: float | None = None, unit: str = "m",
+              executor="process", workers: int = 2, chunksize="auto", verbose: bool = False,
+              **options) -> Study:
     """Run :func:`mmshbm.backbone` over a grid and collect the branches.
 
     Parameters
@@ -338,6 +288,11 @@ def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
         Further grid axes: beam fields (``gap`` (m), ``E`` (Pa), ``rho`` (kg/m³), ...),
         ``grading``, or any option of :func:`mmshbm.backbone` (e.g. ``n_samples``,
         ``penalty_stiffness``).
+    samples : mapping of str to sequence, optional
+        Parameters varied *together* (a Monte-Carlo or any list of parameter sets): equal
+        lengths n, one run per index i with every name at its i-th value (coordinates
+        ``sample`` = i and the names), crossed with the rest of the grid. Same names as
+        ``params`` allows, none in both. :func:`monte_carlo` draws such samples.
     grading : float
         Mesh grading of the beam (when not varied).
     max_amplitude : float, optional
@@ -351,6 +306,10 @@ def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
         (e.g. ``client.get_executor()``; not shut down here).
     workers : int
         Processes of the pool or local Dask cluster.
+    chunksize : int or "auto"
+        Runs per task sent to the executor (:func:`mmshbm.analysis.executors.auto_chunksize`:
+        one for small studies, about 16 tasks per worker for large ones), so that the
+        per-task cost of the executor is paid per chunk; the numbers do not depend on it.
     verbose : bool
         Progress bar (tqdm; also hidden when not on a terminal).
     **options
@@ -368,10 +327,11 @@ def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
         For a bad grid, executor or option; a run's own input error is re-raised.
     """
     specs = grid_specs(beam, model=model, harmonics=harmonics, elements=elements, methods=methods,
-                       params=params, grading=grading, max_amplitude=max_amplitude, unit=unit, **options)
+                       params=params, samples=samples, grading=grading, max_amplitude=max_amplitude,
+                       unit=unit, **options)
     workers = check.integer("workers", workers, minimum=1)
     t0 = time.perf_counter()
-    branches, kind = _run_all(specs, executor, workers, verbose)
+    branches, kind, info = run_specs(specs, executor, workers, chunksize=chunksize, verbose=verbose)
     elapsed = time.perf_counter() - t0
     parent_models = _parent_models(model, specs)
     for spec, branch in zip(specs, branches, strict=True):
@@ -379,13 +339,14 @@ def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
             branch.model = parent_models[spec.index]
     grid = {"harmonics": [int(h) for h in harmonics], "methods": list(methods),
             "params": {k: list(v) for k, v in dict(params or {}).items()}, "options": options,
+            "samples": {k: list(v) for k, v in dict(samples or {}).items()},
             "max_amplitude": max_amplitude, "unit": unit}
     if model is None:
         grid["elements"] = [int(n) for n in (elements or (8, 21))]
         grid["grading"] = grading
     log.info("study: %d runs in %.2f s (%s)", len(specs), elapsed, kind)
     study = Study(runs=[dict(s.coords) for s in specs], branches=branches,
-                  metadata={"grid": grid, "executor": kind, "workers": workers, "elapsed_s": elapsed,
+                  metadata={"grid": grid, "executor": kind, "workers": workers, "elapsed_s": elapsed, **info,
                             "model_file": str(model) if isinstance(model, str | Path) else None})
     for coords, branch in study:
         for finding in branch.findings:
@@ -394,7 +355,8 @@ def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
 
 
 def grid_specs(beam=None, *, model=None, harmonics=(1, 3, 5), elements=None, methods=("mmshbm",),
-               params=None, grading=10.0, max_amplitude=None, unit="m", **options) -> list[RunSpec]:
+               params=None, samples=None, grading=10.0, max_amplitude=None, unit="m",
+               **options) -> list[RunSpec]:
     """The :class:`RunSpec` list of :func:`run_study` (validated, nothing computed)."""
     from ..fe.beam import TimoshenkoBeam, default_beam
     from ..methods.backbone import METHODS
@@ -412,6 +374,7 @@ def grid_specs(beam=None, *, model=None, harmonics=(1, 3, 5), elements=None, met
         if name in _AXES:
             raise ValueError(f"{name!r} is a grid axis of its own, not a parameter")
         params[name] = _list(f"params[{name!r}]", values)
+    samples = _samples(samples, params)
     beam_fields = {f.name for f in fields(TimoshenkoBeam)}
 
     if model is not None:
@@ -419,7 +382,7 @@ def grid_specs(beam=None, *, model=None, harmonics=(1, 3, 5), elements=None, met
             raise ValueError("pass either beam or model, not both")
         if elements is not None:
             raise ValueError("elements applies to beams only, not to a user model")
-        bad = [k for k in params if k in (beam_fields | {"grading"}) - {"gap"}]
+        bad = [k for k in (*params, *samples) if k in (beam_fields | {"grading"}) - {"gap"}]
         if bad:
             raise ValueError(f"a user model can vary only 'gap' of its own parameters, got {bad}")
         if isinstance(model, str | Path):
@@ -427,7 +390,7 @@ def grid_specs(beam=None, *, model=None, harmonics=(1, 3, 5), elements=None, met
                 raise ValueError(f"model file {str(model)!r} does not exist")
             base = {"file": str(Path(model).resolve())}
         elif isinstance(model, Model):
-            base = _matrix_source(model)
+            base = matrix_source(model)
         else:
             raise TypeError(f"model must be an mmshbm.Model or a .npz path, got {type(model).__name__}")
         axes = [("method", list(methods)), ("harmonics", hs)]
@@ -439,10 +402,14 @@ def grid_specs(beam=None, *, model=None, harmonics=(1, 3, 5), elements=None, met
         ns = _int_list("elements", (8, 21) if elements is None else elements, 1)
         axes = [("method", list(methods)), ("elements", ns), ("harmonics", hs)]
     axes += list(params.items())
+    if samples:
+        axes.append(("sample", list(range(len(next(iter(samples.values())))))))
 
     specs = []
     for index, combo in enumerate(itertools.product(*(v for _, v in axes))):
         coords = dict(zip((k for k, _ in axes), combo, strict=True))
+        if samples:
+            coords.update({k: v[coords["sample"]] for k, v in samples.items()})
         run_options = dict(options)
         if model is not None:
             source = dict(base)
@@ -457,7 +424,7 @@ def grid_specs(beam=None, *, model=None, harmonics=(1, 3, 5), elements=None, met
             source = {"beam": {f.name: getattr(run_beam, f.name) for f in fields(TimoshenkoBeam)},
                       "n_elements": coords["elements"], "grading": float(coords.get("grading", grading))}
         for k, v in coords.items():
-            if k not in _AXES and k not in beam_fields and k != "grading":
+            if k not in _AXES and k not in beam_fields and k not in ("grading", "sample"):
                 run_options[k] = v
         specs.append(RunSpec(index=index, coords=coords, source=source, harmonics=coords["harmonics"],
                              method=coords["method"], max_amplitude=max_amplitude, unit=unit,
@@ -473,69 +440,37 @@ def figure2_study(beam=None, harmonics=(1, 3, 5), elements=(8, 21), executor="pr
                      verbose=verbose, **options)
 
 
-def _run_all(specs: list[RunSpec], executor, workers: int, verbose: bool) -> tuple[list[Branch], str]:
-    from tqdm.auto import tqdm
+def monte_carlo(n: int, ranges: Mapping[str, tuple[float, float]], seed: int = 0) -> dict:
+    """``n`` parameter sets drawn uniformly and independently in ``ranges`` (a Latin
+    hypercube: every parameter's range is cut into n equal strata, one draw per stratum),
+    for ``run_study(samples=...)``.
 
-    pool, close, kind = _open_executor(executor, workers)
-    out: list[Branch | None] = [None] * len(specs)
-    bar = tqdm(total=len(specs), desc="study", unit="run", disable=None if verbose else True, leave=False)
-    try:
-        if pool is None:
-            for spec in specs:
-                out[spec.index] = execute(spec)
-                _progress(bar, spec, out[spec.index])
-        else:
-            futures = {pool.submit(execute, spec): spec for spec in specs}
-            try:
-                for fut in cf.as_completed(futures):
-                    spec = futures[fut]
-                    out[spec.index] = fut.result()
-                    _progress(bar, spec, out[spec.index])
-            except BaseException:
-                for fut in futures:
-                    fut.cancel()
-                raise
-    finally:
-        bar.close()
-        if close is not None:
-            close()
-    return out, kind
+    Parameters
+    ----------
+    n : int
+        Number of samples.
+    ranges : mapping of str to (low, high)
+        E.g. ``{"gap": (0.5e-3, 2e-3), "E": (2.0e11, 2.2e11), "rho": (7700, 7900)}`` (SI).
+    seed : int
+        Seed of :func:`numpy.random.default_rng`: the same seed gives the same samples.
 
-
-def _progress(bar, spec: RunSpec, branch: Branch) -> None:
-    log.debug("run %d %s: %r", spec.index, spec.coords, branch)
-    bar.set_postfix_str(" ".join(f"{k}={v}" for k, v in spec.coords.items()), refresh=False)
-    bar.update(1)
-
-
-def _open_executor(executor, workers: int):
-    """(executor or None, closer or None, description) for the ``executor`` argument."""
-    if executor is None or executor == "serial":
-        return None, None, "serial"
-    if executor == "process":
-        pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
-        return pool, pool.shutdown, f"process pool ({workers} workers)"
-    if executor == "dask":
+    Returns
+    -------
+    dict of str to list of float
+    """
+    n = check.integer("n", n, minimum=1)
+    rng = np.random.default_rng(check.integer("seed", seed, minimum=0))
+    out = {}
+    for name, bounds in dict(ranges).items():
         try:
-            from dask.distributed import Client, LocalCluster
-        except ImportError:
-            raise ValueError("executor='dask' needs dask: pip install 'mmshbm[dask]'") from None
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None)
-        client = Client(cluster)
-
-        def close():
-            client.close()
-            cluster.close()
-
-        return client.get_executor(), close, f"dask local cluster ({workers} workers)"
-    if isinstance(executor, cf.Executor):
-        return executor, None, type(executor).__name__
-    if hasattr(executor, "get_executor"):  # a dask.distributed.Client
-        address = getattr(getattr(executor, "scheduler", None), "address", "")
-        return executor.get_executor(), None, f"dask client {address}".strip()
-    raise TypeError("executor must be 'process', 'serial', None, 'dask', a concurrent.futures.Executor "
-                    f"or a dask Client, got {executor!r}")
+            lo, hi = (float(v) for v in bounds)
+        except (TypeError, ValueError):
+            raise ValueError(f"ranges[{name!r}] must be (low, high), got {bounds!r}") from None
+        if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
+            raise ValueError(f"ranges[{name!r}] must be finite with low <= high, got {bounds!r}")
+        strata = (rng.permutation(n) + rng.random(n)) / n
+        out[name] = [float(v) for v in lo + (hi - lo) * strata]
+    return out
 
 
 def _parent_models(model, specs: list[RunSpec]):
@@ -551,15 +486,6 @@ def _parent_models(model, specs: list[RunSpec]):
             cache[key] = build_model(s.source)
         out[s.index] = cache[key]
     return out
-
-
-def _matrix_source(model) -> dict:
-    mats = {}
-    for name, A in (("M", model.M.tocsr()), ("K", model.K.tocsr())):
-        mats.update({f"{name}_data": A.data, f"{name}_indices": A.indices, f"{name}_indptr": A.indptr,
-                     f"{name}_shape": np.array(A.shape)})
-    return {"matrices": mats, "contact_dof": int(model.contact_dof), "gap": float(model.gap),
-            "stop_side": int(model.stop_side), "description": dict(model.description)}
 
 
 def _gap(branch: Branch) -> float:
@@ -580,6 +506,23 @@ def _amplitudes(amplitudes) -> np.ndarray:
     if amps.ndim != 1 or len(amps) == 0 or not np.all(np.isfinite(amps)) or np.any(amps <= 0):
         raise ValueError(f"amplitudes must be positive finite numbers, got {amplitudes!r}")
     return amps
+
+
+def _samples(samples, params: dict) -> dict:
+    """Validated ``samples``: names not grid axes nor in ``params``, equal lengths."""
+    samples = dict(samples or {})
+    n = None
+    for name, values in samples.items():
+        if name in _AXES or name == "sample":
+            raise ValueError(f"{name!r} is a grid axis of its own, not a sampled parameter")
+        if name in params:
+            raise ValueError(f"{name!r} is both a grid parameter and a sampled one")
+        samples[name] = _list(f"samples[{name!r}]", values)
+        if n is not None and len(samples[name]) != n:
+            raise ValueError(f"samples must have equal lengths: {name!r} has {len(samples[name])} values, "
+                             f"not {n}")
+        n = len(samples[name])
+    return samples
 
 
 def _list(name: str, values) -> list:

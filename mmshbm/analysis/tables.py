@@ -1,18 +1,19 @@
-"""Tables of a study: frequencies at chosen amplitudes per run, and observed convergence
-rates fitted on them (:meth:`mmshbm.analysis.studies.Study.table`, ``.convergence``)."""
+"""Tables of a study: frequencies at chosen amplitudes per run, with the reason for every
+empty cell and a caution where a value sits next to a jump of the family
+(:meth:`mmshbm.analysis.studies.Study.table`), and a summary per run of what its
+continuation met (:func:`format_cells`). Convergence fits: :mod:`mmshbm.analysis.convergence`."""
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..results.diagnostics import incomplete_reason
 
-__all__ = ["FrequencyTable", "ConvergenceFit", "format_convergence", "summarize", "coords_text"]
+__all__ = ["FrequencyTable", "format_cells", "summarize", "coords_text", "series_note"]
 
 
 @dataclass
@@ -29,9 +30,21 @@ class FrequencyTable:
     unit : {"gap", "m"}
         Unit of ``amplitudes``.
     frequency : ndarray, shape (n_runs, n_amplitudes)
-        Hz; NaN where the branch never reaches the amplitude.
+        Hz; NaN where the branch's family front has no value (not reached, or inside a
+        skipped internal-resonance tongue: see ``notes``).
     status : list of str
         Each branch's status.
+    notes : list of list of str, shape (n_runs, n_amplitudes)
+        Why a cell is NaN (which named resonance it lies in, or why the run stopped), or a
+        caution for a finite value next to a discontinuity of the family; "" otherwise
+        (:func:`mmshbm.analysis.skips.explain`).
+    mode_share : ndarray, shape (n_runs, n_amplitudes)
+        The starting mode's share of the kinetic energy at the cell (interpolated between
+        the neighbouring front points); NaN where unknown.
+    partner : list of list, shape (n_runs, n_amplitudes)
+        The strongest other mode at the cell, (k, j, share): harmonic k of mode j holds
+        that share of the kinetic energy (e.g. (5, 2, 0.32) on the 5:2 internal
+        resonance); None where unknown.
     """
 
     axes: list
@@ -40,32 +53,56 @@ class FrequencyTable:
     unit: str
     frequency: np.ndarray
     status: list
+    notes: list = field(default_factory=list)
+    mode_share: np.ndarray | None = None
+    partner: list = field(default_factory=list)
+
+    def __post_init__(self):
+        n, m = np.shape(self.frequency)
+        if not self.notes:
+            self.notes = [[""] * m for _ in range(n)]
+        if not self.partner:
+            self.partner = [[None] * m for _ in range(n)]
+        if self.mode_share is None:
+            self.mode_share = np.full((n, m), np.nan)
 
     def _amp_label(self, a: float) -> str:
-        return f"f_at_{a:g}{'gap' if self.unit == 'gap' else 'm'}_hz"
+        return f"{a:g}{'gap' if self.unit == 'gap' else 'm'}"
 
     def to_csv(self, path) -> Path:
-        """Write the table (one header line; frequencies with 10 significant digits)."""
+        """Write the table: coordinates, ``f_at_<A>_hz`` per amplitude (10 significant
+        digits, ``nan`` for empty cells), status, ``mode_share_at_<A>``, ``partner_at_<A>``
+        ("k:j share", the strongest other mode) and ``note_at_<A>`` (why a cell is empty, or
+        a caution; quoted)."""
         path = Path(path)
-        header = [*self.axes, *(self._amp_label(a) for a in self.amplitudes), "status"]
+        labels = [self._amp_label(a) for a in self.amplitudes]
+        header = [*self.axes, *(f"f_at_{x}_hz" for x in labels), "status",
+                  *(f"mode_share_at_{x}" for x in labels), *(f"partner_at_{x}" for x in labels),
+                  *(f"note_at_{x}" for x in labels)]
         lines = [",".join(header)]
-        for r, f, s in zip(self.runs, self.frequency, self.status, strict=True):
+        for r, f, s, sh, pa, nt in zip(self.runs, self.frequency, self.status, self.mode_share, self.partner,
+                                       self.notes, strict=True):
             lines.append(",".join([*(str(r.get(a, "")) for a in self.axes),
-                                   *("nan" if not np.isfinite(x) else f"{x:.10g}" for x in f), s]))
+                                   *("nan" if not np.isfinite(x) else f"{x:.10g}" for x in f), _quote(s),
+                                   *("nan" if not np.isfinite(x) else f"{x:.4f}" for x in sh),
+                                   *(_partner(p) for p in pa), *(_quote(t) for t in nt)]))
         path.write_text("\n".join(lines) + "\n")
         return path
 
     def to_text(self) -> str:
-        """A fixed-width text table."""
+        """A fixed-width text table, one row per run, with a note column."""
         unit = "gaps" if self.unit == "gap" else "m"
-        head = [*self.axes, *(f"A={a:g}" for a in self.amplitudes), "status"]
-        rows = [[*(str(r.get(a, "")) for a in self.axes),
-                 *(f"{x:.3f}" if np.isfinite(x) else "-" for x in f), s]
-                for r, f, s in zip(self.runs, self.frequency, self.status, strict=True)]
+        head = [*self.axes, *(f"A={a:g}" for a in self.amplitudes), "status", "notes"]
+        rows = []
+        for r, f, s, nt in zip(self.runs, self.frequency, self.status, self.notes, strict=True):
+            notes = "; ".join(f"A={a:g}: {t}" for a, t in zip(self.amplitudes, nt, strict=True) if t)
+            rows.append([*(str(r.get(a, "")) for a in self.axes),
+                         *(_cell(x, t) for x, t in zip(f, nt, strict=True)), s, notes])
         widths = [max(len(h), *(len(row[i]) for row in rows)) if rows else len(h) for i, h in enumerate(head)]
-        fmt = "  ".join(f"{{:>{w}}}" for w in widths)
-        title = f"Frequency (Hz) at tip amplitude A ({unit}); '-' = not reached"
-        return "\n".join([title, fmt.format(*head), *(fmt.format(*row) for row in rows)])
+        fmt = "  ".join(f"{{:>{w}}}" for w in widths[:-1]) + "  {}"
+        title = (f"Frequency (Hz) at tip amplitude A ({unit}) on the family front; '-' = no value "
+                 "(see notes), '*' = next to a jump of the family")
+        return "\n".join([title, fmt.format(*head), *(fmt.format(*row).rstrip() for row in rows)])
 
     def pivot(self, amplitude_index: int = 0, rows: str = "elements", columns: str = "harmonics") -> tuple:
         """The frequencies at one amplitude as a matrix over two coordinates.
@@ -77,127 +114,135 @@ class FrequencyTable:
         row_values : list, shape (n_rows,)
         column_values : list, shape (n_columns,)
         frequency : ndarray, shape (n_rows, n_columns)
-            Hz; NaN for missing runs or amplitudes not reached.
+            Hz; NaN for missing runs or cells without a value.
 
         Raises
         ------
         ValueError
             If ``rows`` or ``columns`` is not a coordinate, or two runs fall in one cell.
         """
+        rv, cv, cells = self._cells(rows, columns)
+        f = np.full((len(rv), len(cv)), np.nan)
+        for cell, k in cells.items():
+            f[cell] = self.frequency[k, amplitude_index]
+        return rv, cv, f
+
+    def _cells(self, rows: str, columns: str) -> tuple:
         for name in (rows, columns):
             if name not in self.axes:
                 raise ValueError(f"{name!r} is not a coordinate of the table; it has {self.axes}")
         rv = sorted({r[rows] for r in self.runs})
         cv = sorted({r[columns] for r in self.runs})
-        f = np.full((len(rv), len(cv)), np.nan)
-        seen = set()
-        for r, row in zip(self.runs, self.frequency, strict=True):
+        cells: dict = {}
+        for k, r in enumerate(self.runs):
             cell = (rv.index(r[rows]), cv.index(r[columns]))
-            if cell in seen:
+            if cell in cells:
                 raise ValueError(f"several runs have {rows}={r[rows]}, {columns}={r[columns]}: select first")
-            seen.add(cell)
-            f[cell] = row[amplitude_index]
-        return rv, cv, f
+            cells[cell] = k
+        return rv, cv, cells
 
-    def pivot_text(self, rows: str = "elements", columns: str = "harmonics") -> str:
-        """Text matrices (one per amplitude) of :meth:`pivot`, e.g. elements × H; empty
-        when other coordinates vary too."""
+    def pivot_text(self, rows: str = "elements", columns: str = "harmonics", *,
+                   markdown: bool = False) -> str:
+        """Matrices (one per amplitude) of :meth:`pivot`, e.g. elements × H, with numbered
+        footnotes for empty cells (why) and cautioned values; "" when other coordinates
+        vary too. ``markdown`` gives Markdown tables."""
         unit = "gaps" if self.unit == "gap" else "m"
+        try:
+            rv, cv, cells = self._cells(rows, columns)
+        except ValueError:
+            return ""
         blocks = []
         for j, a in enumerate(self.amplitudes):
-            try:
-                rv, cv, f = self.pivot(j, rows, columns)
-            except ValueError:
-                return ""
+            notes: list[str] = []
+            body = []
+            for r_i, r in enumerate(rv):
+                line = [str(r)]
+                for c_i in range(len(cv)):
+                    k = cells.get((r_i, c_i))
+                    if k is None:
+                        line.append("")
+                        continue
+                    x, t = self.frequency[k, j], self.notes[k][j]
+                    text = f"{x:.3f}" if np.isfinite(x) else ("—" if markdown else "-")
+                    if t:
+                        notes.append(f"[{len(notes) + 1}] {columns}={self.runs[k][columns]}, "
+                                     f"{rows}={self.runs[k][rows]}: {t}")
+                        text += f"[{len(notes)}]"
+                    line.append(text)
+                body.append(line)
             head = [f"{rows} \\ {columns}", *(str(c) for c in cv)]
-            body = [[str(r), *(f"{x:.3f}" if np.isfinite(x) else "-" for x in fr)]
-                    for r, fr in zip(rv, f, strict=True)]
-            widths = [max(len(h), *(len(b[i]) for b in body)) for i, h in enumerate(head)]
-            fmt = "  ".join(f"{{:>{w}}}" for w in widths)
-            blocks.append("\n".join([f"f (Hz) at A = {a:g} {unit}", fmt.format(*head),
-                                     *(fmt.format(*b) for b in body)]))
+            title = f"f (Hz) at A = {a:g} {unit}"
+            shares = [[str(r)] + [_share(self, cells.get((r_i, c_i)), j) for c_i in range(len(cv))]
+                      for r_i, r in enumerate(rv)]
+            share_title = (f"first mode's share of the kinetic energy at A = {a:g} {unit} "
+                           "(strongest other: harmonic k of mode j, k:j, and its share)")
+            if markdown:
+                blocks.append("\n".join([f"**{title}**", "", *_markdown(head, body), "", *notes]))
+            else:
+                blocks.append("\n".join([title, *_fixed(head, body), *notes, "", share_title,
+                                         *_fixed(head, shares)]))
         return "\n\n".join(blocks)
 
     def __str__(self) -> str:
         return self.to_text()
 
 
-@dataclass
-class ConvergenceFit:
-    """Observed convergence of one series of runs at one amplitude.
-
-    Attributes
-    ----------
-    vary : {"harmonics", "elements"}
-        The refined quantity.
-    fixed : dict
-        The other coordinates of the series.
-    amplitude : float
-        The amplitude (in ``unit``) the frequencies are taken at.
-    unit : {"gap", "m"}
-    values : ndarray, shape (n,)
-        H or element counts, ascending; the last is the reference.
-    frequency : ndarray, shape (n,)
-        Frequencies (Hz) at ``amplitude``.
-    difference : ndarray, shape (n,)
-        |f − f_ref| (Hz); 0 for the reference.
-    rate : float
-        p in |f − f_ref| ∝ value^(−p), least squares in log–log over the non-reference
-        runs; NaN with fewer than two usable runs.
-    n_fit : int
-        Number of runs in the fit.
-    note : str
-        Why runs are missing (e.g. the reference run stopped short of the amplitude).
-    """
-
-    vary: str
-    fixed: dict
-    amplitude: float
-    unit: str
-    values: np.ndarray
-    frequency: np.ndarray
-    difference: np.ndarray
-    rate: float
-    n_fit: int
-    note: str = ""
-
-    @classmethod
-    def fit(cls, vary, fixed, amplitude, unit, values, frequency) -> ConvergenceFit:
-        values = np.asarray(values, dtype=float)
-        frequency = np.asarray(frequency, dtype=float)
-        diff = np.abs(frequency - frequency[-1])
-        use = np.isfinite(diff[:-1]) & (diff[:-1] > 1e-12 * abs(frequency[-1]))
-        if not np.isfinite(frequency[-1]):
-            use[:] = False
-        rate = float("nan")
-        if use.sum() >= 2:
-            slope = np.polyfit(np.log(values[:-1][use]), np.log(diff[:-1][use]), 1)[0]
-            rate = float(-slope)
-        return cls(vary, dict(fixed), amplitude, unit, values, frequency, diff, rate, int(use.sum()))
-
-    @property
-    def reference(self) -> float:
-        """The finest value of the series (the reference run)."""
-        return float(self.values[-1])
+def _fixed(head: list, body: list) -> list[str]:
+    widths = [max(len(h), *(len(b[i]) for b in body)) for i, h in enumerate(head)]
+    fmt = "  ".join(f"{{:>{w}}}" for w in widths)
+    return [fmt.format(*head), *(fmt.format(*b) for b in body)]
 
 
-def format_convergence(fits: Sequence[ConvergenceFit]) -> str:
-    """Text table of convergence fits."""
-    lines = ["Observed convergence rate p, |f - f_ref| ~ x^(-p), x = H or elements; reference = the finest "
-             "run of each series (not the exact solution); p from a log-log least-squares fit "
-             "(two points: a two-point slope)"]
-    head = ("vary", "fixed", "A", "x", "|f - f_ref| (Hz)", "p", "note")
+def _markdown(head: list, body: list) -> list[str]:
+    return ["| " + " | ".join(head) + " |", "|" + "---|" * len(head),
+            *("| " + " | ".join(b) + " |" for b in body)]
+
+
+def _share(table: FrequencyTable, k, j: int) -> str:
+    if k is None or not np.isfinite(table.mode_share[k, j]):
+        return "-"
+    p = table.partner[k][j]
+    return f"{table.mode_share[k, j]:.2f}" + (f" ({p[0]}:{p[1]} {p[2]:.2f})" if p and p[2] >= 0.01 else "")
+
+
+def _partner(p) -> str:
+    return "" if p is None else f"{p[0]}:{p[1]} {p[2]:.4f}"
+
+
+def _cell(x: float, note: str) -> str:
+    if not np.isfinite(x):
+        return "-"
+    return f"{x:.3f}" + ("*" if note else "")
+
+
+def _quote(text: str) -> str:
+    if any(c in text for c in ',"\n'):
+        return '"' + text.replace('"', '""') + '"'
+    return text
+
+
+def format_cells(runs: Sequence[dict], branches: Sequence, axes: Sequence[str]) -> str:
+    """Text table, one row per run: points (on the family), jumps, the skipped amplitude
+    intervals wider than 0.1 % of their end (gaps, with the internal resonance k:j found in
+    each), the internal resonances named along the branch (k:j: harmonic k meets mode j),
+    the run's wall time and status (:func:`mmshbm.analysis.skips.cell_summary`)."""
+    from .skips import cell_summary
+
+    head = [*axes, "points", "on family", "jumps", "skipped (gaps, k:j)", "resonances k:j", "time (s)",
+            "status"]
     rows = []
-    for fit in fits:
-        fixed = " ".join(f"{k}={v}" for k, v in fit.fixed.items())
-        xs = ",".join(f"{v:g}" for v in fit.values)
-        diffs = ",".join("-" if not np.isfinite(d) else f"{d:.3g}" for d in fit.difference[:-1])
-        unit = "gap" if fit.unit == "gap" else "m"
-        rows.append((fit.vary, fixed, f"{fit.amplitude:g} {unit}", xs, diffs,
-                     "-" if math.isnan(fit.rate) else f"{fit.rate:.2f}", fit.note))
-    widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(head)]
+    for r, b in zip(runs, branches, strict=True):
+        c = cell_summary(b)
+        skipped = ", ".join(f"{lo:.3g}-{hi:.3g}" + (f" ({kj[0]}:{kj[1]})" if kj else "")
+                            for lo, hi, kj in c["skipped"]) or "-"
+        rows.append([*(str(r.get(a, "")) for a in axes), str(c["points"]), str(c["on_family"]),
+                     str(c["jumps"]), skipped, " ".join(c["resonances"]) or "-",
+                     "-" if not np.isfinite(c["elapsed_s"]) else f"{c['elapsed_s']:.2f}", c["status"]])
+    widths = [max(len(h), *(len(r[i]) for r in rows)) if rows else len(h) for i, h in enumerate(head)]
     fmt = "  ".join(f"{{:<{w}}}" for w in widths)
-    return "\n".join([lines[0], fmt.format(*head), *(fmt.format(*r) for r in rows)])
+    title = ("Per run: points on the family, jumps, amplitude intervals the family front skips "
+             "(frequency_at is NaN inside), internal resonances named (k:j: harmonic k meets mode j)")
+    return "\n".join([title, fmt.format(*head).rstrip(), *(fmt.format(*r).rstrip() for r in rows)])
 
 
 def coords_text(coords: dict) -> str:
@@ -240,12 +285,11 @@ def _reached(branch) -> str:
     return f"stopped at {a / gap:.3g} gaps, " if gap else f"stopped at {a:.3g} m, "
 
 
-def missing_note(vary: str, runs: Sequence[dict], branches: Sequence, frequency) -> str:
-    """Why runs of a convergence series have no frequency at the amplitude (NaN entries of
-    ``frequency``): they never reach it, and why they stopped when they are incomplete."""
-    notes = []
-    for r, b, f in zip(runs, branches, frequency, strict=True):
-        if not np.isfinite(f):
-            why = "" if b.completed else f" ({incomplete_reason(b.status, b.metadata)})"
-            notes.append(f"{vary}={r[vary]} does not reach it{why}")
-    return "; ".join(notes)
+def series_note(vary: str, runs: Sequence[dict], frequency, notes: Sequence[str]) -> str:
+    """The table's notes on the cells of a convergence series: why runs have no frequency
+    at the amplitude, and cautions on values next to a jump of the family."""
+    out = []
+    for r, f, note in zip(runs, frequency, notes, strict=True):
+        if not np.isfinite(f) or note:
+            out.append(f"{vary}={r[vary]}: {note or 'no value'}")
+    return "; ".join(out)

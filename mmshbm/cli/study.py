@@ -4,6 +4,13 @@ from __future__ import annotations
 
 from . import common
 
+#: amplitudes (gaps) of the table of a convergence study (issue 12: f at 2, 5 and 10 gaps)
+STUDY_MARKS = (2.0, 5.0, 10.0)
+
+
+def _chunksize(text: str):
+    return "auto" if text == "auto" else common.positive_int(text)
+
 
 def register(sub) -> None:
     """Add the subcommand to the subparsers ``sub``."""
@@ -20,14 +27,22 @@ def register(sub) -> None:
     p.add_argument("--param", action="append", default=None, metavar="NAME=V1,V2",
                    help="a further grid axis: a beam field (gap, E, rho, ...), grading or a backbone option")
     p.add_argument("--amplitudes", type=common.positive_float, nargs="+", default=None,
-                   help="amplitudes (gaps) of the table and the marked points (default 1.5 3 6)")
+                   help="amplitudes (gaps) of the table (default 2 5 10; 1.5 3 6 with --figure2)")
     p.add_argument("--max-amplitude", type=common.positive_float, default=None,
                    help="largest amplitude, in gaps (default 10)")
     p.add_argument("--max-steps", type=common.positive_int, default=None,
                    help="continuation step budget per run (default 1000); runs that use it up are incomplete")
-    p.add_argument("--executor", default="process", choices=["process", "serial", "dask"],
-                   help="where runs go (default a local process pool)")
+    p.add_argument("--executor", default=None, choices=["process", "serial", "dask"],
+                   help="where runs go (default a local process pool; with --throughput: both pool and dask)")
     p.add_argument("--workers", type=common.positive_int, default=2, help="processes (default 2)")
+    p.add_argument("--chunksize", type=_chunksize, default="auto",
+                   help="runs per task sent to the executor (default auto: 1 for small studies, "
+                        "about 16 tasks per worker for large ones)")
+    p.add_argument("--throughput", type=common.positive_int, default=None, metavar="N",
+                   help="instead of a grid: time a Monte-Carlo study of N backbones (gap, E, rho drawn; "
+                        "H and elements from -H/--elements, default 3 and 8) serially, through a process "
+                        "pool and a Dask cluster: backbones/s and parallel efficiency "
+                        "(throughput.txt, throughput.json)")
     p.add_argument("--measured", default=None, help="measured backbone CSV to overlay")
     p.set_defaults(func=run)
 
@@ -35,16 +50,19 @@ def register(sub) -> None:
 def run(args) -> int:
     from ..analysis import studies
     from ..plotting import plot_figure2, plot_study
+    from ..plotting.studies import plot_convergence, plot_family_grid
 
+    if args.throughput is not None:
+        return _throughput(args)
     params = common.params(args.param)
     if args.elements:
         from ..methods.limits import check_beam_elements
 
         check_beam_elements(max(args.elements))  # before any run assembles a model
     measured = common.measured(args)
-    marks = tuple(args.amplitudes) if args.amplitudes else common.DEFAULT_MARKS
-    executor = None if args.executor == "serial" else args.executor
-    shared = {"executor": executor, "workers": args.workers, "verbose": common.progress(args)}
+    executor = None if args.executor == "serial" else (args.executor or "process")
+    shared = {"executor": executor, "workers": args.workers, "chunksize": args.chunksize,
+              "verbose": common.progress(args)}
     if args.max_amplitude is not None:
         shared.update(max_amplitude=args.max_amplitude, unit="gap")
     if args.max_steps is not None:
@@ -67,6 +85,8 @@ def run(args) -> int:
             study = studies.run_study(beam, elements=args.elements or (8, 21), grading=args.grading, **grid,
                                       **shared)
         name = "study"
+    marks = common.DEFAULT_MARKS if args.figure2 else STUDY_MARKS
+    marks = tuple(args.amplitudes) if args.amplitudes else marks
     out = common.out_dir(args)
     table = study.table(marks, unit="gap")
     report = study.report(marks, unit="gap")
@@ -75,12 +95,39 @@ def run(args) -> int:
     text.write_text(report + "\n")
     files.append(text)
     png = out / f"{name}.png"
-    if args.figure2 or common.has_grid(study):
+    files.append(png)
+    if args.figure2:
         plot_figure2(study, marks=marks, measured=measured, path=png)
+    elif common.has_grid(study):
+        plot_family_grid(study, amplitudes=marks, path=png)
+        files.append(out / f"{name}_convergence.png")
+        plot_convergence(study, amplitudes=marks, table=table, path=files[-1])
     else:
         plot_study(study, measured=measured, path=png)
-    files.append(png)
     print(report)
     print(repr(study))
     common.wrote(*files)
     return common.exit_code(study.branches)
+
+
+def _throughput(args) -> int:
+    from ..analysis.throughput import measure_throughput
+
+    if args.figure2 or args.model_file or args.param or args.methods:
+        raise ValueError("--throughput runs its own Monte-Carlo study of the default beam: drop --figure2, "
+                         "--model-file, --param and --methods")
+    if (args.harmonics and len(args.harmonics) > 1) or (args.elements and len(args.elements) > 1):
+        raise ValueError("--throughput takes one value of -H and of --elements")
+    executors = ("process", "dask") if args.executor is None else (args.executor,)
+    if executors == ("serial",):
+        executors = ()
+    result = measure_throughput(args.throughput, harmonics=args.harmonics[0] if args.harmonics else 3,
+                                elements=args.elements[0] if args.elements else 8,
+                                max_amplitude=args.max_amplitude or 10.0, workers=args.workers,
+                                executors=executors, chunksize=args.chunksize, verbose=common.progress(args))
+    out = common.out_dir(args)
+    text = out / "throughput.txt"
+    text.write_text(result.to_text() + "\n")
+    print(result.to_text())
+    common.wrote(text, result.to_json(out / "throughput.json"))
+    return 0 if all(r.identical for r in result.runs) else 1
