@@ -284,7 +284,7 @@ def plot_frequency_energy(branches, labels: Sequence[str] | None = None, *, ax=N
         with np.errstate(divide="ignore", invalid="ignore"):
             ax.plot(b.frequency, np.log10(b.energy), label=label, **style)
     ax.set_xlabel("frequency (Hz)")
-    ax.set_ylabel("log$_{10}$(energy / J)")
+    ax.set_ylabel("log₁₀(energy / J)")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     if title:
