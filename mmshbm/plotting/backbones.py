@@ -37,8 +37,9 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
         Legend entries (default :func:`branch_label`).
     measured : MeasuredBackbone or path, optional
         A measured backbone to overlay (``mmshbm.analysis.measured.load_measured`` reads CSV).
-    model : Model, optional
-        For the reference lines (default: every distinct model of the branches).
+    model : Model or (f_lin, f_zero), optional
+        For the reference lines (default: every distinct model of the branches); or the
+        pair :func:`~mmshbm.plotting.data.reference_frequencies` gives.
     marks : sequence of (branch index, point index), optional
         Points to mark and number 1, 2, ... (e.g. those of :func:`plot_time_signals`).
     reference_lines : bool

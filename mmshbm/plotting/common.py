@@ -8,6 +8,8 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from .data import BranchData, _gap, reference_frequencies  # noqa: F401 (re-exported)
+
 log = logging.getLogger(__name__)
 
 _DPI = 150
@@ -58,19 +60,9 @@ def _finish(fig: Figure, path) -> Figure:
 
 
 def _as_list(branches) -> list:
-    from ..results.branch import Branch
-
-    return [branches] if isinstance(branches, Branch) else list(branches)
-
-
-def _gap(branch) -> float:
-    gap = branch.gap
-    if gap is None:
-        try:
-            gap = branch.get_model().gap
-        except ValueError:
-            gap = 0.0
-    return float(gap)
+    """One branch (anything with a ``frequency`` array: a Branch or a :class:`BranchData`)
+    or a sequence of them -> list."""
+    return [branches] if hasattr(branches, "frequency") else list(branches)
 
 
 def _model(branch):
@@ -166,19 +158,6 @@ def _reference_lines(ax, model, fmin, fmax, modes, max_order, *, color_open="0.5
                 ax.annotate(f"f{subscript(k)}/{order}", xy=(f, 0.0), xycoords=("data", "axes fraction"),
                             xytext=(2, 3), textcoords="offset points", ha="left", va="bottom", fontsize=8,
                             color=color_ir)
-
-
-def reference_frequencies(model, modes=(2, 3)) -> tuple[np.ndarray, float | None] | None:
-    """(linear frequencies of modes 1..max(modes) (Hz), zero-gap limit (Hz) or None) of
-    ``model`` (sparse eigen-solves on large models); None when they cannot be computed."""
-    n = max(max(modes, default=1), 1)
-    try:
-        f_lin = model.linear_frequencies(min(n, len(model.l)))
-        f_zero = model.zero_gap_frequency() if model.n_contacts == 1 and model.gap > 0 else None
-    except (ValueError, np.linalg.LinAlgError) as err:
-        log.info("no reference lines: %s", err)
-        return None
-    return f_lin, f_zero
 
 
 def distinct_models(branches) -> list[tuple[object, list[int]]]:
