@@ -39,8 +39,9 @@ def whole_process(args: list[str], repeat: int, cold: bool, env: dict | None = N
             if cold:
                 run_env["NUMBA_CACHE_DIR"] = os.path.join(tmp, f"numba{i}")
             t0 = time.perf_counter()
-            subprocess.run([sys.executable, "-m", "mmshbm", "backbone", "--out", os.path.join(tmp, "out"), *args],
-                           env=run_env, check=False, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            command = [sys.executable, "-m", "mmshbm", "backbone", "--out", os.path.join(tmp, "out"), *args]
+            subprocess.run(command, env=run_env, check=False, stdout=subprocess.DEVNULL,
+                           stderr=subprocess.DEVNULL)
             times.append(time.perf_counter() - t0)
     return times
 
@@ -85,7 +86,8 @@ def _child(args: list[str], out: str) -> None:
             inner = stack.pop()
             if stack:
                 stack[-1] += inclusive
-            kernels.append((f"{self.py_func.__module__}.{self.py_func.__name__}", inclusive - inner, inclusive))
+            name = f"{self.py_func.__module__}.{self.py_func.__name__}"
+            kernels.append((name, inclusive - inner, inclusive))
 
     Dispatcher.compile = timed
     from mmshbm.results import diagnostics
@@ -167,8 +169,8 @@ def main(argv=None) -> int:
         child_env = dict(env)
         if ns.cold:
             child_env["NUMBA_CACHE_DIR"] = os.path.join(tmp, "numba")
-        subprocess.run([sys.executable, __file__, "--child", "--out", os.path.join(tmp, "out"), "--args", *ns.args],
-                       env=child_env, check=True)
+        command = [sys.executable, __file__, "--child", "--out", os.path.join(tmp, "out"), "--args", *ns.args]
+        subprocess.run(command, env=child_env, check=True)
     return 0
 
 

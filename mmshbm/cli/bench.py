@@ -18,7 +18,7 @@ def register(sub) -> None:
                    help="methods (default all three)")
     p.add_argument("--repeats", type=common.positive_int, default=None, help="timing repeats (default 3)")
     p.add_argument("--amplitude", type=common.positive_float, default=None,
-                   help="amplitude (gaps) compared at (default 2)")
+                   help="amplitude (gaps) compared at (default: oscillator 2, beam 1.5)")
     p.set_defaults(func=run)
 
 
