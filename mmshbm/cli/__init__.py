@@ -82,8 +82,9 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def console() -> int:
-    """The ``mmshbm`` program (console script and ``python -m mmshbm``): :func:`main`, then
-    a fast interpreter exit.
+    """The ``mmshbm`` program (console script and ``python -m mmshbm``): BLAS on one thread
+    unless the environment says otherwise (:func:`mmshbm._threads.single_thread_env`),
+    :func:`main`, then a fast interpreter exit.
 
     After the command the interpreter's finalisation would walk every object the
     imports made (Numba's typing and lowering registries are ~10⁵ objects) in repeated
@@ -94,6 +95,9 @@ def console() -> int:
     """
     import gc
 
+    from .._threads import single_thread_env
+
+    single_thread_env()  # before numpy loads: one BLAS thread unless the user set them (mmshbm._threads)
     code = main()
     gc.freeze()
     return code
