@@ -36,18 +36,18 @@ def test_worker_draws_the_same_files_and_falls_back(branch, tmp_path):
     jobs = [("plot_backbone", (data,), {"model": reference_frequencies(model), "path": tmp_path / "w.png"})]
     with _plot_worker.PlotWorker(start=True) as worker:
         assert worker.running
-        worker.draw(jobs)
+        assert worker.draw(jobs)  # drawn by the child
         assert not worker.running
     plotting.plot_backbone(data, model=reference_frequencies(model), path=tmp_path / "p.png")
     assert (tmp_path / "w.png").read_bytes() == (tmp_path / "p.png").read_bytes()
     # a job that fails in the child is drawn again here, where it raises as usual
     bad = [("plot_backbone", (data,), {"labels": ["one", "two"], "path": tmp_path / "x.png"})]
     with _plot_worker.PlotWorker(start=True) as worker, pytest.raises(ValueError, match="2 labels for 1"):
-        worker.draw(bad)
+        worker.draw(bad)  # fails in the child, raises here
     # without a child the jobs are drawn here
     with _plot_worker.PlotWorker(start=False) as worker:
         assert not worker.running
-        worker.draw([("plot_frequency_energy", (data,), {"path": tmp_path / "e.png"})])
+        assert not worker.draw([("plot_frequency_energy", (data,), {"path": tmp_path / "e.png"})])
     assert (tmp_path / "e.png").stat().st_size > 10_000
 
 

@@ -19,12 +19,12 @@ never.
 
 from __future__ import annotations
 
+import json
 import logging
 import os
 import pickle
 import subprocess
 import sys
-from pathlib import Path
 
 log = logging.getLogger(__name__)
 
@@ -73,13 +73,13 @@ class PlotWorker:
         self._proc = None
         if not (enabled() if start is None else start):
             return
-        env = dict(os.environ)
-        root = str(Path(__file__).resolve().parents[2])  # where the mmshbm package is
-        env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+        # the child imports exactly as this process does: same interpreter, same sys.path
+        code = ("import sys, json; sys.path[:] = json.loads(sys.argv[1]); "
+                "from mmshbm.cli._plot_worker import _main; _main()")
         try:
-            self._proc = subprocess.Popen([sys.executable, "-m", "mmshbm.cli._plot_worker"],
+            self._proc = subprocess.Popen([sys.executable, "-c", code, json.dumps(sys.path)],
                                           stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
-                                          stderr=subprocess.PIPE, env=env)
+                                          stderr=subprocess.PIPE)
         except OSError as err:  # pragma: no cover - no way to start a process
             log.info("plot worker not started (%s): drawing in this process", err)
 
@@ -87,19 +87,20 @@ class PlotWorker:
     def running(self) -> bool:
         return self._proc is not None and self._proc.poll() is None
 
-    def draw(self, jobs: list[tuple[str, tuple, dict]]) -> None:
+    def draw(self, jobs: list[tuple[str, tuple, dict]]) -> bool:
         """Draw ``jobs``: (name of a function of :mod:`mmshbm.plotting`, args, kwargs with
-        ``path``), in the child when it is running, else (or when it fails) here."""
+        ``path``), in the child when it is running, else (or when it fails) here. Returns
+        True when the child drew them."""
         if not jobs:
             self.close()
-            return
+            return False
         if self._proc is not None:
             try:
                 _, err = self._proc.communicate(pickle.dumps(jobs, protocol=pickle.HIGHEST_PROTOCOL),
                                                 timeout=TIMEOUT_S)
                 if self._proc.returncode == 0:
                     self._proc = None
-                    return
+                    return True
                 log.info("plot worker failed (exit %s): drawing in this process\n%s", self._proc.returncode,
                          err.decode(errors="replace").strip())
             except (OSError, ValueError, pickle.PicklingError, subprocess.TimeoutExpired) as err:
@@ -109,6 +110,7 @@ class PlotWorker:
 
         for name, args, kwargs in jobs:
             getattr(plotting, name)(*args, **kwargs)
+        return False
 
     def close(self) -> None:
         """End the child (if it still runs)."""
@@ -143,7 +145,7 @@ def _serve() -> int:
     return 0
 
 
-if __name__ == "__main__":
+def _main() -> None:  # pragma: no cover - runs in the child
     import gc
 
     code = _serve()
