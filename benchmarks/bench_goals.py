@@ -39,9 +39,9 @@ def _main_job():
 
 
 def count_evaluations(run):
-    """(branch, residual evaluations) of ``run()``: the continuation's own count
-    (``branch.metadata["evaluations"]``) when it records one, else the calls of the
-    problem's ``evaluate`` (residual, with or without the Jacobian)."""
+    """(branch, residual evaluations) of ``run()``: the count the problem keeps
+    (``solver.evaluations``, the compiled corrector's included) when it has one, else
+    the calls of the problem's ``evaluate`` (residual, with or without the Jacobian)."""
     from mmshbm.methods.mms_hbm import MMSHBMProblem
 
     original = MMSHBMProblem.evaluate
@@ -56,7 +56,8 @@ def count_evaluations(run):
         branch = run()
     finally:
         MMSHBMProblem.evaluate = original
-    return branch, int(branch.metadata.get("evaluations", calls[0]))
+    kept = getattr(branch.solver, "evaluations", None)
+    return branch, int(calls[0] if kept is None else kept)
 
 
 class DefaultBackbone:
