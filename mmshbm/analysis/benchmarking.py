@@ -30,7 +30,7 @@ References (column ``reference``):
   On the default beam above grazing the last case is the one that applies: the exact
   orbits rattle (many contacts per period) and the solver does not converge, and the
   frequency is not converged in H to 1e-4 at any amplitude (at 1.5 gaps, H = 5 / 7 / 9 /
-  11 / 20 / 25 give 54.75 / 55.06 / 55.01 / 54.95 / 54.81 / 55.01 Hz: internal
+  11 / 15 / 25 give 54.75 / 55.06 / 55.01 / 54.95 / 54.87 / 55.01 Hz: internal
   resonances with higher modes keep entering as H grows). Equal accuracy against a true
   reference is measured on the one-DOF oscillator.
 
@@ -286,10 +286,10 @@ def _measure(model, method, amplitude, options, repeats):
 
 
 #: amplitude of the comparison (gaps) per model kind. The oscillator: 2 gaps (closed form
-#: everywhere). The beam: 1.5 gaps, where every H <= 25 branch passes once, below the 5:1
-#: internal resonance (5 x 54.7 Hz, 4 % below f2 = 286.1 Hz); at 2 (and 3) gaps the H = 5
-#: branch is inside its excursion into the 5:1 tongue and passes the amplitude three
-#: times, so "the frequency at 2 gaps" is not one number (Branch.frequency_at gives NaN).
+#: everywhere). The beam: 1.5 gaps, below the 5:1 internal resonance (5 x 54.75 Hz, 4 %
+#: below f2 = 286.1 Hz); at 2 gaps the H = 5 branch sits on that resonance (57.06 Hz:
+#: where it enters the tongue, which it climbs to 3.1 gaps), and 3 gaps is inside the
+#: excursion (docs/benchmarks.md, "What the beam does above grazing").
 DEFAULT_AMPLITUDE_GAPS = {"oscillator": 2.0, "beam": 1.5}
 
 

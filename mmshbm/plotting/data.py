@@ -43,14 +43,20 @@ class BranchData:
     special_points: list = field(default_factory=list)
     metadata: dict = field(default_factory=dict)
     gap: float | None = None
+    records: dict = field(default_factory=dict)
+
+    #: the per-point records the plots read (the family front: mmshbm.results.family_points)
+    RECORDS = ("on_family", "mode_share")
 
     @classmethod
     def of(cls, branch) -> BranchData:
         """The plotted data of ``branch``."""
-        meta = {"model": dict(branch.metadata.get("model", {}))}
+        meta = {key: branch.metadata[key] for key in ("model", "continuation") if key in branch.metadata}
+        records = {key: np.asarray(branch.records[key]) for key in cls.RECORDS
+                   if key in getattr(branch, "records", {})}
         return cls(np.asarray(branch.frequency), np.asarray(branch.amplitude), np.asarray(branch.energy),
                    np.asarray(branch.contact_force_max), str(branch.status), str(branch.method),
-                   int(branch.harmonics), list(branch.special_points), meta, _gap(branch))
+                   int(branch.harmonics), list(branch.special_points), meta, _gap(branch), records)
 
     def __len__(self) -> int:
         return len(self.frequency)
