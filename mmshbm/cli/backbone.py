@@ -26,8 +26,15 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
+    from ._plot_worker import PlotWorker
+
+    with PlotWorker() as worker:  # imports matplotlib in a child while this process computes
+        return _run(args, worker)
+
+
+def _run(args, worker) -> int:
     from ..methods.backbone import backbone
-    from ..plotting import plot_backbone, plot_frequency_energy
+    from ..plotting.data import BranchData, reference_frequencies
 
     measured = common.measured(args)
     model = common.model(args)
@@ -46,8 +53,10 @@ def run(args) -> int:
     files = [branch.to_csv(out / "backbone.csv"), branch.save(out / "backbone.npz")]
     if len(branch):
         files += [out / "backbone.png", out / "frequency_energy.png"]
-        plot_backbone(branch, measured=measured, model=model, path=files[-2])
-        plot_frequency_energy(branch, path=files[-1])
+        data = BranchData.of(branch)
+        worker.draw([("plot_backbone", (data,), {"measured": measured, "model": reference_frequencies(model),
+                                                 "path": files[-2]}),
+                     ("plot_frequency_energy", (data,), {"path": files[-1]})])
     print(repr(branch))
     common.wrote(*files)
     return common.exit_code([branch])

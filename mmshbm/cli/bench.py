@@ -18,11 +18,33 @@ def register(sub) -> None:
                    help="methods (default all three)")
     p.add_argument("--repeats", type=common.positive_int, default=None, help="timing repeats (default 3)")
     p.add_argument("--amplitude", type=common.positive_float, default=None,
-                   help="amplitude (gaps) compared at (default 2)")
+                   help="amplitude (gaps) compared at (default: oscillator 2, beam 1.5)")
+    p.add_argument("--from-asv", nargs="?", const=".asv/results", default=None, metavar="RESULTS",
+                   help="print the tables of a recorded asv run instead (a results file or folder, default "
+                        ".asv/results: the newest run with the bench_goals figures)")
+    p.add_argument("--update", nargs="+", default=None, metavar="FILE",
+                   help="with --from-asv: write the tables into FILEs (README.md docs/benchmarks.md) between "
+                        "their generated-block markers")
     p.set_defaults(func=run)
 
 
+def _from_asv(args) -> int:
+    from ..analysis import asv_tables
+
+    run = asv_tables.load_run(args.from_asv)
+    block = asv_tables.tables(run)
+    print(block)
+    for path in args.update or ():
+        changed = asv_tables.update_file(path, block)
+        print(f"{'updated' if changed else 'unchanged'} {path}")
+    return 0
+
+
 def run(args) -> int:
+    if args.from_asv is not None:
+        return _from_asv(args)
+    if args.update:
+        raise ValueError("--update needs --from-asv")
     try:
         from ..analysis import benchmarking
     except ImportError as err:
@@ -36,7 +58,21 @@ def run(args) -> int:
         kwargs["repeats"] = args.repeats
     if args.amplitude is not None:
         kwargs["amplitude_gaps"] = args.amplitude
-    rows = benchmarking.compare_methods(**kwargs)
+    import warnings
+
+    from .._warnings import BranchWarning
+
+    with warnings.catch_warnings(record=True) as caught:  # the tuning runs many backbones: one line each
+        warnings.simplefilter("always", BranchWarning)
+        rows = benchmarking.compare_methods(**kwargs)
+    seen: dict[str, int] = {}
+    for w in caught:
+        if issubclass(w.category, BranchWarning):
+            seen[str(w.message)] = seen.get(str(w.message), 0) + 1
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    for message, count in seen.items():
+        warnings.warn(message + (f" ({count} runs)" if count > 1 else ""), BranchWarning, stacklevel=2)
     print(benchmarking.format_table(rows))
     common.wrote(*benchmarking.write_results(rows, common.out_dir(args)))
     return 0

@@ -4,8 +4,7 @@ contact-layer stiffness from a measured backbone (``--measured``)."""
 from __future__ import annotations
 
 import json
-
-import numpy as np
+import math
 
 from . import common
 
@@ -93,4 +92,4 @@ def run(args) -> int:
 
 
 def _finite(x: float):
-    return float(x) if np.isfinite(x) else None
+    return float(x) if math.isfinite(x) else None

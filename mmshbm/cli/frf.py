@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 from . import common
 
 
@@ -62,6 +60,8 @@ def run(args) -> int:
             dof = int(with_mass[-2] if beam and len(with_mass) > 1 else model.l[-1])
         if not 0 <= dof < model.n_dof:
             raise ValueError(f"--force-dof must be in [0, {model.n_dof - 1}], got {dof}")
+        import numpy as np
+
         force = np.zeros(model.n_dof)
         force[dof] = args.force
     extra = {} if args.max_steps is None else {"max_steps": args.max_steps}

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import _validate as check
+from .._threads import blas_limit
 from ..core.continuation import ContinuationOptions, continue_branch
 from ..core.resonances import internal_resonances
 from ..core.special_points import SpecialPoint
@@ -143,10 +144,11 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
         if previous is not None and _finished(previous, copts):
             res = _finished_result(state, previous.terminal)
         else:
-            res = continue_branch(problem, None if state else problem.linear_point(start_amplitude),
-                                  None if state else problem.initial_tangent(), copts, callback=callback,
-                                  progress=None, resume=state,
-                                  on_point=writer.point if writer is not None else None)
+            with blas_limit():  # small dense solves: one BLAS thread unless the user chose (mmshbm._threads)
+                res = continue_branch(problem, None if state else problem.linear_point(start_amplitude),
+                                      None if state else problem.initial_tangent(), copts, callback=callback,
+                                      progress=None, resume=state,
+                                      on_point=writer.point if writer is not None else None)
         if writer is not None:
             writer.end(res.status)
     finally:

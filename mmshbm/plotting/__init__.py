@@ -21,13 +21,38 @@ own axes. Every function returns the figure.
 - :func:`plot_frequency_response`, :func:`plot_phase_resonance`, :func:`plot_damping_ratio`:
   forced responses (unstable parts dashed), phase resonance, damped modes."""
 
-from .backbones import plot_backbone, plot_frequency_energy, plot_peak_contact_force
-from .common import _gap, branch_label, dof_label, points_at
-from .response import plot_damping_ratio, plot_frequency_response, plot_phase_resonance
-from .signals import plot_contact_force, plot_harmonic_content, plot_time_signals
-from .studies import plot_figure2, plot_study, study_labels, study_styles, varying_axes
+from __future__ import annotations
+
+import importlib
+
+#: public name -> submodule (imported on first use: matplotlib costs ~0.3 s to import,
+#: and ``mmshbm.plotting.data`` is needed without it)
+_LAZY = {
+    "plot_backbone": "backbones", "plot_frequency_energy": "backbones",
+    "plot_peak_contact_force": "backbones",
+    "BranchData": "data", "reference_frequencies": "data",
+    "_gap": "data", "branch_label": "common", "dof_label": "common", "points_at": "common",
+    "plot_damping_ratio": "response", "plot_frequency_response": "response",
+    "plot_phase_resonance": "response",
+    "plot_contact_force": "signals", "plot_harmonic_content": "signals", "plot_time_signals": "signals",
+    "plot_figure2": "studies", "plot_study": "studies", "study_labels": "studies", "study_styles": "studies",
+    "varying_axes": "studies",
+}
 
 __all__ = ["plot_backbone", "plot_frequency_energy", "plot_time_signals", "plot_contact_force",
            "plot_harmonic_content", "plot_figure2", "plot_peak_contact_force", "study_styles", "points_at",
            "plot_study", "study_labels", "varying_axes", "branch_label", "dof_label", "_gap",
-           "plot_frequency_response", "plot_phase_resonance", "plot_damping_ratio"]
+           "plot_frequency_response", "plot_phase_resonance", "plot_damping_ratio", "BranchData",
+           "reference_frequencies"]
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        value = getattr(importlib.import_module(f"{__name__}.{_LAZY[name]}"), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))

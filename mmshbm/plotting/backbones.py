@@ -37,8 +37,9 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
         Legend entries (default :func:`branch_label`).
     measured : MeasuredBackbone or path, optional
         A measured backbone to overlay (``mmshbm.analysis.measured.load_measured`` reads CSV).
-    model : Model, optional
-        For the reference lines (default: every distinct model of the branches).
+    model : Model or (f_lin, f_zero), optional
+        For the reference lines (default: every distinct model of the branches); or the
+        pair :func:`~mmshbm.plotting.data.reference_frequencies` gives.
     marks : sequence of (branch index, point index), optional
         Points to mark and number 1, 2, ... (e.g. those of :func:`plot_time_signals`).
     reference_lines : bool
@@ -284,7 +285,7 @@ def plot_frequency_energy(branches, labels: Sequence[str] | None = None, *, ax=N
         with np.errstate(divide="ignore", invalid="ignore"):
             ax.plot(b.frequency, np.log10(b.energy), label=label, **style)
     ax.set_xlabel("frequency (Hz)")
-    ax.set_ylabel("log$_{10}$(energy / J)")
+    ax.set_ylabel("log₁₀(energy / J)")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     if title:

@@ -272,26 +272,33 @@ def _contact(branch, solver, th: CheckThresholds) -> list[Finding]:
     k_c = None if k_c is None else float(np.max(np.atleast_1d(np.asarray(k_c, dtype=float))))
     if k_c is not None and np.isfinite(k_c):
         f_scale = max(f_scale, k_c * float(np.max(gaps)))
-    pen = np.full(len(branch), -np.inf)
-    neg = np.zeros(len(branch))
     tau = 2 * np.pi * np.arange(n) / n
     cheap = model.n_contacts == 1 and hasattr(solver, "contact_signals")
+    # the signals of every point first, the reductions over points and samples at once
+    # (numpy calls per point cost more than the signals of a small model)
+    n_pts, n_k = len(branch), len(dofs)
+    Q = np.empty((n_pts, n_k, n))
+    L = np.zeros((n_pts, n_k if cheap else len(model.contacts), n))
+    amp = np.maximum(np.asarray(branch.amplitude, dtype=float), 1e-300)[:, None, None]
+    scale = np.where(gaps[None] > 0, gaps[None], amp)  # (n_pts, n_k, 1)
     for i, u in enumerate(branch.states):
         if cheap:  # the contact DOF and the force without recovering every DOF
-            _, q, lam = solver.contact_signals(u, tau)
-            q = np.atleast_2d(q)
+            _, Q[i, 0], L[i, 0] = solver.contact_signals(u, tau)
         else:
-            _, q = solver.time_signals(u, dofs, n)
-            lam = solver.contact_force(u, n)[1]
-        scale = np.where(gaps > 0, gaps, max(float(branch.amplitude[i]), 1e-300))
-        pen[i] = float(np.max((sides * q - gaps) / scale))
-        if pen[i] < -th.penetration:
-            continue  # the contact never comes near its stop: any force is Newton's residual
-        lam = np.atleast_2d(lam)
-        peak = max(float(np.max(lam)), th.force_floor * f_scale)
-        lo = float(np.min(lam))
-        if peak > 0 and lo < -th.force_floor * f_scale:
-            neg[i] = -lo / peak
+            Q[i] = solver.time_signals(u, dofs, n)[1]
+            # the force right after the motion: a solver may cache the last point's orbit
+            if np.max((sides * Q[i] - gaps) / scale[i]) >= -th.penetration:
+                L[i] = np.atleast_2d(solver.contact_force(u, n)[1])
+    pen = np.max((sides[None] * Q - gaps[None]) / scale, axis=(1, 2)) if n_pts else np.zeros(0)
+    # a contact that never comes near its stop carries no force but Newton's residual
+    need_force = pen >= -th.penetration
+    neg = np.zeros(n_pts)
+    if n_pts:
+        floor = th.force_floor * f_scale
+        peak = np.maximum(L.max(axis=(1, 2)), floor)
+        lo = L.min(axis=(1, 2))
+        bad = need_force & (peak > 0) & (lo < -floor)
+        neg[bad] = -lo[bad] / peak[bad]
     out = []
     bad = np.flatnonzero(pen > th.penetration)
     if len(bad):

@@ -1,0 +1,236 @@
+"""The benchmark tables of the README and of docs/benchmarks.md, from one recorded run of
+the airspeed-velocity suite (``benchmarks/bench_goals.py``).
+
+``mmshbm bench --from-asv [RESULTS]`` prints them; ``--update README.md
+docs/benchmarks.md`` writes them between the markers :data:`BEGIN` and :data:`END` of
+each file, so that the published figures are those of one recorded run and say which
+(commit, machine, date)::
+
+    OPENBLAS_NUM_THREADS=1 asv run --python=same --bench bench_goals --set-commit-hash $(git rev-parse HEAD)
+    mmshbm bench --from-asv --update README.md docs/benchmarks.md
+
+``RESULTS`` is an asv results file (``.asv/results/<machine>/<commit>-<env>.json``) or a
+folder of them (default ``.asv/results``: the most recent file that holds the
+``bench_goals`` figures).
+"""
+
+from __future__ import annotations
+
+import ast
+import datetime as _dt
+import itertools
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+__all__ = ["AsvRun", "find_results", "load_run", "goal_table", "equal_accuracy_table", "tables",
+           "update_file", "BEGIN", "END"]
+
+#: markers of the generated block in a Markdown file
+BEGIN = "<!-- begin: tables from asv (mmshbm bench --from-asv --update) -->"
+END = "<!-- end: tables from asv -->"
+
+_PREFIX = "bench_goals."
+_METHODS = {"mmshbm": "MMS-HBM", "penalty": "penalty-HBM", "shooting": "shooting"}
+
+
+@dataclass
+class AsvRun:
+    """The results of one ``asv run`` for one commit and environment."""
+
+    path: Path
+    commit: str
+    date: _dt.datetime
+    machine: dict
+    values: dict = field(default_factory=dict)  # (benchmark name, params tuple) -> value
+    units: dict = field(default_factory=dict)  # benchmark name -> unit
+
+    def value(self, name: str, *params) -> float:
+        """The result of ``name`` (without the ``bench_goals.`` prefix allowed) for
+        ``params``; NaN when missing, skipped or failed."""
+        if not name.startswith("bench_"):
+            name = _PREFIX + name
+        v = self.values.get((name, tuple(str(p) for p in params)))
+        return float(v) if isinstance(v, int | float) else math.nan
+
+    def names(self, prefix: str) -> list[str]:
+        return sorted({n for n, _ in self.values if n.startswith(prefix)})
+
+
+def find_results(path=None) -> Path:
+    """The results file: ``path`` itself, or the most recent file under ``path`` (default
+    ``.asv/results``) that holds ``bench_goals`` figures."""
+    path = Path(".asv/results" if path is None else path)
+    if path.is_file():
+        return path
+    if not path.is_dir():
+        raise FileNotFoundError(f"no asv results at {path} (run asv first, see docs/benchmarks.md)")
+    best, best_date = None, -1
+    for f in path.rglob("*.json"):
+        if f.name in ("machine.json", "benchmarks.json"):
+            continue
+        try:
+            data = json.loads(f.read_text())
+        except (OSError, ValueError):
+            continue
+        if any(k.startswith(_PREFIX) for k in data.get("results", {})) and data.get("date", 0) > best_date:
+            best, best_date = f, data.get("date", 0)
+    if best is None:
+        raise FileNotFoundError(f"no asv results with bench_goals figures under {path}")
+    return best
+
+
+def _param(text: str):
+    try:
+        return ast.literal_eval(text)
+    except (ValueError, SyntaxError):
+        return text
+
+
+def load_run(path=None) -> AsvRun:
+    """Read an asv results file (format version 2) and the units of its benchmarks."""
+    f = find_results(path)
+    data = json.loads(f.read_text())
+    if data.get("version") != 2:
+        raise ValueError(f"{f}: asv results format version {data.get('version')!r}, expected 2")
+    columns = data["result_columns"]
+    i_result, i_params = columns.index("result"), columns.index("params")
+    values = {}
+    for name, entry in data["results"].items():
+        results = entry[i_result]
+        params = entry[i_params] or []
+        combos = list(itertools.product(*params)) if params else [()]
+        if not isinstance(results, list):
+            results = [results]
+        for combo, v in zip(combos, results, strict=False):
+            values[(name, tuple(str(_param(p)) for p in combo))] = v
+    units = {}
+    meta = f.parent.parent / "benchmarks.json"
+    if meta.is_file():
+        try:
+            described = json.loads(meta.read_text())
+            units = {k: v.get("unit", "") for k, v in described.items() if isinstance(v, dict)}
+        except ValueError:
+            units = {}
+    date = _dt.datetime.fromtimestamp(data.get("date", 0) / 1000, tz=_dt.UTC)
+    return AsvRun(f, data.get("commit_hash", "?"), date, dict(data.get("params", {})), values, units)
+
+
+# ---------------------------------------------------------------------- tables
+def _fmt(v: float, spec: str, unit: str = "") -> str:
+    return "n/a" if not math.isfinite(v) else f"{v:{spec}}{unit}"
+
+
+def _setting(run: AsvRun, model: str, method: str) -> str:
+    H = run.value("EqualAccuracy.track_harmonics", model, method)
+    N = run.value("EqualAccuracy.track_samples", model, method)
+    if method == "shooting":
+        return _fmt(N, ".0f", " steps/period")
+    parts = [f"H = {_fmt(H, '.0f')}"]
+    if method == "mmshbm" and math.isfinite(N) and N > 0:
+        parts.append(f"N = {N:.0f}")
+    if method == "penalty":
+        k = run.value("EqualAccuracy.track_penalty_factor", model, method)
+        parts.append(f"k_p = {k:.0e} k_c" if math.isfinite(k) else "k_p = n/a")
+    return ", ".join(parts)
+
+
+def equal_accuracy_table(run: AsvRun, model: str) -> str:
+    """``mmshbm bench``'s table for ``model`` ("oscillator" or "beam21")."""
+    lines = ["| method | setting | unknowns | time (ms) | × MMS-HBM | Newton it. | f (Hz) | rel. error "
+             "| target met |", "|---|---|---|---|---|---|---|---|---|"]
+    for method, label in _METHODS.items():
+        tracks = ("target_met", "unknowns", "time_ms", "time_ratio", "newton_iterations", "frequency_hz",
+                  "rel_error")
+        v = {what: run.value(f"EqualAccuracy.track_{what}", model, method) for what in tracks}
+        met = v["target_met"]
+        cells = [label, _setting(run, model, method), _fmt(v["unknowns"], ".0f"), _fmt(v["time_ms"], ".3g"),
+                 _fmt(v["time_ratio"], ".3g"), _fmt(v["newton_iterations"], ".0f"),
+                 _fmt(v["frequency_hz"], ".6f"), _fmt(v["rel_error"], ".1e"),
+                 "n/a" if not math.isfinite(met) else ("yes" if met else "no")]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def goal_table(run: AsvRun) -> str:
+    """Issue 15's goal table with the measured figures."""
+    t10 = run.value("DefaultBackbone.time_backbone_to_10_gaps")
+    evals = run.value("DefaultBackbone.track_evaluations_per_point")
+    checks = run.value("DefaultBackbone.time_branch_checks")
+    pen = run.value("EqualAccuracy.track_time_ratio", "oscillator", "penalty")
+    sho = run.value("EqualAccuracy.track_time_ratio", "oscillator", "shooting")
+    bpen = run.value("EqualAccuracy.track_time_ratio", "beam21", "penalty")
+    bsho = run.value("EqualAccuracy.track_time_ratio", "beam21", "shooting")
+    bamp = run.value("EqualAccuracy.track_amplitude_gaps", "beam21", "mmshbm")
+    beam = (f"beam, {_fmt(bamp, 'g')} gaps, equal H = 5: penalty-HBM / shooting cost (no common converged "
+            "reference)")
+    rows = [
+        ("default backbone (beam, 21 elements, H = 5) to 10 gaps, warm", _fmt(1e3 * t10, ".3g", " ms"),
+         "≤ 5 ms"),
+        ("residual + Jacobian evaluations per point (same branch)", _fmt(evals, ".2f"), "≤ 3"),
+        ("branch checks of that branch", _fmt(1e3 * checks, ".2g", " ms"), ""),
+        ("equal accuracy vs penalty-HBM (oscillator, 2 gaps, 1e-4, closed form)", _fmt(pen, ".3g", "×"),
+         "≥ 20×"),
+        ("equal accuracy vs shooting (same)", _fmt(sho, ".3g", "×"), "≥ 300×"),
+        (beam, f"{_fmt(bpen, '.3g', '×')} / {_fmt(bsho, '.3g', '×')}", ""),
+    ]
+    for worker, what in (("1", "figures drawn by a child process"), ("0", "figures drawn in the process")):
+        warm = run.value("WholeProcess.track_warm_s", worker)
+        cold = run.value("WholeProcess.track_cold_s", worker)
+        if math.isfinite(warm) or math.isfinite(cold):
+            rows.append((f"`mmshbm backbone` whole process, warm / cold ({what})",
+                         f"{_fmt(warm, '.2f', ' s')} / {_fmt(cold, '.2f', ' s')}", "≤ 1 s / ≤ 3 s"))
+    for name in run.names("bench_studies."):
+        params_of = [p for n, p in run.values if n == name]
+        for params in params_of:
+            v = run.value(name, *params)
+            label = name.removeprefix("bench_studies.") + (f" ({', '.join(params)})" if params else "")
+            rows.append((f"study: {label}", f"{_fmt(v, '.3g')} {run.units.get(name, '')}".strip(), ""))
+    lines = ["| figure | measured | goal |", "|---|---|---|"]
+    lines += [f"| {a} | {b} | {c} |" for a, b, c in rows]
+    return "\n".join(lines)
+
+
+def tables(run: AsvRun) -> str:
+    """The whole generated block: where the figures come from, the goal table and the
+    two equal-accuracy tables."""
+    m = run.machine
+    where = (f"asv run of commit {run.commit[:8]} on machine `{m.get('machine', '?')}` "
+             f"({m.get('num_cpu', '?')} CPUs, {m.get('cpu', '?')}), {run.date:%Y-%m-%d %H:%M} UTC; "
+             "wall-clock times on a shared machine: read the ratios, repeat before trusting absolute "
+             "figures.")
+    osc_ref = run.value("EqualAccuracy.track_reference_hz", "oscillator", "mmshbm")
+    beam_ref = run.value("EqualAccuracy.track_reference_hz", "beam21", "mmshbm")
+    beam_amp = run.value("EqualAccuracy.track_amplitude_gaps", "beam21", "mmshbm")
+    return "\n".join([
+        where, "", goal_table(run), "",
+        f"One-DOF oscillator, 2 gaps, target 1e-4 against the closed form ({_fmt(osc_ref, '.9g')} Hz): "
+        "every method tuned to the target, whole backbone from half a gap, fastest of 3:", "",
+        equal_accuracy_table(run, "oscillator"), "",
+        f"Default beam, 21 elements, {_fmt(beam_amp, 'g')} gaps: no converged reference exists (the exact "
+        "orbits rattle, the frequency is not converged in H), so this is cost at equal H = 5, not at equal "
+        f"accuracy: the reference is MMS-HBM's own H = 5 solution with N = 1024 ({_fmt(beam_ref, '.9g')} Hz; "
+        "with the exact projection of the contact law N does not change it, hence MMS-HBM's zero error), "
+        "penalty-HBM tuned in k_p, shooting (which does not truncate harmonics) against the same number:",
+        "",
+        equal_accuracy_table(run, "beam21"),
+    ])
+
+
+def update_file(path, block: str) -> bool:
+    """Replace the lines between the line :data:`BEGIN` and the next line :data:`END` in
+    ``path`` by ``block``; True when the file changed. Raises ValueError when the marker
+    lines are missing (markers quoted inside other lines do not count)."""
+    path = Path(path)
+    text = path.read_text()
+    lines = text.split("\n")
+    try:
+        i = next(k for k, line in enumerate(lines) if line.strip() == BEGIN)
+        j = next(k for k in range(i + 1, len(lines)) if lines[k].strip() == END)
+    except StopIteration:
+        raise ValueError(f"{path}: no generated block (a line {BEGIN!r}, later a line {END!r})") from None
+    new = "\n".join(lines[: i + 1] + block.strip().split("\n") + lines[j:])
+    if new != text:
+        path.write_text(new)
+    return new != text

@@ -1,0 +1,81 @@
+"""The data of the backbone plots without matplotlib: a branch's plotted arrays
+(:class:`BranchData`) and the reference frequencies (:func:`reference_frequencies`).
+Importing this module imports numpy only."""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["BranchData", "reference_frequencies"]
+
+log = logging.getLogger(__name__)
+
+
+def _gap(branch) -> float:
+    gap = branch.gap
+    if gap is None:
+        try:
+            gap = branch.get_model().gap
+        except ValueError:
+            gap = 0.0
+    return float(gap)
+
+
+@dataclass
+class BranchData:
+    """What the backbone plots read from a :class:`~mmshbm.results.branch.Branch`, without
+    its solver or model: cheap to pickle and to unpickle (the command line draws its
+    figures in a child process that imports matplotlib while the parent computes, see
+    :mod:`mmshbm.cli._plot_worker`). :func:`~mmshbm.plotting.plot_backbone` and
+    :func:`~mmshbm.plotting.plot_frequency_energy` accept it in place of a Branch; pass the reference
+    lines as ``model=reference_frequencies(model)``."""
+
+    frequency: np.ndarray
+    amplitude: np.ndarray
+    energy: np.ndarray
+    contact_force_max: np.ndarray
+    status: str
+    method: str
+    harmonics: int
+    special_points: list = field(default_factory=list)
+    metadata: dict = field(default_factory=dict)
+    gap: float | None = None
+    records: dict = field(default_factory=dict)
+
+    #: the per-point records the plots read (the family front: mmshbm.results.family_points)
+    RECORDS = ("on_family", "mode_share")
+
+    @classmethod
+    def of(cls, branch) -> BranchData:
+        """The plotted data of ``branch``."""
+        meta = {key: branch.metadata[key] for key in ("model", "continuation") if key in branch.metadata}
+        records = {key: np.asarray(branch.records[key]) for key in cls.RECORDS
+                   if key in getattr(branch, "records", {})}
+        return cls(np.asarray(branch.frequency), np.asarray(branch.amplitude), np.asarray(branch.energy),
+                   np.asarray(branch.contact_force_max), str(branch.status), str(branch.method),
+                   int(branch.harmonics), list(branch.special_points), meta, _gap(branch), records)
+
+    def __len__(self) -> int:
+        return len(self.frequency)
+
+    def get_model(self):
+        raise ValueError("BranchData carries no model: pass the reference lines as model=(f_lin, f_zero)")
+
+
+def reference_frequencies(model, modes=(2, 3)) -> tuple[np.ndarray, float | None] | None:
+    """(linear frequencies of modes 1..max(modes) (Hz), zero-gap limit (Hz) or None) of
+    ``model`` (sparse eigen-solves on large models); None when they cannot be computed.
+    A pair (f_lin, f_zero) given as ``model`` is returned as it is."""
+    if isinstance(model, tuple):
+        return model
+    n = max(max(modes, default=1), 1)
+    try:
+        f_lin = model.linear_frequencies(min(n, len(model.l)))
+        f_zero = model.zero_gap_frequency() if model.n_contacts == 1 and model.gap > 0 else None
+    except (ValueError, np.linalg.LinAlgError) as err:
+        log.info("no reference lines: %s", err)
+        return None
+    return f_lin, f_zero
