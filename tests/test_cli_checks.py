@@ -233,3 +233,25 @@ def test_plot_repeats_the_findings(tmp_path, capsys):
     capsys.readouterr()
     assert main(["plot", str(tmp_path / "backbone.npz"), "--kind", "backbone", "--out", str(tmp_path)]) == 0
     assert "mmshbm plot: warning: mmshbm branch ended short of its bounds" in capsys.readouterr().err
+
+
+def test_backbone_names_resonances_and_jumps_and_follows_the_path_on_request(tmp_path, capsys):
+    """H = 7: the family warning says where the excursions are and how to leave them out,
+    the truncation effects come as one warning, and stdout names the 6:1 and 5:1
+    resonances with mode 2 and the jumps; --follow path stays on the 6:1 tongue."""
+    assert main(["backbone", "-H", "7", "--out", str(tmp_path)]) == 0
+    out, err = capsys.readouterr()
+    assert "internal resonances: 6Ω≈f₂" in out and "5Ω≈f₂" in out
+    assert "jumps over tongues: " in out
+    warnings_ = [line for line in err.splitlines() if "warning:" in line]
+    assert len(warnings_) == 2
+    assert "follows the family of linear mode 1 past internal resonances" in warnings_[0]
+    assert "branch.family_front()" in warnings_[0]
+    assert "passes the stop" in warnings_[1] and "pulls" in warnings_[1]
+    assert main(["backbone", "-H", "7", "--follow", "path", "--max-amplitude", "2",
+                 "--out", str(tmp_path / "path")]) == 0
+    out, err = capsys.readouterr()
+    assert "jumps over tongues" not in out and "leaves the family of linear mode 1" in err
+    branch = mmshbm.load(tmp_path / "path" / "backbone.npz")
+    assert branch.metadata["continuation"]["follow"] == "path"
+    assert branch.frequency[-1] < 48.5  # on the tongue at f2/6 = 47.7 Hz, not the backbone

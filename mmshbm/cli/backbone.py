@@ -22,6 +22,9 @@ def register(sub) -> None:
     p.add_argument("--checkpoint", default=None, metavar="FILE",
                    help="write converged points to FILE as they go")
     p.add_argument("--resume", default=None, metavar="FILE", help="continue from a checkpoint FILE")
+    p.add_argument("--follow", default="family", choices=["family", "path"],
+                   help="'family' (default): the first mode's backbone, jumping internal-resonance "
+                        "tongues; 'path': plain path following (to study a tongue)")
     p.set_defaults(func=run)
 
 
@@ -47,6 +50,8 @@ def _run(args, worker) -> int:
         extra["resume"] = args.resume
     if args.max_steps is not None:
         extra["max_steps"] = args.max_steps
+    if args.follow != "family":
+        extra["follow"] = args.follow
     branch = backbone(model, harmonics=args.harmonics, method=args.method, max_amplitude=max_amp,
                       verbose=common.progress(args), **extra)
     out = common.out_dir(args)
@@ -58,5 +63,34 @@ def _run(args, worker) -> int:
                                                  "path": files[-2]}),
                      ("plot_frequency_energy", (data,), {"path": files[-1]})])
     print(repr(branch))
+    for line in _special_lines(branch, model.gap):
+        print(line)
     common.wrote(*files)
     return common.exit_code([branch])
+
+
+def _special_lines(branch, gap: float) -> list[str]:
+    """The internal resonances the branch met and the jumps it made, one line each kind."""
+    from ..plotting.data import resonance_label
+
+    def amp(a):
+        return f"{a / gap:.3g} gaps" if gap > 0 else f"{a:.3g} m"
+
+    res, jumps, seen = [], [], set()
+    for sp in branch.special_points:
+        d = getattr(sp, "data", {}) or {}
+        if sp[0] == "internal_resonance" and (d.get("k"), d.get("j")) not in seen:
+            seen.add((d.get("k"), d.get("j")))
+            i = int(sp[1])
+            res.append(f"{resonance_label(d['k'], d['j'])} at {amp(branch.amplitude[i])} "
+                       f"({branch.frequency[i]:.4g} Hz)")
+        elif sp[0] == "jump" and "amplitude_frontier" in d:
+            lo, hi = d["amplitude_frontier"], d["amplitude_to"]
+            span = amp(lo) if hi <= lo * 1.001 else f"{amp(lo)}..{amp(hi)}"
+            jumps.append(f"{span} ({d.get('frequency_to', float('nan')):.4g} Hz after)")
+    out = []
+    if res:
+        out.append("internal resonances: " + ", ".join(res))
+    if jumps:
+        out.append("jumps over tongues: " + ", ".join(jumps))
+    return out

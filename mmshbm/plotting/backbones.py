@@ -21,6 +21,7 @@ from .common import (
     log,
     reference_frequencies,
 )
+from .data import resonance_label
 
 
 def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=None, model=None,
@@ -212,13 +213,6 @@ def _broken_at_jumps(branch) -> tuple[np.ndarray, np.ndarray]:
     f = np.insert(np.asarray(branch.frequency, dtype=float), cuts, np.nan)
     a = np.insert(np.asarray(branch.amplitude, dtype=float), cuts, np.nan)
     return f, a
-
-
-def resonance_label(k, j) -> str:
-    """The label of the internal resonance of harmonic k with mode j (1-based), e.g.
-    "5Ω≈f₂"."""
-    sub = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
-    return f"{k}Ω≈f{str(j).translate(sub)}"
 
 
 def _special_points(ax, branch, scale: float, color) -> None:

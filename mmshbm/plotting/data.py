@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["BranchData", "reference_frequencies"]
+__all__ = ["BranchData", "reference_frequencies", "resonance_label"]
 
 log = logging.getLogger(__name__)
 
@@ -79,3 +79,10 @@ def reference_frequencies(model, modes=(2, 3)) -> tuple[np.ndarray, float | None
         log.info("no reference lines: %s", err)
         return None
     return f_lin, f_zero
+
+
+def resonance_label(k, j) -> str:
+    """The label of the internal resonance of harmonic k with mode j (1-based), e.g.
+    "5Ω≈f₂"."""
+    sub = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
+    return f"{k}Ω≈f{str(j).translate(sub)}"

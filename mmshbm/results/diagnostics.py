@@ -181,8 +181,29 @@ def check_branch(branch, thresholds: CheckThresholds | None = None, *, warn: boo
     branch.metadata["checks"] = [f.to_dict() for f in out]
     branch.metadata["check_thresholds"] = asdict(th)
     if warn:
-        for f in out:
-            warnings.warn(f.message, BranchWarning, stacklevel=stacklevel + 1)
+        for message in _warnings(branch, out):
+            warnings.warn(message, BranchWarning, stacklevel=stacklevel + 1)
+    return out
+
+
+def _warnings(branch, found: list[Finding]) -> list[str]:
+    """One warning per finding, except that the two truncation effects of harmonic
+    balance (penetration and a pulling force) make one."""
+    kinds = {f.kind: f for f in found}
+    if not ("penetration" in kinds and "negative_force" in kinds and branch.harmonics):
+        return [f.message for f in found]
+    pen, neg = kinds["penetration"], kinds["negative_force"]
+    joint = (f"{branch.method} branch, truncation effects of the Fourier series (more harmonics reduce "
+             f"them): the contact DOF passes the stop by up to {pen.value:.3g} gaps (from "
+             f"{_where(branch, pen.first)}) and the contact force pulls by up to {-neg.value:.3g} of the "
+             f"peak (from point {neg.first}); branch.time_signals(i, admissible=True) gives admissible "
+             "signals")
+    out = []
+    for f in found:
+        if f.kind == "penetration":
+            out.append(joint)
+        elif f.kind != "negative_force":
+            out.append(f.message)
     return out
 
 
@@ -241,6 +262,9 @@ def _family(branch, shares: np.ndarray, th: CheckThresholds) -> list[Finding]:
     if not len(low):
         return []
     mode = int(branch.metadata.get("method_options", {}).get("mode", 1))
+    on = branch.records.get("on_family")
+    if on is not None and len(on) == len(shares) and on[-1] > 0.5:
+        return _followed(branch, np.asarray(on, dtype=float), shares, mode)
     first, worst = int(low[0]), int(low[np.argmin(shares[low])])
     back = np.flatnonzero(shares[first:] >= th.min_mode_share)
     ended_low = shares[-1] < th.min_mode_share
@@ -256,6 +280,23 @@ def _family(branch, shares: np.ndarray, th: CheckThresholds) -> list[Finding]:
         tail = (f"; it returns at point {last + 1} ({branch.frequency[last + 1]:.4g} Hz): the "
                 f"points {first}..{last} are an excursion into another mode (internal resonance)")
     return [Finding("left_family", head + tail, first, last, float(shares[worst]))]
+
+
+def _followed(branch, on: np.ndarray, shares: np.ndarray, mode: int) -> list[Finding]:
+    """The finding of a branch that followed its family (``follow="family"``) to the end:
+    where its excursions into tongues are, and how to leave them out."""
+    off = np.flatnonzero(on < 0.5)
+    if not len(off):
+        return []
+    runs = np.split(off, np.flatnonzero(np.diff(off) > 1) + 1)
+    spans = ", ".join(f"{r[0]}..{r[-1]}" for r in runs[:4]) + (", ..." if len(runs) > 4 else "")
+    jumps = sum(1 for sp in branch.special_points if sp[0] == "jump")
+    message = (f"{branch.method} branch follows the family of linear mode {mode} past internal resonances: "
+               f"{len(off)} of {len(branch)} points (at {spans}) are excursions into other modes, kept in "
+               f"the arrays" + (f", and it jumped over {jumps} tongue(s)" if jumps else "")
+               + "; branch.family_front() selects the backbone (see special_points)")
+    worst = int(off[np.argmin(shares[off])])
+    return [Finding("left_family", message, int(off[0]), int(off[-1]), float(shares[worst]))]
 
 
 def _contact(branch, solver, th: CheckThresholds) -> list[Finding]:
