@@ -101,6 +101,8 @@ def _zeros(c, s, g_t, dg_t, tau_t, roots):
     τ_j = tau_t[j] (equispaced, τ_0 = 0); returns their count (stored sorted in ``roots``)."""
     N = g_t.shape[0]
     n = 0
+    # the order as run-time integers: literal arguments would compile _refine twice
+    root, extremum = np.int64(0), np.int64(1)
     for j in range(N):
         jn = j + 1 if j + 1 < N else 0
         a = tau_t[j]
@@ -116,15 +118,15 @@ def _zeros(c, s, g_t, dg_t, tau_t, roots):
             if gb == 0.0:
                 continue  # the next interval records it
             if n < roots.shape[0]:
-                roots[n] = _refine(c, s, a, b, ga, 0)
+                roots[n] = _refine(c, s, a, b, ga, root)
                 n += 1
         elif dg_t[j] * dg_t[jn] < 0.0:
             # an extremum inside: a pair of close zeros hides if it lies on the other side
-            t_ext = _refine(c, s, a, b, dg_t[j], 1)
+            t_ext = _refine(c, s, a, b, dg_t[j], extremum)
             g_ext, _, _ = _trig_eval(c, s, t_ext)
             if g_ext != 0.0 and (g_ext > 0.0) != (ga > 0.0) and n + 1 < roots.shape[0]:
-                roots[n] = _refine(c, s, a, t_ext, ga, 0)
-                roots[n + 1] = _refine(c, s, t_ext, b, g_ext, 0)
+                roots[n] = _refine(c, s, a, t_ext, ga, root)
+                roots[n + 1] = _refine(c, s, t_ext, b, g_ext, root)
                 n += 2
     return n
 

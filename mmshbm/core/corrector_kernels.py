@@ -54,6 +54,7 @@ def _newton_modal(u, u_pred, t, tol, step_tol, max_iter, n_c, H, colscale, rowsc
     """
     n = u.shape[0]
     n_a = (H + 1) * n_c
+    with_derivative = n > 0  # a run-time bool: a literal True would compile the callee twice
     n_p = eta.shape[0]
     du_norm = math.inf
     for it in range(max_iter + 1):
@@ -63,7 +64,7 @@ def _newton_modal(u, u_pred, t, tol, step_tol, max_iter, n_c, H, colscale, rowsc
         for p in range(n_p):
             eta[p] = u[n_a + p] * colscale[n_a + p]
         omega = u[n - 1] * colscale[n - 1]
-        if _modal_dynamic_stiffness(D0, B, w2, Rs, omega, H, keep, pole_rtol, D, dD, True) != 0:
+        if _modal_dynamic_stiffness(D0, B, w2, Rs, omega, H, keep, pole_rtol, D, dD, with_derivative) != 0:
             return POLE, it
         for k in range(H + 1):
             for i in range(n_c):
