@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import importlib
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 
 # public name -> module that defines it
 _LAZY = {
@@ -35,6 +35,10 @@ _LAZY = {
     "ContinuationOptions": "mmshbm.core.continuation",
     "Branch": "mmshbm.results.branch",
     "fit_material": "mmshbm.analysis.identification",
+    "fit_contact_stiffness": "mmshbm.analysis.contact_fit",
+    "solid_beam_model": "mmshbm.fe.solid",
+    "branch_stability": "mmshbm.methods.stability",
+    "phase_resonance_backbone": "mmshbm.analysis.phase_resonance",
     "load": "mmshbm.io",
     "MmshbmWarning": "mmshbm._warnings",
     "BranchWarning": "mmshbm._warnings",
