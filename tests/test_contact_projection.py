@@ -7,7 +7,7 @@ import pytest
 from scipy.integrate import quad
 from scipy.optimize import brentq
 
-from mmshbm.core.contact_kernels import contact_spectrum, project_contact
+from mmshbm.core.projection import contact_spectrum, project_contact
 
 
 def _p(coefs, tau):
@@ -79,6 +79,19 @@ def test_a_narrow_contact_between_samples_is_found():
     c = np.array([-0.9999, np.cos(0.3), np.sin(0.3)])  # cos(τ − 0.3) − 0.9999
     C2, _ = contact_spectrum(c[:2], np.array([0.0, c[2]]), exact=True, n_samples=8)
     assert C2[0] == pytest.approx(width / (2 * np.pi), rel=1e-10)
+
+
+@pytest.mark.parametrize("n_samples", [8, 64, 128])
+def test_zeros_and_extrema_on_samples(n_samples):
+    """p = cos τ: its zeros π/2, 3π/2 and extrema 0, π lie on the samples, where the
+    sampled values are round-off (±6e-17) rather than zero; the arc (−π/2, π/2) is found
+    exactly: C_0 = 1/2, C_1 = 1/π, C_2 = 0, C_3 = −1/(3π)."""
+    C, S = contact_spectrum(np.array([0.0, 1.0, 0.0, 0.0]), None, exact=True, n_samples=n_samples)
+    np.testing.assert_allclose(C[:4], [0.5, 1 / np.pi, 0.0, -1 / (3 * np.pi)], rtol=0, atol=1e-15)
+    assert np.abs(S).max() < 1e-15
+    # scaled to metres (a gap of 1 mm): the round-off stop must scale with the function
+    C_mm, _ = contact_spectrum(np.array([0.0, 1e-3, 0.0, 0.0]), None, exact=True, n_samples=n_samples)
+    np.testing.assert_allclose(C_mm, C, rtol=0, atol=1e-15)
 
 
 def test_the_projection_is_continuous_through_grazing():

@@ -17,20 +17,17 @@ lo, and the harmonic projection of s·p is a matrix times the coefficients of p:
 ε_0 = 1, ε_m = 2 (and the analogous sine terms for a general trigonometric polynomial).
 Only the spectrum C_n (n = 0..2H) of the active set depends on how the projection is done:
 
-* **sampled** (AFT): C_n = (1/N) Σ_j s(τ_j) cos nτ_j on N samples. A sample that changes
-  its active set is a kink of the residual: the branch has corners, N is a discretisation
-  parameter.
-* **exact** (C¹): p − θ is a trigonometric polynomial of degree H. Its zeros on the period
-  are bracketed on the N samples (sign changes of p − θ, and sign changes of p′ between
-  samples of equal sign to catch a pair of close zeros), refined by safeguarded Newton to
-  round-off, and C_n is integrated in closed form over the arcs where s = 1. Because the
-  integrand s·(p − θ) vanishes at the moving arc ends, the derivative of the projection is
-  G times the derivative of p with no boundary terms: the residual is continuously
-  differentiable in the unknowns and the same G gives its exact Jacobian. N only brackets
-  zeros; it is no longer a discretisation error.
+* **sampled** (AFT): C_n = (1/N) Σ_j s(τ_j) cos nτ_j on N samples; a sample changing its
+  active set is a kink of the residual.
+* **exact** (C¹): the zeros of the trigonometric polynomial p − θ are bracketed on the N
+  samples, refined by safeguarded Newton to round-off, and C_n is integrated in closed
+  form over the arcs; s·(p − θ) vanishes at the moving arc ends, so the same G is the
+  exact Jacobian (docs/design.md §2, §8).
 
-The kernels take plain arrays and know nothing of models; all kernels that call each
-other are in this file (numba's cache does not see edits to a callee in another file).
+The kernels take plain arrays and know nothing of models. Numba's cache keys a kernel on
+its own file only: after editing a kernel here, the cached callers in other files
+(``corrector_kernels``) are stale until their file changes or the cache is cleared
+(``find mmshbm -name '*.nb[ic]' -delete``).
 """
 
 from __future__ import annotations
@@ -42,7 +39,7 @@ from numba import njit
 
 from .kernels import JIT_OPTIONS
 
-__all__ = ["project_contact", "contact_spectrum"]
+__all__: list[str] = []  # kernels only; the projections as functions: mmshbm.core.projection
 
 _TWO_PI = 2.0 * math.pi
 
@@ -73,13 +70,26 @@ def _trig_eval(c, s, tau):
 def _refine(c, s, a, b, fa, order):
     """Zero of g (order 0) or of g′ (order 1) in the bracket [a, b], where the function has
     the sign of ``fa`` at a and the opposite sign at b: safeguarded Newton (bisection
-    whenever a step leaves the bracket), to round-off in τ."""
+    whenever a step leaves the bracket), to round-off in τ: it stops where the function
+    value is below the round-off of its evaluation (Newton's steps there only hop between
+    neighbouring doubles; an end of the bracket with such a value is the zero), or where
+    the step or the bracket is at round-off in τ."""
+    H = c.shape[0] - 1
+    noise = abs(c[0]) if order == 0 else 0.0
+    for k in range(1, H + 1):
+        noise += (abs(c[k]) + abs(s[k])) * (1.0 if order == 0 else k)
+    noise *= 8e-16
+    if abs(fa) <= noise:  # a zero on a sample: Newton would bisect towards it to round-off
+        return a
+    gb, gb1, _ = _trig_eval(c, s, b)
+    if abs(gb if order == 0 else gb1) <= noise:
+        return b
     x = 0.5 * (a + b)
     for _ in range(100):
         g, g1, g2 = _trig_eval(c, s, x)
         f = g if order == 0 else g1
         df = g1 if order == 0 else g2
-        if f == 0.0:
+        if abs(f) <= noise:
             return x
         if (f > 0.0) == (fa > 0.0):
             a = x
@@ -103,6 +113,13 @@ def _zeros(c, s, g_t, dg_t, tau_t, roots):
     n = 0
     # the order as run-time integers: literal arguments would compile _refine twice
     root, extremum = np.int64(0), np.int64(1)
+    # |g″| <= M2 everywhere, so between two samples of one sign g stays beyond
+    # min(|g_a|, |g_b|) − M2 h²/8: a hidden pair of zeros needs a sample within that margin
+    m2 = 0.0
+    for k in range(1, c.shape[0]):
+        m2 += k * k * (abs(c[k]) + abs(s[k]))
+    h = _TWO_PI / N
+    margin = 1.01 * m2 * h * h / 8.0 + 1e-300
     for j in range(N):
         jn = j + 1 if j + 1 < N else 0
         a = tau_t[j]
@@ -120,7 +137,7 @@ def _zeros(c, s, g_t, dg_t, tau_t, roots):
             if n < roots.shape[0]:
                 roots[n] = _refine(c, s, a, b, ga, root)
                 n += 1
-        elif dg_t[j] * dg_t[jn] < 0.0:
+        elif dg_t[j] * dg_t[jn] < 0.0 and min(abs(ga), abs(gb)) <= margin:
             # an extremum inside: a pair of close zeros hides if it lies on the other side
             t_ext = _refine(c, s, a, b, dg_t[j], extremum)
             g_ext, _, _ = _trig_eval(c, s, t_ext)
@@ -201,117 +218,6 @@ def _spectrum(c, s, cos_table, sin_table, tau_t, exact, g_t, dg_t, roots, C, S):
         _arc_spectrum(c, s, g_t, dg_t, tau_t, roots, C, S)
     else:
         _sampled_spectrum(g_t, cos_table, sin_table, C, S)
-
-
-# ---------------------------------------------------------------------- public projections
-def _tables(H: int, N: int):
-    tau = _TWO_PI * np.arange(N) / N
-    n = np.arange(2 * H + 1)[:, None]
-    return tau, np.cos(n * tau), np.sin(n * tau)
-
-
-def contact_spectrum(c: np.ndarray, s: np.ndarray | None = None, exact: bool = True,
-                     n_samples: int | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Spectrum of the set where the trigonometric polynomial g is positive.
-
-    Parameters
-    ----------
-    c, s : ndarray, shape (H+1,)
-        g(τ) = c_0 + Σ_{k=1..H} (c_k cos kτ + s_k sin kτ) (``s[0]`` unused; None: zero).
-    exact : bool
-        Arcs between exactly located zeros (True) or sample means (False).
-    n_samples : int, optional
-        Samples per period (bracketing grid, or the sampled rule); default 16·(2H+1).
-
-    Returns
-    -------
-    C, S : ndarray, shape (2H+1,)
-        C_n = (1/2π)∫_{g>0} cos nτ dτ and S_n likewise with sines, n = 0..2H.
-    """
-    c = np.ascontiguousarray(c, dtype=float)
-    H = c.shape[0] - 1
-    s = np.zeros(H + 1) if s is None else np.ascontiguousarray(s, dtype=float)
-    if c.ndim != 1 or s.shape != c.shape:
-        raise ValueError(f"c and s must be 1-D of equal length, got {c.shape} and {s.shape}")
-    N = 16 * (2 * H + 1) if n_samples is None else int(n_samples)
-    if N < 2 * H + 1:
-        raise ValueError(f"n_samples must be >= 2H+1 = {2 * H + 1}, got {N}")
-    tau, cos_t, sin_t = _tables(H, N)
-    C, S = np.empty(2 * H + 1), np.empty(2 * H + 1)
-    _spectrum(c, s, cos_t, sin_t, tau, bool(exact), np.empty(N), np.empty(N), np.empty(2 * N + 2), C, S)
-    return C, S
-
-
-def _product_matrix(C: np.ndarray, S: np.ndarray, H: int) -> np.ndarray:
-    """G_ab = proj_a[s φ_b] in NLvib order (φ = 1, cos τ, sin τ, ..., cos Hτ, sin Hτ) from the
-    spectrum (C, S) of s."""
-    G = np.zeros((2 * H + 1, 2 * H + 1))
-    for a in range(2 * H + 1):
-        m, a_sin = (a + 1) // 2, a > 0 and a % 2 == 0
-        w = 1.0 if a == 0 else 2.0
-        for b in range(2 * H + 1):
-            k, b_sin = (b + 1) // 2, b > 0 and b % 2 == 0
-            d, t = abs(m - k), m + k
-            if not a_sin and not b_sin:
-                v = 0.5 * (C[d] + C[t])
-            elif a_sin and b_sin:
-                v = 0.5 * (C[d] - C[t])
-            elif not a_sin:  # cos m · sin k = ½ (sin (k+m) + sin (k−m))
-                v = 0.5 * (S[t] + np.sign(k - m) * S[d])
-            else:  # sin m · cos k = ½ (sin (m+k) + sin (m−k))
-                v = 0.5 * (S[t] + np.sign(m - k) * S[d])
-            G[a, b] = w * v
-    return G
-
-
-def project_contact(p: np.ndarray, lo: float, hi: float, exact: bool = True,
-                    n_samples: int | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Harmonic projection of (p − hi)₊ − (lo − p)₊ and its Jacobian.
-
-    Parameters
-    ----------
-    p : ndarray, shape (2H+1,)
-        NLvib-ordered coefficients [p_0, p_c1, p_s1, ..., p_cH, p_sH] of p(τ).
-    lo, hi : float
-        The admissible interval (``-inf`` / ``inf`` for a side without a stop), lo <= hi.
-    exact : bool
-        Exact (C¹) projection with the switching instants located (default), or the
-        sampled AFT projection.
-    n_samples : int, optional
-        Samples per period; default 16·(2H+1).
-
-    Returns
-    -------
-    r : ndarray, shape (2H+1,)
-        NLvib-ordered projection (proj_0 = mean, proj_cm = (1/π)∫ · cos mτ, ...).
-    G : ndarray, shape (2H+1, 2H+1)
-        ∂r/∂p: the projection of s(τ)·φ_b(τ), s the indicator of the active set.
-    """
-    p = np.asarray(p, dtype=float)
-    if p.ndim != 1 or p.shape[0] % 2 != 1:
-        raise ValueError(f"p must be 1-D with 2H+1 entries, got shape {p.shape}")
-    lo, hi = float(lo), float(hi)
-    if math.isnan(lo) or math.isnan(hi) or lo > hi:
-        raise ValueError(f"need lo <= hi, got lo={lo!r}, hi={hi!r}")
-    H = (p.shape[0] - 1) // 2
-    c = np.concatenate([[p[0]], p[1::2]])
-    s = np.concatenate([[0.0], p[2::2]])
-    r = np.zeros(2 * H + 1)
-    G = np.zeros((2 * H + 1, 2 * H + 1))
-    for theta, sign in ((hi, 1.0), (lo, -1.0)):
-        if math.isinf(theta):
-            continue
-        gc, gs = sign * c, sign * s
-        gc[0] -= sign * theta  # g = ±(p − θ) > 0 on the active set
-        C, S = contact_spectrum(gc, gs, exact, n_samples)
-        Gt = _product_matrix(C, S, H)
-        G += Gt
-        indicator = np.zeros(2 * H + 1)
-        indicator[0] = C[0]
-        indicator[1::2] = 2 * C[1:H + 1]
-        indicator[2::2] = 2 * S[1:H + 1]
-        r += Gt @ p - theta * indicator
-    return r, G
 
 
 # ---------------------------------------------------------------------- fused MMS-HBM

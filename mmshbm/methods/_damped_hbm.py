@@ -25,7 +25,7 @@ The other massless DOFs: R = f. R is projected on harmonics 0..H; with
 
     R = F + r φ(x_i − F/r),    ∂R/∂x_i = r G,    ∂R/∂F = I − G.
 
-The projection is the lead's :func:`mmshbm.core.contact_kernels.project_contact`: by default
+The projection is the lead's :func:`mmshbm.core.projection.project_contact`: by default
 exact (the switching instants, roots of p − hi and p − lo, located and the pieces integrated
 in closed form, so R is C¹ in x), or sampled by AFT on N samples (``projection="sampled"``; a
 sample switching state is a kink of the residual).
@@ -47,10 +47,10 @@ __all__: list[str] = []
 
 
 def contact_projection(projection: str, H: int, N: int):
-    """``project(p, lo, hi) -> (r, G)``: the lead's :func:`mmshbm.core.contact_kernels.project_contact`,
+    """``project(p, lo, hi) -> (r, G)``: the lead's :func:`mmshbm.core.projection.project_contact`,
     exact (``"exact"``: switching instants located, pieces integrated in closed form, C¹)
     or sampled on N points (``"sampled"``, AFT)."""
-    from ..core.contact_kernels import project_contact
+    from ..core.projection import project_contact
 
     if projection == "exact":
         return project_contact
