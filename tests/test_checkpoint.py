@@ -18,8 +18,10 @@ from mmshbm.core.checkpoint import CheckpointWriter, read_checkpoint
 from mmshbm.fe.oscillator import OneDofOscillator
 
 BEAM_SCRIPT = """
-import sys, time
+import signal, sys, time
 import mmshbm
+# as in a terminal: a child of a background job (`pytest &`) starts with SIGINT ignored
+signal.signal(signal.SIGINT, signal.default_int_handler)
 model = mmshbm.default_beam().model(8)
 def slow(u, rec):
     time.sleep(0.04)

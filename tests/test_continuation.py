@@ -83,6 +83,21 @@ def test_interrupt_returns_the_points_so_far():
     assert len(res.u) == 5
 
 
+def test_a_nested_continuation_lets_the_interrupt_through():
+    """A continuation run inside another's step (a jump's backfill) must not turn the
+    user's Ctrl-C into a status of its own: the outer run would go on to its end."""
+    class Interrupting(Circle):
+        def monitor(self, u):
+            if u[0] > 0.5:
+                raise KeyboardInterrupt
+            return super().monitor(u)
+
+    with pytest.raises(KeyboardInterrupt):
+        continue_branch(Interrupting(), np.array([0.0, -1.0]), np.array([1.0, 0.0]), catch_interrupt=False)
+    res = continue_branch(Interrupting(), np.array([0.0, -1.0]), np.array([1.0, 0.0]))
+    assert res.status == "interrupted" and res.records["x"][-1] <= 0.5
+
+
 def test_start_failure_is_a_status_not_an_exception():
     res = continue_branch(Circle(wall=-1.0), np.array([0.0, -1.0]), np.array([1.0, 0.0]))
     assert res.status.startswith("start failed")

@@ -54,3 +54,22 @@ def test_exactly_on_the_pole_newton_converges_quadratically():
     # without the pole unknown, D_2 is of order 1/eps there: the force D_2 a_2 is ∞·0
     D = without.cond.dynamic_stiffness(omega, 5, derivative=False)
     assert np.abs(D[2]).max() > 1e12 * np.abs(D[0]).max()
+
+
+def test_batched_contact_signals_equal_the_per_point_ones():
+    """contact_signals_many (the branch checks' batch) gives each point's contact_signals,
+    pole unknowns included, and leaves the corrector's cached stiffness as it was."""
+    br = mmshbm.backbone(OSC.model(), harmonics=5, max_amplitude=6.0)
+    p = br._require_solver()
+    assert p.n_poles == 1
+    tau = np.linspace(0.0, 2 * np.pi, 37)
+    cached = p._cached
+    q, lam = p.contact_signals_many(br.states, tau)
+    assert p._cached is cached
+    assert q.shape == lam.shape == (len(br), 1, len(tau))
+    for i in (0, len(br) // 2, len(br) - 1):
+        _, q_i, lam_i = p.contact_signals(br.states[i], tau)
+        np.testing.assert_allclose(q[i, 0], q_i, rtol=0, atol=1e-14 * np.abs(q_i).max())
+        np.testing.assert_allclose(lam[i, 0], lam_i, rtol=0, atol=1e-12 * np.abs(lam_i).max())
+    with pytest.raises(ValueError, match="states must have shape"):
+        p.contact_signals_many(np.zeros((2, p.n_unknowns + 1)), tau)

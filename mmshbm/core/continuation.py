@@ -174,7 +174,8 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
                     options: ContinuationOptions | None = None,
                     callback: Callable[[np.ndarray, dict], None] | None = None,
                     progress=None, *, resume: ContinuationState | None = None,
-                    on_point: Callable[[dict], None] | None = None) -> ContinuationResult:
+                    on_point: Callable[[dict], None] | None = None,
+                    catch_interrupt: bool = True) -> ContinuationResult:
     """Follow the branch of ``problem`` from ``u0`` in the direction ``t0``.
 
     Parameters
@@ -199,6 +200,10 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
         ``record``, ``special`` (special points at this index), ``status`` (the
         terminal status if this point ends the branch, else None)); a checkpoint
         writer. Exceptions other than KeyboardInterrupt propagate.
+    catch_interrupt : bool
+        A KeyboardInterrupt ends the branch with status ``"interrupted"`` (default);
+        False lets it propagate: continuations nested inside another run's step (a
+        jump's backfill, an auxiliary branch) must not swallow the user's Ctrl-C.
 
     Returns
     -------
@@ -410,6 +415,8 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
                     status = terminal
                     break
     except KeyboardInterrupt:
+        if not catch_interrupt:
+            raise
         status = "interrupted"
     return result(status)
 
@@ -425,7 +432,7 @@ def _backfill(problem, u, t, frontier: float, landing: float, opt: ContinuationO
         newton_tol=opt.newton_tol, step_tol=opt.step_tol, max_newton=opt.max_newton, growth=opt.growth,
         max_angle=opt.max_angle, corner_ds=opt.corner_ds, follow="path",
         bounds={"amplitude": (frontier, landing * (1 + 1e-6)), "mode_share": (opt.family_share, 2.0)})
-    res = continue_branch(problem, u, -t, back)
+    res = continue_branch(problem, u, -t, back, catch_interrupt=False)
     out = []
     for i in range(len(res.u) - 1, 0, -1):
         rec = {k: v[i] for k, v in res.records.items()}

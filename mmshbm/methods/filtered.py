@@ -115,7 +115,7 @@ def pass_resonance(problem, u_from: np.ndarray, amplitude_from: float, harmonic:
         res = continue_branch(filt, u0, t0, ContinuationOptions(
             follow="path", max_steps=300, newton_tol=newton_tol,
             bounds={"amplitude": (0.0, amplitude_max), "frequency": (0.0, f_stop),
-                    "mode_share": (family_share, 2.0)}))
+                    "mode_share": (family_share, 2.0)}), catch_interrupt=False)
         if not res.status.startswith("bound:") and len(res.u) < 2:
             raise PinnedFailure(f"the filtered branch stopped: {res.status}")
         A, f = res.records["amplitude"], res.records["frequency"]

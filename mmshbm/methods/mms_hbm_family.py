@@ -84,7 +84,7 @@ class FamilyMixin:
         start = 0.5 * self.gap if self.gap > 0 else 0.01 * amplitude_max
         res = continue_branch(aux, aux.linear_point(start), aux.initial_tangent(),
                               ContinuationOptions(bounds={"amplitude": (0.0, amplitude_max)}, follow="path",
-                                                  max_steps=400))
+                                                  max_steps=400), catch_interrupt=False)
         A = res.records.get("amplitude", np.empty(0))
         keep, best = [], -np.inf
         for i, a in enumerate(A):
@@ -212,13 +212,12 @@ class FamilyMixin:
         Y = -Y
         for p, (k, j) in enumerate(pairs):
             Y[:, :, k] -= S[None, :, j] * (eta[:, p] * x[:, k] / self._pole_w2[p])[:, None]
-        quad = np.empty(len(states))
-        for i in range(len(states)):  # the total kinetic energy from the condensed stiffness
-            _, dD = self._condensed(float(omega[i]), True)
-            q = np.einsum("ki,kij,kj->k", a[i], dD, a[i])
-            for p, k in enumerate(self._pole_k):
-                q[k] -= 2.0 * k * k * omega[i] * eta[i, p] ** 2
-            quad[i] = q[1:].sum()
+        # the total kinetic energy from the condensed stiffness
+        _, dD = self.condensed_many(omega, derivative=True)
+        q = np.einsum("nki,nkij,nkj->nk", a, dD, a)
+        for p, k in enumerate(self._pole_k):
+            q[:, k] -= 2.0 * k * k * omega * eta[:, p] ** 2
+        quad = q[:, 1:].sum(axis=1)
         total = -omega / 8.0 * quad
         shares = np.zeros((len(states), len(MPhiT), H + 1))
         ok = total > 0

@@ -59,6 +59,47 @@ class SignalsMixin:
             return tau, q[0], lam[0]
         return tau, q, lam
 
+    def condensed_many(self, omegas: np.ndarray, derivative: bool = False):
+        """D_k(Ω) (and ∂D_k/∂Ω if ``derivative``) at many frequencies: arrays of shape
+        (n_points, H+1, n_c, n_c) (dD None unless asked); the pole terms are left out as
+        in :meth:`_condensed`."""
+        omegas = np.asarray(omegas, dtype=float)
+        shape = (len(omegas), self.H + 1, self.n_c, self.n_c)
+        D = np.empty(shape)
+        dD = np.empty(shape) if derivative else None
+        cached = self._cached
+        try:
+            for i, omega in enumerate(omegas):
+                D_i, dD_i = self._condensed(float(omega), derivative)
+                D[i] = D_i
+                if derivative:
+                    dD[i] = dD_i
+        finally:
+            self._cached = cached  # the corrector's cache stays as it was
+        return D, dD
+
+    def contact_signals_many(self, states: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`contact_signals` of many points at once: (q, λ), each of shape
+        (n_points, n_contact_dofs, len(tau)) in m and N (contact DOFs in the order of
+        ``contact_dofs``)."""
+        states = np.atleast_2d(np.asarray(states, dtype=float))
+        if states.shape[1:] != (self.n_unknowns,):
+            raise ValueError(f"states must have shape (n, {self.n_unknowns}), got {states.shape}")
+        X = states * self.colscale[None, :]
+        n_a = (self.H + 1) * self.n_c
+        a = X[:, :n_a].reshape(len(X), self.H + 1, self.n_c)
+        eta = states[:, n_a:n_a + self.n_poles] * self.eta_scale
+        D, _ = self.condensed_many(X[:, -1])
+        F = np.einsum("nkij,nkj->nki", D, a)
+        for p, k in enumerate(self._pole_k):
+            F[:, k] -= self._pole_b[p][None, :] * eta[:, p:p + 1]
+        F = F[:, :, self.cdof]
+        F = np.where(np.isfinite(self.hi)[None, None, :], -F, F)
+        C = np.cos(np.outer(np.arange(self.H + 1), np.asarray(tau, dtype=float)))
+        q = np.einsum("nkc,kt->nct", a[:, :, self.cdof], C)
+        lam = np.einsum("nkc,kt->nct", F, C)
+        return q, lam
+
     def coefficients(self, u: np.ndarray) -> np.ndarray:
         """NLvib-ordered coefficients of all DOFs, shape (n_dof, 2H+1) (sines are zero)."""
         a, omega = self.unpack(u)

@@ -322,7 +322,10 @@ def _contact(branch, solver, th: CheckThresholds) -> list[Finding]:
     L = np.zeros((n_pts, n_k if cheap else len(model.contacts), n))
     amp = np.maximum(np.asarray(branch.amplitude, dtype=float), 1e-300)[:, None, None]
     scale = np.where(gaps[None] > 0, gaps[None], amp)  # (n_pts, n_k, 1)
-    for i, u in enumerate(branch.states):
+    many = cheap and hasattr(solver, "contact_signals_many")
+    if many and n_pts:  # every point's contact DOF and force at once
+        Q[:], L[:] = solver.contact_signals_many(np.asarray(branch.states, dtype=float), tau)
+    for i, u in enumerate(() if many else branch.states):
         if cheap:  # the contact DOF and the force without recovering every DOF
             _, Q[i, 0], L[i, 0] = solver.contact_signals(u, tau)
         else:
