@@ -291,7 +291,9 @@ class ModalCondensation:
         whether Ω is inside. For converged points (e.g. from a problem's ``monitor``): a
         Newton iterate may wander far out and back, so :meth:`dynamic_stiffness` does not
         check."""
-        H = check.integer("harmonics", harmonics, minimum=1)
+        # called for every converged point: validate only what is not already a plain int
+        H = harmonics if type(harmonics) is int and harmonics >= 1 else check.integer("harmonics", harmonics,
+                                                                                        minimum=1)
         inside = H * abs(float(omega)) <= _LEFT_OUT_WARNING * self._omega_next
         if not inside and not self._warned:
             self._warned = True

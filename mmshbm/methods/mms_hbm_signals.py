@@ -67,6 +67,19 @@ class SignalsMixin:
         shape = (len(omegas), self.H + 1, self.n_c, self.n_c)
         D = np.empty(shape)
         dD = np.empty(shape) if derivative else None
+        fast = self._fast_setup() if hasattr(self, "_fast_setup") else False
+        if fast:  # the modal kernel straight into the slices (as _condensed, without its cache)
+            from ..core._modal_kernels import _modal_dynamic_stiffness
+            from ..core.condense import SingularDynamicStiffness
+
+            D0, B, w2, Rs, keep, static, rtol = fast["cond"]
+            for i, omega in enumerate(omegas):
+                if _modal_dynamic_stiffness(D0, B, w2, Rs, float(omega), self.H, keep, rtol, D[i],
+                                            dD[i] if derivative else D[i], derivative):
+                    raise SingularDynamicStiffness(f"a harmonic of Ω = {omega:.6g} rad/s sits on a "
+                                                   "fixed-interface eigenfrequency")
+            D += static[None]
+            return D, dD
         cached = self._cached
         try:
             for i, omega in enumerate(omegas):
