@@ -25,149 +25,32 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .bordered import bordered_solve as _bordered_solve
-from .bordered import bordered_solve_sign as _bordered_solve_sign
+from .bordered import bordered_solve as _bordered_solve  # noqa: F401 (the benchmarks' name)
 from .family import FamilyGuard, jump
 from .options import ContinuationOptions, ContinuationProblem, ContinuationResult, ContinuationState
 from .pinned import PinnedFailure
 from .special_points import SpecialPoint
+from .steps import (
+    SKIP_MIN_TOL,  # noqa: F401 (imported from here before the split)
+    _corrector,
+    _curvature,
+    _Failure,
+    _monitor,
+    _next_step,
+    _orientation,
+    _orientation_safe,
+    _pinned_monitor,
+    _predicted_converged,  # noqa: F401
+    _step,
+    _tangent,
+    _tangent_sign,  # noqa: F401
+    newton,
+)
 
 __all__ = ["ContinuationOptions", "ContinuationProblem", "ContinuationResult", "ContinuationState",
            "continue_branch", "newton"]
 
 log = logging.getLogger(__name__)
-
-
-class _Failure(Exception):
-    pass
-
-
-def newton(problem: ContinuationProblem, u: np.ndarray, tangent: np.ndarray, u_pred: np.ndarray,
-           tol: float, max_iter: int, step_tol: float = 0.0):
-    """Newton corrector on [R(u); t·(u − u_pred)] = 0.
-
-    Converged when the residual's infinity norm is <= ``tol``, or when the update's is
-    <= ``step_tol`` with the residual <= √tol. Returns (u, iterations, residual
-    history, Jacobian at u). Raises ``_Failure``.
-    """
-    fast = getattr(problem, "fast_newton", None)
-    if fast is not None:  # a compiled loop for small dense problems (MMS-HBM, modal back end)
-        try:
-            out = fast(u, u_pred, tangent, tol, max_iter, step_tol)
-        except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError) as err:
-            raise _Failure(str(err)) from None
-        if out is not None:
-            return out
-    history = []
-    du_norm = np.inf
-    for it in range(max_iter + 1):
-        try:
-            R, J = problem.evaluate(u, jacobian=True)
-        except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError) as err:
-            # ArithmeticError includes condense.SingularDynamicStiffness (kΩ on a pole);
-            # RuntimeError is what SuperLU raises for an exactly singular matrix
-            raise _Failure(f"residual failed: {err}") from None
-        arc = float(tangent @ (u - u_pred))
-        norm = max(float(np.abs(R).max()) if R.size else 0.0, abs(arc))
-        history.append(norm)
-        if not math.isfinite(norm):
-            raise _Failure("non-finite residual")
-        if norm <= tol or (du_norm <= step_tol and norm <= math.sqrt(tol)):
-            return u, it, np.array(history), J
-        if it == max_iter:
-            break
-        rhs = np.empty(len(R) + 1)
-        rhs[:-1] = R
-        rhs[-1] = arc
-        du = _bordered_solve(J, tangent, rhs)
-        du_norm = float(np.abs(du).max())
-        if not math.isfinite(du_norm):
-            raise _Failure("singular Jacobian")
-        u = u - du
-        if _predicted_converged(history, tol):
-            return u, it + 1, np.array(history + [_predicted(history)]), J
-    raise _Failure(f"no convergence in {max_iter} iterations (residual {history[-1]:.2e})")
-
-
-
-
-def _curvature(t_old: np.ndarray, t_new: np.ndarray, ds: float):
-    """dt/ds over the last step (the second-order predictor's κ), or None after a jump or a
-    refinement (ds = 0) or across a sharp turn (the tangents more than ~26° apart)."""
-    if ds > 0 and float(t_new @ t_old) > 0.9:
-        return (t_new - t_old) / ds
-    return None
-
-
-def _next_step(ds: float, nit: int, hist, opt: ContinuationOptions) -> float:
-    """The next arclength step (before the ds_max cap) after a converged corrector."""
-    if opt.step_control == "effort":
-        return ds * (1 + opt.growth * ((opt.max_newton - nit) / opt.max_newton) ** 2)
-    r0 = float(hist[0]) if len(hist) else 0.0
-    factor = _MAX_GROWTH if r0 <= 0 else (opt.target_residual / r0) ** (1.0 / 3.0)
-    return ds * min(_MAX_GROWTH, max(0.5, factor))
-
-
-#: largest growth of the step from one point to the next (that of the effort rule at
-#: growth = 0.5): steps that double run into corners (grazing) of nonsmooth residuals
-_MAX_GROWTH = 1.5
-
-
-def _predicted(history: list) -> float:
-    """Residual after the next Newton step predicted from the last two, r_next = C r_k²,
-    C = r_k / r_{k−1}² (quadratic convergence)."""
-    r_prev, r = history[-2], history[-1]
-    return r * (r / r_prev) ** 2 if r_prev > 0 else math.inf
-
-
-def _predicted_converged(history: list, tol: float) -> bool:
-    """True when Newton has entered quadratic convergence (the last residual is at most
-    √tol, the last contraction at least tenfold) and the residual after the update just
-    made is predicted below tol/10: the point is accepted without evaluating it again
-    (the evaluation would accept it). Saves one evaluation per continuation step."""
-    if len(history) < 2 or tol < SKIP_MIN_TOL:
-        return False
-    r_prev, r = history[-2], history[-1]
-    return r <= math.sqrt(tol) and r <= 0.1 * r_prev and _predicted(history) <= 0.1 * tol
-
-
-#: the skip needs a tolerance well above the round-off floor of the scaled residual
-#: (~1e-13): below it a predicted residual is not one the arithmetic can deliver
-SKIP_MIN_TOL = 1e-11
-
-
-def _orientation(J, t: np.ndarray) -> float:
-    """Sign of det [J; tᵀ] (0 where not computed: sparse or large J). Along a branch it
-    changes sign at a simple branch point, not at a fold (the bordered matrix stays
-    regular there and t turns continuously)."""
-    if not isinstance(J, np.ndarray) or J.shape[1] > _DET_LIMIT:
-        return 0.0
-    A = np.empty((J.shape[1], J.shape[1]))
-    A[:-1] = J
-    A[-1] = t
-    sign, _ = np.linalg.slogdet(A)
-    return float(sign)
-
-
-#: largest bordered system whose determinant sign is tracked (dense slogdet per point)
-_DET_LIMIT = 400
-
-
-def _tangent(J, t_prev: np.ndarray) -> np.ndarray:
-    return _tangent_sign(J, t_prev)[0]
-
-
-def _tangent_sign(J, t_prev: np.ndarray) -> tuple[np.ndarray, float]:
-    """Unit tangent (oriented along ``t_prev``) and the sign of det [J; t] (0 if unknown):
-    det [J; t_prev] and det [J; t] share their sign when t·t_prev > 0, because both are the
-    cofactor vector of J (a multiple of t) dotted with the last row."""
-    rhs = np.zeros(len(t_prev))
-    rhs[-1] = 1.0
-    t, sign = _bordered_solve_sign(J, t_prev, rhs)
-    if not np.all(np.isfinite(t)):
-        raise _Failure("singular Jacobian at the tangent")
-    t /= np.linalg.norm(t)
-    return (t, sign) if t @ t_prev >= 0 else (-t, sign)
 
 
 def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray,
@@ -335,11 +218,9 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
         while step < opt.max_steps:
             try:
                 curv = curvature["k"] if opt.step_control == "residual" else None
-                u_new, nit, hist, J = _corrector(problem, u, t, ds, opt, curvature=curv)
-                t_new, sign = _tangent_sign(J, t)
+                u_new, nit, hist, J, t_new, sign, rec = _step(problem, u, t, ds, opt, curv)
                 if t_new @ t < math.cos(opt.max_angle) and ds > opt.corner_ds:
                     raise _Failure("tangent turned too far")
-                rec = _monitor(problem, u_new)
             except _Failure as err:
                 ds *= 0.5
                 log.debug("step failed (%s); ds -> %g", err, ds)
@@ -444,51 +325,11 @@ def _backfill(problem, u, t, frontier: float, landing: float, opt: ContinuationO
     return out
 
 
-def _orientation_safe(problem, u, t) -> float:
-    try:
-        _, J = problem.evaluate(u, jacobian=True)
-    except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError):
-        return 0.0
-    return _orientation(J, t)
-
-
-def _monitor(problem, u) -> dict:
-    """``problem.monitor(u)``; a numerical failure (e.g. a singular factorisation in the
-    recovery) makes the step fail instead of the run."""
-    try:
-        return problem.monitor(u)
-    except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError) as err:
-        raise _Failure(f"monitor failed: {err}") from None
-
-
-def _pinned_monitor(problem, u) -> dict:
-    """:func:`_monitor` for the jumps, whose failures are PinnedFailure."""
-    try:
-        return _monitor(problem, u)
-    except _Failure as err:
-        raise PinnedFailure(str(err)) from None
-
-
 def _check_bound_names(bounds, rec: dict) -> None:
     unknown = sorted(set(dict(bounds)) - set(rec))
     if unknown:
         raise ValueError(f"bounds on unknown quantit{'y' if len(unknown) == 1 else 'ies'} "
                          f"{', '.join(map(repr, unknown))}; the problem monitors {sorted(rec)}")
-
-
-def _corrector(problem, u, t, ds, opt, start=None, curvature=None):
-    """Newton on the hyperplane t·(v − u_pred) = 0 through the predictor u_pred = u + ds t
-    (+ ½ ds² κ with the branch's curvature vector κ, when given: a second-order predictor,
-    closer to the branch, so Newton needs fewer iterations), from ``start`` (a point on that
-    hyperplane; default the predictor)."""
-    u_pred = u + ds * t
-    if curvature is not None:
-        u_pred = u_pred + 0.5 * ds * ds * curvature
-    u_new, nit, hist, J = newton(problem, u_pred if start is None else start, t, u_pred, opt.newton_tol,
-                                 opt.max_newton, opt.step_tol)
-    if np.linalg.norm(u_new - u_pred) > 2.0 * ds + 10 * opt.newton_tol:
-        raise _Failure("corrector left the predictor cone")
-    return u_new, nit, hist, J
 
 
 def _outside(rec: dict, bounds) -> tuple | None:

@@ -155,6 +155,16 @@ class FamilyMixin:
             return float(self.modal_shares(u)[self.mode - 1, 1])
         from ..core.corrector_kernels import _start_mode_share
 
+        row, s0, s, sv, pole_j = self._share_setup()
+        a, omega = self.unpack(u)
+        _, dD = self._condensed(omega, True)
+        D0, B, w2, Rs, keep, static, rtol = fast["cond"]
+        return float(_start_mode_share(np.ascontiguousarray(a), self.unpack_eta(u), omega, dD, self._pole_k,
+                                       pole_j, self._pole_w2, B, w2, keep, s0, s, sv))
+
+    def _share_setup(self):
+        """(row, s0, s, sv, pole_j): the starting mode's projections for
+        :func:`~mmshbm.core.corrector_kernels._start_mode_share` (modal back end; built once)."""
         data = getattr(self, "_share_data", None)
         if data is None:
             cond = self.cond
@@ -166,12 +176,7 @@ class FamilyMixin:
                 else np.zeros(0, dtype=np.int64)
             data = self._share_data = (row, np.ascontiguousarray(S0[0]), np.ascontiguousarray(S[0]),
                                        np.ascontiguousarray(sv), pole_j)
-        row, s0, s, sv, pole_j = data
-        a, omega = self.unpack(u)
-        _, dD = self._condensed(omega, True)
-        D0, B, w2, Rs, keep, static, rtol = fast["cond"]
-        return float(_start_mode_share(np.ascontiguousarray(a), self.unpack_eta(u), omega, dD, self._pole_k,
-                                       pole_j, self._pole_w2, B, w2, keep, s0, s, sv))
+        return data
 
     def branch_records(self, states) -> dict:
         """Per-point records computed once for a whole branch: ``modal_shares``, shape
