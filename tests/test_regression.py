@@ -38,21 +38,3 @@ def test_backbone_equals_the_stored_one(key):
         got = b.frequency_at(gaps * model.gap, tol=1e-12)
         assert np.isfinite(got), (key, gaps)
         assert abs(got / f - 1) < 1e-9, (key, gaps, got, f)
-
-
-def test_the_compiled_step_gives_the_python_steps_numbers(monkeypatch):
-    """MMS-HBM's fast_step (corrector, tangent and monitor in one compiled call) against
-    the three Python calls it replaces: the same branch bit for bit (the bordered systems
-    here are below the size where the Python tangent uses LAPACK)."""
-    from mmshbm.methods.mms_hbm import MMSHBMProblem
-
-    model = mmshbm.default_beam().model(8)
-    fast = mmshbm.backbone(model, harmonics=5, max_amplitude=4 * model.gap)
-    monkeypatch.setattr(MMSHBMProblem, "fast_step", None)
-    slow = mmshbm.backbone(model, harmonics=5, max_amplitude=4 * model.gap)
-    assert len(fast) == len(slow) > 30 and fast.status == slow.status == "bound:amplitude"
-    np.testing.assert_array_equal(fast.states, slow.states)
-    for name in ("frequency", "amplitude", "energy", "contact_force_max"):
-        np.testing.assert_array_equal(getattr(fast, name), getattr(slow, name), err_msg=name)
-    np.testing.assert_array_equal(fast.records["mode_share"], slow.records["mode_share"])
-    assert fast.special_points == slow.special_points

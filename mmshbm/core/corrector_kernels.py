@@ -23,7 +23,7 @@ import math
 from numba import njit
 
 from ._modal_kernels import _modal_dynamic_stiffness
-from .contact_kernels import _mmshbm_eval, _mmshbm_monitor_multi
+from .contact_kernels import _mmshbm_eval
 from .kernels import JIT_OPTIONS, _dense_solve
 
 __all__ = []
@@ -167,71 +167,3 @@ def _start_mode_share(a, eta, omega, dD, pole_k, pole_j, pole_w2, B, w2, keep, s
     if total <= 0.0:
         return 0.0
     return 0.25 * x * y * y / total
-
-
-#: status of :func:`_step_modal` when the corrector converged but [J; t] is singular
-SINGULAR_TANGENT = 6
-
-
-@njit(**JIT_OPTIONS)
-def _step_modal(u, u_pred, t, tol, step_tol, max_iter, n_c, H, colscale, rowscale,
-                D0, B, w2, Rs, keep, static, pole_rtol,
-                pole_k, pole_b, pole_w2, cdof, lo, hi, r, exact, cos_table, sin_table, tau_t,
-                hist, D, dD, R, J, A, rhs, LU, du, a, eta, sign,
-                F, dF, pc, ps, gc, g_t, dg_t, roots, C_hi, C_lo, S_w, P,
-                t_raw, amp_index, amp_sign, c_w, s_w, y_t, out, pole_j, s0, s_proj, sv, mon):
-    """One continuation step of MMS-HBM in one call: :func:`_newton_modal` from ``u`` on
-    the hyperplane through ``u_pred``, then at the converged point the bordered solve
-    [J; tᵀ] x = e_n of the tangent (``t_raw`` <- x, not normalised; ``sign[0]`` <- the
-    sign of det [J; tᵀ], as :func:`mmshbm.core.bordered.bordered_solve_sign`) and the
-    monitor: ``mon`` (4,) <- amplitude (m), energy (J), peak contact force (N)
-    (:func:`~mmshbm.core.contact_kernels._mmshbm_monitor_multi`) and the starting mode's
-    share (:func:`_start_mode_share`). D and dD hold the condensed stiffness at the
-    converged point on return (recomputed after a SKIPPED convergence).
-
-    The same kernels in the same order as the Python step (corrector, tangent, monitor),
-    so the numbers are identical. Returns (status, iterations) with this module's codes;
-    ``out`` (3,), ``c_w``, ``s_w`` (H+1,) and ``y_t`` (N,) are work.
-    """
-    status, it = _newton_modal(u, u_pred, t, tol, step_tol, max_iter, n_c, H, colscale, rowscale,
-                               D0, B, w2, Rs, keep, static, pole_rtol,
-                               pole_k, pole_b, pole_w2, cdof, lo, hi, r, exact, cos_table, sin_table, tau_t,
-                               hist, D, dD, R, J, A, rhs, LU, du, a, eta, sign,
-                               F, dF, pc, ps, gc, g_t, dg_t, roots, C_hi, C_lo, S_w, P)
-    if status != CONVERGED and status != SKIPPED:
-        return status, it
-    n = u.shape[0]
-    n_a = (H + 1) * n_c
-    for k in range(H + 1):
-        for i in range(n_c):
-            a[k, i] = u[k * n_c + i] * colscale[k * n_c + i]
-    for p in range(eta.shape[0]):
-        eta[p] = u[n_a + p] * colscale[n_a + p]
-    omega = u[n - 1] * colscale[n - 1]
-    if status == SKIPPED:  # D, dD and J belong to the iterate before the last update
-        if _modal_dynamic_stiffness(D0, B, w2, Rs, omega, H, keep, pole_rtol, D, dD, n > 0) != 0:
-            return POLE, it
-        for k in range(H + 1):
-            for i in range(n_c):
-                for j in range(n_c):
-                    D[k, i, j] += static[k, i, j]
-    # the tangent: [J; t] x = e_n
-    for i in range(n - 1):
-        for j in range(n):
-            A[i, j] = J[i, j]
-        rhs[i] = 0.0
-    for j in range(n):
-        A[n - 1, j] = t[j]
-    rhs[n - 1] = 1.0
-    if _dense_solve(A, rhs, LU, t_raw, sign) != 0:
-        return SINGULAR_TANGENT, it
-    # the monitor
-    for k in range(H + 1):
-        c_w[k] = a[k, amp_index]
-    amp_row = c_w.copy()
-    _mmshbm_monitor_multi(D, dD, a, eta, pole_k, pole_b, cdof, lo, hi, r, omega, amp_row, amp_sign, cos_table,
-                          sin_table, c_w, s_w, y_t, out)
-    for q in range(3):
-        mon[q] = out[q]
-    mon[3] = _start_mode_share(a, eta, omega, dD, pole_k, pole_j, pole_w2, B, w2, keep, s0, s_proj, sv)
-    return status, it

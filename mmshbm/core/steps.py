@@ -4,9 +4,9 @@ is the driver that strings the steps into a branch).
 
 Newton on [R(u); t·(u − u_p)] = 0 with the bordered Jacobian [J; tᵀ]; the tangent solves
 [J; tᵀ] t' = [0; 1] and is oriented along the previous one; the sign of det [J; tᵀ] is kept
-for branch points. A problem may provide ``fast_newton`` (a compiled corrector) and
-``fast_step`` (corrector, tangent and monitor in one compiled call): the numbers are those
-of the Python route. Failures raise ``_Failure``; the driver halves the step.
+for branch points. A problem may provide ``fast_newton`` (a compiled corrector, MMS-HBM's):
+the numbers are those of the Python loop. Failures raise ``_Failure``; the driver halves
+the step.
 """
 
 from __future__ import annotations
@@ -180,26 +180,7 @@ def _pinned_monitor(problem, u) -> dict:
 
 def _step(problem, u, t, ds, opt, curvature):
     """One step from (u, t): corrector, tangent and monitor. Returns (u, iterations,
-    residual history, J, tangent, sign of det [J; t], record). A problem with a
-    ``fast_step`` (MMS-HBM's compiled step) does the three in one call, with the numbers
-    of the three Python calls."""
-    fast = getattr(problem, "fast_step", None)
-    if fast is not None:
-        u_pred = u + ds * t
-        if curvature is not None:
-            u_pred = u_pred + 0.5 * ds * ds * curvature
-        try:
-            out = fast(u_pred, t, opt.newton_tol, opt.max_newton, opt.step_tol)
-        except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError) as err:
-            raise _Failure(str(err)) from None
-        if out is not None:
-            u_new, nit, hist, J, x, sign, rec = out
-            if np.linalg.norm(u_new - u_pred) > 2.0 * ds + 10 * opt.newton_tol:
-                raise _Failure("corrector left the predictor cone")
-            if not np.all(np.isfinite(x)):
-                raise _Failure("singular Jacobian at the tangent")
-            x /= np.linalg.norm(x)
-            return u_new, nit, hist, J, (x if x @ t >= 0 else -x), sign, rec
+    residual history, J, tangent, sign of det [J; t], record)."""
     u_new, nit, hist, J = _corrector(problem, u, t, ds, opt, curvature=curvature)
     t_new, sign = _tangent_sign(J, t)
     return u_new, nit, hist, J, t_new, sign, _monitor(problem, u_new)

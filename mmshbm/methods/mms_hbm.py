@@ -312,50 +312,6 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin):
                   ck.POLE: "a harmonic of Ω sits on a fixed-interface eigenfrequency"}[status]
         raise ArithmeticError(reason)
 
-    def fast_step(self, u_pred, tangent, tol: float, max_iter: int, step_tol: float):
-        """:meth:`fast_newton` from ``u_pred``, the tangent's bordered solve and the monitor
-        at the converged point, in one compiled call (``_step_modal``; modal condensation
-        with the amplitude DOF massless only, else None and the continuation calls the three
-        in turn, with the same numbers).
-
-        Returns (u, iterations, residual history, Jacobian, x, sign, record): x solves
-        [J; tᵀ] x = e_n (the tangent before normalisation), sign that of det [J; tᵀ];
-        raises ArithmeticError with the reason of a failure."""
-        from ..core import corrector_kernels as ck
-
-        fast = self._fast_setup()
-        if not fast or not self._amp_in_c:
-            return None
-        _, s0, s, sv, pole_j = self._share_setup()
-        u = np.array(u_pred, dtype=float)
-        hist = np.empty(max_iter + 1)
-        D, dD, R, J, A, rhs, LU, du, a, eta = fast["work"]
-        x, sign, mon = np.empty(len(u)), np.zeros(1), np.empty(4)
-        H = self.H
-        tangent = np.ascontiguousarray(tangent, dtype=float)
-        status, it = ck._step_modal(
-            u, np.ascontiguousarray(u_pred, dtype=float), tangent, float(tol), float(step_tol), int(max_iter),
-            self.n_c, H, self.colscale,
-            self.rowscale, *fast["cond"], self._pole_k, self._pole_b, self._pole_w2, self.cdof, self.lo,
-            self.hi, self.r_each, self.projection == "exact", self._cos_table, self._sin_table, self._tau,
-            hist, D, dD, R, J, A, rhs, LU, du, a, eta, sign, *self._work,
-            x, self._amp_index, self._amp_sign, np.empty(H + 1), np.empty(H + 1), np.empty(self.N),
-            np.empty(3), pole_j, s0, s, sv, mon)
-        self.evaluations += it if status == ck.SKIPPED else it + 1
-        if status not in (ck.CONVERGED, ck.SKIPPED):
-            if status == ck.SINGULAR_TANGENT:
-                raise ArithmeticError("singular Jacobian at the tangent")
-            reason = {ck.NO_CONVERGENCE: f"no convergence in {max_iter} iterations (residual {hist[it]:.2e})",
-                      ck.NON_FINITE: "non-finite residual", ck.SINGULAR: "singular Jacobian",
-                      ck.POLE: "a harmonic of Ω sits on a fixed-interface eigenfrequency"}[status]
-            raise ArithmeticError(reason)
-        omega = float(u[-1] * self.colscale[-1])
-        self._cached = (omega, D.copy(), dD.copy())
-        self.cond.check_range(omega, H)  # warns once past the modes kept
-        record = {"frequency": omega / (2 * np.pi), "amplitude": float(mon[0]), "energy": float(mon[1]),
-                  "contact_force_max": float(mon[2]), "mode_share": float(mon[3])}
-        return u, int(it), hist[: it + 1].copy(), J.copy(), x, float(sign[0]), record
-
     # ------------------------------------------------------------------ residual
     def _condensed(self, omega: float, derivative: bool):
         """(D, dD) of :meth:`Condensation.dynamic_stiffness` at Ω (dD None unless
