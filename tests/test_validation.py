@@ -270,7 +270,7 @@ def test_exact_pole_at_the_start_is_regular_with_pole_unknowns():
     model = osc.model()
     p = MMSHBMProblem(model, 3, poles=False)
     assert p.unpack(p.linear_point(0.05))[1] == 1.0  # Ω exactly ω1, 2Ω exactly ω2
-    with pytest.raises(SingularDynamicStiffness, match=r"harmonic 2 of Ω sits on an eigenfrequency"):
+    with pytest.raises(SingularDynamicStiffness, match=r"harmonic 2 of Ω sits on (an|the) "):
         p.evaluate(p.linear_point(0.05))
     br = mmshbm.backbone(model, harmonics=3, poles=False)
     assert len(br) == 0
@@ -290,7 +290,9 @@ class PoleWindow:
         from mmshbm.core.condense import SingularDynamicStiffness
 
         self.osc = OneDofOscillator(1.0, 1.0, 4.0, 1.0)
-        self.problem = MMSHBMProblem(self.osc.model(), 3, projection="sampled", poles=False)
+        # the LU back end: its dynamic_stiffness is what the Python corrector calls (the
+        # modal one runs a compiled corrector that this injection cannot reach)
+        self.problem = MMSHBMProblem(self.osc.model(), 3, projection="sampled", poles=False, backend="banded")
         self.pole = self.osc.omega_closed / 2
         self.hits = 0
         real = self.problem.cond.dynamic_stiffness

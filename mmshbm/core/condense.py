@@ -226,18 +226,19 @@ def _band_storage(A: sp.spmatrix, kl: int) -> np.ndarray:
     return ab
 
 
-#: ``"auto"`` uses the modal back end from this many DOFs with mass. Measured (beam, H = 5,
-#: one BLAS thread): a modal evaluation costs 3.3 µs at any size against 5, 9, 13, 23, 54,
-#: 108, 321 and 682 µs for the banded LU at n_l = 6, 14, 22, 40, 98, 198, 598, 998, and its
-#: reduction (0.4-15 ms up to n_l = 1000) is repaid after 15-70 evaluations (400 at
-#: n_l = 998), far fewer than a backbone makes. Below ~20 DOFs with mass the two differ
-#: by less than 10 µs per evaluation and keep the banded LU (the 8-element beam); from
-#: 20 on (the default 21-element beam) the modal one. With the LU, round-off decided
-#: whether a branch got past the pole 5Ω = ω_1 near 1.6 gaps; with MMS-HBM's exact
-#: projection both back ends pass it (21 elements: 87 and 86 points to 10 gaps, 2 gaps at
-#: 57.06321 and 57.06322 Hz; 100 elements: the banded branch stops with ds_min at H = 5,
-#: the modal one reaches 10 gaps).
-MODAL_CROSSOVER = 20
+#: ``"auto"`` uses the modal back end from this many DOFs with mass, i.e. always. Per
+#: evaluation (beam, H = 5, one BLAS thread) a modal one costs 3.3 µs at any size against
+#: 5, 9, 13, 23, 54, 108, 321 and 682 µs for the banded LU at n_l = 6 … 998, and its
+#: reduction (0.4-15 ms up to n_l = 1000) is repaid after 15-70 evaluations. Below ~20 DOFs
+#: with mass the evaluations differ by less than 10 µs and the banded LU was kept until
+#: 0.2.0; but only the modal back end runs MMS-HBM's compiled corrector, so on whole
+#: backbones it is the faster one at every size: one-DOF oscillator H = 13 to 2 gaps
+#: 16.9 → 7.9 ms, 8-element beam to 10 gaps H = 5 88 → 20 ms, H = 7 615 → 236 ms, same
+#: branches (frequencies equal to ~1e-11). With the exact projection both back ends pass the
+#: pole 5Ω = ω_1 near 1.6 gaps of the 21-element beam (87 and 86 points to 10 gaps, 2 gaps
+#: at 57.06321 and 57.06322 Hz); on 100 elements at H = 5 the banded branch stops with
+#: ds_min where the modal one reaches 10 gaps.
+MODAL_CROSSOVER = 1
 
 
 def make_condensation(model: Model, backend: str = "auto", *, harmonics: int = 5, mode: int = 1,

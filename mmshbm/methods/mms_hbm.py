@@ -307,6 +307,8 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin):
             return u, int(it), hist[: it + 1].copy(), J.copy()
         if status == ck.SKIPPED:  # D and J belong to the iterate before the last update
             return u, int(it), hist[: it + 1].copy(), J.copy()
+        if status == ck.POLE:  # the condensation's own message names the harmonic and the mode
+            self._condensed(float(u[-1] * self.colscale[-1]), True)
         reason = {ck.NO_CONVERGENCE: f"no convergence in {max_iter} iterations (residual {hist[it]:.2e})",
                   ck.NON_FINITE: "non-finite residual", ck.SINGULAR: "singular Jacobian",
                   ck.POLE: "a harmonic of Ω sits on a fixed-interface eigenfrequency"}[status]
@@ -328,9 +330,12 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin):
             D = np.empty((self.H + 1, self.n_c, self.n_c))
             dD = np.empty_like(D) if derivative else None
             out = D if dD is None else dD
-            if _modal_dynamic_stiffness(D0, B, w2, Rs, omega, self.H, keep, rtol, D, out, derivative):
-                raise SingularDynamicStiffness(f"a harmonic of Ω = {omega:.6g} rad/s sits on a "
-                                               "fixed-interface eigenfrequency")
+            info = _modal_dynamic_stiffness(D0, B, w2, Rs, omega, self.H, keep, rtol, D, out, derivative)
+            if info:
+                k, j = divmod(info - 1, len(w2))
+                raise SingularDynamicStiffness(
+                    f"K_ll - ({k}·{omega:.6g} rad/s)^2 M_ll is singular: harmonic {k} of Ω sits on the "
+                    f"fixed-interface eigenfrequency {np.sqrt(w2[j]):.9g} rad/s (mode index {j})")
             D += static
             self._cached = (omega, D, dD)
             return D, dD
