@@ -8,7 +8,9 @@ import pytest
 import scipy.sparse as sp
 
 import mmshbm
+from mmshbm.core.condense import make_condensation
 from mmshbm.fe.solid import rebuild_solid, solid_beam_matrices
+from mmshbm.methods.registry import make_problem
 from mmshbm.model.contact import Contact
 from mmshbm.model.model import Model
 
@@ -148,8 +150,23 @@ def test_large_model_is_never_densified(beam, monkeypatch):
     model = beam.solid_model(24, 1, 1)
     assert len(model.l) > 600  # past every dense-solver limit
     assert 45.0 < model.linear_frequencies(1)[0] < 46.0
-    cond = mmshbm.core.condense.make_condensation(model, "modal", harmonics=3)
+    cond = make_condensation(model, "modal", harmonics=3)
     assert cond.reduction.solver == "arpack"
     assert np.all(np.isfinite(cond.dynamic_stiffness(2 * np.pi * 50, 3, False)))
     closed = Model(model.M, model.K, (Contact(model.contact_dofs[0], 0.0, 1),))
     assert closed.zero_gap_frequency() > 45.0
+    problem = make_problem(model, "mmshbm", harmonics=3, backend="modal")  # its pole range: held frequency
+    low, high = problem._omega_range()
+    assert high >= low > 0
+
+
+def test_held_frequency_sparse_equals_dense(beam, monkeypatch):
+    """MMS-HBM's upper frequency (every contact DOF held) by the sparse path equals the dense one."""
+    import mmshbm.model.model as mm
+    from mmshbm.methods.mms_hbm import _held_frequency
+
+    model = beam.solid_model(24, 1, 1)
+    sparse = _held_frequency(model, model.contact_dofs, 1)
+    monkeypatch.setattr(mm, "_DENSE_EIG_LIMIT", 10**6)
+    dense = _held_frequency(model, model.contact_dofs, 1)
+    assert sparse == pytest.approx(dense, rel=1e-7)
