@@ -8,7 +8,8 @@
 * ``ForcedBeam``: the default beam (21 elements, 0.5 % modal damping), 2.3 N at the last
   node with mass (the force that holds 5 gaps at phase resonance), 40–60 Hz, H = 5, with and
   without Floquet stability; penalty-HBM at equal H (no converged reference exists on the
-  beam; its default k_p). Shooting is skipped on the beam (it wanders into rattling families,
+  beam; its defaults: k_p = 10³ k_c, the exact projection; with the sampled one it stopped at
+  57.1 Hz). Shooting is skipped on the beam (it wanders into rattling families,
   see SKIP_REASONS).
 * ``DampedModes``: the EPMC backbone of the beam to 10 gaps (H = 5, 0.5 %; H = 7 with the
   higher modes at 5 %) and the phase-resonance backbone to 5 gaps.
@@ -150,6 +151,10 @@ class ForcedBeam:
 
     def track_peak_gaps(self, method):
         return float(self._run(method).amplitude.max() / 1e-3)
+
+    def track_end_frequency(self, method):
+        """Where the response ends (Hz): 60 when it covers the range."""
+        return float(self._run(method).frequency[-1])
 
 
 class DampedModes:
