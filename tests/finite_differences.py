@@ -19,8 +19,9 @@ The step starts at the caller's h and shrinks by 4 while the tolerance falls (a 
 for the nearest resonance or switch). The check asserts
 |analytic − value| ≤ safety · (truncation + round-off) + the analytic value's own round-off
 (1e4·ε of the derivative's size, see assert_derivative), entry by entry, and refuses to pass
-when that tolerance is too coarse to test anything (above ``rtol_cap`` of the derivative's size): a kink or a switch inside the step
-shows up as "noise" and fails loudly instead of widening the tolerance.
+when that tolerance is too coarse to test anything (above ``rtol_cap`` of the derivative's
+size): a kink or a switch inside the step shows up as "noise" and fails loudly instead of
+widening the tolerance.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from finite_differences import assert_derivative, assert_jacobian
+from finite_differences import assert_derivative
 from naive import condensed_stiffness_dense
 
 import mmshbm

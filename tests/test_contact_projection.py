@@ -4,7 +4,7 @@ against finite differences."""
 
 import numpy as np
 import pytest
-from finite_differences import assert_derivative, assert_jacobian
+from finite_differences import assert_jacobian
 from scipy.integrate import quad
 from scipy.optimize import brentq
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from finite_differences import assert_derivative, assert_jacobian
+from finite_differences import assert_jacobian
 
 import mmshbm
 from mmshbm.core.continuation import newton

@@ -11,7 +11,7 @@ import importlib.util
 
 import numpy as np
 import pytest
-from finite_differences import assert_derivative, assert_jacobian
+from finite_differences import assert_jacobian
 from scipy.integrate import solve_ivp
 
 import mmshbm

@@ -3,7 +3,7 @@ observations on the beam, and Newton's convergence rate."""
 
 import numpy as np
 import pytest
-from finite_differences import assert_derivative, assert_jacobian
+from finite_differences import assert_jacobian
 
 import mmshbm
 from mmshbm.core.continuation import newton

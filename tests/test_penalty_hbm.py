@@ -7,8 +7,8 @@ The error tables these tests assert are reported in docs/penalty.md.
 
 import numpy as np
 import pytest
-from finite_differences import assert_derivative, assert_jacobian
 import scipy.sparse as sp
+from finite_differences import assert_jacobian
 
 import mmshbm
 from mmshbm.core.harmonics import default_n_samples

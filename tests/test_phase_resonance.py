@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from finite_differences import assert_derivative, assert_jacobian
+from finite_differences import assert_jacobian
 
 import mmshbm
 from mmshbm.analysis.phase_resonance import compare_backbones, phase_resonance_backbone

@@ -14,8 +14,8 @@ import itertools
 
 import numpy as np
 import pytest
-from finite_differences import assert_derivative, assert_jacobian
 import scipy.linalg as la
+from finite_differences import assert_jacobian
 from scipy.integrate import solve_ivp
 
 import mmshbm

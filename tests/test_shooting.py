@@ -7,7 +7,7 @@ import os
 
 import numpy as np
 import pytest
-from finite_differences import assert_derivative, assert_jacobian
+from finite_differences import assert_jacobian
 from scipy.integrate import quad
 from scipy.optimize import brentq
 
