@@ -7,14 +7,13 @@ import numpy as np
 import pytest
 from finite_differences import assert_derivative, noise_level
 
-
 _RNG = np.random.default_rng(0)
 
 
 def _cancelling(s, noise=0.0):
     """f(s) = (big + sin(1 + s)) − big: a derivative of size 1 under round-off of ε·big."""
     big = 1e9
-    rng = _RNG np.array([(big + np.sin(1 + s)) - big, np.exp(s)]) + noise * rng.standard_normal(2)
+    return np.array([(big + np.sin(1 + s)) - big, np.exp(s)]) + noise * _RNG.standard_normal(2)
 
 
 def test_noise_level_measures_added_noise():
