@@ -20,7 +20,7 @@ from ..core.special_points import SpecialPoint
 from ..model.model import Model
 from ..results.branch import Branch
 from .limits import check_resources
-from .registry import _CONTINUATION_FIELDS, METHODS, make_problem
+from .registry import _CONTINUATION_FIELDS, METHODS, make_problem, method_options  # noqa: F401 - public here since 0.1
 
 __all__ = ["backbone"]
 
