@@ -11,8 +11,6 @@ one module object, one set of classes, nothing imported before it is asked for.
 from __future__ import annotations
 
 import importlib
-import importlib.abc
-import importlib.util
 import sys
 
 #: old dotted path -> the module that holds its code now (a prefix maps its submodules too)
@@ -36,19 +34,26 @@ MODULE_ALIASES = {
 
 def target(fullname: str) -> str | None:
     """The module that an old dotted path stands for, or None if it is not an old path."""
+    if not fullname.startswith("mmshbm."):
+        return None
     for old, new in MODULE_ALIASES.items():
         if fullname == old or fullname.startswith(old + "."):
             return new + fullname[len(old):]
     return None
 
 
-class AliasFinder(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+class AliasFinder:
     """Finds old module paths; loading one puts the new module in ``sys.modules`` under the
-    old name (the import machinery then returns what ``sys.modules`` holds)."""
+    old name (the import machinery then returns what ``sys.modules`` holds). A meta-path
+    finder and loader by protocol (importlib.abc costs milliseconds to import)."""
 
     def find_spec(self, fullname, path=None, target_=None):
         new = target(fullname)
-        if new is None or importlib.util.find_spec(new) is None:
+        if new is None:
+            return None
+        import importlib.util
+
+        if importlib.util.find_spec(new) is None:
             return None
         return importlib.util.spec_from_loader(fullname, self)
 
