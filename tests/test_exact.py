@@ -130,20 +130,32 @@ def _energy_drift(model, ratio):
     t = np.unique(np.concatenate([np.linspace(0, T, 1001), tr.switch_times]))
     q_l, v_l = tr.state_l(t)
     E = S.energy(q_l, v_l)
-    return np.abs(E / E[0] - 1).max(), tr
+    return np.abs(E / E[0] - 1).max(), tr, _roundoff_bound(S, tr)
+
+
+def _roundoff_bound(S, tr):
+    """Worst-case relative energy error of the exact flow in floating point: each phase maps
+    the state into its modal coordinates and back, a backward-stable product with error up to
+    n_l·ε·κ(Φ) relative (κ the condition number of the phase's mode matrix), the energy, a
+    quadratic form, doubles it, and the errors of the switches (plus the start and the end)
+    add up at worst linearly."""
+    kappa = max(np.linalg.cond(phase.modes) for phase in S._phases.values())
+    return 2 * (len(tr.switch_times) + 2) * S.n_l * np.finfo(float).eps * kappa
 
 
 def test_energy_conserved_chain():
-    drift, tr = _energy_drift(chain(), 3.0)
+    drift, tr, bound = _energy_drift(chain(), 3.0)
     assert tr.n_contacts >= 1
-    assert drift < 1e-12
+    assert drift < bound < 1e-12
 
 
 @needs_beam
 def test_energy_conserved_beam():
-    drift, tr = _energy_drift(mmshbm.default_beam().model(21), 3.0)
+    drift, tr, bound = _energy_drift(mmshbm.default_beam().model(21), 3.0)
     assert tr.n_contacts > 10  # the first mode at 3 gaps rattles on the stop
-    assert drift < 1e-10
+    # 65 contacts, κ(Φ) ≈ 970: the bound is 2.3e-9; drifts of 3e-11 to 1.5e-10 were measured
+    # under four OpenBLAS kernels (the switches' errors add up as a random walk)
+    assert drift < bound < 3e-9
 
 
 # ------------------------------------------------------------------ independent ODE reference
