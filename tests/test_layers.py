@@ -20,6 +20,7 @@ LAYERS = {
     "mmshbm._files": 0,
     "mmshbm._threads": 0,
     "mmshbm._aliases": 0,
+    "mmshbm._kernel_cache": 0,
     "mmshbm.model": 1,
     "mmshbm.fe": 2,
     "mmshbm.core": 3,
