@@ -226,19 +226,22 @@ def test_agrees_with_dop853(make):
     q_l, v_l = tr.state_l(t_eval)
     x_scale, v_scale = np.abs(x0).max(), np.abs(v_l).max()
     errors = []
-    for rtol in (1e-11, 1e-13):
+    for rtol in (1e-10, 3e-14):
         ref, switches = _dop853_reference(model, x0, T, t_eval, rtol=rtol)
         assert len(switches) == len(tr.switch_times) >= 2
-        errors.append((np.abs(tr.switch_times - switches).max() / T,
-                       np.abs(q_l - ref[: S.n_l]).max() / x_scale,
-                       np.abs(v_l - ref[S.n_l:]).max() / v_scale))
-    # The differences are DOP853's own error: they shrink as its tolerance tightens (an
-    # error of the exact solver would stay). Velocities carry the most of it: DOP853's
-    # position error in mode j shows in the velocities multiplied by ω_j (up to ω_4 = 47 ω_1
-    # on the 3-element beam), so they are compared with the largest velocity of the motion.
-    (t11, q11, v11), (t13, q13, v13) = errors
-    assert q13 < q11 / 10 and v13 < v11 / 10
-    assert t13 < 1e-11 and q13 < 1e-10 and v13 < 1e-8
+        errors.append(np.array([np.abs(tr.switch_times - switches).max() / T,
+                                np.abs(q_l - ref[: S.n_l]).max() / x_scale,
+                                np.abs(v_l - ref[S.n_l:]).max() / v_scale]))
+    # The differences are DOP853's own error: they shrink as its tolerance tightens 3300-fold
+    # (by 530 to 25 000 under four OpenBLAS kernels; an error of the exact solver would
+    # stay). DOP853's global error is not proportional to rtol, so only a 100-fold shrink is
+    # asserted. Velocities carry the most of it: DOP853's position error in mode j shows in
+    # the velocities multiplied by ω_j (up to ω_4 = 47 ω_1 on the 3-element beam), so they
+    # are compared with the largest velocity of the motion. At rtol 3e-14 the differences
+    # measured at most 1.4e-14 (t), 1.1e-12 (q), 1.4e-11 (v).
+    loose, tight = errors
+    assert (tight * 100 < loose).all(), (loose, tight)
+    assert (tight < [1e-13, 1e-11, 1e-10]).all(), tight
     # all DOFs and the contact force from the trajectory obey the contact law
     q, v, lam = tr.evaluate(t_eval)
     gN = model.gap - model.stop_side * q[model.contact_dof]
