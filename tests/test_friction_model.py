@@ -57,7 +57,7 @@ def test_friction_coupled_to_a_unilateral_contact_is_stored():
         2, 0.2, normal_contact=0, preload=0.5)
     assert model.friction == (FrictionContact(2, 0.2, None, 0, 0.5),)
     with pytest.raises(ValueError, match="varies in time"):
-        model.friction[0].slip_force
+        _ = model.friction[0].slip_force
     with pytest.raises(ValueError, match="carries a unilateral contact"):
         model.with_friction(1, 0.2, normal_load=1.0)
 

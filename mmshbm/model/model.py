@@ -118,7 +118,8 @@ class Model:
         check.symmetric("M", M)
         check.symmetric("K", K)
         n = M.shape[0]
-        contacts = () if no_contacts(contact_dof, gap, stop_side) else contacts_from(contact_dof, gap, stop_side, n)
+        empty = no_contacts(contact_dof, gap, stop_side)
+        contacts = () if empty else contacts_from(contact_dof, gap, stop_side, n)
         if damping is not None:
             damping = check.square_matrix("damping", damping)
             if damping.shape != M.shape:
