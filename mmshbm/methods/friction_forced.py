@@ -1,0 +1,209 @@
+"""Forced responses by MMS-HBM of structures with Coulomb friction at massless DOFs.
+
+The structure of :class:`~mmshbm.model.Model` with damping C (optional: friction alone
+damps it), a harmonic force on the DOFs with mass, unilateral contacts (optional) and
+friction contacts with constant normal load on massless DOFs,
+
+    M q'' + C q' + K q = Σ w_i λ_i − Σ e_t f_t + Re(F̂ e^{iΩt}),
+    f_t = clip(f_t + r u̇_t, −s_t, s_t),   s_t = μ_t N_t,   u_t = q[dof_t],
+
+f_t the force node t exerts on its support (:mod:`mmshbm.contact.coulomb`). The ansatz,
+unknowns and condensation are those of :class:`~mmshbm.methods.forced.ForcedResponseProblem`
+(the full cosine/sine series of the massless DOFs, F = 𝔇(Ω) x − P the force the structure
+needs there, so f_t = −F_t). Each friction DOF's rows are the velocity-level proximal
+equation projected on harmonics 0..H,
+
+    R_t = F_t + proj[clip(−F_t + ρ u_t′, −s, s)] = 0,    u_t′ = d u_t / dτ = u̇_t / Ω,
+
+with ρ the condensed static tangential stiffness 1/(D_0⁻¹)_tt (N/m; the physical
+parameter is r = ρ/Ω, N·s/m), projected exactly (:func:`~mmshbm.contact.coulomb.project_coulomb`:
+the instants where p = ±s located as zeros of trigonometric polynomials, the pieces
+integrated in closed form) with the exact Jacobian ∂R/∂F = G, ∂R/∂u′ = ρ (I − G), G the
+projection of the slip indicator [|p| > s].
+
+Full stick. Where node t sticks over the whole period (no slip anywhere, G = 0) its law
+says only u_t′ = 0: the mean of u_t is history, not a steady state, and the mean row of
+R_t vanishes identically. This problem then takes the symmetric position: the mean row is
+replaced by F_t,0 = 0 (mean friction force zero), the limit of the slipping orbits of a
+symmetric structure under a harmonic force as the slip vanishes. Full-stick orbits are
+compared with references under that choice.
+
+Not yet: friction coupled to a unilateral contact's force (``normal_contact=``) and the
+Floquet multipliers of friction orbits (both raise NotImplementedError).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..contact.coulomb import derivative_matrix, project_coulomb
+from ..model.model import Model
+from .forced import ForcedResponseProblem
+
+__all__ = ["FrictionForcedProblem"]
+
+
+class FrictionForcedProblem(ForcedResponseProblem):
+    """MMS-HBM forced response of a model with Coulomb friction, continued in (x, Ω).
+
+    Parameters
+    ----------
+    model : Model
+        With at least one friction contact (``model.with_friction``, constant normal load);
+        unilateral contacts and viscous damping optional.
+    force, harmonics, n_samples, backend, projection
+        As :class:`~mmshbm.methods.forced.ForcedResponseProblem`.
+    r : float, optional
+        Proximal parameter of the unilateral contacts (N/m); the friction contacts use
+        their condensed static tangential stiffness.
+    stability : bool or "auto"
+        Floquet multipliers are not yet available with friction: "auto" and False skip
+        them, True raises NotImplementedError.
+
+    Notes
+    -----
+    Records per point, besides those of the unilateral problem: ``slip_fraction`` (the
+    largest fraction of the period any friction node slips, 0 in full stick) and
+    ``friction_dissipation`` (J per period, Σ_t ∮ f_t u̇_t dt of the degree-H signals).
+    The length scale of the unknowns is the static response of the structure with free
+    friction nodes to the force.
+    """
+
+    def __init__(self, model: Model, force, harmonics: int = 5, n_samples: int | None = None,
+                 r: float | None = None, backend: str = "auto", stability: bool | str = "auto",
+                 projection: str = "exact"):
+        if not isinstance(model, Model):
+            raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
+        if not model.friction:
+            raise ValueError("the model has no friction contact: use ForcedResponseProblem")
+        coupled = [fc.dof for fc in model.friction if fc.normal_contact is not None]
+        if coupled:
+            raise NotImplementedError(f"friction coupled to a unilateral contact's force (normal_contact=, DOFs "
+                                      f"{coupled}) is not yet solved by MMS-HBM: give a constant normal_load")
+        if stability is True:
+            raise NotImplementedError("Floquet multipliers of orbits with friction are not yet available: "
+                                      "pass stability=False")
+        if not (stability is False or stability == "auto"):
+            raise ValueError(f"stability must be True, False or 'auto', got {stability!r}")
+        super().__init__(model, force, harmonics, n_samples, r, backend, False, projection)
+        c = model.c
+        self.friction_rows = np.searchsorted(c, [fc.dof for fc in model.friction])
+        self.slip_force = np.array([fc.slip_force for fc in model.friction])
+        flex = np.linalg.inv(np.asarray(self.cond.D0).real)
+        self.rho = 1.0 / np.diag(flex)[self.friction_rows]
+        self._Dt = derivative_matrix(self.H)
+        self._exact = projection == "exact"
+        self._rescale()
+
+    def _rescale(self) -> None:
+        """Unknowns in units of the static response to the force (free friction nodes)."""
+        import scipy.sparse.linalg as spla
+
+        s, _ = self.excitation.scale(self.omega_ref)
+        F_l = s * self.force_l
+        K_red = self.model.reduced_stiffness
+        stat = [spla.spsolve(K_red.tocsc(), part) for part in (F_l.real, F_l.imag) if np.any(part)]
+        length = max(float(np.abs(q).max()) for q in stat)
+        if not length > 0:
+            length = 1.0
+        self.length = length
+        shape = np.abs(self.mode_shape_c)
+        self.xscale_c = length * np.maximum(shape, 1e-3 * max(shape.max(), 1e-300))
+        self.xscale = np.tile(self.xscale_c, self.n_coef)
+        fscale = np.abs(self.cond.D0) @ self.xscale_c
+        self.rowscale = np.tile(fscale, self.n_coef)
+        for j, i in enumerate(self.contact_rows):
+            self.rowscale[self._coef_index[i]] = self.r[j] * length
+        for j, i in enumerate(self.friction_rows):
+            self.rowscale[self._coef_index[i]] = self.rho[j] * length
+        self.colscale = np.concatenate([self.xscale, [self.omega_ref]])
+
+    # ------------------------------------------------------------------ residual
+    def friction_law(self, x: np.ndarray, F: np.ndarray, j: int):
+        """(R (2H+1,), ∂R/∂F_t, ∂R/∂x_t (2H+1, 2H+1), slip fraction) of friction contact j."""
+        idx = self._coef_index[self.friction_rows[j]]
+        v = self._Dt @ x[idx]
+        Rc, A, B, slip = project_coulomb(-F[idx], v, self.slip_force[j], self.rho[j], self._exact,
+                                         None if self._exact else self.N)
+        # R = −Rc = F_t + proj[clip(−F_t + ρ u′)]
+        return -Rc, A, -B @ self._Dt, slip
+
+    def contact_residual(self, x: np.ndarray, F: np.ndarray, dF: np.ndarray | None, dFp: np.ndarray | None):
+        R, Jx, Jp = super().contact_residual(x, F, dF, dFp)
+        for j, i in enumerate(self.friction_rows):
+            idx = self._coef_index[i]
+            Rt, A, B, slip = self.friction_law(x, F, j)
+            R[idx] = Rt
+            if Jx is not None:
+                Jx[idx] = A @ dF[idx]
+                Jx[np.ix_(idx, idx)] += B
+                if Jp is not None:
+                    Jp[idx] = A @ dFp[idx]
+            if slip == 0.0:  # full stick: the symmetric position, mean friction force zero
+                m = idx[0]
+                R[m] = F[m]
+                if Jx is not None:
+                    Jx[m] = dF[m]
+                    if Jp is not None:
+                        Jp[m] = dFp[m]
+        return R, Jx, Jp
+
+    # ------------------------------------------------------------------ start
+    def stuck_point(self, frequency: float) -> np.ndarray:
+        """Scaled unknowns of the linear response with every friction node held at 0
+        (the full-stick orbit in the symmetric position)."""
+        omega = 2 * np.pi * frequency
+        ch = self._condensed(omega)
+        s, _ = self.excitation.scale(omega)
+        free = np.setdiff1d(np.arange(self.n_c), self.friction_rows)
+        Qc = np.zeros(self.n_c, dtype=complex)
+        if len(free):
+            Qc[free] = np.linalg.solve(ch.D[1][np.ix_(free, free)], s * ch.P[free, 0])
+        x = np.zeros(self.n_x)
+        x[self.n_c:2 * self.n_c] = Qc.real
+        x[2 * self.n_c:3 * self.n_c] = -Qc.imag
+        return self.pack(x, omega)
+
+    def solve_at(self, frequency: float, guess: np.ndarray, max_iter: int = 50, tol: float = 1e-11):
+        """Newton at fixed Ω from the scaled ``guess``: (scaled unknowns, converged)."""
+        x, omega = self.unpack(guess)
+        for _ in range(max_iter):
+            R, Jx, _, _ = self.residual_parts(x, omega, 1.0, True)
+            if not np.all(np.isfinite(R)):
+                return guess, False
+            if np.abs(R / self.rowscale).max() < tol:
+                return self.pack(x, omega), True
+            try:
+                dx = np.linalg.solve(Jx, -R)
+            except np.linalg.LinAlgError:
+                dx = np.linalg.lstsq(Jx, -R, rcond=None)[0]
+            x = x + dx
+        return self.pack(x, omega), False
+
+    def start_point(self, frequency: float, max_iter: int = 50) -> np.ndarray:
+        """Converged unknowns at ``frequency`` (Hz) by Newton from the full-stick and the
+        free-slip linear responses (the first that converges); the stuck response when
+        neither does (the continuation's first corrector then tries)."""
+        for guess in (self.stuck_point(frequency), self.linear_point(frequency)):
+            u, ok = self.solve_at(frequency, guess, max_iter)
+            if ok:
+                return u
+        return self.stuck_point(frequency)
+
+    # ------------------------------------------------------------------ results
+    def friction_records(self, x: np.ndarray, omega: float, sigma: float = 1.0) -> dict:
+        """``slip_fraction`` (largest over the friction nodes) and ``friction_dissipation``
+        (J per period: Σ_t ∫ f_t u_t′ dτ with f_t = −F_t, by Parseval)."""
+        F = self._needed(x, omega, sigma)
+        slip, work = 0.0, 0.0
+        for j, i in enumerate(self.friction_rows):
+            idx = self._coef_index[i]
+            slip = max(slip, self.friction_law(x, F, j)[3])
+            f, v = -F[idx], self._Dt @ x[idx]
+            work += np.pi * (2 * f[0] * v[0] + f[1:] @ v[1:])
+        return {"slip_fraction": slip, "friction_dissipation": float(work)}
+
+    def _record(self, x: np.ndarray, omega: float, sigma: float) -> dict:
+        rec = super()._record(x, omega, sigma)
+        rec.update(self.friction_records(x, omega, sigma))
+        return rec
