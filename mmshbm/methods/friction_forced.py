@@ -78,8 +78,9 @@ class FrictionForcedProblem(ForcedResponseProblem):
             raise ValueError("the model has no friction contact: use ForcedResponseProblem")
         coupled = [fc.dof for fc in model.friction if fc.normal_contact is not None]
         if coupled:
-            raise NotImplementedError(f"friction coupled to a unilateral contact's force (normal_contact=, DOFs "
-                                      f"{coupled}) is not yet solved by MMS-HBM: give a constant normal_load")
+            raise NotImplementedError(f"friction coupled to a unilateral contact's force (normal_contact=, "
+                                      f"DOFs {coupled}) is not yet solved by MMS-HBM: give a constant "
+                                      "normal_load")
         if stability is True:
             raise NotImplementedError("Floquet multipliers of orbits with friction are not yet available: "
                                       "pass stability=False")
