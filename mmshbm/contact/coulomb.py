@@ -168,3 +168,176 @@ def project_coulomb(f: np.ndarray, v: np.ndarray, s: float, r: float, exact: boo
     R = phi - r * v
     dR_dv = -r * (np.eye(len(f)) - G)
     return R, G, dR_dv, float(G[0, 0])
+
+
+# ---------------------------------------------------------------------- displacement level
+def _phi(H: int, tau: float) -> np.ndarray:
+    """NLvib-ordered basis [1, cos τ, sin τ, ..., cos Hτ, sin Hτ] at one τ."""
+    k = np.arange(1, H + 1)
+    out = np.empty(2 * H + 1)
+    out[0] = 1.0
+    out[1::2] = np.cos(k * tau)
+    out[2::2] = np.sin(k * tau)
+    return out
+
+
+def _arc(H: int, a: float, b: float) -> tuple[np.ndarray, np.ndarray]:
+    """Spectrum (C, S), n = 0..2H, of the indicator of the arc [a, b]:
+    C_n = (1/2π)∫_a^b cos nτ dτ, S_n = (1/2π)∫_a^b sin nτ dτ (closed form)."""
+    n = np.arange(1, 2 * H + 1)
+    C = np.empty(2 * H + 1)
+    S = np.empty(2 * H + 1)
+    C[0], S[0] = b - a, 0.0
+    C[1:] = (np.sin(n * b) - np.sin(n * a)) / n
+    S[1:] = (np.cos(n * a) - np.cos(n * b)) / n
+    return C / (2 * np.pi), S / (2 * np.pi)
+
+
+def _indicator(C: np.ndarray, S: np.ndarray, H: int) -> np.ndarray:
+    """NLvib-ordered projection of an indicator with spectrum (C, S)."""
+    out = np.empty(2 * H + 1)
+    out[0] = C[0]
+    out[1::2] = 2 * C[1:H + 1]
+    out[2::2] = 2 * S[1:H + 1]
+    return out
+
+
+def play_pieces(y: np.ndarray, s: float, r: float, n_samples: int | None = None) -> list:
+    """Stick and slip pieces of the periodic Coulomb law driven by ``y`` (see
+    :func:`project_coulomb_play`), over one period starting at y's global maximum.
+
+    Returns a list of (a, b, σ, u, τ_e): the arc [a, b] (a in [0, 2π), b <= a + 2π), σ = 0
+    stick at the node position u (set at the extremum τ_e of y, so ∂u/∂y = φ(τ_e)), σ = ±1
+    slip in the direction σ (u = y − σ s/r). Full stick (y's range <= 2s/r): one piece
+    [0, 2π] at the symmetric position u = mean(y) (mean force zero, τ_e = NaN: ∂u/∂y = e_0),
+    or clamped into the band where |r (u − y)| <= s (at y's maximum or minimum, τ_e there).
+    """
+    from ..core.contact_kernels import _TWO_PI, _refine, _zeros
+
+    y = np.asarray(y, dtype=float)
+    H = (y.shape[0] - 1) // 2
+    N = 16 * (2 * H + 1) if n_samples is None else int(n_samples)
+    k = np.arange(1, H + 1)
+    c, sn = np.concatenate([[y[0]], y[1::2]]), np.concatenate([[0.0], y[2::2]])
+    dc, ds = np.concatenate([[0.0], k * sn[1:]]), np.concatenate([[0.0], -k * c[1:]])  # y′
+    tau = _TWO_PI * np.arange(N) / N
+    cos_t, sin_t = np.cos(np.outer(np.arange(H + 1), tau)), np.sin(np.outer(np.arange(H + 1), tau))
+    d1 = dc @ cos_t + ds @ sin_t
+    d2 = (k * ds[1:]) @ cos_t[1:] - (k * dc[1:]) @ sin_t[1:]
+    roots = np.empty(2 * N + 2)
+    n_ext = _zeros(dc, ds, d1, d2, tau, roots)
+    ext = roots[:n_ext]
+    width = s / r
+    if n_ext == 0:
+        return [(0.0, _TWO_PI, 0, float(y[0]), np.nan)]
+    vals = np.array([c[0] + c[1:] @ np.cos(k * t) + sn[1:] @ np.sin(k * t) for t in ext])
+    i_max, i_min = int(np.argmax(vals)), int(np.argmin(vals))
+    y_max, y_min = vals[i_max], vals[i_min]
+    if y_max - y_min <= 2 * width:
+        if y[0] < y_max - width:
+            return [(0.0, _TWO_PI, 0, y_max - width, float(ext[i_max]))]
+        if y[0] > y_min + width:
+            return [(0.0, _TWO_PI, 0, y_min + width, float(ext[i_min]))]
+        return [(0.0, _TWO_PI, 0, float(y[0]), np.nan)]
+    order = np.roll(np.arange(n_ext), -i_max)
+    pts = np.concatenate([ext[order], [ext[i_max] + _TWO_PI]])
+    pv = np.concatenate([vals[order], [y_max]])
+    pts[1:-1] = np.where(pts[1:-1] < pts[0], pts[1:-1] + _TWO_PI, pts[1:-1])
+    u, t_e = y_max - width, float(pts[0])
+    pieces = []
+    zero = np.int64(0)
+    for a, b, ya, yb in zip(pts[:-1], pts[1:], pv[:-1], pv[1:], strict=True):
+        if b <= a:
+            continue
+        sigma = 1 if yb > ya else -1
+        level = u + sigma * width
+        if sigma * (yb - level) <= 0:  # does not reach the slip threshold: sticks throughout
+            pieces.append((a, b, 0, u, t_e))
+            continue
+        if sigma * (ya - level) >= 0:
+            t_sw = a
+        else:
+            gc = c.copy()
+            gc[0] -= level
+            t_sw = _refine(gc, sn, a, b, ya - level, zero)
+        if t_sw > a:
+            pieces.append((a, t_sw, 0, u, t_e))
+        pieces.append((t_sw, b, sigma, np.nan, np.nan))
+        u, t_e = yb - sigma * width, float(b)
+    return pieces
+
+
+def project_coulomb_play(y: np.ndarray, s: float, r: float,
+                         n_samples: int | None = None) -> tuple[np.ndarray, np.ndarray, float]:
+    """Exact harmonic projection of the support's force g = r (u − y) of a massless Coulomb
+    node whose position u is driven by the periodic signal y, and its exact Jacobian.
+
+    The law at the displacement level. For a massless node with the force g the support
+    exerts on it and any r > 0, write y = u − g/r. Coulomb's law (stick while |g| < s,
+    slip with g = −s sign u̇) is then exactly: u stays put while |u − y| < s/r and is
+    dragged at u = y ∓ s/r when y pushes it (the play operator of half-width s/r, the time
+    integral of the proximal equation). For a periodic y with range > 2s/r the periodic
+    motion is reached in one pass from y's global maximum, where the node has just been
+    dragged up, u = y_max − s/r (:func:`play_pieces`); with a smaller range the node sticks
+    throughout and its position is history: the symmetric position (mean force zero) is
+    taken. Extrema of y are the zeros of the trigonometric polynomial y′ and stick-to-slip
+    instants the zeros of y − level, located by the unilateral projection's root finder
+    (:mod:`mmshbm.core.contact_kernels`); g is r (u − y) or −σ s on the pieces, integrated
+    in closed form. g is continuous at every switch and u's dependence on the extremum's
+    time vanishes there (y′ = 0), so the Jacobian has no boundary terms:
+
+        ∂proj[g]/∂y = Σ_stick r (proj[χ_arc] φ(τ_e)ᵀ − proj[χ_arc φ_b]).
+
+    Parameters
+    ----------
+    y : ndarray (2H+1,)
+        NLvib-ordered coefficients of y (m).
+    s : float
+        Slip force >= 0 (N).
+    r : float
+        Stiffness parameter > 0 (N/m).
+    n_samples : int, optional
+        Bracketing grid of the root finder; default 16·(2H+1).
+
+    Returns
+    -------
+    g : ndarray (2H+1,)
+        NLvib-ordered projection of the support's force (N).
+    dg_dy : ndarray (2H+1, 2H+1)
+    slip : float
+        Fraction of the period in slip.
+    """
+    from ..core.projection import _product_matrix
+
+    y = np.asarray(y, dtype=float)
+    if y.ndim != 1 or y.shape[0] % 2 != 1:
+        raise ValueError(f"y must be 1-D with 2H+1 entries, got shape {y.shape}")
+    s, r = float(s), float(r)
+    if not (s >= 0 and np.isfinite(s)):
+        raise ValueError(f"slip force s must be finite and >= 0, got {s!r}")
+    if not r > 0:
+        raise ValueError(f"r must be > 0, got {r!r}")
+    H = (y.shape[0] - 1) // 2
+    g = np.zeros(2 * H + 1)
+    J = np.zeros((2 * H + 1, 2 * H + 1))
+    C_stick = np.zeros(2 * H + 1)
+    S_stick = np.zeros(2 * H + 1)
+    slip = 0.0
+    for a, b, sigma, u, t_e in play_pieces(y, s, r, n_samples):
+        C, S = _arc(H, a, b)
+        ind = _indicator(C, S, H)
+        if sigma != 0:
+            g -= sigma * s * ind
+            slip += (b - a) / (2 * np.pi)
+            continue
+        C_stick += C
+        S_stick += S
+        g += r * u * ind
+        if np.isnan(t_e):  # full stick at the symmetric position u = mean(y)
+            J[:, 0] += r * ind
+        else:
+            J += r * np.outer(ind, _phi(H, t_e))
+    G = _product_matrix(C_stick, S_stick, H)
+    g -= r * (G @ y)
+    J -= r * G
+    return g, J, slip
