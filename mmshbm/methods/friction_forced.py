@@ -16,8 +16,8 @@ equivalent forms (``law=``), both with ρ = 1/(K_cc⁻¹)_tt, the node's stiffne
 DOFs with mass held (N/m):
 
 * ``"play"`` (default), displacement level: with y = u_t − F_t/ρ (= wᵀq_l when no other
-  massless DOF is loaded: where the free
-  node would sit: as smooth as the motion of the DOFs with mass), Coulomb's law says that
+  massless DOF is loaded: where the free node would sit, as smooth as the motion of the
+  DOFs with mass), Coulomb's law says that
   u_t is the play operator of y of half-width s/ρ (the time integral of the proximal
   equation), so R_t = F_t − proj[ρ (Play(y) − y)] = 0
   (:func:`~mmshbm.contact.coulomb.project_coulomb_play`: extrema of y and stick-to-slip
@@ -167,7 +167,8 @@ class FrictionForcedProblem(ForcedResponseProblem):
                 Jx[np.ix_(idx, idx)] += B
                 if Jp is not None:
                     Jp[idx] = A @ dFp[idx]
-            if slip == 0.0 and self.law == "velocity":  # full stick: the symmetric position, mean friction force zero
+            if slip == 0.0 and self.law == "velocity":
+                # full stick: the symmetric position, mean friction force zero
                 m = idx[0]
                 R[m] = F[m]
                 if Jx is not None:

@@ -104,7 +104,8 @@ class FrictionSystem:
         w, k, s = self.w, self.k, self.s
         self.slip = {+1: _Phase("slip+", M, C, K_red, -s * w, F_l, self.omega, zero, 0.0),
                      -1: _Phase("slip-", M, C, K_red, s * w, F_l, self.omega, zero, 0.0)}
-        self._stick_unit = _Phase("stick", M, C, K_red + k * np.outer(w, w), k * w, F_l, self.omega, zero, 0.0)
+        K_stick = K_red + k * np.outer(w, w)
+        self._stick_unit = _Phase("stick", M, C, K_stick, k * w, F_l, self.omega, zero, 0.0)
 
     # ------------------------------------------------------------------ phases
     def stick(self, u_s: float) -> _Phase:
