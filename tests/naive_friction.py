@@ -71,3 +71,26 @@ def project_clip(p, s, nodes=40):
             inside = (np.abs(pv) < s).astype(float)
             Jac += (E * (wt * inside)) @ E.T
     return proj * weight, Jac * weight[:, None]
+
+
+def play_force_sampled(y, s, r, n=2**17, periods=2):
+    """proj[r (u − y)] with u the play operator of half-width s/r driven by y, by the clamp
+    recursion on n samples per period (exact on the piecewise-linear interpolant of the
+    samples), started at u = mean(y) and run ``periods`` periods; the last period is
+    projected by the trapezoidal rule. Error O((2π/n)²)."""
+    H = (len(y) - 1) // 2
+    tau = 2 * np.pi * np.arange(n) / n
+    yt = synth(y, tau)
+    w = s / r
+    u = y[0]
+    for _ in range(periods - 1):
+        for j in range(n):
+            u = min(max(u, yt[j] - w), yt[j] + w)
+    ut = np.empty(n)
+    for j in range(n):
+        u = min(max(u, yt[j] - w), yt[j] + w)
+        ut[j] = u
+    g = r * (ut - yt)
+    E = basis(H, tau)
+    weight = np.array([1.0] + [2.0] * (2 * H)) / n
+    return (E @ g) * weight

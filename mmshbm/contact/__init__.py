@@ -11,6 +11,14 @@ same layer and builds on it.
 
 from __future__ import annotations
 
-from .coulomb import coulomb_derivative, coulomb_residual, derivative_matrix, project_coulomb
+from .coulomb import (
+                      coulomb_derivative,
+                      coulomb_residual,
+                      derivative_matrix,
+                      play_pieces,
+                      project_coulomb,
+                      project_coulomb_play,
+)
 
-__all__ = ["coulomb_residual", "coulomb_derivative", "project_coulomb", "derivative_matrix"]
+__all__ = ["coulomb_residual", "coulomb_derivative", "project_coulomb", "project_coulomb_play", "play_pieces",
+           "derivative_matrix"]

@@ -36,7 +36,8 @@ from numba import njit
 
 from ..core.kernels import JIT_OPTIONS
 
-__all__ = ["coulomb_residual", "coulomb_derivative", "project_coulomb", "derivative_matrix"]
+__all__ = ["coulomb_residual", "coulomb_derivative", "project_coulomb", "project_coulomb_play", "play_pieces",
+           "derivative_matrix"]
 
 
 @njit(**JIT_OPTIONS)
