@@ -111,7 +111,8 @@ def test_several_dofs_with_mass_and_friction_alone():
     the orbit is periodic and its input work equals the friction dissipation."""
     M = np.diag([1.0, 0.5, 0.0])
     K = np.array([[3.0, -1.0, 0.0], [-1.0, 3.0, -2.0], [0.0, -2.0, 2.0]])
-    model = mmshbm.Model.from_matrices(M, K, [], [], [], amplitude_dof=0).with_friction(2, 0.5, normal_load=0.1)
+    model = mmshbm.Model.from_matrices(M, K, [], [], [], amplitude_dof=0)
+    model = model.with_friction(2, 0.5, normal_load=0.1)
     orbit = friction_orbit(model, [0.1, 0.0, 0.0], 0.19)
     assert orbit.converged and 0 < orbit.slip_fraction < 1
     e = orbit.energy_balance()
