@@ -24,7 +24,8 @@ import numpy as np
 
 from .. import _validate as check
 
-__all__ = ["FrictionContact", "friction_contact", "friction_to_json", "friction_from_json", "no_contacts"]
+__all__ = ["FrictionContact", "with_friction", "add_friction", "friction_contact", "friction_to_json",
+           "friction_from_json", "no_contacts"]
 
 
 @dataclass(frozen=True)
@@ -59,6 +60,50 @@ class FrictionContact:
             raise ValueError(f"the friction contact on DOF {self.dof} is coupled to contact "
                              f"{self.normal_contact}: its slip force varies in time")
         return self.mu * self.normal_load
+
+
+def with_friction(model, dof, mu, normal_load=None, normal_contact=None, preload=None):
+    """``model`` with Coulomb friction on the massless DOF ``dof`` added (a new Model; the
+    call recorded in ``description["transforms"]``).
+
+    Parameters
+    ----------
+    dof : int
+        A massless DOF (the tangential displacement of a contact node).
+    mu : float
+        Friction coefficient >= 0.
+    normal_load : float, optional
+        Constant normal force N >= 0 (N): slip force μN.
+    normal_contact : int, optional
+        Index of the unilateral contact whose force λ_j(t) (plus ``preload``, N) is the
+        normal force. Exactly one of ``normal_load`` and ``normal_contact``.
+
+    Raises
+    ------
+    ValueError, TypeError
+        Naming the offending input (:func:`friction_contact`).
+    """
+    from dataclasses import replace
+
+    args = {"dof": dof, "mu": mu}
+    given = {"normal_load": normal_load, "normal_contact": normal_contact, "preload": preload}
+    args.update({k: v for k, v in given.items() if v is not None})
+    out = add_friction(model, [args])
+    description = dict(model.description)
+    description["transforms"] = list(description.get("transforms", [])) + [
+        {"name": "with_friction", "args": {k: (v.item() if isinstance(v, np.generic) else v)
+                                           for k, v in args.items()}}]
+    return replace(out, description=description)
+
+
+def add_friction(model, entries):
+    """``model`` with the friction contacts of ``entries`` (dicts of :func:`friction_contact`
+    arguments) added, nothing recorded (loading a saved model)."""
+    from dataclasses import replace
+
+    for kw in entries:
+        model = replace(model, friction=model.friction + (friction_contact(model, **kw),))
+    return model
 
 
 def friction_contact(model, dof, mu, normal_load=None, normal_contact=None, preload=None) -> FrictionContact:

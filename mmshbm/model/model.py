@@ -142,8 +142,10 @@ class Model:
         kwargs = read_npz(path, contact_dof, gap, stop_side, amplitude_dof)
         friction = kwargs.pop("friction", [])
         model = cls.from_matrices(**kwargs)
-        for kw in friction:
-            model = model._add_friction(kw)
+        if friction:
+            from .friction import add_friction
+
+            model = add_friction(model, friction)
         return model
 
     @classmethod
@@ -210,44 +212,13 @@ class Model:
 
     def with_friction(self, dof: int, mu: float, *, normal_load: float | None = None,
                       normal_contact: int | None = None, preload: float | None = None) -> Model:
-        """The same model with Coulomb friction on the massless DOF ``dof`` (several calls add
-        several friction contacts); see :mod:`mmshbm.model.friction`.
+        """The same model with Coulomb friction (coefficient ``mu``) on the massless DOF
+        ``dof``, pressed by a constant ``normal_load`` (N) or by unilateral contact
+        ``normal_contact`` (plus ``preload``); several calls add several. See
+        :func:`mmshbm.model.friction.with_friction` (ValueError naming bad input)."""
+        from .friction import with_friction
 
-        Parameters
-        ----------
-        dof : int
-            A massless DOF (the tangential displacement of a contact node).
-        mu : float
-            Friction coefficient >= 0.
-        normal_load : float, optional
-            Constant normal force N >= 0 (N): slip force μN.
-        normal_contact : int, optional
-            Index of the unilateral contact whose force λ_j(t) (plus ``preload``, N) is the
-            normal force. Exactly one of ``normal_load`` and ``normal_contact``.
-
-        Raises
-        ------
-        ValueError, TypeError
-            Naming the offending input (:func:`~mmshbm.model.friction.friction_contact`).
-        """
-        args = {"dof": dof, "mu": mu}
-        if normal_load is not None:
-            args["normal_load"] = normal_load
-        if normal_contact is not None:
-            args["normal_contact"] = normal_contact
-        if preload is not None:
-            args["preload"] = preload
-        model = self._add_friction(args)
-        description = dict(self.description)
-        description["transforms"] = list(description.get("transforms", [])) + [
-            {"name": "with_friction", "args": {k: (v.item() if isinstance(v, np.generic) else v)
-                                               for k, v in args.items()}}]
-        return replace(model, description=description)
-
-    def _add_friction(self, args: dict) -> Model:
-        from .friction import friction_contact
-
-        return replace(self, friction=self.friction + (friction_contact(self, **args),))
+        return with_friction(self, dof, mu, normal_load, normal_contact, preload)
 
     def with_amplitude_dof(self, dof: int) -> Model:
         """The same model with its amplitude measured at ``dof``."""
