@@ -54,59 +54,36 @@ from ..contact.coulomb import derivative_matrix, project_coulomb, project_coulom
 from ..model.model import Model
 from .forced import ForcedResponseProblem
 
-__all__ = ["FrictionForcedProblem"]
+__all__ = ["FrictionRows", "FrictionForcedProblem", "check_friction_model", "check_law"]
 
 
-class FrictionForcedProblem(ForcedResponseProblem):
-    """MMS-HBM forced response of a model with Coulomb friction, continued in (x, Ω).
+def check_law(law: str, projection: str) -> None:
+    """Raise ValueError for an unknown ``law`` or the play law with a sampled projection."""
+    if law not in ("play", "velocity"):
+        raise ValueError(f"law must be 'play' or 'velocity', got {law!r}")
+    if law == "play" and projection != "exact":
+        raise ValueError("law='play' is projected exactly only: pass projection='exact'")
 
-    Parameters
-    ----------
-    model : Model
-        With at least one friction contact (``model.with_friction``, constant normal load);
-        unilateral contacts and viscous damping optional.
-    force, harmonics, n_samples, backend, projection
-        As :class:`~mmshbm.methods.forced.ForcedResponseProblem`.
-    r : float, optional
-        Proximal parameter of the unilateral contacts (N/m); the friction contacts use
-        their condensed static tangential stiffness.
-    stability : bool or "auto"
-        Floquet multipliers are not yet available with friction: "auto" and False skip
-        them, True raises NotImplementedError.
-    law : {"play", "velocity"}
-        The form of the friction rows (module docstring); "play" needs the exact projection.
 
-    Notes
-    -----
-    Records per point, besides those of the unilateral problem: ``slip_fraction`` (the
-    largest fraction of the period any friction node slips, 0 in full stick) and
-    ``friction_dissipation`` (J per period, Σ_t ∮ f_t u̇_t dt of the degree-H signals).
-    The length scale of the unknowns is the static response of the structure with free
-    friction nodes to the force.
-    """
+def check_friction_model(model: Model) -> None:
+    """Raise unless ``model`` has friction contacts this module solves (constant loads)."""
+    if not isinstance(model, Model):
+        raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
+    if not model.friction:
+        raise ValueError("the model has no friction contact")
+    coupled = [fc.dof for fc in model.friction if fc.normal_contact is not None]
+    if coupled:
+        raise NotImplementedError(f"friction coupled to a unilateral contact's force (normal_contact=, "
+                                  f"DOFs {coupled}) is not yet solved by MMS-HBM: give a constant "
+                                  "normal_load")
 
-    def __init__(self, model: Model, force, harmonics: int = 5, n_samples: int | None = None,
-                 r: float | None = None, backend: str = "auto", stability: bool | str = "auto",
-                 projection: str = "exact", law: str = "play"):
-        if law not in ("play", "velocity"):
-            raise ValueError(f"law must be 'play' or 'velocity', got {law!r}")
-        if law == "play" and projection != "exact":
-            raise ValueError("law='play' is projected exactly only: pass projection='exact'")
-        if not isinstance(model, Model):
-            raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
-        if not model.friction:
-            raise ValueError("the model has no friction contact: use ForcedResponseProblem")
-        coupled = [fc.dof for fc in model.friction if fc.normal_contact is not None]
-        if coupled:
-            raise NotImplementedError(f"friction coupled to a unilateral contact's force (normal_contact=, "
-                                      f"DOFs {coupled}) is not yet solved by MMS-HBM: give a constant "
-                                      "normal_load")
-        if stability is True:
-            raise NotImplementedError("Floquet multipliers of orbits with friction are not yet available: "
-                                      "pass stability=False")
-        if not (stability is False or stability == "auto"):
-            raise ValueError(f"stability must be True, False or 'auto', got {stability!r}")
-        super().__init__(model, force, harmonics, n_samples, r, backend, False, projection)
+
+class FrictionRows:
+    """The friction rows shared by the forced-response and EPMC problems with friction
+    (mixed in before a :class:`~mmshbm.methods._damped_hbm.DampedHBMBase` subclass): the
+    law of every friction contact replaces the rows F_t = 0 of its massless DOF."""
+
+    def _init_friction(self, model: Model, law: str, projection: str) -> None:
         c = model.c
         self.friction_rows = np.searchsorted(c, [fc.dof for fc in model.friction])
         self.slip_force = np.array([fc.slip_force for fc in model.friction])
@@ -117,19 +94,10 @@ class FrictionForcedProblem(ForcedResponseProblem):
         self._Dt = derivative_matrix(self.H)
         self._exact = projection == "exact"
         self.law = law
-        self._rescale()
 
-    def _rescale(self) -> None:
-        """Unknowns in units of the static response to the force (free friction nodes)."""
-        import scipy.sparse.linalg as spla
-
-        s, _ = self.excitation.scale(self.omega_ref)
-        F_l = s * self.force_l
-        K_red = self.model.reduced_stiffness
-        stat = [spla.spsolve(K_red.tocsc(), part) for part in (F_l.real, F_l.imag) if np.any(part)]
-        length = max(float(np.abs(q).max()) for q in stat)
-        if not length > 0:
-            length = 1.0
+    def _rescale(self, length: float, extra_cols: int) -> None:
+        """Unknowns in units of ``length`` (m) times the first mode's shape; ``extra_cols``
+        parameters (scaled by ω_ref) after them."""
         self.length = length
         shape = np.abs(self.mode_shape_c)
         self.xscale_c = length * np.maximum(shape, 1e-3 * max(shape.max(), 1e-300))
@@ -140,9 +108,8 @@ class FrictionForcedProblem(ForcedResponseProblem):
             self.rowscale[self._coef_index[i]] = self.r[j] * length
         for j, i in enumerate(self.friction_rows):
             self.rowscale[self._coef_index[i]] = self.rho[j] * length
-        self.colscale = np.concatenate([self.xscale, [self.omega_ref]])
+        self.colscale = np.concatenate([self.xscale, np.full(extra_cols, self.omega_ref)])
 
-    # ------------------------------------------------------------------ residual
     def friction_law(self, x: np.ndarray, F: np.ndarray, j: int):
         """(R (2H+1,), ∂R/∂F_t, ∂R/∂x_t (2H+1, 2H+1), slip fraction) of friction contact j."""
         idx = self._coef_index[self.friction_rows[j]]
@@ -176,6 +143,72 @@ class FrictionForcedProblem(ForcedResponseProblem):
                     if Jp is not None:
                         Jp[m] = dFp[m]
         return R, Jx, Jp
+
+    def friction_records(self, x: np.ndarray, omega: float, sigma: float = 1.0) -> dict:
+        """``slip_fraction`` (largest over the friction nodes) and ``friction_dissipation``
+        (J per period: Σ_t ∫ f_t u_t′ dτ with f_t = −F_t, by Parseval)."""
+        F = self._needed(x, omega, sigma)
+        slip, work = 0.0, 0.0
+        for j, i in enumerate(self.friction_rows):
+            idx = self._coef_index[i]
+            slip = max(slip, self.friction_law(x, F, j)[3])
+            f, v = -F[idx], self._Dt @ x[idx]
+            work += np.pi * (2 * f[0] * v[0] + f[1:] @ v[1:])
+        return {"slip_fraction": slip, "friction_dissipation": float(work)}
+
+
+class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
+    """MMS-HBM forced response of a model with Coulomb friction, continued in (x, Ω).
+
+    Parameters
+    ----------
+    model : Model
+        With at least one friction contact (``model.with_friction``, constant normal load);
+        unilateral contacts and viscous damping optional.
+    force, harmonics, n_samples, backend, projection
+        As :class:`~mmshbm.methods.forced.ForcedResponseProblem`.
+    r : float, optional
+        Proximal parameter of the unilateral contacts (N/m); the friction contacts use
+        their condensed static tangential stiffness.
+    stability : bool or "auto"
+        Floquet multipliers are not yet available with friction: "auto" and False skip
+        them, True raises NotImplementedError.
+    law : {"play", "velocity"}
+        The form of the friction rows (module docstring); "play" needs the exact projection.
+
+    Notes
+    -----
+    Records per point, besides those of the unilateral problem: ``slip_fraction`` (the
+    largest fraction of the period any friction node slips, 0 in full stick) and
+    ``friction_dissipation`` (J per period, Σ_t ∮ f_t u̇_t dt of the degree-H signals).
+    The length scale of the unknowns is the static response of the structure with free
+    friction nodes to the force.
+    """
+
+    def __init__(self, model: Model, force, harmonics: int = 5, n_samples: int | None = None,
+                 r: float | None = None, backend: str = "auto", stability: bool | str = "auto",
+                 projection: str = "exact", law: str = "play"):
+        check_friction_model(model)
+        check_law(law, projection)
+        if stability is True:
+            raise NotImplementedError("Floquet multipliers of orbits with friction are not yet available: "
+                                      "pass stability=False")
+        if not (stability is False or stability == "auto"):
+            raise ValueError(f"stability must be True, False or 'auto', got {stability!r}")
+        super().__init__(model, force, harmonics, n_samples, r, backend, False, projection)
+        self._init_friction(model, law, projection)
+        self._rescale(self._static_length(), 1)
+
+    def _static_length(self) -> float:
+        """The static response (m) to the force, friction nodes free (1 if it is zero)."""
+        import scipy.sparse.linalg as spla
+
+        s, _ = self.excitation.scale(self.omega_ref)
+        F_l = s * self.force_l
+        K_red = self.model.reduced_stiffness.tocsc()
+        stat = [spla.spsolve(K_red, part) for part in (F_l.real, F_l.imag) if np.any(part)]
+        length = max(float(np.abs(q).max()) for q in stat)
+        return length if length > 0 else 1.0
 
     # ------------------------------------------------------------------ start
     def stuck_point(self, frequency: float) -> np.ndarray:
@@ -220,18 +253,6 @@ class FrictionForcedProblem(ForcedResponseProblem):
         return self.stuck_point(frequency)
 
     # ------------------------------------------------------------------ results
-    def friction_records(self, x: np.ndarray, omega: float, sigma: float = 1.0) -> dict:
-        """``slip_fraction`` (largest over the friction nodes) and ``friction_dissipation``
-        (J per period: Σ_t ∫ f_t u_t′ dτ with f_t = −F_t, by Parseval)."""
-        F = self._needed(x, omega, sigma)
-        slip, work = 0.0, 0.0
-        for j, i in enumerate(self.friction_rows):
-            idx = self._coef_index[i]
-            slip = max(slip, self.friction_law(x, F, j)[3])
-            f, v = -F[idx], self._Dt @ x[idx]
-            work += np.pi * (2 * f[0] * v[0] + f[1:] @ v[1:])
-        return {"slip_fraction": slip, "friction_dissipation": float(work)}
-
     def _record(self, x: np.ndarray, omega: float, sigma: float) -> dict:
         rec = super()._record(x, omega, sigma)
         rec.update(self.friction_records(x, omega, sigma))
