@@ -146,3 +146,33 @@ def test_what_is_not_yet_done_says_so():
         FrictionForcedProblem(jenkins(0.2), [F_, 0.0], 3, stability=True)
     with pytest.raises(ValueError, match="law must be"):
         FrictionForcedProblem(jenkins(0.2), [F_, 0.0], 3, law="penalty")
+
+
+def test_a_response_with_friction_is_saved_and_loaded(tmp_path):
+    model = jenkins(0.2)
+    fr = mmshbm.frequency_response(model, [F_, 0.0], (0.15, 0.25), harmonics=5)
+    path = fr.save(tmp_path / "jenkins.npz")
+    back = mmshbm.FrequencyResponse.load(path)
+    assert back.get_model().same_as(model) and back.get_model().friction == model.friction
+    back.attach_solver()
+    assert isinstance(back.solver, FrictionForcedProblem)
+    np.testing.assert_allclose(back.solver.monitor(back.states[3])["amplitude"], fr.amplitude[3], rtol=1e-12)
+
+
+def test_several_dofs_with_mass_converge_to_the_exact_orbit():
+    """Two masses in a chain, the node on the second, friction alone (no viscous damping)."""
+    M = np.diag([1.0, 0.5, 0.0])
+    K = np.array([[3.0, -1.0, 0.0], [-1.0, 3.0, -2.0], [0.0, -2.0, 2.0]])
+    model = mmshbm.Model.from_matrices(M, K, [], [], [], amplitude_dof=0)
+    model = model.with_friction(2, 0.5, normal_load=0.1)
+    force, f = [0.1, 0.0, 0.0], 0.19
+    orbit = friction_orbit(model, force, f)
+    assert orbit.converged and 0 < orbit.slip_fraction < 1
+    A = orbit.amplitude(0)
+    err = {}
+    for H in (7, 31):
+        p = FrictionForcedProblem(model, force, H)
+        u, ok = p.solve_at(f, p.start_point(f))
+        assert ok
+        err[H] = abs(p.monitor(u)["amplitude"] / A - 1)
+    assert err[31] < err[7] and err[31] < 1e-4, err
