@@ -84,7 +84,7 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     if not isinstance(method, str) or method not in METHODS:
         raise ValueError(f"unknown method {method!r}; choose one of {sorted(METHODS)}")
     # --- issue 14: the backbone of a damped model is its damped nonlinear mode (EPMC) ---
-    if method == "mmshbm" and model.damping is not None:
+    if method == "mmshbm" and (model.damping is not None or model.friction):
         method = "epmc"
     # --- end issue 14 ---
     if method != "shooting":
