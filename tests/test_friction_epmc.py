@@ -106,3 +106,9 @@ def test_refusals_are_named():
         FrictionEPMCProblem(free, 3)
     with pytest.raises(ValueError, match="must carry mass"):
         FrictionEPMCProblem(jenkins().with_amplitude_dof(1), 3)
+
+
+@pytest.mark.parametrize("method", ["penalty", "shooting"])
+def test_baselines_say_not_yet(method):
+    with pytest.raises(NotImplementedError, match="not yet"):
+        mmshbm.backbone(jenkins(), method=method, max_amplitude=1.0)
