@@ -70,3 +70,13 @@ def test_friction_is_saved_and_loaded(tmp_path):
     assert back.same_as(model) and back.fingerprint() == model.fingerprint()
     assert back.friction == model.friction
     assert back.description == model.description  # loading does not record the transform twice
+
+
+def test_transforms_keep_the_friction_contacts():
+    M = np.diag([1.0, 1.0, 0.0])
+    K = np.array([[3.0, -1.0, -1.0], [-1.0, 3.0, 0.0], [-1.0, 0.0, 2.0]])
+    model = mmshbm.Model.from_matrices(M, K, [], [], [], amplitude_dof=0)
+    model = model.with_friction(2, 0.3, normal_load=1.0)
+    with pytest.warns(mmshbm.ModelWarning):
+        lighter = model.with_massless_contact([1])
+    assert lighter.friction == model.friction and 1 in lighter.c.tolist()

@@ -24,7 +24,8 @@ import numpy as np
 
 from .. import _validate as check
 
-__all__ = ["FrictionContact", "with_friction", "add_friction", "friction_contact", "friction_to_json",
+__all__ = ["FrictionContact", "with_friction", "add_friction", "friction_contact", "friction_args",
+           "friction_to_json",
            "friction_from_json", "no_contacts"]
 
 
@@ -144,6 +145,13 @@ def friction_contact(model, dof, mu, normal_load=None, normal_contact=None, prel
                          f"contacts, got {j}")
     pre = 0.0 if preload is None else check.non_negative("preload", preload)
     return FrictionContact(dof, mu, None, j, pre)
+
+
+def friction_args(fc: FrictionContact) -> dict:
+    """Keyword arguments of :func:`friction_contact` that rebuild ``fc``."""
+    if fc.normal_contact is None:
+        return {"dof": fc.dof, "mu": fc.mu, "normal_load": fc.normal_load}
+    return {"dof": fc.dof, "mu": fc.mu, "normal_contact": fc.normal_contact, "preload": fc.preload}
 
 
 def friction_to_json(friction: Sequence[FrictionContact]) -> str:
