@@ -2,7 +2,8 @@
 pointwise kernels and exact harmonic projections.
 
 * :mod:`mmshbm.contact.coulomb`: Coulomb dry friction with slip force s = μN,
-  f = clip(f + r u̇, −s, s).
+  f = clip(f + r u̇, −s, s): pointwise Numba kernels, the exact projection of this
+  velocity-level form, and of its time integral (the play operator, displacement level).
 
 The unilateral (Signorini) law lives with the numerical core
 (:mod:`mmshbm.core.contact_kernels`, :mod:`mmshbm.core.projection`); this package sits at the

@@ -26,7 +26,10 @@ p = ±s are the zeros of the trigonometric polynomials p ∓ s, located by its r
 the pieces are integrated in closed form, and its Jacobian G (the projection of the
 indicator of |p| > s) gives ∂proj[clip]/∂p = I − G exactly. This module calls that
 projection and does not copy it; the pointwise kernels below are self-contained (Numba
-caches a kernel per file).
+caches a kernel per file). The displacement-level projection (:func:`project_coulomb_play`)
+calls the root-finding kernels of :mod:`mmshbm.core.contact_kernels` (``_zeros``,
+``_refine``) from Python: no compiled kernel here calls one in another file, so Numba's
+per-file cache cannot go stale across files.
 """
 
 from __future__ import annotations
