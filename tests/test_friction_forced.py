@@ -176,3 +176,15 @@ def test_several_dofs_with_mass_converge_to_the_exact_orbit():
         assert ok
         err[H] = abs(p.monitor(u)["amplitude"] / A - 1)
     assert err[31] < err[7] and err[31] < 1e-4, err
+
+
+def test_the_continuation_follows_a_stuck_resonance():
+    """Stuck, the node's coefficients (the condensed unknowns) vanish; harmonic 1 of the
+    amplitude DOF is carried as unknowns so the arclength sees the peak. Largest sampled
+    amplitude against the closed-form peak F/(k 2ζ√(1−ζ²)), k = k1 + k2: measured 2e-7."""
+    fr = mmshbm.frequency_response(jenkins(1e3), [F_, 0.0], (0.1, 0.4), harmonics=5)
+    k = K1 + K2
+    zeta = C_ / (2 * np.sqrt(k * M_))
+    peak = F_ / k / (2 * zeta * np.sqrt(1 - zeta**2))
+    assert fr.amplitude.max() == pytest.approx(peak, rel=1e-4)
+    assert np.all(fr.records["slip_fraction"] == 0.0)

@@ -182,7 +182,10 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
     largest fraction of the period any friction node slips, 0 in full stick) and
     ``friction_dissipation`` (J per period, Σ_t ∮ f_t u̇_t dt of the degree-H signals).
     The length scale of the unknowns is the static response of the structure with free
-    friction nodes to the force.
+    friction nodes to the force. When the amplitude DOF carries mass, harmonic 1 of it is
+    carried as two more unknowns (scaled u = [x, a_1, b_1, Ω]) with rows equating them to
+    their recovery from x: a stuck node's coefficients vanish, and without them the
+    arclength would not see (and step over) the resonances of the stuck structure.
     """
 
     def __init__(self, model: Model, force, harmonics: int = 5, n_samples: int | None = None,
@@ -198,6 +201,68 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         super().__init__(model, force, harmonics, n_samples, r, backend, False, projection)
         self._init_friction(model, law, projection)
         self._rescale(self._static_length(), 1)
+        # harmonic 1 of the amplitude DOF (when it carries mass) as two more unknowns
+        hit = np.flatnonzero(model.l == self.amplitude_dof)
+        self._track = int(hit[0]) if len(hit) else None
+        if self._track is not None:
+            self.colscale = np.concatenate([self.xscale, [self.length, self.length, self.omega_ref]])
+            self.n_unknowns = self.n_x + 3
+
+    # ------------------------------------------------------------------ unknowns
+    def unpack(self, u: np.ndarray) -> tuple[np.ndarray, float]:
+        """Scaled unknowns -> (x (n_x,) in m/rad, Ω in rad/s); the tracked harmonic of the
+        amplitude DOF is dropped (it follows from x and Ω)."""
+        if self._track is None:
+            return super().unpack(u)
+        if np.shape(u) != (self.n_unknowns,):
+            raise ValueError(f"u must have shape ({self.n_unknowns},), got {np.shape(u)}")
+        y = np.asarray(u, dtype=float) * self.colscale
+        return y[:self.n_x], float(y[-1])
+
+    def pack(self, x: np.ndarray, omega: float) -> np.ndarray:
+        if self._track is None:
+            return super().pack(x, omega)
+        ab = self._tracked(np.asarray(x, dtype=float), omega)[0]
+        return np.concatenate([x, ab, [omega]]) / self.colscale
+
+    def _tracked(self, x: np.ndarray, omega: float):
+        """(cos, sin) of harmonic 1 of the amplitude DOF (m) and ∂/∂x (2, n_x).
+
+        Q̂ = −z·Û_1 + σ Y_1, z the amplitude DOF's row of Z_1 = S_1⁻¹K_lc."""
+        ch = self._condensed(omega, recover=True)
+        s, _ = self.excitation.scale(omega)
+        z = ch.Z[1][self._track]
+        n_c = self.n_c
+        Uc, Us = x[n_c:2 * n_c], x[2 * n_c:3 * n_c]
+        q = -z @ (Uc - 1j * Us) + s * ch.Y[self._track, 0]
+        dx = np.zeros((2, self.n_x))
+        dx[0, n_c:2 * n_c], dx[0, 2 * n_c:3 * n_c] = -z.real, -z.imag
+        dx[1, n_c:2 * n_c], dx[1, 2 * n_c:3 * n_c] = z.imag, -z.real
+        return np.array([q.real, -q.imag]), dx
+
+    def evaluate(self, u: np.ndarray, jacobian: bool = True):
+        """Scaled residual and, if asked, its Jacobian; with the amplitude DOF tracked, two
+        more rows (its harmonic-1 unknowns equal their recovery from x; the Ω column of
+        these rows by central differences of the recovery, step 1e-6 Ω)."""
+        if self._track is None:
+            return super().evaluate(u, jacobian)
+        x, omega = self.unpack(u)
+        ab = np.asarray(u[self.n_x:self.n_x + 2], dtype=float) * self.length
+        R_x, Jx, Jw, _ = self.residual_parts(x, omega, 1.0, jacobian)
+        rec, drec = self._tracked(x, omega)
+        R = np.concatenate([R_x / self.rowscale, (ab - rec) / self.length])
+        if not jacobian:
+            return R
+        h = 1e-6 * omega
+        dw = (self._tracked(x, omega + h)[0] - self._tracked(x, omega - h)[0]) / (2 * h)
+        self._condensed(omega, 0.0, True, recover=True)  # back to Ω in the cache
+        J = np.zeros((self.n_x + 2, self.n_unknowns))
+        J[:self.n_x, :self.n_x] = Jx * self.xscale[None, :] / self.rowscale[:, None]
+        J[:self.n_x, -1] = Jw * self.omega_ref / self.rowscale
+        J[self.n_x:, :self.n_x] = -drec * self.xscale[None, :] / self.length
+        J[self.n_x:, self.n_x:self.n_x + 2] = np.eye(2)
+        J[self.n_x:, -1] = -dw * self.omega_ref / self.length
+        return R, J
 
     def _static_length(self) -> float:
         """The static response (m) to the force, friction nodes free (1 if it is zero)."""
