@@ -292,26 +292,69 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         return self.pack(x, omega)
 
     def solve_at(self, frequency: float, guess: np.ndarray, max_iter: int = 50, tol: float = 1e-11):
-        """Newton at fixed Ω from the scaled ``guess``: (scaled unknowns, converged)."""
+        """Newton at fixed Ω from the scaled ``guess``, with a backtracking line search on
+        max|R/rowscale|: (scaled unknowns, converged)."""
         x, omega = self.unpack(guess)
+        omega = 2 * np.pi * frequency
+
+        def merit(x):
+            R = self.residual_parts(x, omega, 1.0, False)[0]
+            return float(np.abs(R / self.rowscale).max()), R
+
+        r, R = merit(x)
         for _ in range(max_iter):
-            R, Jx, _, _ = self.residual_parts(x, omega, 1.0, True)
-            if not np.all(np.isfinite(R)):
+            if not np.isfinite(r):
                 return guess, False
-            if np.abs(R / self.rowscale).max() < tol:
+            if r < tol:
                 return self.pack(x, omega), True
+            _, Jx, _, _ = self.residual_parts(x, omega, 1.0, True)
             try:
                 dx = np.linalg.solve(Jx, -R)
             except np.linalg.LinAlgError:
                 dx = np.linalg.lstsq(Jx, -R, rcond=None)[0]
-            x = x + dx
-        return self.pack(x, omega), False
+            x, r, R, ok = _backtrack(merit, x, dx, r)
+            if not ok:
+                return self.pack(x, omega), False
+        return self.pack(x, omega), r < tol
+
+    def fast_newton(self, u, u_pred, tangent, tol, max_iter, step_tol):
+        """The continuation's corrector on [R(u); t·(u − u_pred)] = 0, globalised: each Newton
+        step is halved until the merit max(|R|, |t·(u − u_pred)|) (scaled) decreases. The
+        friction rows are semismooth, and where a node sticks only briefly (a stiff node,
+        slip over > 99 % of the period) plain Newton cycles. Returns (u, iterations,
+        residual history, Jacobian at u); raises RuntimeError when it does not converge."""
+        from ..core.bordered import bordered_solve
+
+        def merit(u):
+            R = self.evaluate(u, jacobian=False)
+            return max(float(np.abs(R).max()), abs(float(tangent @ (u - u_pred)))), R
+
+        r, _ = merit(u)
+        history = [r]
+        for it in range(max_iter + 1):
+            if not np.isfinite(r):
+                raise RuntimeError("non-finite residual")
+            R, J = self.evaluate(u, jacobian=True)
+            if r <= tol:
+                return u, it, np.array(history), J
+            if it == max_iter:
+                break
+            du = -bordered_solve(J, tangent, np.append(R, tangent @ (u - u_pred)))
+            if not np.all(np.isfinite(du)):
+                raise RuntimeError("singular Jacobian")
+            if float(np.abs(du).max()) <= step_tol and r <= np.sqrt(tol):
+                return u, it, np.array(history), J
+            u, r, _, ok = _backtrack(merit, u, du, r)
+            history.append(r)
+            if not ok:
+                break
+        raise RuntimeError(f"no convergence in {max_iter} iterations (residual {history[-1]:.2e})")
 
     def start_point(self, frequency: float, max_iter: int = 50) -> np.ndarray:
-        """Converged unknowns at ``frequency`` (Hz) by Newton from the full-stick and the
-        free-slip linear responses (the first that converges); the stuck response when
+        """Converged unknowns at ``frequency`` (Hz) by Newton from the free-slip, then the
+        full-stick linear response (the first that converges); the stuck response when
         neither does (the continuation's first corrector then tries)."""
-        for guess in (self.stuck_point(frequency), self.linear_point(frequency)):
+        for guess in (self.linear_point(frequency), self.stuck_point(frequency)):
             u, ok = self.solve_at(frequency, guess, max_iter)
             if ok:
                 return u
@@ -322,3 +365,16 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         rec = super()._record(x, omega, sigma)
         rec.update(self.friction_records(x, omega, sigma))
         return rec
+
+
+def _backtrack(merit, x: np.ndarray, dx: np.ndarray, r: float, min_step: float = 1.0 / 4096):
+    """x + λ dx with λ = 1, 1/2, ... down to ``min_step``: the first with merit below
+    (1 − 1e-4 λ) r. Returns (x, merit, residual, decreased)."""
+    lam = 1.0
+    while True:
+        r_new, R_new = merit(x + lam * dx)
+        if r_new < (1 - 1e-4 * lam) * r:
+            return x + lam * dx, r_new, R_new, True
+        if lam <= min_step:
+            return x, r, merit(x)[1], False
+        lam *= 0.5
