@@ -169,7 +169,7 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         As :class:`~mmshbm.methods.forced.ForcedResponseProblem`.
     r : float, optional
         Proximal parameter of the unilateral contacts (N/m); the friction contacts use
-        their condensed static tangential stiffness.
+        ρ = 1/(K_cc⁻¹)_tt, the node's stiffness with the DOFs with mass held.
     stability : bool or "auto"
         Floquet multipliers are not yet available with friction: "auto" and False skip
         them, True raises NotImplementedError.
