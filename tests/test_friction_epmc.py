@@ -112,3 +112,12 @@ def test_refusals_are_named():
 def test_baselines_say_not_yet(method):
     with pytest.raises(NotImplementedError, match="not yet"):
         mmshbm.backbone(jenkins(), method=method, max_amplitude=1.0)
+
+
+def test_the_default_start_is_stuck():
+    """Without a gap the backbone starts at half the amplitude where the stuck mode slips
+    (or 1 % of max_amplitude, whichever is smaller)."""
+    with pytest.warns(mmshbm.BranchWarning, match="short of its bounds"):
+        branch = mmshbm.backbone(jenkins(), harmonics=5, max_amplitude=10.0, max_steps=3)
+    assert branch.amplitude[0] == pytest.approx(0.5 * S / K2, rel=1e-12)
+    assert branch.damping_ratio[0] == pytest.approx(C_ / (2 * np.sqrt((K1 + K2) * M_)), rel=1e-10)

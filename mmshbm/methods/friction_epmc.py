@@ -31,7 +31,23 @@ from ._damped_hbm import DampedHBMBase
 from .friction_forced import FrictionRows, check_friction_model, check_law
 from .mms_hbm import _mean_energy
 
-__all__ = ["FrictionEPMCProblem"]
+__all__ = ["FrictionEPMCProblem", "stuck_mode"]
+
+
+def stuck_mode(model: Model, mode: int = 1) -> tuple[float, np.ndarray, float]:
+    """Linear mode ``mode`` of the structure with its friction DOFs clamped (the other
+    massless DOFs condensed): (frequency in Hz, shape (n_dof,) with 1 at the amplitude DOF,
+    the amplitude (m) at which the first friction contact reaches its slip force, inf if
+    none is loaded)."""
+    fixed = [fc.dof for fc in model.friction]
+    keep = np.setdiff1d(np.arange(model.n_dof), fixed)
+    freqs, phi = Model(model.M[keep][:, keep], model.K[keep][:, keep], ()).linear_modes(mode)
+    shape = np.zeros(model.n_dof)
+    shape[keep] = phi[:, -1]
+    shape /= shape[model.amplitude_dof]
+    force = model.K @ shape  # the force each clamped DOF needs per unit amplitude
+    onset = [fc.slip_force / abs(force[fc.dof]) for fc in model.friction if force[fc.dof] != 0]
+    return float(freqs[-1]), shape, (min(onset) if onset else np.inf)
 
 
 class FrictionEPMCProblem(FrictionRows, DampedHBMBase):
@@ -85,22 +101,12 @@ class FrictionEPMCProblem(FrictionRows, DampedHBMBase):
         self.n_l = n_l = self.M.shape[0]
         self.amplitude_dof = amp_dof
         self.amp_l = int(l_index[0])
-        # the stuck structure: friction DOFs clamped, the other massless DOFs condensed
-        fixed = [fc.dof for fc in model.friction]
-        keep = np.setdiff1d(np.arange(model.n_dof), fixed)
-        sub = Model(model.M[keep][:, keep], model.K[keep][:, keep], ())
-        freqs, phi = sub.linear_modes(self.mode)
-        shape = np.zeros(model.n_dof)
-        shape[keep] = phi[:, -1]
-        shape /= shape[amp_dof]
+        frequency, shape, onset = stuck_mode(model, self.mode)
         self.stuck_shape = shape
-        self.mode_frequency = float(freqs[-1])
+        self.mode_frequency = frequency
         phi_m = shape / np.sqrt(shape @ (model.M @ shape))
         self.mode_xi = float(phi_m @ (model.damping @ phi_m)) if model.damping is not None else 0.0
-        # scales: the amplitude at which the stuck mode starts to slip
-        force = model.K @ shape
-        onset = [fc.slip_force / abs(force[fc.dof]) for fc in model.friction if force[fc.dof] != 0]
-        self.length = min(onset) if onset else 1.0
+        self.length = onset if np.isfinite(onset) else 1.0  # scale: where the stuck mode starts to slip
         self._rescale(self.length, 0)
         self.mode_shape_c = shape[model.c]
         xl = self.length * np.maximum(np.abs(shape[model.l]), 1e-3 * np.abs(shape[model.l]).max())
