@@ -24,6 +24,7 @@ LAYERS = {
     "mmshbm.model": 1,
     "mmshbm.fe": 2,
     "mmshbm.core": 3,
+    "mmshbm.contact": 3,
     "mmshbm.results": 4,
     "mmshbm.methods": 5,
     "mmshbm.analysis": 6,
