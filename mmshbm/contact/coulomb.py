@@ -185,27 +185,6 @@ def _phi(H: int, tau: float) -> np.ndarray:
     return out
 
 
-def _arc(H: int, a: float, b: float) -> tuple[np.ndarray, np.ndarray]:
-    """Spectrum (C, S), n = 0..2H, of the indicator of the arc [a, b]:
-    C_n = (1/2π)∫_a^b cos nτ dτ, S_n = (1/2π)∫_a^b sin nτ dτ (closed form)."""
-    n = np.arange(1, 2 * H + 1)
-    C = np.empty(2 * H + 1)
-    S = np.empty(2 * H + 1)
-    C[0], S[0] = b - a, 0.0
-    C[1:] = (np.sin(n * b) - np.sin(n * a)) / n
-    S[1:] = (np.cos(n * a) - np.cos(n * b)) / n
-    return C / (2 * np.pi), S / (2 * np.pi)
-
-
-def _indicator(C: np.ndarray, S: np.ndarray, H: int) -> np.ndarray:
-    """NLvib-ordered projection of an indicator with spectrum (C, S)."""
-    out = np.empty(2 * H + 1)
-    out[0] = C[0]
-    out[1::2] = 2 * C[1:H + 1]
-    out[2::2] = 2 * S[1:H + 1]
-    return out
-
-
 def play_pieces(y: np.ndarray, s: float, r: float, n_samples: int | None = None) -> list:
     """Stick and slip pieces of the periodic Coulomb law driven by ``y`` (see
     :func:`project_coulomb_play`), over one period starting at y's global maximum.
@@ -234,7 +213,7 @@ def play_pieces(y: np.ndarray, s: float, r: float, n_samples: int | None = None)
     width = s / r
     if n_ext == 0:
         return [(0.0, _TWO_PI, 0, float(y[0]), np.nan)]
-    vals = np.array([c[0] + c[1:] @ np.cos(k * t) + sn[1:] @ np.sin(k * t) for t in ext])
+    vals = c[0] + np.cos(np.outer(ext, k)) @ c[1:] + np.sin(np.outer(ext, k)) @ sn[1:]
     i_max, i_min = int(np.argmax(vals)), int(np.argmin(vals))
     y_max, y_min = vals[i_max], vals[i_min]
     if y_max - y_min <= 2 * width:
@@ -271,8 +250,8 @@ def play_pieces(y: np.ndarray, s: float, r: float, n_samples: int | None = None)
     return pieces
 
 
-def project_coulomb_play(y: np.ndarray, s: float, r: float,
-                         n_samples: int | None = None) -> tuple[np.ndarray, np.ndarray, float]:
+def project_coulomb_play(y: np.ndarray, s: float, r: float, n_samples: int | None = None,
+                         jacobian: bool = True) -> tuple[np.ndarray, np.ndarray | None, float]:
     """Exact harmonic projection of the support's force g = r (u − y) of a massless Coulomb
     node whose position u is driven by the periodic signal y, and its exact Jacobian.
 
@@ -302,12 +281,14 @@ def project_coulomb_play(y: np.ndarray, s: float, r: float,
         Stiffness parameter > 0 (N/m).
     n_samples : int, optional
         Bracketing grid of the root finder; default 16·(2H+1).
+    jacobian : bool
+        If False skip the Jacobian (returned as None): a residual-only evaluation.
 
     Returns
     -------
     g : ndarray (2H+1,)
         NLvib-ordered projection of the support's force (N).
-    dg_dy : ndarray (2H+1, 2H+1)
+    dg_dy : ndarray (2H+1, 2H+1) or None
     slip : float
         Fraction of the period in slip.
     """
@@ -322,26 +303,55 @@ def project_coulomb_play(y: np.ndarray, s: float, r: float,
     if not r > 0:
         raise ValueError(f"r must be > 0, got {r!r}")
     H = (y.shape[0] - 1) // 2
-    g = np.zeros(2 * H + 1)
+    pieces = play_pieces(y, s, r, n_samples)
+    a, b, sigma, u, t_e = (np.array(v, dtype=float) for v in zip(*pieces, strict=True))
+    # spectra C_n = (1/2π)∫_a^b cos nτ, S_n = (1/2π)∫_a^b sin nτ (n = 0..2H) of every
+    # piece's indicator, in closed form
+    n = np.arange(1, 2 * H + 1)
+    C = np.empty((len(a), 2 * H + 1))
+    S = np.empty((len(a), 2 * H + 1))
+    C[:, 0], S[:, 0] = b - a, 0.0
+    C[:, 1:] = (np.sin(np.outer(b, n)) - np.sin(np.outer(a, n))) / n
+    S[:, 1:] = (np.cos(np.outer(a, n)) - np.cos(np.outer(b, n))) / n
+    C /= 2 * np.pi
+    S /= 2 * np.pi
+    ind = np.empty((len(a), 2 * H + 1))  # NLvib-ordered projection of each indicator
+    ind[:, 0] = C[:, 0]
+    ind[:, 1::2] = 2 * C[:, 1:H + 1]
+    ind[:, 2::2] = 2 * S[:, 1:H + 1]
+    slipping = sigma != 0
+    stick = ~slipping
+    slip = float(np.sum(b[slipping] - a[slipping]) / (2 * np.pi))
+    g = -s * (sigma[slipping] @ ind[slipping]) + r * (u[stick] @ ind[stick])
+    C_stick, S_stick = C[stick].sum(axis=0), S[stick].sum(axis=0)
+    if not jacobian:
+        return g - r * _product_vector(C_stick, S_stick, y, H), None, slip
     J = np.zeros((2 * H + 1, 2 * H + 1))
-    C_stick = np.zeros(2 * H + 1)
-    S_stick = np.zeros(2 * H + 1)
-    slip = 0.0
-    for a, b, sigma, u, t_e in play_pieces(y, s, r, n_samples):
-        C, S = _arc(H, a, b)
-        ind = _indicator(C, S, H)
-        if sigma != 0:
-            g -= sigma * s * ind
-            slip += (b - a) / (2 * np.pi)
-            continue
-        C_stick += C
-        S_stick += S
-        g += r * u * ind
-        if np.isnan(t_e):  # full stick at the symmetric position u = mean(y)
-            J[:, 0] += r * ind
+    for i in np.flatnonzero(stick):
+        if np.isnan(t_e[i]):  # full stick at the symmetric position u = mean(y)
+            J[:, 0] += r * ind[i]
         else:
-            J += r * np.outer(ind, _phi(H, t_e))
+            J += r * np.outer(ind[i], _phi(H, t_e[i]))
     G = _product_matrix(C_stick, S_stick, H)
     g -= r * (G @ y)
     J -= r * G
     return g, J, slip
+
+
+def _product_vector(C: np.ndarray, S: np.ndarray, y: np.ndarray, H: int) -> np.ndarray:
+    """proj[χ y] for the indicator χ of spectrum (C, S) (n = 0..2H) and the NLvib-ordered
+    y (2H+1,): the product of the two series truncated to harmonics 0..H, without forming
+    the product matrix."""
+    a = np.concatenate([[y[0]], 0.5 * y[1::2]])   # y = Σ_k a_k e^{ikτ} + c.c. (a_0 real)
+    b = np.concatenate([[0.0], -0.5 * y[2::2]])
+    yc = a + 1j * b                                 # complex coefficient of e^{ikτ}, k >= 0
+    chi = C - 1j * S                                # χ = Σ_n χ_n e^{inτ}, χ_{-n} = conj(χ_n)
+    full_y = np.concatenate([np.conj(yc[:0:-1]), yc])         # k = −H..H
+    full_c = np.concatenate([np.conj(chi[:0:-1]), chi])       # n = −2H..2H
+    prod = np.convolve(full_c, full_y)                        # index of m: m + 3H
+    p = prod[3 * H:4 * H + 1]                                 # m = 0..H
+    out = np.empty(2 * H + 1)
+    out[0] = p[0].real
+    out[1::2] = 2 * p[1:].real
+    out[2::2] = -2 * p[1:].imag
+    return out

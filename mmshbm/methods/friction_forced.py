@@ -110,12 +110,16 @@ class FrictionRows:
             self.rowscale[self._coef_index[i]] = self.rho[j] * length
         self.colscale = np.concatenate([self.xscale, np.full(extra_cols, self.omega_ref)])
 
-    def friction_law(self, x: np.ndarray, F: np.ndarray, j: int):
-        """(R (2H+1,), ∂R/∂F_t, ∂R/∂x_t (2H+1, 2H+1), slip fraction) of friction contact j."""
+    def friction_law(self, x: np.ndarray, F: np.ndarray, j: int, jacobian: bool = True):
+        """(R (2H+1,), ∂R/∂F_t, ∂R/∂x_t (2H+1, 2H+1), slip fraction) of friction contact j
+        (the play form without ``jacobian`` returns None for both derivatives)."""
         idx = self._coef_index[self.friction_rows[j]]
         if self.law == "play":
             rho = self.rho[j]
-            g, Jg, slip = project_coulomb_play(x[idx] - F[idx] / rho, self.slip_force[j], rho)
+            g, Jg, slip = project_coulomb_play(x[idx] - F[idx] / rho, self.slip_force[j], rho,
+                                               jacobian=jacobian)
+            if Jg is None:
+                return F[idx] - g, None, None, slip
             return F[idx] - g, np.eye(len(idx)) + Jg / rho, -Jg, slip
         v = self._Dt @ x[idx]
         Rc, A, B, slip = project_coulomb(-F[idx], v, self.slip_force[j], self.rho[j], self._exact,
@@ -127,7 +131,7 @@ class FrictionRows:
         R, Jx, Jp = super().contact_residual(x, F, dF, dFp)
         for j, i in enumerate(self.friction_rows):
             idx = self._coef_index[i]
-            Rt, A, B, slip = self.friction_law(x, F, j)
+            Rt, A, B, slip = self.friction_law(x, F, j, Jx is not None)
             R[idx] = Rt
             if Jx is not None:
                 Jx[idx] = A @ dF[idx]
@@ -151,7 +155,7 @@ class FrictionRows:
         slip, work = 0.0, 0.0
         for j, i in enumerate(self.friction_rows):
             idx = self._coef_index[i]
-            slip = max(slip, self.friction_law(x, F, j)[3])
+            slip = max(slip, self.friction_law(x, F, j, False)[3])
             f, v = -F[idx], self._Dt @ x[idx]
             work += np.pi * (2 * f[0] * v[0] + f[1:] @ v[1:])
         return {"slip_fraction": slip, "friction_dissipation": float(work)}
