@@ -63,10 +63,11 @@ class NormalLoadStudy:
     def optimum(self) -> tuple[float, float]:
         """(N, amplitude) at the smallest resonance amplitude: a parabola in (log N, log
         amplitude) through the smallest sampled point and its neighbours, its vertex where
-        it lies between them; the sampled point otherwise (at an end of the range, or next
-        to N = 0)."""
+        it lies between them; the sampled point otherwise (at an end of the range, next to
+        N = 0, or where one of the three has its largest amplitude at a band edge)."""
         i = int(np.argmin(self.peak_amplitude))
-        if 0 < i < len(self.normal_load) - 1 and self.normal_load[i - 1] > 0:
+        inner = 0 < i < len(self.normal_load) - 1
+        if inner and self.normal_load[i - 1] > 0 and not self.at_band_edge[i - 1:i + 2].any():
             x = np.log(self.normal_load[i - 1:i + 2])
             c2, c1, c0 = np.polyfit(x, np.log(self.peak_amplitude[i - 1:i + 2]), 2)
             if c2 > 0 and x[0] <= -c1 / (2 * c2) <= x[2]:
@@ -102,7 +103,9 @@ def resonance_peak(problem, grid: np.ndarray, guesses: list | None = None, xtol:
     scaled residual, ``xtol`` the relative frequency tolerance of the search.
 
     Returns (amplitude (m), frequency (Hz), slip fraction, all converged, the sweep's
-    scaled unknowns per grid point (to warm-start the next load)).
+    scaled unknowns per grid point, None where the solve did not converge (to
+    warm-start the next load)). Points whose solve did not converge are left out of the
+    maximum; NaN when none converged.
     """
     from scipy.optimize import minimize_scalar
 
@@ -119,10 +122,13 @@ def resonance_peak(problem, grid: np.ndarray, guesses: list | None = None, xtol:
         if not ok:
             u_new, ok = problem.solve_at(f, problem.start_point(f), tol=tol)
         ok_all &= ok
-        u = u_new
-        sols.append(u)
-        amps.append(_amplitude(problem, u))
+        if ok:  # a point that did not converge neither counts nor starts the next
+            u = u_new
+        sols.append(u_new if ok else None)
+        amps.append(_amplitude(problem, u_new) if ok else -np.inf)
     amps = np.array(amps)
+    if not np.isfinite(amps).any():
+        return np.nan, np.nan, np.nan, False, sols
     i = int(np.argmax(amps))
     lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, len(grid) - 1)]
     cache = {"u": sols[i]}
@@ -131,7 +137,9 @@ def resonance_peak(problem, grid: np.ndarray, guesses: list | None = None, xtol:
         u, ok = problem.solve_at(f, cache["u"], tol=tol)
         if not ok:
             u, ok = problem.solve_at(f, problem.start_point(f), tol=tol)
-        cache["ok"] = cache.get("ok", True) and ok
+        if not ok:
+            cache["ok"] = False
+            return np.inf
         cache["u"] = u
         return -_amplitude(problem, u)
 
@@ -141,7 +149,7 @@ def resonance_peak(problem, grid: np.ndarray, guesses: list | None = None, xtol:
         return float(amps[i]), float(grid[i]), float(slip), bool(ok_all), sols
     best = minimize_scalar(neg, bounds=(lo, hi), method="bounded", options={"xatol": xtol * grid[i]})
     f_pk, a_pk = float(best.x), float(-best.fun)
-    if amps[i] > a_pk:  # the grid point itself (an end of the band)
+    if amps[i] > a_pk:  # the grid point itself
         f_pk, a_pk = float(grid[i]), float(amps[i])
         cache["u"] = sols[i]
     x, om = problem.unpack(cache["u"])
