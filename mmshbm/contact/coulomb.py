@@ -40,7 +40,7 @@ from numba import njit
 from ..core.kernels import JIT_OPTIONS
 
 __all__ = ["coulomb_residual", "coulomb_derivative", "project_coulomb", "project_coulomb_play", "play_pieces",
-           "derivative_matrix"]
+           "derivative_matrix", "jenkins_hysteresis"]
 
 
 @njit(**JIT_OPTIONS)
@@ -355,3 +355,88 @@ def _product_vector(C: np.ndarray, S: np.ndarray, y: np.ndarray, H: int) -> np.n
     out[1::2] = 2 * p[1:].real
     out[2::2] = -2 * p[1:].imag
     return out
+
+
+@njit(**JIT_OPTIONS)
+def _jenkins_passes(u, s, k, f, df):
+    """In place: the periodic force f (N,) of a Jenkins element (spring k, slider of slip
+    force s) driven by the samples u (N,) and df[j, i] = ∂f_j/∂u_i, by two passes of the
+    return map f_j = clip(f_{j−1} + k (u_j − u_{j−1}), −s, s). The first pass starts
+    with the slider at mean(u) (f = k (u_0 − mean u), clipped); the second starts from the
+    end of the first, so the hysteresis is periodic whenever the slider slipped in the
+    first pass (and the symmetric stuck position, mean force zero, where it never slips)."""
+    n = u.shape[0]
+    mean = 0.0
+    for i in range(n):
+        mean += u[i]
+    mean /= n
+    d = np.empty(n)  # ∂f_prev/∂u
+    fp = k * (u[0] - mean)
+    for i in range(n):
+        d[i] = -k / n
+    d[0] += k
+    if fp > s or fp < -s:
+        fp = s if fp > s else -s
+        for i in range(n):
+            d[i] = 0.0
+    for sweep in range(2):
+        for j in range(n):
+            jm = j - 1 if j > 0 else n - 1
+            if sweep == 0 and j == 0:
+                trial = fp  # the start itself
+            else:
+                trial = fp + k * (u[j] - u[jm])
+                d[j] += k
+                d[jm] -= k
+            if trial > s or trial < -s:
+                fp = s if trial > s else -s
+                for i in range(n):
+                    d[i] = 0.0
+            else:
+                fp = trial
+            if sweep == 1:
+                f[j] = fp
+                for i in range(n):
+                    df[j, i] = d[i]
+
+
+def jenkins_hysteresis(u: np.ndarray, s: float, k: float) -> tuple[np.ndarray, np.ndarray]:
+    """Periodic force of a Jenkins element (a spring k in series with a Coulomb slider of
+    slip force s) driven by the samples u of one period, and its exact derivative.
+
+    The slider is Coulomb's law at a massless node joined to the driven point by the
+    spring: the node sticks while |k (u − w)| < s and slides with |f| = s, the discrete
+    return map f_j = clip(f_{j−1} + k Δu_j, −s, s) being its exact solution for u
+    piecewise linear between samples. Two passes over the period make the hysteresis
+    periodic (the slip erases the start); this is the alternating frequency-time (AFT)
+    evaluation of the Jenkins element of penalty harmonic balance (NLvib's
+    ``elasticDryFriction``, pyHarm's Jenkins element).
+
+    Parameters
+    ----------
+    u : ndarray (N,)
+        Displacement of the driven point at τ_j = 2πj/N (m).
+    s : float
+        Slip force >= 0 (N).
+    k : float
+        Spring stiffness > 0 (N/m).
+
+    Returns
+    -------
+    f : ndarray (N,)
+        The force the element exerts on its support (N), the spring's tension k (u − w).
+    df_du : ndarray (N, N)
+        ∂f_j/∂u_i.
+    """
+    u = np.ascontiguousarray(u, dtype=float)
+    if u.ndim != 1 or u.shape[0] < 2:
+        raise ValueError(f"u must be 1-D with at least 2 samples, got shape {u.shape}")
+    s, k = float(s), float(k)
+    if not (s >= 0 and np.isfinite(s)):
+        raise ValueError(f"slip force s must be finite and >= 0, got {s!r}")
+    if not (k > 0 and np.isfinite(k)):
+        raise ValueError(f"spring stiffness k must be finite and > 0, got {k!r}")
+    f = np.empty(u.shape[0])
+    df = np.empty((u.shape[0], u.shape[0]))
+    _jenkins_passes(u, s, k, f, df)
+    return f, df
