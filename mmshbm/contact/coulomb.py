@@ -358,27 +358,29 @@ def _product_vector(C: np.ndarray, S: np.ndarray, y: np.ndarray, H: int) -> np.n
 
 
 @njit(**JIT_OPTIONS)
-def _jenkins_passes(u, s, k, f, df):
+def _jenkins_passes(u, B, s, k, f, df):
     """In place: the periodic force f (N,) of a Jenkins element (spring k, slider of slip
-    force s) driven by the samples u (N,) and df[j, i] = ∂f_j/∂u_i, by two passes of the
+    force s) driven by the samples u (N,) and df[j] = ∂f_j/∂c (N, m) for u = B c (B the
+    (N, m) derivative of the samples with respect to m parameters), by two passes of the
     return map f_j = clip(f_{j−1} + k (u_j − u_{j−1}), −s, s). The first pass starts
     with the slider at mean(u) (f = k (u_0 − mean u), clipped); the second starts from the
     end of the first, so the hysteresis is periodic whenever the slider slipped in the
     first pass (and the symmetric stuck position, mean force zero, where it never slips)."""
-    n = u.shape[0]
+    n, m = B.shape
     mean = 0.0
     for i in range(n):
         mean += u[i]
     mean /= n
-    d = np.empty(n)  # ∂f_prev/∂u
-    fp = k * (u[0] - mean)
+    d = np.zeros(m)  # ∂f_prev/∂c
     for i in range(n):
-        d[i] = -k / n
-    d[0] += k
+        for c in range(m):
+            d[c] -= k * B[i, c] / n
+    for c in range(m):
+        d[c] += k * B[0, c]
+    fp = k * (u[0] - mean)
     if fp > s or fp < -s:
         fp = s if fp > s else -s
-        for i in range(n):
-            d[i] = 0.0
+        d[:] = 0.0
     for sweep in range(2):
         for j in range(n):
             jm = j - 1 if j > 0 else n - 1
@@ -386,21 +388,21 @@ def _jenkins_passes(u, s, k, f, df):
                 trial = fp  # the start itself
             else:
                 trial = fp + k * (u[j] - u[jm])
-                d[j] += k
-                d[jm] -= k
+                for c in range(m):
+                    d[c] += k * (B[j, c] - B[jm, c])
             if trial > s or trial < -s:
                 fp = s if trial > s else -s
-                for i in range(n):
-                    d[i] = 0.0
+                d[:] = 0.0
             else:
                 fp = trial
             if sweep == 1:
                 f[j] = fp
-                for i in range(n):
-                    df[j, i] = d[i]
+                for c in range(m):
+                    df[j, c] = d[c]
 
 
-def jenkins_hysteresis(u: np.ndarray, s: float, k: float) -> tuple[np.ndarray, np.ndarray]:
+def jenkins_hysteresis(u: np.ndarray, s: float, k: float,
+                       basis: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Periodic force of a Jenkins element (a spring k in series with a Coulomb slider of
     slip force s) driven by the samples u of one period, and its exact derivative.
 
@@ -420,13 +422,16 @@ def jenkins_hysteresis(u: np.ndarray, s: float, k: float) -> tuple[np.ndarray, n
         Slip force >= 0 (N).
     k : float
         Spring stiffness > 0 (N/m).
+    basis : ndarray (N, m), optional
+        ∂u/∂c for m parameters c (e.g. the harmonic coefficients: the synthesis matrix);
+        default the identity (derivatives with respect to the samples).
 
     Returns
     -------
     f : ndarray (N,)
         The force the element exerts on its support (N), the spring's tension k (u − w).
-    df_du : ndarray (N, N)
-        ∂f_j/∂u_i.
+    df : ndarray (N, m)
+        ∂f_j/∂c (∂f_j/∂u_i without ``basis``), propagated along the passes (O(N m)).
     """
     u = np.ascontiguousarray(u, dtype=float)
     if u.ndim != 1 or u.shape[0] < 2:
@@ -436,7 +441,10 @@ def jenkins_hysteresis(u: np.ndarray, s: float, k: float) -> tuple[np.ndarray, n
         raise ValueError(f"slip force s must be finite and >= 0, got {s!r}")
     if not (k > 0 and np.isfinite(k)):
         raise ValueError(f"spring stiffness k must be finite and > 0, got {k!r}")
+    B = np.eye(u.shape[0]) if basis is None else np.ascontiguousarray(basis, dtype=float)
+    if B.ndim != 2 or B.shape[0] != u.shape[0]:
+        raise ValueError(f"basis must have shape ({u.shape[0]}, m), got {B.shape}")
     f = np.empty(u.shape[0])
-    df = np.empty((u.shape[0], u.shape[0]))
-    _jenkins_passes(u, s, k, f, df)
+    df = np.empty((u.shape[0], B.shape[1]))
+    _jenkins_passes(u, B, s, k, f, df)
     return f, df

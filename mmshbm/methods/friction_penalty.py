@@ -196,13 +196,14 @@ class JenkinsForcedProblem(PenaltyForcedProblem):
         R = L @ Q - s * self._Fvec
         rows, cols, vals = [], [], []
         for j, idx in enumerate(self._idx):
-            f, df = jenkins_hysteresis(self._Phi @ Q[idx], self.slip_force[j], self.tangential_stiffness[j])
+            f, df = jenkins_hysteresis(self._Phi @ Q[idx], self.slip_force[j], self.tangential_stiffness[j],
+                                       self._Phi)
             R[idx] += self._P @ f
             if jacobian:
                 rr, cc = np.meshgrid(idx, idx, indexing="ij")
                 rows.append(rr.ravel())
                 cols.append(cc.ravel())
-                vals.append((self._P @ df @ self._Phi).ravel())
+                vals.append((self._P @ df).ravel())
         R = R / self.rowscale
         if not jacobian:
             return R
