@@ -97,10 +97,12 @@ class NormalLoadStudy:
 
 
 def resonance_peak(problem, grid: np.ndarray, guesses: list | None = None, xtol: float = 1e-5,
-                   tol: float = 1e-11):
+                   tol: float = 1e-11, max_iter: int = 50):
     """Largest amplitude of ``problem`` (a FrictionForcedProblem) over the frequencies of
     ``grid`` (Hz, ascending) and between them; ``tol`` is the Newton tolerance on the
-    scaled residual, ``xtol`` the relative frequency tolerance of the search.
+    scaled residual, ``xtol`` the relative frequency tolerance of the search, ``max_iter``
+    the Newton iterations of each solve (a point that needs more is restarted from the
+    linear responses, then left out).
 
     Returns (amplitude (m), frequency (Hz), slip fraction, all converged, the sweep's
     scaled unknowns per grid point, None where the solve did not converge (to
@@ -116,11 +118,11 @@ def resonance_peak(problem, grid: np.ndarray, guesses: list | None = None, xtol:
         starts = [g for g in ((guesses[j] if guesses is not None else None), u) if g is not None]
         ok = False
         for start in starts:
-            u_new, ok = problem.solve_at(f, start, tol=tol)
+            u_new, ok = problem.solve_at(f, start, max_iter, tol)
             if ok:
                 break
         if not ok:
-            u_new, ok = problem.solve_at(f, problem.start_point(f), tol=tol)
+            u_new, ok = problem.solve_at(f, problem.start_point(f, max_iter), max_iter, tol)
         ok_all &= ok
         if ok:  # a point that did not converge neither counts nor starts the next
             u = u_new
@@ -134,9 +136,9 @@ def resonance_peak(problem, grid: np.ndarray, guesses: list | None = None, xtol:
     cache = {"u": sols[i]}
 
     def neg(f):
-        u, ok = problem.solve_at(f, cache["u"], tol=tol)
+        u, ok = problem.solve_at(f, cache["u"], max_iter, tol)
         if not ok:
-            u, ok = problem.solve_at(f, problem.start_point(f), tol=tol)
+            u, ok = problem.solve_at(f, problem.start_point(f, max_iter), max_iter, tol)
         if not ok:
             cache["ok"] = False
             return np.inf
