@@ -139,9 +139,9 @@ def resonance_peak(problem, grid: np.ndarray, guesses: list | None = None, xtol:
         u, ok = problem.solve_at(f, cache["u"], max_iter, tol)
         if not ok:
             u, ok = problem.solve_at(f, problem.start_point(f, max_iter), max_iter, tol)
-        if not ok:
+        if not ok:  # counts as no amplitude (finite: the search's parabolas stay defined)
             cache["ok"] = False
-            return np.inf
+            return 0.0
         cache["u"] = u
         return -_amplitude(problem, u)
 

@@ -30,6 +30,11 @@ caches a kernel per file). The displacement-level projection (:func:`project_cou
 calls the root-finding kernels of :mod:`mmshbm.core.contact_kernels` (``_zeros``,
 ``_refine``) from Python: no compiled kernel here calls one in another file, so Numba's
 per-file cache cannot go stale across files.
+
+The Jenkins element of penalty harmonic balance (a spring in series with the slider:
+Coulomb's law at a massless node behind a spring) is evaluated by AFT with the return map
+f_j = clip(f_{j−1} + k Δu_j, −s, s) over two passes (:func:`jenkins_hysteresis`), the same
+clip as the proximal equation above, applied to displacement increments.
 """
 
 from __future__ import annotations
