@@ -27,9 +27,10 @@ the pieces are integrated in closed form, and its Jacobian G (the projection of 
 indicator of |p| > s) gives ∂proj[clip]/∂p = I − G exactly. This module calls that
 projection and does not copy it; the pointwise kernels below are self-contained (Numba
 caches a kernel per file). The displacement-level projection (:func:`project_coulomb_play`)
-calls the root-finding kernels of :mod:`mmshbm.core.contact_kernels` (``_zeros``,
-``_refine``) from Python: no compiled kernel here calls one in another file, so Numba's
-per-file cache cannot go stale across files.
+uses the root-finding kernels of :mod:`mmshbm.core.contact_kernels` (``_zeros`` from
+Python, ``_refine`` from the compiled walk over the extrema, ``_play_walk``: the package's
+cache policy, :mod:`mmshbm._kernel_cache`, recompiles a caller when a callee's file
+changes).
 
 The Jenkins element of penalty harmonic balance (a spring in series with the slider:
 Coulomb's law at a massless node behind a spring) is evaluated by AFT with the return map
@@ -39,9 +40,12 @@ clip as the proximal equation above, applied to displacement increments.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from numba import njit
 
+from ..core.contact_kernels import _TWO_PI, _refine, _zeros
 from ..core.kernels import JIT_OPTIONS
 
 __all__ = ["coulomb_residual", "coulomb_derivative", "project_coulomb", "project_coulomb_play", "play_pieces",
@@ -190,6 +194,91 @@ def _phi(H: int, tau: float) -> np.ndarray:
     return out
 
 
+@functools.lru_cache(maxsize=32)
+def _sample_basis(H: int, N: int):
+    """τ_j = 2πj/N and cos/sin(k τ_j), k = 0..H ((H+1, N) each), read-only."""
+    tau = 2 * np.pi * np.arange(N) / N
+    k = np.arange(H + 1)
+    out = (tau, np.cos(np.outer(k, tau)), np.sin(np.outer(k, tau)))
+    for arr in out:
+        arr.flags.writeable = False
+    return out
+
+
+@njit(**JIT_OPTIONS)
+def _play_walk(pts, pv, c, sn, width, A, B, SG, U, TE):
+    """The pieces of the play operator between consecutive extrema ``pts`` (values ``pv``)
+    of y = c_0 + Σ c_k cos kτ + sn_k sin kτ, starting dragged up at pts[0]; written to
+    A, B (arc), SG (σ), U (stick position), TE (extremum that set it). Returns the count."""
+    m = 0
+    u = pv[0] - width
+    t_e = pts[0]
+    gc = c.copy()
+    zero = np.int64(0)
+    for i in range(pts.shape[0] - 1):
+        a, b, ya, yb = pts[i], pts[i + 1], pv[i], pv[i + 1]
+        if b <= a:
+            continue
+        sigma = 1 if yb > ya else -1
+        level = u + sigma * width
+        if sigma * (yb - level) <= 0:  # does not reach the slip threshold: sticks throughout
+            A[m], B[m], SG[m], U[m], TE[m] = a, b, 0, u, t_e
+            m += 1
+            continue
+        if sigma * (ya - level) >= 0:
+            t_sw = a
+        else:
+            gc[0] = c[0] - level
+            t_sw = _refine(gc, sn, a, b, ya - level, zero)
+        if t_sw > a:
+            A[m], B[m], SG[m], U[m], TE[m] = a, t_sw, 0, u, t_e
+            m += 1
+        A[m], B[m], SG[m], U[m], TE[m] = t_sw, b, sigma, np.nan, np.nan
+        m += 1
+        u, t_e = yb - sigma * width, b
+    return m
+
+
+def _play_arrays(y: np.ndarray, s: float, r: float, n_samples: int | None = None):
+    """The pieces of :func:`play_pieces` as arrays (a, b, σ, u, τ_e)."""
+    y = np.asarray(y, dtype=float)
+    H = (y.shape[0] - 1) // 2
+    N = 16 * (2 * H + 1) if n_samples is None else int(n_samples)
+    k = np.arange(1, H + 1)
+    c, sn = np.concatenate([[y[0]], y[1::2]]), np.concatenate([[0.0], y[2::2]])
+    dc, ds = np.concatenate([[0.0], k * sn[1:]]), np.concatenate([[0.0], -k * c[1:]])  # y′
+    tau, cos_t, sin_t = _sample_basis(H, N)
+    d1 = dc @ cos_t + ds @ sin_t
+    d2 = (k * ds[1:]) @ cos_t[1:] - (k * dc[1:]) @ sin_t[1:]
+    roots = np.empty(2 * N + 2)
+    n_ext = _zeros(dc, ds, d1, d2, tau, roots)
+    ext = roots[:n_ext]
+    width = s / r
+
+    def one(a, b, sg, u, te):
+        return tuple(np.array([v], dtype=float) for v in (a, b, sg, u, te))
+
+    if n_ext == 0:
+        return one(0.0, _TWO_PI, 0, float(y[0]), np.nan)
+    vals = c[0] + np.cos(np.outer(ext, k)) @ c[1:] + np.sin(np.outer(ext, k)) @ sn[1:]
+    i_max, i_min = int(np.argmax(vals)), int(np.argmin(vals))
+    y_max, y_min = vals[i_max], vals[i_min]
+    if y_max - y_min <= 2 * width:
+        if y[0] < y_max - width:
+            return one(0.0, _TWO_PI, 0, y_max - width, float(ext[i_max]))
+        if y[0] > y_min + width:
+            return one(0.0, _TWO_PI, 0, y_min + width, float(ext[i_min]))
+        return one(0.0, _TWO_PI, 0, float(y[0]), np.nan)
+    order = np.roll(np.arange(n_ext), -i_max)
+    pts = np.concatenate([ext[order], [ext[i_max] + _TWO_PI]])
+    pv = np.concatenate([vals[order], [y_max]])
+    pts[1:-1] = np.where(pts[1:-1] < pts[0], pts[1:-1] + _TWO_PI, pts[1:-1])
+    cap = 2 * len(pts)
+    out = [np.empty(cap) for _ in range(5)]
+    m = _play_walk(pts, pv, c, sn, width, *out)
+    return tuple(arr[:m] for arr in out)
+
+
 def play_pieces(y: np.ndarray, s: float, r: float, n_samples: int | None = None) -> list:
     """Stick and slip pieces of the periodic Coulomb law driven by ``y`` (see
     :func:`project_coulomb_play`), over one period starting at y's global maximum.
@@ -200,59 +289,8 @@ def play_pieces(y: np.ndarray, s: float, r: float, n_samples: int | None = None)
     [0, 2π] at the symmetric position u = mean(y) (mean force zero, τ_e = NaN: ∂u/∂y = e_0),
     or clamped into the band where |r (u − y)| <= s (at y's maximum or minimum, τ_e there).
     """
-    from ..core.contact_kernels import _TWO_PI, _refine, _zeros
-
-    y = np.asarray(y, dtype=float)
-    H = (y.shape[0] - 1) // 2
-    N = 16 * (2 * H + 1) if n_samples is None else int(n_samples)
-    k = np.arange(1, H + 1)
-    c, sn = np.concatenate([[y[0]], y[1::2]]), np.concatenate([[0.0], y[2::2]])
-    dc, ds = np.concatenate([[0.0], k * sn[1:]]), np.concatenate([[0.0], -k * c[1:]])  # y′
-    tau = _TWO_PI * np.arange(N) / N
-    cos_t, sin_t = np.cos(np.outer(np.arange(H + 1), tau)), np.sin(np.outer(np.arange(H + 1), tau))
-    d1 = dc @ cos_t + ds @ sin_t
-    d2 = (k * ds[1:]) @ cos_t[1:] - (k * dc[1:]) @ sin_t[1:]
-    roots = np.empty(2 * N + 2)
-    n_ext = _zeros(dc, ds, d1, d2, tau, roots)
-    ext = roots[:n_ext]
-    width = s / r
-    if n_ext == 0:
-        return [(0.0, _TWO_PI, 0, float(y[0]), np.nan)]
-    vals = c[0] + np.cos(np.outer(ext, k)) @ c[1:] + np.sin(np.outer(ext, k)) @ sn[1:]
-    i_max, i_min = int(np.argmax(vals)), int(np.argmin(vals))
-    y_max, y_min = vals[i_max], vals[i_min]
-    if y_max - y_min <= 2 * width:
-        if y[0] < y_max - width:
-            return [(0.0, _TWO_PI, 0, y_max - width, float(ext[i_max]))]
-        if y[0] > y_min + width:
-            return [(0.0, _TWO_PI, 0, y_min + width, float(ext[i_min]))]
-        return [(0.0, _TWO_PI, 0, float(y[0]), np.nan)]
-    order = np.roll(np.arange(n_ext), -i_max)
-    pts = np.concatenate([ext[order], [ext[i_max] + _TWO_PI]])
-    pv = np.concatenate([vals[order], [y_max]])
-    pts[1:-1] = np.where(pts[1:-1] < pts[0], pts[1:-1] + _TWO_PI, pts[1:-1])
-    u, t_e = y_max - width, float(pts[0])
-    pieces = []
-    zero = np.int64(0)
-    for a, b, ya, yb in zip(pts[:-1], pts[1:], pv[:-1], pv[1:], strict=True):
-        if b <= a:
-            continue
-        sigma = 1 if yb > ya else -1
-        level = u + sigma * width
-        if sigma * (yb - level) <= 0:  # does not reach the slip threshold: sticks throughout
-            pieces.append((a, b, 0, u, t_e))
-            continue
-        if sigma * (ya - level) >= 0:
-            t_sw = a
-        else:
-            gc = c.copy()
-            gc[0] -= level
-            t_sw = _refine(gc, sn, a, b, ya - level, zero)
-        if t_sw > a:
-            pieces.append((a, t_sw, 0, u, t_e))
-        pieces.append((t_sw, b, sigma, np.nan, np.nan))
-        u, t_e = yb - sigma * width, float(b)
-    return pieces
+    a, b, sg, u, te = _play_arrays(y, s, r, n_samples)
+    return [(float(a[i]), float(b[i]), int(sg[i]), float(u[i]), float(te[i])) for i in range(len(a))]
 
 
 def project_coulomb_play(y: np.ndarray, s: float, r: float, n_samples: int | None = None,
@@ -308,8 +346,7 @@ def project_coulomb_play(y: np.ndarray, s: float, r: float, n_samples: int | Non
     if not r > 0:
         raise ValueError(f"r must be > 0, got {r!r}")
     H = (y.shape[0] - 1) // 2
-    pieces = play_pieces(y, s, r, n_samples)
-    a, b, sigma, u, t_e = (np.array(v, dtype=float) for v in zip(*pieces, strict=True))
+    a, b, sigma, u, t_e = _play_arrays(y, s, r, n_samples)
     # spectra C_n = (1/2π)∫_a^b cos nτ, S_n = (1/2π)∫_a^b sin nτ (n = 0..2H) of every
     # piece's indicator, in closed form
     n = np.arange(1, 2 * H + 1)
