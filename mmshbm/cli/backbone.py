@@ -71,15 +71,16 @@ def _run(args, worker) -> int:
 
 def _special_lines(branch, gap: float) -> list[str]:
     """The internal resonances the branch met and the jumps it made, one line each kind."""
-    from ..plotting.data import resonance_label
+    from ..plotting.data import resonance_label, resonances_met
 
     def amp(a):
         return f"{a / gap:.3g} gaps" if gap > 0 else f"{a:.3g} m"
 
     res, jumps, seen = [], [], set()
+    met = {id(sp) for sp in resonances_met(branch)}
     for sp in branch.special_points:
         d = getattr(sp, "data", {}) or {}
-        if sp[0] == "internal_resonance" and (d.get("k"), d.get("j")) not in seen:
+        if id(sp) in met and (d.get("k"), d.get("j")) not in seen:
             seen.add((d.get("k"), d.get("j")))
             i = int(sp[1])
             res.append(f"{resonance_label(d['k'], d['j'])} at {amp(branch.amplitude[i])} "

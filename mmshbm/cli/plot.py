@@ -16,7 +16,8 @@ def register(sub) -> None:
                    choices=["all", "backbone", "energy", "peak_force", "signals", "force", "harmonics"],
                    help="which plots")
     p.add_argument("--points", type=common.positive_float, nargs="+", default=None,
-                   help="amplitudes (gaps) of the marked points (default 1.5 3 6)")
+                   help="amplitudes (gaps) of the marked points, solved on the backbone (the family "
+                        "front); one line each, 'point N: F Hz, A gaps' (default 1.5 3 6)")
     p.add_argument("--measured", default=None, help="measured backbone CSV to overlay")
     p.set_defaults(func=run)
 
@@ -58,10 +59,16 @@ def run(args) -> int:
     if not len(branch):
         raise ValueError(f"{args.file}: the branch has no points")
     gap = plotting._gap(branch)
-    pts = plotting.points_at(branch, [m * gap for m in marks]) if gap > 0 else [len(branch) - 1]
+    if gap > 0:  # the marked points, solved on the family front
+        points = branch.solve_at([m * gap for m in marks])
+    else:
+        points = branch.solve_at([branch.amplitude[branch.family_front()[-1]]])
+    pts = list(range(len(points)))
+    for n, i in enumerate(pts, start=1):
+        print(f"point {n}: {_point_line(points, i, gap)}")
     if "backbone" in kinds:
         files.append(out / f"{stem}_backbone.png")
-        plotting.plot_backbone(branch, measured=measured, marks=[(0, p) for p in pts], path=files[-1])
+        plotting.plot_backbone(branch, measured=measured, marks=points, path=files[-1])
     if "energy" in kinds:
         files.append(out / f"{stem}_energy.png")
         plotting.plot_frequency_energy(branch, path=files[-1])
@@ -70,15 +77,27 @@ def run(args) -> int:
         plotting.plot_peak_contact_force(branch, measured=measured, path=files[-1])
     if "signals" in kinds:
         files.append(out / f"{stem}_signals.png")
-        plotting.plot_time_signals(branch, pts, path=files[-1])
+        plotting.plot_time_signals(points, pts, path=files[-1])
     if "force" in kinds:
         files.append(out / f"{stem}_contact_force.png")
-        plotting.plot_contact_force(branch, pts, path=files[-1])
+        plotting.plot_contact_force(points, pts, path=files[-1])
     if "harmonics" in kinds:
         files.append(out / f"{stem}_harmonics.png")
-        plotting.plot_harmonic_content(branch, pts[-1], path=files[-1])
+        plotting.plot_harmonic_content(points, pts[-1], path=files[-1], number=len(pts))
     common.wrote(*files)
     return 0
+
+
+def _point_line(points, i: int, gap: float) -> str:
+    """"F Hz, A gaps" of marked point i, saying when the family front had no point at the
+    amplitude asked for and the nearest one stands in."""
+    amp = f"{points.amplitude[i] / gap:.3g} gaps" if gap > 0 else f"{points.amplitude[i]:.3g} m"
+    line = f"{points.frequency[i]:.2f} Hz, {amp}"
+    if not points.records["solved"][i]:
+        asked = points.records["requested_amplitude"][i]
+        line += (f" (no family point at {asked / gap:.3g} gaps: the nearest)" if gap > 0
+                 else " (the family's last point)")
+    return line
 
 
 def _show_findings(data) -> None:

@@ -138,9 +138,10 @@ def plot_contact_force(branch, points, *, n_samples: int = 512, ax=None, path=No
 
 
 def plot_harmonic_content(branch, point: int, dof: int | None = None, *, log_scale: bool = True, ax=None,
-                          path=None) -> Figure:
+                          path=None, number: int | None = None) -> Figure:
     """Bar chart of the harmonic amplitudes |Q_k|, k = 0..H, of ``dof`` (default the
-    contact DOF) at ``point``."""
+    contact DOF) at ``point``; ``number`` names it in the title as a marked point (default:
+    its index)."""
     (i,) = _points(branch, [point])
     fig, ax = _figure(ax, (5.2, 3.4))
     amp = np.asarray(branch.harmonic_content(i, dof))
@@ -154,7 +155,8 @@ def plot_harmonic_content(branch, point: int, dof: int | None = None, *, log_sca
     ax.set_xticks(k)
     ax.set_xlabel("harmonic k")
     ax.set_ylabel(f"|Q_k| of {label}")
-    ax.set_title(f"point {i}: {branch.frequency[i]:.2f} Hz", fontsize=10)
+    title = f"point {i}" if number is None else f"marked point {_point_label(branch, number, i)}"
+    ax.set_title(title if number is not None else f"{title}: {branch.frequency[i]:.2f} Hz", fontsize=10)
     ax.grid(True, axis="y", alpha=0.3)
     return _finish(fig, path)
 

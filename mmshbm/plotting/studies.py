@@ -8,7 +8,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from .backbones import plot_backbone
-from .common import _H_COLORS, _finish, _gap, branch_label, line_styles, points_at
+from .common import _H_COLORS, _finish, _gap, branch_label, line_styles
+from .data import resonances_met
 from .signals import plot_contact_force, plot_time_signals
 
 
@@ -107,7 +108,8 @@ def plot_figure2(study, *, marks: Sequence[float] = (1.5, 3.0, 6.0), marked: dic
     study : Study
         With coordinates ``harmonics`` and ``elements`` (e.g. :func:`mmshbm.analysis.studies.figure2_study`).
     marks : sequence of float
-        Amplitudes (gaps) of the numbered points: the first branch point reaching each.
+        Amplitudes (gaps) of the numbered points, solved on the family front of the
+        ``marked`` run (:meth:`~mmshbm.Branch.solve_at`).
     marked : dict, optional
         Coordinates of the run carrying the points (default the largest H with the most
         elements).
@@ -135,15 +137,15 @@ def plot_figure2(study, *, marks: Sequence[float] = (1.5, 3.0, 6.0), marked: dic
     right = [fig.add_subplot(grid[0, 1])]
     right += [fig.add_subplot(grid[i, 1], sharex=right[0]) for i in (1, 2)]
     gap = _gap(mb)
-    pts = points_at(mb, np.asarray(marks, dtype=float) * gap) if gap > 0 else []
     model = mb.get_model()
-    marked_points = [(len(branches) - 1, p) for p in pts]
-    plot_backbone(branches, labels, measured=measured, marks=marked_points, ax=left, styles=styles,
+    points = mb.solve_at(np.asarray(marks, dtype=float) * gap) if gap > 0 and len(marks) else None
+    pts = list(range(len(points))) if points is not None else []
+    plot_backbone(branches, labels, measured=measured, marks=points, ax=left, styles=styles,
                   legend_loc="lower right")
     left.set_title("backbone curves (first nonlinear mode)", fontsize=11)
     dofs = [int(d) for d in model.c]
     dofs = [model.contact_dof] + [d for d in dofs if d != model.contact_dof][:1]
-    plot_time_signals(mb, pts, dofs=dofs, axes=right[:len(dofs)])
+    plot_time_signals(points if points is not None else mb, pts, dofs=dofs, axes=right[:len(dofs)])
     note = right[0].get_title(loc="left")
     right[0].set_title("", loc="left")
     head = f"marked points ({branch_label(mb)}): tip motion and contact force"
@@ -153,7 +155,7 @@ def plot_figure2(study, *, marks: Sequence[float] = (1.5, 3.0, 6.0), marked: dic
     for ax in right[:2]:
         ax.tick_params(labelbottom=False)
         ax.set_xlabel("")
-    plot_contact_force(mb, pts, ax=right[2])
+    plot_contact_force(points if points is not None else mb, pts, ax=right[2])
     right[2].get_legend().remove()
     if title:
         fig.suptitle(title)
@@ -250,9 +252,7 @@ def plot_family_grid(study, *, amplitudes: Sequence[float] = (2.0, 5.0, 10.0), p
                 if s.width > WIDE * s.hi or s.discontinuous:
                     ax.plot([s.f_lo, s.f_hi], [s.lo / gap, s.hi / gap], ls=":", color=color, lw=1.2, zorder=2)
             named = set()
-            for sp in b.special_points:
-                if sp[0] != "internal_resonance":
-                    continue
+            for sp in resonances_met(b):
                 i = int(sp[1])
                 ax.plot(b.frequency[i], b.amplitude[i] / gap, "D", color=color, mfc="w", ms=3.5, mew=0.9,
                         zorder=4)
