@@ -63,8 +63,9 @@ def test_plot_prints_and_labels_the_marked_points(h5, tmp_path, capsys):
     np.testing.assert_allclose(f, [h5.frequency_at(a * h5.gap) for a in (1.5, 3, 6)], atol=0.006)
     fig = plotting.plot_backbone(h5, marks=h5.solve_at([1.5, 3, 6], unit="gap"))
     labels = fig.axes[0].get_legend_handles_labels()[1]
-    assert [lab for lab in labels if lab.startswith("marked point")] == \
-        [f"marked point {n}: {x:.2f} Hz, {a:.2g} gaps" for n, x, a in zip((1, 2, 3), f, (1.5, 3, 6), strict=True)]
+    expected = [f"marked point {n}: {x:.2f} Hz, {a:.2g} gaps"
+                for n, x, a in zip((1, 2, 3), f, (1.5, 3, 6), strict=True)]
+    assert [lab for lab in labels if lab.startswith("marked point")] == expected
 
 
 def test_a_point_beyond_the_front_is_the_nearest_family_point(h5):
