@@ -6,6 +6,10 @@ from pathlib import Path
 
 from . import common
 
+#: runs of the paper's Figure 2 (H 1 3 5 x 8 21 elements): larger grid studies are drawn one
+#: panel per element count
+FIGURE2_RUNS = 6
+
 
 def register(sub) -> None:
     """Add the subcommand to the subparsers ``sub``."""
@@ -40,7 +44,11 @@ def run(args) -> int:
     if not isinstance(data, Branch):  # a study
         if "backbone" in kinds:
             path = out / f"{stem}_backbone.png"
-            if common.has_grid(data):
+            if common.has_grid(data) and len(data) > FIGURE2_RUNS:
+                from ..plotting.grids import plot_family_grid
+
+                plot_family_grid(data, amplitudes=(), marks=marks, path=path)
+            elif common.has_grid(data):
                 plotting.plot_figure2(data, marks=marks, measured=measured, path=path)
             else:
                 plotting.plot_study(data, measured=measured, path=path)
@@ -48,11 +56,12 @@ def run(args) -> int:
         styles, labels = plotting.study_styles(data.runs), plotting.study_labels(data.runs)
         if "energy" in kinds:
             files.append(out / f"{stem}_energy.png")
-            plotting.plot_frequency_energy(data.branches, labels, styles=styles, path=files[-1])
+            fig = plotting.plot_frequency_energy(data.branches, labels, styles=styles)
+            _save_with_study_legend(fig, data.runs, styles, labels, files[-1])
         if "peak_force" in kinds:
             files.append(out / f"{stem}_peak_force.png")
-            plotting.plot_peak_contact_force(data.branches, labels, measured=measured, styles=styles,
-                                             path=files[-1])
+            fig = plotting.plot_peak_contact_force(data.branches, labels, measured=measured, styles=styles)
+            _save_with_study_legend(fig, data.runs, styles, labels, files[-1])
         common.wrote(*files)
         return 0
     branch = data
@@ -86,6 +95,15 @@ def run(args) -> int:
         plotting.plot_harmonic_content(points, pts[-1], path=files[-1], number=len(pts))
     common.wrote(*files)
     return 0
+
+
+def _save_with_study_legend(fig, runs, styles, labels, path) -> None:
+    """Replace the per-run legend of a study's figure by one entry per coordinate value."""
+    from ..plotting.common import _finish
+    from ..plotting.studies import study_legend
+
+    study_legend(fig.axes[0], runs, styles, labels, fontsize=7, ncol=2)
+    _finish(fig, path)
 
 
 def _point_line(points, i: int, gap: float) -> str:

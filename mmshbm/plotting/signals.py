@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Sequence
 
 import numpy as np
@@ -83,7 +84,7 @@ def plot_time_signals(branch, points, dofs: Sequence[int] | None = None, *, n_sa
     axes[-1].set_xlabel("t / T")
     axes[-1].set_xlim(0, 1)
     axes[0].legend(fontsize=8, loc="best")
-    axes[0].set_title(_signals_note(branch, signals), fontsize=8, loc="left")
+    axes[0].set_title(textwrap.fill(_signals_note(branch, signals), 90), fontsize=8, loc="left")
     return _finish(fig, path)
 
 
@@ -133,7 +134,7 @@ def plot_contact_force(branch, points, *, n_samples: int = 512, ax=None, path=No
             what += f"; λ < 0 (down to {lowest:.3g} N) is a truncation effect"
     else:
         what = f"{branch.method}: exact static contact force along the orbit"
-    ax.set_title(what, fontsize=8, loc="left")
+    ax.set_title(textwrap.fill(what, 90), fontsize=8, loc="left")
     return _finish(fig, path)
 
 
