@@ -1,0 +1,88 @@
+"""A study prints one findings table and a count, not a warning per finding; the runs'
+own warnings (also those raised in worker processes) go to the report file."""
+
+import warnings
+
+import pytest
+
+import mmshbm
+from mmshbm import BranchWarning, ModelWarning, studies
+from mmshbm.analysis import runspec
+from mmshbm.cli import main
+from mmshbm.core.modal import ModalCondensation
+
+GRID = ["study", "-H", "1", "3", "5", "--elements", "4", "6", "--max-amplitude", "3", "--amplitudes", "2",
+        "--executor", "serial"]
+
+
+@pytest.fixture
+def model_warning(monkeypatch):
+    """Every modal condensation warns that a harmonic reaches its left-out modes (as the
+    default beam at H = 15 does in some runs of the 35-run study)."""
+    def check_range(self, omega, harmonics):
+        warnings.warn("harmonic 15 of Ω = 1 Hz reaches 2 Hz, near or past the first mode the modal "
+                      "condensation leaves out", ModelWarning, stacklevel=2)
+        return False
+
+    monkeypatch.setattr(ModalCondensation, "check_range", check_range)
+
+
+def test_the_study_prints_a_row_per_run_and_a_count(tmp_path, capsys):
+    assert main([*GRID, "--out", str(tmp_path)]) == 0
+    out, err = capsys.readouterr()
+    lines = out.splitlines()
+    # header, 6 runs, the count, where the details are, the files written: 35 runs give 39 lines
+    assert len(lines) == 6 + 4
+    head = ["run", "status", "family", "truncation", "effects", "skipped", "(gaps)", "notes"]
+    assert lines[0].split() == head
+    assert [ln.split()[:3] for ln in lines[1:7]] == [["4", "el.,", f"H{h}"] for h in (1, 3, 5)] + \
+        [["6", "el.,", f"H{h}"] for h in (1, 3, 5)]
+    assert all("complete" in ln for ln in lines[1:7])
+    assert lines[7].startswith("6 runs: 6 reached their bounds, 0 incomplete")
+    assert "with truncation effects" in lines[7]
+    assert f"{tmp_path}/study_table.txt" in lines[8] and lines[9].startswith("wrote ")
+    assert err == ""
+    details = (tmp_path / "study_table.txt").read_text()
+    assert "run method=mmshbm, elements=6, harmonics=5:\n  mmshbm branch" in details
+
+
+def test_verbose_prints_the_report(tmp_path, capsys):
+    assert main([*GRID[:1], "-H", "3", "--elements", "4", "--max-amplitude", "3", "--amplitudes", "2",
+                 "--executor", "serial", "-v", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "Frequency (Hz) at tip amplitude" in out and "Details per run" in out
+
+
+def test_warnings_inside_a_run_are_recorded_not_shown(model_warning, tmp_path, capsys):
+    spec = studies.grid_specs(harmonics=(3,), elements=(4,), max_amplitude=2e-3, backend="modal")[0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # nothing escapes the worker's function
+        branch = runspec.execute(spec)
+    assert branch.metadata["run_warnings"] == [
+        "ModelWarning: harmonic 15 of Ω = 1 Hz reaches 2 Hz, near or past the first mode the modal "
+        "condensation leaves out"]
+    capsys.readouterr()  # (info logs of the run above when an earlier test left the logger at -v)
+    assert main(["study", "-H", "3", "--elements", "4", "--max-amplitude", "2", "--param", "backend=modal",
+                 "--executor", "serial", "--out", str(tmp_path)]) == 0
+    out, err = capsys.readouterr()
+    assert err == ""  # no raw warning, no source line
+    assert "1 warning" in out.splitlines()[1]
+    assert "condensation leaves out" in (tmp_path / "study_table.txt").read_text()
+
+
+def test_run_study_warns_once_with_the_counts():
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        study = studies.run_study(harmonics=(1, 3), elements=(4,), executor="serial", max_amplitude=3.0,
+                                  unit="gap")
+    messages = [str(w.message) for w in caught if issubclass(w.category, BranchWarning)]
+    assert len(messages) == 1
+    assert messages[0].startswith("study: 2 runs: 2 reached their bounds, 0 incomplete; 2 with truncation")
+    assert "study.findings()" in messages[0]
+    rows = study.findings().splitlines()
+    assert len(rows) == 1 + 2 + 1 and rows[1].startswith("H1 ") and rows[2].startswith("H3 ")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        studies.run_study(harmonics=(1,), elements=(4,), executor="serial", max_amplitude=3.0, unit="gap",
+                          warn=False)
+    assert isinstance(study.branches[0], mmshbm.Branch)
