@@ -16,7 +16,8 @@ SMALL = ["--elements", "4", "-H", "3", "--max-amplitude", "3"]
 
 
 def test_penalty_cli_warns_another_family(tmp_path, capsys):
-    assert main(["backbone", "--method", "penalty", "--out", str(tmp_path)]) == 0  # reached its bounds
+    # reached its bounds, on another family: exit 1
+    assert main(["backbone", "--method", "penalty", "--out", str(tmp_path)]) == 1
     err = capsys.readouterr().err
     assert "mmshbm backbone: warning: penalty branch leaves the family of linear mode 1" in err
     assert "Traceback" not in err and "warnings.warn" not in err

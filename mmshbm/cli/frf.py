@@ -10,11 +10,13 @@ def register(sub) -> None:
     p = sub.add_parser("frf", help="forced response (damped, harmonic force): frf.csv/.npz/.png",
                        description="Frequency response of a damped structure with impact by MMS-HBM (or a "
                                    "baseline), continued through folds, stable parts solid and unstable "
-                                   "dashed. Default: the default beam with 0.5 %% modal damping, a force at "
+                                   "dashed. Default: the default beam with 0.5 % modal damping, a force at "
                                    "the last node with mass.")
     common.beam_options(p)
     p.add_argument("-H", "--harmonics", type=common.positive_int, default=5, help="harmonics (default 5)")
-    p.add_argument("--method", default="mmshbm", choices=["mmshbm", "penalty", "shooting"])
+    p.add_argument("--method", default="mmshbm", choices=["mmshbm", "penalty", "shooting"],
+                   help="MMS-HBM, or a baseline on the same forced problem: penalty harmonic balance or "
+                        "time-domain shooting (default mmshbm)")
     p.add_argument("--damping", type=common.non_negative_float, default=0.005,
                    help="modal damping ratio of every mode (default 0.005)")
     p.add_argument("--rayleigh", type=common.non_negative_float, nargs=2, default=None,
@@ -34,7 +36,7 @@ def register(sub) -> None:
                         "(phase_resonance.png/.csv)")
     p.add_argument("--max-amplitude", type=common.positive_float, default=6.0,
                    help="phase resonance: in gaps (default 6)")
-    p.add_argument("--measured", default=None, help="measured backbone CSV to overlay")
+    common.measured_option(p)
     p.set_defaults(func=run)
 
 

@@ -22,7 +22,7 @@ def register(sub) -> None:
     p.add_argument("--points", type=common.positive_float, nargs="+", default=None,
                    help="amplitudes (gaps) of the marked points, solved on the backbone (the family "
                         "front); one line each, 'point N: F Hz, A gaps' (default 1.5 3 6)")
-    p.add_argument("--measured", default=None, help="measured backbone CSV to overlay")
+    common.measured_option(p)
     p.set_defaults(func=run)
 
 

@@ -48,7 +48,7 @@ def register(sub) -> None:
                         "H and elements from -H/--elements, default 3 and 8) serially, through a process "
                         "pool and a Dask cluster: backbones/s and parallel efficiency "
                         "(throughput.txt, throughput.json)")
-    p.add_argument("--measured", default=None, help="measured backbone CSV to overlay")
+    common.measured_option(p)
     p.set_defaults(func=run)
 
 
