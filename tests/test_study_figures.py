@@ -10,7 +10,7 @@ import pytest
 from matplotlib.text import Text
 
 import mmshbm
-from mmshbm import BranchWarning, plotting, studies
+from mmshbm import BranchWarning, ModelWarning, plotting, studies
 from mmshbm.cli import main
 from mmshbm.plotting.data import BranchData, reference_frequencies, resonance_orders, symmetric_clearance
 from mmshbm.plotting.grids import plot_convergence, plot_family_grid
@@ -174,3 +174,23 @@ def test_frequency_energy_is_drawn_like_the_backbone():
     np.testing.assert_allclose(np.sort(solid.get_ydata()[np.isfinite(solid.get_ydata())]),
                                np.sort(np.log10(branch.energy[front])))
     assert thin.get_linewidth() < 0.5 * solid.get_linewidth()
+
+
+def test_backbone_labels_do_not_overlap_at_h15():
+    """H = 15 names a dozen resonances and skipped intervals near 1.2–2 gaps: their labels
+    are moved apart (or left to the legend), never drawn over each other."""
+    from matplotlib.text import Annotation
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", BranchWarning)
+        warnings.simplefilter("ignore", ModelWarning)  # a left-out mode's pole reached once (the run's own)
+        branch = mmshbm.backbone(mmshbm.default_beam().model(21), harmonics=15)
+    fig, messages = _render(lambda: plotting.plot_backbone(branch))
+    assert messages == []
+    ax = fig.axes[0]
+    labels = [t for t in ax.texts if isinstance(t, Annotation) and t.get_visible()]
+    assert len(labels) >= 8
+    renderer = fig._get_renderer()
+    boxes = [(t.get_text(), t.get_window_extent(renderer)) for t in labels]
+    clashes = [(a, b) for n, (a, p) in enumerate(boxes) for b, q in boxes[n + 1:] if p.overlaps(q)]
+    assert clashes == []
