@@ -120,15 +120,23 @@ def _point_line(points, i: int, gap: float) -> str:
 
 def _show_findings(data) -> None:
     """Repeat what the checks found when the results were computed (a file from before
-    the checks is checked now), as warnings: a plot must not look more certain than the run."""
+    the checks is checked now), as warnings: a plot must not look more certain than the run.
+    A branch's findings one each; a study's as one line of counts (``Study.findings()``
+    gives a row per run)."""
     import warnings
 
     from .._warnings import BranchWarning
     from ..results.branch import Branch
 
-    pairs = [("", data)] if isinstance(data, Branch) else \
-        [(f"run {', '.join(f'{k}={v}' for k, v in r.items())}: ", b) for r, b in data]
-    for prefix, branch in pairs:
-        found = branch.findings if "checks" in branch.metadata else branch.check(warn=False)
-        for finding in found:
-            warnings.warn(prefix + finding.message, BranchWarning, stacklevel=2)
+    branches = [data] if isinstance(data, Branch) else list(data.branches)
+    for branch in branches:
+        if "checks" not in branch.metadata:
+            branch.check(warn=False)
+    if isinstance(data, Branch):
+        for finding in data.findings:
+            warnings.warn(finding.message, BranchWarning, stacklevel=2)
+    elif any(b.findings for b in branches):
+        from ..analysis.tables import findings_count
+
+        warnings.warn(f"{findings_count(data.runs, branches)} (a row per run: Study.findings(), or the "
+                      "study's *_table.txt)", BranchWarning, stacklevel=2)
