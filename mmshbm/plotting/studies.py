@@ -131,12 +131,22 @@ def plot_study(study, *, measured=None, path=None, title: str | None = None, ax=
     """Backbone curves of every run of a study over any coordinates: each branch in units
     of its own gap, labels naming every coordinate that varies (:func:`study_labels`),
     distinct styles (:func:`study_styles`), reference lines per distinct model, special
-    points and the ends of runs that stopped short. ``kwargs`` go to :func:`plot_backbone`."""
+    points and the ends of runs that stopped short; with more than six runs, a legend entry
+    per value of each coordinate (:func:`study_legend`). ``kwargs`` go to
+    :func:`plot_backbone`."""
     runs = list(study.runs)
     if not runs:
         raise ValueError("the study is empty")
-    return plot_backbone(study.branches, study_labels(runs), measured=measured, styles=study_styles(runs),
-                         path=path, title=title, ax=ax, **kwargs)
+    labels, styles = study_labels(runs), study_styles(runs)
+    fig = plot_backbone(study.branches, labels, measured=measured, styles=styles, title=title, ax=ax,
+                        **kwargs)
+    if len(runs) > _LEGEND_RUNS:
+        study_legend(ax or fig.axes[0], runs, styles, labels, fontsize=7, ncol=2)
+    return _finish(fig, path)
+
+
+#: studies with more runs get a legend by coordinate value (:func:`study_legend`)
+_LEGEND_RUNS = 6
 
 
 def plot_figure2(study, *, marks: Sequence[float] = (1.5, 3.0, 6.0), marked: dict | None = None,
