@@ -157,7 +157,9 @@ def _reached_frequency(branch, amplitude: float) -> float:
     top = int(np.nanargmax(branch.amplitude))
     if not branch.amplitude[top] >= amplitude * (1 - _REACH_RTOL):
         return math.nan
-    f = float(branch.frequency_at(amplitude))
+    from ..results.family_points import frequency_at
+
+    f = float(frequency_at(branch, amplitude))  # no warning just past the end: the top point answers
     return f if math.isfinite(f) else float(branch.frequency[top])
 
 
