@@ -86,3 +86,22 @@ def test_run_study_warns_once_with_the_counts():
         studies.run_study(harmonics=(1,), elements=(4,), executor="serial", max_amplitude=3.0, unit="gap",
                           warn=False)
     assert isinstance(study.branches[0], mmshbm.Branch)
+
+
+def test_other_warnings_from_the_package_are_one_line(monkeypatch, tmp_path, capsys):
+    """A warning of another category raised in the package's code (here a RuntimeWarning
+    from the condensation) is one line on the terminal, named by its category, never the
+    interpreter's two lines with the source line."""
+    import mmshbm.core.modal as modal
+
+    def check_range(self, omega, harmonics):
+        warnings.warn("overflow in a test", UserWarning, stacklevel=1)  # raised in mmshbm/core/modal.py
+        return True
+
+    monkeypatch.setattr(modal.ModalCondensation, "check_range", check_range)
+    monkeypatch.setattr(check_range, "__code__", check_range.__code__.replace(co_filename=modal.__file__))
+    argv = ["backbone", "--elements", "4", "-H", "3", "--max-amplitude", "2", "--out", str(tmp_path)]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert "mmshbm backbone: warning: UserWarning: overflow in a test" in err
+    assert "warnings.warn(" not in err and "modal.py:" not in err

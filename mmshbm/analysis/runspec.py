@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -104,8 +105,9 @@ def _execute(spec: RunSpec) -> Branch:
         branch = backbone(model, harmonics=spec.harmonics, method=spec.method, max_amplitude=max_amplitude,
                           **spec.options)
     notes = []
+    package = str(Path(__file__).resolve().parents[1])
     for w in caught:
-        if issubclass(w.category, MmshbmWarning):
+        if issubclass(w.category, MmshbmWarning) or str(w.filename).startswith(package):
             notes.append(f"{w.category.__name__}: {w.message}")
         else:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
