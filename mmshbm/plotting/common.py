@@ -84,7 +84,8 @@ def declutter(fig: Figure) -> int:
         for t in texts:
             x0, y0 = t.xyann
             step = 1.15 * t.get_fontsize()
-            for k in (0, -1, 1, -2, 2, -3, 3):
+            movable = t.anncoords == "offset points"  # shifts are in points
+            for k in (0, -1, 1, -2, 2, -3, 3) if movable else (0,):
                 t.xyann = (x0, y0 + k * step)
                 box = t.get_window_extent(renderer)
                 if not any(box.overlaps(p) for p in placed) and (k == 0 or frame.contains(box.x0, box.y0)
