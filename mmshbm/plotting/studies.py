@@ -9,7 +9,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from .backbones import plot_backbone
-from .common import _H_COLORS, _finish, _gap, branch_label, line_styles
+from .common import _finish, _gap, branch_label, line_styles
 from .grids import _h_colors, plot_convergence, plot_family_grid  # noqa: F401 (public here)
 from .signals import plot_contact_force, plot_time_signals
 
@@ -55,12 +55,11 @@ def study_styles(runs: Sequence[dict]) -> list[dict]:
             or any(len(values[k]) > 4 for k in axes[2:]):
         return line_styles(len(runs))
     styles = []
+    hs = {x.get(first) for x in runs}
+    by_h = _h_colors(hs) if first == "harmonics" and all(isinstance(h, int) for h in hs) else None
     for r in runs:
         i = values[first].index(repr(r.get(first)))
-        if first == "harmonics" and all(h in _H_COLORS for h in (x.get(first) for x in runs)):
-            color = _H_COLORS[r.get(first)]
-        else:
-            color = f"C{i}"
+        color = by_h[r.get(first)] if by_h is not None else f"C{i}"  # H: the paper's colours, as the grid
         style = {"color": color, "ls": "-", "lw": 1.5}
         if len(axes) > 1:
             # the finest mesh / last value solid, others dashed, dotted, dash-dotted
