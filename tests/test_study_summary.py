@@ -35,8 +35,8 @@ def test_the_study_prints_a_row_per_run_and_a_count(tmp_path, capsys):
     assert len(lines) == 6 + 4
     head = ["run", "status", "family", "truncation", "effects", "skipped", "(gaps)", "notes"]
     assert lines[0].split() == head
-    assert [ln.split()[:3] for ln in lines[1:7]] == [["4", "el.,", f"H{h}"] for h in (1, 3, 5)] + \
-        [["6", "el.,", f"H{h}"] for h in (1, 3, 5)]
+    assert [ln.split()[:3] for ln in lines[1:7]] == [[f"H{h},", "4", "el."] for h in (1, 3, 5)] + \
+        [[f"H{h},", "6", "el."] for h in (1, 3, 5)]
     assert all("complete" in ln for ln in lines[1:7])
     assert lines[7].startswith("6 runs: 6 reached their bounds, 0 incomplete")
     assert "with truncation effects" in lines[7]

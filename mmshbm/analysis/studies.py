@@ -502,8 +502,9 @@ def monte_carlo(n: int, ranges: Mapping[str, tuple[float, float]], seed: int = 0
 def _varying(runs: list[dict]) -> list[str]:
     """The coordinates whose value differs between runs (all of the first run's when none)."""
     keys = list(dict.fromkeys(k for r in runs for k in r))
-    varying = [k for k in keys if len({repr(r.get(k)) for r in runs}) > 1]
-    return varying or keys
+    varying = [k for k in keys if len({repr(r.get(k)) for r in runs}) > 1] or keys
+    first = [k for k in ("harmonics", "elements") if k in varying]  # "H5, 21 el.", as the plots name runs
+    return first + [k for k in varying if k not in first]
 
 
 def _parent_models(model, specs: list[RunSpec]):
