@@ -74,7 +74,9 @@ def test_cli_plot_of_a_large_grid_study_reads_at_a_glance(grid, tmp_path, capsys
         warnings.simplefilter("always")
         assert main(["plot", str(path), "--out", str(tmp_path)]) == 0
     assert not [w for w in caught if "layout" in str(w.message)]
-    err = capsys.readouterr().err
+    out, err = capsys.readouterr()
+    points = [line for line in out.splitlines() if line.startswith("point ")]
+    assert len(points) == 3 and all(line.endswith("(H11, 21 el.)") for line in points)
     assert "constrained_layout" not in err
     # what the runs' checks found: one line of counts, not a warning per finding
     assert len(err.splitlines()) == 1 and "mmshbm plot: warning: 15 runs: 15 reached their bounds" in err

@@ -42,6 +42,8 @@ def run(args) -> int:
     marks = tuple(args.points) if args.points else common.DEFAULT_MARKS
     files = []
     if not isinstance(data, Branch):  # a study
+        if "backbone" in kinds and common.has_grid(data):
+            _print_points(data, marks)
         if "backbone" in kinds:
             path = out / f"{stem}_backbone.png"
             if common.has_grid(data) and len(data) > FIGURE2_RUNS:
@@ -104,6 +106,20 @@ def _save_with_study_legend(fig, runs, styles, labels, path) -> None:
 
     study_legend(fig.axes[0], runs, styles, labels, fontsize=7, ncol=2)
     _finish(fig, path)
+
+
+def _print_points(study, marks) -> None:
+    """One line per marked point of a grid study's figure (on its marked run)."""
+    from ..plotting import branch_label
+    from ..plotting.data import _gap, marked_run
+
+    branch = study.branch(**marked_run(study.runs))
+    gap = _gap(branch)
+    if gap <= 0:
+        return
+    points = branch.solve_at([m * gap for m in marks])
+    for i in range(len(points)):
+        print(f"point {i + 1}: {_point_line(points, i, gap)} ({branch_label(branch)})")
 
 
 def _point_line(points, i: int, gap: float) -> str:

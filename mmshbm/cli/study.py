@@ -79,6 +79,10 @@ def run(args) -> int:
         for line in notes:
             print(f"mmshbm study: warning: {line}", file=sys.stderr)
     print(study.findings())
+    if args.figure2:
+        from .plot import _print_points
+
+        _print_points(study, marks)
     elapsed = study.metadata.get("elapsed_s")
     timing = f"wall time: {len(study)} runs in {elapsed:.1f} s, {study.metadata.get('executor', '?')}; " \
         if elapsed is not None else ""

@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = ["BranchData", "reference_frequencies", "resonance_label", "resonance_orders", "resonances_met",
-           "symmetric_clearance"]
+           "symmetric_clearance", "marked_run"]
 
 log = logging.getLogger(__name__)
 
@@ -127,3 +127,13 @@ def resonances_met(branch) -> list:
     toward kΩ = ω_j, at a bound or a stop, and its largest share is only where it stopped)."""
     n = len(branch)
     return [sp for sp in branch.special_points if sp[0] == "internal_resonance" and 0 <= int(sp[1]) < n - 1]
+
+
+def marked_run(runs) -> dict:
+    """The coordinates (method, harmonics, elements) of the run of a study that carries
+    the marked points of its figures: the largest H with the most elements."""
+    runs = list(runs)
+    if not runs:
+        raise ValueError("the study is empty")
+    best = max(runs, key=lambda r: (r.get("harmonics", 0), r.get("elements", 0)))
+    return {k: best[k] for k in ("method", "harmonics", "elements") if k in best}

@@ -9,7 +9,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from .common import _H_COLORS, _finish, _gap
-from .data import resonances_met
+from .data import marked_run, resonances_met
 
 #: colours of H beyond the paper's (H 1, 3, 5 as in Figure 2)
 _MORE_H_COLORS = ("C7", "C8", "C9", "C4", "C5")
@@ -128,9 +128,7 @@ def plot_family_grid(study, *, amplitudes: Sequence[float] = (2.0, 5.0, 10.0), p
             ax.set_ylabel("tip amplitude / gap")
     handles, labels = axes[0].get_legend_handles_labels()
     if len(marks):
-        if marked is None:
-            best = max(runs, key=lambda r: (r["harmonics"], r["elements"]))
-            marked = {k: best[k] for k in ("method", "harmonics", "elements") if k in best}
+        marked = marked or marked_run(runs)
         mb = study.branch(**marked)
         gap = _gap(mb) or 1.0
         points = mb.solve_at(np.asarray(marks, dtype=float) * gap)

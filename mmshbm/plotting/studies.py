@@ -10,6 +10,7 @@ from matplotlib.figure import Figure
 
 from .backbones import plot_backbone
 from .common import _finish, _gap, branch_label, line_styles
+from .data import marked_run
 from .grids import _h_colors, plot_convergence, plot_family_grid  # noqa: F401 (public here)
 from .signals import plot_contact_force, plot_time_signals
 
@@ -175,10 +176,7 @@ def plot_figure2(study, *, marks: Sequence[float] = (1.5, 3.0, 6.0), marked: dic
     runs = list(study.runs)
     if not runs:
         raise ValueError("the study is empty")
-    if marked is None:
-        best = max(range(len(runs)), key=lambda i: (runs[i].get("harmonics", 0), runs[i].get("elements", 0)))
-        marked = {k: runs[best][k] for k in ("method", "harmonics", "elements") if k in runs[best]}
-    mb = study.branch(**marked)
+    mb = study.branch(**(marked or marked_run(runs)))
     styles = study_styles(runs)
     # order: the marked run last so that it is drawn on top
     order = sorted(range(len(runs)), key=lambda i: study.branches[i] is mb)
