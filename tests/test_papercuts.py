@@ -107,7 +107,8 @@ def test_forced_response_of_an_undamped_model_is_refused():
             mmshbm.frequency_response(undamped, [1.0, 0.0], (0.1, 0.3))
     assert model_has_damping(model.with_damping(modal_ratio=0.01))
     # a dissipative attribute besides the viscous matrix (a friction law) counts as damping
-    assert model_has_damping(types.SimpleNamespace(damping=None, friction=object()))
+    assert model_has_damping(types.SimpleNamespace(damping=None, friction=(object(),)))
+    assert not model_has_damping(types.SimpleNamespace(damping=None, friction=()))
     assert not model_has_damping(types.SimpleNamespace(damping=None, friction=None))
 
 

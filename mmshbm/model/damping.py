@@ -144,15 +144,20 @@ def modal_damping_ratios(model, n: int = 1) -> np.ndarray:
 
 
 #: model attributes besides the viscous matrix ``damping`` that dissipate energy when they
-#: are set (not None): :func:`model_has_damping` counts them as damping
+#: are set (not None, not empty): :func:`model_has_damping` counts them as damping
 DISSIPATIVE_ATTRIBUTES = ("friction",)
 
 
 def model_has_damping(model) -> bool:
     """Whether ``model`` dissipates energy: a viscous damping matrix with a nonzero entry,
-    or one of :data:`DISSIPATIVE_ATTRIBUTES` set. A forced response needs it (undamped,
-    the response grows along the backbone without bound)."""
+    or one of :data:`DISSIPATIVE_ATTRIBUTES` set (e.g. a non-empty tuple of friction
+    contacts). A forced response needs it (undamped, the response grows along the
+    backbone without bound)."""
     C = getattr(model, "damping", None)
     if C is not None and (C.count_nonzero() if sp.issparse(C) else np.count_nonzero(C)) > 0:
         return True
-    return any(getattr(model, name, None) is not None for name in DISSIPATIVE_ATTRIBUTES)
+    for name in DISSIPATIVE_ATTRIBUTES:
+        value = getattr(model, name, None)
+        if value is not None and (len(value) > 0 if hasattr(value, "__len__") else True):
+            return True
+    return False
