@@ -17,6 +17,10 @@ from __future__ import annotations
 
 import importlib
 
+from . import _aliases
+
+_aliases.install()
+
 __version__ = "0.2.0"
 
 # public name -> module that defines it
@@ -70,4 +74,4 @@ def __getattr__(name: str):
 
 
 def __dir__():
-    return sorted(set(globals()) | set(_LAZY) | _SUBMODULES)
+    return sorted(set(globals()) | set(_LAZY) | set(_SUBMODULES))

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from finite_differences import assert_jacobian
 
 import mmshbm
 from mmshbm.core.continuation import newton
@@ -32,13 +33,7 @@ def test_jacobian_matches_finite_differences(projection):
     rng = np.random.default_rng(7)
     u = p.linear_point(2.5e-3) + np.r_[0.3 * rng.standard_normal(p.n_x), 0.01, 0.02]
     R, J = p.evaluate(u)
-    Jfd = np.empty_like(J)
-    h = 1e-7
-    for j in range(len(u)):
-        e = np.zeros(len(u))
-        e[j] = h
-        Jfd[:, j] = (p.evaluate(u + e, False) - p.evaluate(u - e, False)) / (2 * h)
-    assert np.abs(J - Jfd).max() <= 1e-6 * np.abs(J).max()
+    assert_jacobian(lambda v: p.evaluate(v, False), u, J, 1e-5)
 
 
 @pytest.mark.parametrize("name, H, amax", [("oscillator", 7, 5.0), ("beam8", 5, 6e-3)])

@@ -11,6 +11,7 @@ import importlib.util
 
 import numpy as np
 import pytest
+from finite_differences import assert_jacobian
 from scipy.integrate import solve_ivp
 
 import mmshbm
@@ -129,20 +130,32 @@ def _energy_drift(model, ratio):
     t = np.unique(np.concatenate([np.linspace(0, T, 1001), tr.switch_times]))
     q_l, v_l = tr.state_l(t)
     E = S.energy(q_l, v_l)
-    return np.abs(E / E[0] - 1).max(), tr
+    return np.abs(E / E[0] - 1).max(), tr, _roundoff_bound(S, tr)
+
+
+def _roundoff_bound(S, tr):
+    """Worst-case relative energy error of the exact flow in floating point: each phase maps
+    the state into its modal coordinates and back, a backward-stable product with error up to
+    n_l·ε·κ(Φ) relative (κ the condition number of the phase's mode matrix), the energy, a
+    quadratic form, doubles it, and the errors of the switches (plus the start and the end)
+    add up at worst linearly."""
+    kappa = max(np.linalg.cond(phase.modes) for phase in S._phases.values())
+    return 2 * (len(tr.switch_times) + 2) * S.n_l * np.finfo(float).eps * kappa
 
 
 def test_energy_conserved_chain():
-    drift, tr = _energy_drift(chain(), 3.0)
+    drift, tr, bound = _energy_drift(chain(), 3.0)
     assert tr.n_contacts >= 1
-    assert drift < 1e-12
+    assert drift < bound < 1e-12
 
 
 @needs_beam
 def test_energy_conserved_beam():
-    drift, tr = _energy_drift(mmshbm.default_beam().model(21), 3.0)
+    drift, tr, bound = _energy_drift(mmshbm.default_beam().model(21), 3.0)
     assert tr.n_contacts > 10  # the first mode at 3 gaps rattles on the stop
-    assert drift < 1e-10
+    # 65 contacts, κ(Φ) ≈ 970: the bound is 2.3e-9; drifts of 3e-11 to 1.5e-10 were measured
+    # under four OpenBLAS kernels (the switches' errors add up as a random walk)
+    assert drift < bound < 3e-9
 
 
 # ------------------------------------------------------------------ independent ODE reference
@@ -213,19 +226,22 @@ def test_agrees_with_dop853(make):
     q_l, v_l = tr.state_l(t_eval)
     x_scale, v_scale = np.abs(x0).max(), np.abs(v_l).max()
     errors = []
-    for rtol in (1e-11, 1e-13):
+    for rtol in (1e-10, 3e-14):
         ref, switches = _dop853_reference(model, x0, T, t_eval, rtol=rtol)
         assert len(switches) == len(tr.switch_times) >= 2
-        errors.append((np.abs(tr.switch_times - switches).max() / T,
-                       np.abs(q_l - ref[: S.n_l]).max() / x_scale,
-                       np.abs(v_l - ref[S.n_l:]).max() / v_scale))
-    # The differences are DOP853's own error: they shrink as its tolerance tightens (an
-    # error of the exact solver would stay). Velocities carry the most of it: DOP853's
-    # position error in mode j shows in the velocities multiplied by ω_j (up to ω_4 = 47 ω_1
-    # on the 3-element beam), so they are compared with the largest velocity of the motion.
-    (t11, q11, v11), (t13, q13, v13) = errors
-    assert q13 < q11 / 10 and v13 < v11 / 10
-    assert t13 < 1e-11 and q13 < 1e-10 and v13 < 1e-8
+        errors.append(np.array([np.abs(tr.switch_times - switches).max() / T,
+                                np.abs(q_l - ref[: S.n_l]).max() / x_scale,
+                                np.abs(v_l - ref[S.n_l:]).max() / v_scale]))
+    # The differences are DOP853's own error: they shrink as its tolerance tightens 3300-fold
+    # (by 530 to 25 000 under four OpenBLAS kernels; an error of the exact solver would
+    # stay). DOP853's global error is not proportional to rtol, so only a 100-fold shrink is
+    # asserted. Velocities carry the most of it: DOP853's position error in mode j shows in
+    # the velocities multiplied by ω_j (up to ω_4 = 47 ω_1 on the 3-element beam), so they
+    # are compared with the largest velocity of the motion. At rtol 3e-14 the differences
+    # measured at most 1.4e-14 (t), 1.1e-12 (q), 1.4e-11 (v).
+    loose, tight = errors
+    assert (tight * 100 < loose).all(), (loose, tight)
+    assert (tight < [1e-13, 1e-11, 1e-10]).all(), tight
     # all DOFs and the contact force from the trajectory obey the contact law
     q, v, lam = tr.evaluate(t_eval)
     gN = model.gap - model.stop_side * q[model.contact_dof]
@@ -302,16 +318,10 @@ def test_transition_matches_finite_differences_across_switches():
     assert len(tr.switch_times) >= 2
     z0 = np.concatenate([x0, v0])
     n = S.n_l
-    h = 1e-6 * np.abs(z0).max()
-    fd = np.empty((2 * n, 2 * n))
-    for j in range(2 * n):
-        zp, zm = z0.copy(), z0.copy()
-        zp[j] += h
-        zm[j] -= h
-        fp = np.concatenate(integrate(S, zp[:n], zp[n:], t_end).final_state())
-        fm = np.concatenate(integrate(S, zm[:n], zm[n:], t_end).final_state())
-        fd[:, j] = (fp - fm) / (2 * h)
-    assert np.abs(fd - tr.transition).max() < 1e-6 * np.abs(tr.transition).max()
+    def final(z):
+        return np.concatenate(integrate(S, z[:n], z[n:], t_end).final_state())
+
+    assert_jacobian(final, z0, tr.transition, 1e-4 * np.abs(z0).max())
 
 
 # ------------------------------------------------------------------ periodic orbits, backbone

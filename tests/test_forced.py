@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from finite_differences import assert_jacobian
 from scipy.integrate import solve_ivp
 
 import mmshbm
@@ -40,14 +41,9 @@ def _closed_form(model, F, omega):
     return Q
 
 
-def _fd_check(problem, u, h=1e-7, rtol=1e-6):
+def _fd_check(problem, u, h=1e-5):
     R, J = problem.evaluate(u)
-    Jfd = np.empty_like(J)
-    for j in range(len(u)):
-        e = np.zeros(len(u))
-        e[j] = h
-        Jfd[:, j] = (problem.evaluate(u + e, False) - problem.evaluate(u - e, False)) / (2 * h)
-    assert np.abs(J - Jfd).max() <= rtol * np.abs(J).max()
+    assert_jacobian(lambda v: problem.evaluate(v, False), u, J, h)
 
 
 def test_linear_response_below_the_gap_is_the_closed_form(beam):

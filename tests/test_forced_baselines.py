@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from finite_differences import assert_jacobian
 
 import mmshbm
 from mmshbm.core.bordered import bordered_solve
@@ -40,20 +41,18 @@ def exact_orbit(osc):
 
 
 def _at_frequency(problem, u):
+    """Newton at fixed frequency to a scaled residual of 1e-10: above the round-off floor of
+    the stiffest problem here (1.8e-12 for penalty-HBM with k_p = 8e3 k_c under some BLAS
+    kernels, above a 1e-12 target) and far below the accuracies these tests compare."""
     t = np.zeros(problem.n_unknowns)
     t[-1] = 1.0
-    return newton(problem, u, t, u.copy(), 1e-12, 40, 1e-14)[0]
+    return newton(problem, u, t, u.copy(), 1e-10, 40, 1e-12)[0]
 
 
-def _fd(problem, u, h=1e-7):
+def _fd(problem, u, h=1e-5):
     R, J = problem.evaluate(u)
     J = J.toarray() if hasattr(J, "toarray") else J
-    Jfd = np.empty_like(J)
-    for j in range(len(u)):
-        e = np.zeros(len(u))
-        e[j] = h
-        Jfd[:, j] = (problem.evaluate(u + e, False) - problem.evaluate(u - e, False)) / (2 * h)
-    return np.abs(J - Jfd).max() / np.abs(J).max()
+    assert_jacobian(lambda v: problem.evaluate(v, False), u, J, h)
 
 
 def test_jacobians_match_finite_differences(osc):
@@ -62,12 +61,12 @@ def test_jacobians_match_finite_differences(osc):
     u = pen.linear_point(0.17)
     u[:-1] += 0.3 * rng.standard_normal(len(u) - 1)
     u[2 + 1] += 2.0  # the contact DOF's cosine: into the stop
-    assert _fd(pen, u) < 1e-6
+    _fd(pen, u)
     sh = ShootingForcedProblem(osc, F, steps_per_period=64)
     u = sh.linear_point(0.17)
     u[:-1] += 0.3 * rng.standard_normal(len(u) - 1)
     u[0] += 2.0
-    assert _fd(sh, u) < 1e-6
+    _fd(sh, u)
 
 
 def test_shooting_converges_at_order_two(osc, exact_orbit):

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from finite_differences import assert_jacobian
 
 import mmshbm
 from mmshbm.analysis.phase_resonance import compare_backbones, phase_resonance_backbone
@@ -41,12 +42,7 @@ def test_phase_resonance_of_the_oscillator(osc):
     u[:-2] += 0.3 * rng.standard_normal(len(u) - 2)
     u[p.n_c + p.contact_rows[0]] += 2.0
     R, J = p.evaluate(u)
-    Jfd = np.empty_like(J)
-    for j in range(len(u)):
-        e = np.zeros(len(u))
-        e[j] = 1e-7
-        Jfd[:, j] = (p.evaluate(u + e, False) - p.evaluate(u - e, False)) / 2e-7
-    assert np.abs(J - Jfd).max() < 1e-6 * np.abs(J).max()
+    assert_jacobian(lambda v: p.evaluate(v, False), u, J, 1e-5)
     with pytest.raises(ValueError, match="needs a damped model"):
         phase_resonance_backbone(mmshbm.OneDofOscillator().model(), [1.0, 0.0])
 

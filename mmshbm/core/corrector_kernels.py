@@ -11,9 +11,8 @@ Jacobian (:func:`~mmshbm.core.contact_kernels._mmshbm_eval`), the bordered LU
 :func:`mmshbm.core.continuation.newton` — so that an iteration costs its arithmetic. The
 numbers are those of the Python loop (the same kernels, in the same order).
 
-Caching: this kernel calls kernels of three other files. Numba's on-disk cache checks only
-the file of the function it caches; after editing a callee, clear ``__pycache__`` (CI and
-installs always start from a fresh cache).
+Caching: this kernel calls kernels of three other files; the package's cache policy
+(:mod:`mmshbm._kernel_cache`) recompiles it when any of them changes.
 """
 
 from __future__ import annotations

@@ -2,8 +2,10 @@
 
 Kernels take plain contiguous float64 arrays and know nothing of models; the public
 functions validate shapes and call the private ``_kernel`` versions, which the solvers
-call directly in their inner loops. All kernels that call each other live in this one
-file: numba's on-disk cache does not see edits to a callee in another module.
+call directly in their inner loops. Caching: every kernel module takes its flags from
+:data:`JIT_OPTIONS` here, and importing this module installs the package's cache policy
+(:mod:`mmshbm._kernel_cache`: a cached kernel is stale when any kernel file changes), so
+kernels may call kernels of other files.
 
 Proximal contact law (Signorini, λ >= 0 the contact force, g the gap, r > 0):
 
@@ -18,7 +20,11 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .._kernel_cache import install as _install_cache_policy
+
 __all__ = ["proximal_contact", "cosine_product_matrix", "JIT_OPTIONS"]
+
+_install_cache_policy()
 
 #: One place for the compilation flags of every kernel: cached, no GIL, fast math
 #: without the flags that assume no NaN/inf (a NaN must propagate to Newton's checks).

@@ -8,58 +8,20 @@ modal coordinates of the open-contact structure (M = I, K_open = Λ):
     S = (4/h²) I + (2/h) Γ + Λ,   P = (4/h²) I + (2/h) Γ − Λ,   g_k = f(t_k) + f(t_k+1),
 
 with Γ = Φᵀ C Φ (diagonal for modal or Rayleigh damping), â = Φᵀ a the contact direction
-and F the AVF force sum of the free gap h = gap + â·η. ``_force_sum`` and
-``_contact_root`` are those of the conservative shooting kernels, copied here because a
-kernel and the kernels it calls must live in one file (numba's cache does not see edits
-to a callee in another file). S⁻¹ is passed as a dense matrix (diagonal when Γ is).
+and F the AVF force sum of the free gap h = gap + â·η (``_force_sum`` and ``_contact_root``
+of the conservative shooting kernels). S⁻¹ is passed as a dense matrix (diagonal when Γ
+is).
 """
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 from numba import njit
 
 from ..core.kernels import JIT_OPTIONS
+from ._shooting_kernels import _contact_root, _force_sum
 
 __all__: list[str] = []
-
-
-@njit(**JIT_OPTIONS)
-def _force_sum(h0, h1, kc):
-    """AVF force sum F = 2 k_c ∫₀¹ max(0, −(h0 + s(h1 − h0))) ds and (∂F/∂h0, ∂F/∂h1)."""
-    if h0 >= 0.0 and h1 >= 0.0:
-        return 0.0, 0.0, 0.0
-    if h0 <= 0.0 and h1 <= 0.0:
-        return -kc * (h0 + h1), -kc, -kc
-    if h1 < 0.0:  # h0 > 0 > h1
-        d = h0 - h1
-        return kc * h1 * h1 / d, -kc * h1 * h1 / (d * d), kc * h1 * (2.0 * h0 - h1) / (d * d)
-    d = h1 - h0  # h0 < 0 < h1
-    return kc * h0 * h0 / d, kc * h0 * (2.0 * h1 - h0) / (d * d), -kc * h0 * h0 / (d * d)
-
-
-@njit(**JIT_OPTIONS)
-def _contact_root(h0, hy, ak):
-    """The free gap h1 at the step's end: the root of h1 = hy + α F(h0, h1), ak = α k_c."""
-    if h0 >= 0.0:
-        if hy >= 0.0:
-            return hy
-        A = 1.0 + ak
-        b = h0 + hy
-        disc = math.sqrt(b * b - 4.0 * A * h0 * hy)
-        if b > 0.0:
-            return 2.0 * h0 * hy / (b + disc)
-        return (b - disc) / (2.0 * A)
-    if hy <= ak * h0:
-        return (hy - ak * h0) / (1.0 + ak)
-    b = hy + h0
-    C = hy * h0 - ak * h0 * h0
-    disc = math.sqrt((hy - h0) * (hy - h0) + 4.0 * ak * h0 * h0)
-    if b >= 0.0:
-        return 0.5 * (b + disc)
-    return C / (0.5 * (b - disc))
 
 
 @njit(**JIT_OPTIONS)
@@ -123,8 +85,8 @@ def _forced_integrate(Sinv, P, Gam, diag, a, z, alpha, kc, gap, h, dh, G, dG, q,
         hy = gap
         for i in range(n):
             hy += a[i] * y[i]
-        h1 = _contact_root(h0, hy, ak)
-        F, F0, F1 = _force_sum(h0, h1, kc)
+        h1 = _contact_root(h0, hy, ak, True)
+        F, F0, F1 = _force_sum(h0, h1, kc, True)
         for i in range(n):
             qn[i] = y[i] + F * z[i]
         sm = F1 / (1.0 - F1 * alpha)

@@ -12,9 +12,8 @@ active set J, λ_J = −G_JJ⁻¹ h_J. Along a straight path h(s) = h0 + s (h1 �
 followed exactly by principal pivoting (:func:`_lcp_path`): on each piece λ and g are
 affine in s, and the piece ends where an active λ_j or an inactive g_i reaches zero.
 
-Band storage and tangent layout as in :mod:`mmshbm.methods._shooting_kernels`. The two
-band kernels used here are copies of that module's: numba's on-disk cache does not see
-edits to a callee in another file, so a kernel and its callees live in one file.
+Band storage, the band kernels and the tangent layout are those of
+:mod:`mmshbm.methods._shooting_kernels`.
 """
 
 from __future__ import annotations
@@ -23,43 +22,13 @@ import numpy as np
 from numba import njit
 
 from ..core.kernels import JIT_OPTIONS
+from ._shooting_kernels import _band_solve, _band_symv
 
 __all__ = ["lcp_solve"]
 
 _MAX_NEWTON = 60
 # Tangent columns per block (as in _shooting_kernels).
 _BLOCK = 16
-
-
-@njit(**JIT_OPTIONS)
-def _band_solve(L, b):
-    """In place: b <- A⁻¹ b with L the band Cholesky factor of A; b shape (n,)."""
-    p = L.shape[0] - 1
-    n = L.shape[1]
-    for i in range(n):
-        s = b[i]
-        for k in range(max(0, i - p), i):
-            s -= L[i - k, k] * b[k]
-        b[i] = s / L[0, i]
-    for i in range(n - 1, -1, -1):
-        s = b[i]
-        for k in range(i + 1, min(n, i + p + 1)):
-            s -= L[k - i, i] * b[k]
-        b[i] = s / L[0, i]
-
-
-@njit(**JIT_OPTIONS)
-def _band_symv(ab, x, out):
-    """out <- A x for symmetric A in lower band storage; x, out shape (n,)."""
-    p = ab.shape[0] - 1
-    n = ab.shape[1]
-    for i in range(n):
-        out[i] = ab[0, i] * x[i]
-    for d in range(1, p + 1):
-        for j in range(n - d):
-            c = ab[d, j]
-            out[j + d] += c * x[j]
-            out[j] += c * x[j + d]
 
 
 @njit(**JIT_OPTIONS)

@@ -20,7 +20,7 @@ from ..core.special_points import SpecialPoint
 from ..model.model import Model
 from ..results.branch import Branch
 from .limits import check_resources
-from .registry import _CONTINUATION_FIELDS, METHODS, make_problem
+from .registry import _CONTINUATION_FIELDS, METHODS, make_problem, method_options  # noqa: F401 - public here since 0.1
 
 __all__ = ["backbone"]
 
@@ -84,7 +84,7 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     if not isinstance(method, str) or method not in METHODS:
         raise ValueError(f"unknown method {method!r}; choose one of {sorted(METHODS)}")
     # --- issue 14: the backbone of a damped model is its damped nonlinear mode (EPMC) ---
-    if method == "mmshbm" and model.damping is not None:
+    if method == "mmshbm" and (model.damping is not None or model.friction):
         method = "epmc"
     # --- end issue 14 ---
     if method != "shooting":
@@ -99,6 +99,10 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     max_amplitude = check.positive("max_amplitude", max_amplitude)
     if start_amplitude is None:
         start_amplitude = 0.5 * gap if gap > 0 else 0.01 * max_amplitude
+        if model.friction and gap == 0:  # start stuck: below the amplitude where slip begins
+            from .friction_epmc import stuck_mode
+
+            start_amplitude = min(start_amplitude, 0.5 * stuck_mode(model, options.get("mode", 1))[2])
     start_amplitude = check.positive("start_amplitude", start_amplitude)
     if start_amplitude >= max_amplitude:
         raise ValueError(f"start_amplitude ({start_amplitude:g} m) must be below max_amplitude "

@@ -58,6 +58,10 @@ def make_forced_problem(model: Model, force, method: str = "mmshbm", harmonics: 
     if isinstance(force, dict):
         force = Excitation.from_json(force)
     module, cls = FORCED_METHODS[method].split(":")
+    if getattr(model, "friction", ()):
+        if method != "mmshbm":
+            raise NotImplementedError(f"method {method!r} does not yet take friction contacts: use 'mmshbm'")
+        module, cls = "mmshbm.methods.friction_forced", "FrictionForcedProblem"
     problem_class = getattr(importlib.import_module(module), cls)
     options = dict(options or {})
     params = list(inspect.signature(problem_class).parameters.values())[2:]

@@ -46,6 +46,10 @@ def make_problem(model: Model, method: str = "mmshbm", **options):
     if not isinstance(method, str) or method not in METHODS:
         raise ValueError(f"unknown method {method!r}; choose one of {sorted(METHODS)}")
     module, cls = METHODS[method].split(":")
+    if getattr(model, "friction", ()):
+        if method != "epmc":
+            raise NotImplementedError(f"method {method!r} does not yet take friction contacts: use 'mmshbm'")
+        module, cls = "mmshbm.methods.friction_epmc", "FrictionEPMCProblem"
     try:
         problem_class = getattr(importlib.import_module(module), cls)
     except ImportError as err:  # pragma: no cover - a baseline not installed

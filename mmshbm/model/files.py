@@ -99,11 +99,23 @@ def read_npz(path, contact_dof=None, gap=None, stop_side=None, amplitude_dof=Non
         "stop_side": _entry(data, "stop_side", stop_side, where, default=1, integer=True),
         "description": description, "damping": _matrix(data, "C", where, required=False),
         "amplitude_dof": amp,
+        **({"friction": _friction(data, where)} if "friction" in data else {}),
     }
 
 
+def _friction(data: dict, where: str) -> list[dict]:
+    from .friction import friction_from_json
+
+    try:
+        return friction_from_json(data["friction"])
+    except (json.JSONDecodeError, ValueError) as err:
+        raise ValueError(f"{where}: 'friction' is malformed: {err}") from None
+
+
 def write_npz(path, model) -> None:
-    """Write ``model`` (CSR parts, contacts, damping, description) to ``path``."""
+    """Write ``model`` (CSR parts, contacts, damping, friction, description) to ``path``."""
+    from .friction import friction_to_json
+
     parts = {}
     mats = [("M", model.M), ("K", model.K)] + ([("C", model.damping)] if model.damping is not None else [])
     for name, A in mats:
@@ -117,7 +129,8 @@ def write_npz(path, model) -> None:
              gap=contacts[0].gap if single else np.array([c.gap for c in contacts]),
              stop_side=contacts[0].side if single else np.array([c.side for c in contacts]),
              amplitude_dof=-1 if model._amplitude_dof is None else model._amplitude_dof,
-             description=json.dumps(model.description))
+             description=json.dumps(model.description),
+             **({"friction": friction_to_json(model.friction)} if model.friction else {}))
 
 
 def read_matrix_market(M_path, K_path) -> tuple:

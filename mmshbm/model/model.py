@@ -31,6 +31,7 @@ import scipy.sparse.linalg as spla
 
 from .. import _validate as check
 from .contact import Contact, contacts_from
+from .friction import no_contacts
 
 __all__ = ["Model"]
 
@@ -58,6 +59,8 @@ class Model:
         ``transforms`` applied since).
     damping : scipy.sparse.csr_matrix or None, shape (n_dof, n_dof)
         Viscous damping matrix C (N·s/m), zero on the massless DOFs; None: undamped.
+    friction : tuple of FrictionContact
+        Coulomb friction contacts on massless DOFs (:meth:`with_friction`); empty: none.
     """
 
     M: sp.csr_matrix
@@ -66,6 +69,7 @@ class Model:
     description: dict = field(default_factory=dict)
     damping: sp.csr_matrix | None = None
     _amplitude_dof: int | None = None
+    friction: tuple = ()
 
     # ------------------------------------------------------------------ builders
     @classmethod
@@ -80,7 +84,9 @@ class Model:
             massless.
         contact_dof : int or sequence of int
             The DOF(s) facing a stop, ``0 <= contact_dof < n``. The same DOF may appear
-            twice with opposite ``stop_side`` (a clearance).
+            twice with opposite ``stop_side`` (a clearance). ``[]`` (with ``gap=[]``,
+            ``stop_side=[]``): no unilateral contact (e.g. friction only,
+            :meth:`with_friction`; name ``amplitude_dof``).
         gap : float or sequence of float
             Distance(s) (m) to the stop(s), >= 0: one for all contacts or one per contact.
         stop_side : {+1, -1} or sequence of them
@@ -110,7 +116,8 @@ class Model:
         check.symmetric("M", M)
         check.symmetric("K", K)
         n = M.shape[0]
-        contacts = contacts_from(contact_dof, gap, stop_side, n)
+        empty = no_contacts(contact_dof, gap, stop_side)
+        contacts = () if empty else contacts_from(contact_dof, gap, stop_side, n)
         if damping is not None:
             damping = check.square_matrix("damping", damping)
             if damping.shape != M.shape:
@@ -130,7 +137,14 @@ class Model:
         arguments given here override the file's entries."""
         from .files import read_npz
 
-        return cls.from_matrices(**read_npz(path, contact_dof, gap, stop_side, amplitude_dof))
+        kwargs = read_npz(path, contact_dof, gap, stop_side, amplitude_dof)
+        friction = kwargs.pop("friction", [])
+        model = cls.from_matrices(**kwargs)
+        if friction:
+            from .friction import add_friction
+
+            model = add_friction(model, friction)
+        return model
 
     @classmethod
     def from_matrix_market(cls, M_path, K_path, contact_dof, gap, stop_side=1, *,
@@ -193,6 +207,16 @@ class Model:
         description["transforms"] = list(description.get("transforms", [])) + [
             {"name": "with_damping", "args": args}]
         return replace(self, damping=C, description=description)
+
+    def with_friction(self, dof: int, mu: float, *, normal_load: float | None = None,
+                      normal_contact: int | None = None, preload: float | None = None) -> Model:
+        """The same model with Coulomb friction (coefficient ``mu``) on the massless DOF
+        ``dof``, pressed by a constant ``normal_load`` (N) or by unilateral contact
+        ``normal_contact`` (plus ``preload``); several calls add several. See
+        :func:`mmshbm.model.friction.with_friction` (ValueError naming bad input)."""
+        from .friction import with_friction
+
+        return with_friction(self, dof, mu, normal_load, normal_contact, preload)
 
     def with_amplitude_dof(self, dof: int) -> Model:
         """The same model with its amplitude measured at ``dof``."""
@@ -382,13 +406,18 @@ class Model:
         h.update(json.dumps(contacts[0] if len(contacts) == 1 else contacts).encode())
         if self._amplitude_dof is not None:
             h.update(json.dumps({"amplitude_dof": int(self._amplitude_dof)}).encode())
+        if self.friction:
+            from .friction import friction_to_json
+
+            h.update(friction_to_json(self.friction).encode())
         return h.hexdigest()
 
     def same_as(self, other: Model) -> bool:
         """True when both models have identical matrices, contacts, damping and amplitude DOF."""
         if not isinstance(other, Model) or self.M.shape != other.M.shape:
             return False
-        if self.contacts != other.contacts or self._amplitude_dof != other._amplitude_dof:
+        if (self.contacts != other.contacts or self._amplitude_dof != other._amplitude_dof
+                or self.friction != other.friction):
             return False
         if (self.damping is None) != (other.damping is None):
             return False
@@ -455,7 +484,9 @@ class Model:
         if len(self.c):
             modes[self.c] = -la.solve(b["K_cc"], b["K_lc"].T @ phi)
         # fix the sign: the (first) contact DOF of each mode moves toward its stop first
-        first = self.contacts[0]
+        # (without one: the first friction DOF, or else the first DOF, moves to +)
+        first = self.contacts[0] if self.contacts else Contact(
+            self.friction[0].dof if self.friction else 0, 0.0, 1)
         sign = np.where(modes[first.dof] * first.side < 0, -1.0, 1.0)
         modes *= sign
         return np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi), modes
@@ -489,6 +520,8 @@ class Model:
             contact = "contacts=[" + ", ".join(f"(dof {c.dof}, gap {c.gap:g}, side {c.side:+d})"
                                                for c in self.contacts) + "]"
         extra = "" if self.damping is None else ", damped"
+        if self.friction:
+            extra += ", friction on DOFs " + str([fc.dof for fc in self.friction])
         return f"Model(n_dof={self.n_dof}, massless={self.c.tolist()}, {contact}{extra})"
 
 

@@ -295,6 +295,11 @@ def _build(model, M, K, contacts, description, damping, amplitude_dof):
     gaps = [c.gap for c in contacts]
     sides = [c.side for c in contacts]
     one = len(contacts) == 1
-    return cls.from_matrices(M, K, dofs[0] if one else dofs, gaps[0] if one else gaps,
-                             sides[0] if one else sides, description, damping=damping,
-                             amplitude_dof=amplitude_dof)
+    new = cls.from_matrices(M, K, dofs[0] if one else dofs, gaps[0] if one else gaps,
+                            sides[0] if one else sides, description, damping=damping,
+                            amplitude_dof=amplitude_dof)
+    if model.friction:  # the transforms keep the DOF numbers: the friction contacts carry over
+        from .friction import add_friction, friction_args
+
+        new = add_friction(new, [friction_args(fc) for fc in model.friction])
+    return new

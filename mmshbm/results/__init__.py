@@ -1,1 +1,20 @@
 """What the methods produce: :class:`~mmshbm.results.branch.Branch` and its file format."""
+
+import importlib
+
+# public names of the flat ``mmshbm.results`` module of 0.1 -> the module that holds them now
+_NAMES = {
+    "Branch": "branch", "versions": "branch", "branch_payload": "branch",
+    "branch_from_payload": "branch", "rebuild_model": "models",
+    "write_archive": "archive", "read_archive": "archive",
+}
+
+
+def __getattr__(name: str):
+    if name in _NAMES:
+        return getattr(importlib.import_module(f"{__name__}.{_NAMES[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_NAMES))

@@ -91,8 +91,16 @@ def _model_from_arrays(arrays: dict, info: dict):
         d, i, p, shape = (arrays[f"model_{name}_{q}"] for q in ("data", "indices", "indptr", "shape"))
         mats[name] = sp.csr_matrix((d, i, p), shape=tuple(int(v) for v in shape))
     if "contacts" in info:
-        dofs, gaps, sides = (list(v) for v in zip(*info["contacts"], strict=True))
+        dofs, gaps, sides = ((list(v) for v in zip(*info["contacts"], strict=True)) if info["contacts"]
+                             else ([], [], []))
     else:
         dofs, gaps, sides = int(info["contact_dof"]), float(info["gap"]), int(info["stop_side"])
-    return Model.from_matrices(mats["M"], mats["K"], dofs, gaps, sides, dict(info.get("description", {})),
-                               damping=mats.get("C"), amplitude_dof=info.get("amplitude_dof"))
+    model = Model.from_matrices(mats["M"], mats["K"], dofs, gaps, sides, dict(info.get("description", {})),
+                                damping=mats.get("C"), amplitude_dof=info.get("amplitude_dof"))
+    friction = [dict(step.get("args", {})) for step in model.description.get("transforms", [])
+                if step.get("name") == "with_friction"]
+    if friction:  # recorded by Model.with_friction; added here without recording them again
+        from ..model.friction import add_friction
+
+        model = add_friction(model, friction)
+    return model

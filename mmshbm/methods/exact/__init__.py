@@ -108,6 +108,7 @@ Always check ``converged`` and ``n_contacts``.
 
 from __future__ import annotations
 
+from .friction import FrictionOrbit, FrictionSystem, friction_orbit
 from .orbits import Backbone, PeriodicOrbit, backbone, periodic_orbit
 from .phase import Phase
 from .system import PiecewiseLinearSystem
@@ -123,4 +124,7 @@ __all__ = [
     "integrate",
     "periodic_orbit",
     "backbone",
+    "FrictionSystem",
+    "FrictionOrbit",
+    "friction_orbit",
 ]

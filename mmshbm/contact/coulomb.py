@@ -1,0 +1,347 @@
+"""Coulomb dry friction at a massless DOF, without regularisation.
+
+Notation. ``f`` is the force the node exerts on the support in the friction direction (N;
+the support pushes back with −f), ``u̇`` the node's velocity, s = μN >= 0 the slip force.
+Coulomb's law f ∈ s·Sign(u̇) (|f| <= s; u̇ ≠ 0 only where |f| = s, with f u̇ = s|u̇| >= 0,
+the power dissipated) is, for any r > 0, the proximal point equation
+
+    f = prox_[−s, s](f + r u̇) = clip(f + r u̇, −s, s):
+
+stick (u̇ = 0): f = clip(f) ⇔ |f| <= s; slip u̇ > 0: clip(f + r u̇) = f only at f = s
+(below s the argument exceeds f and clip moves it up); u̇ < 0 mirrors it. The solution
+does not depend on r; Newton's conditioning does (r of the order of the condensed
+tangential stiffness over Ω). In the solvers' convention the force the structure *needs*
+at the DOF (K_cl q_l + K_cc q_c) is the support's force on the node, −f.
+
+Residual R = f − clip(p, −s, s), p = f + r u̇, with the derivative
+∂clip/∂p = [|p| < s] (clip is continuous: no boundary terms).
+
+Harmonic projection. On the Fourier ansatz p(τ) is a trigonometric polynomial, and
+
+    clip(p, −s, s) = p − [(p − s)₊ − (−s − p)₊],
+
+the bracket being exactly the unilateral law's projection on the admissible interval
+[lo, hi] = [−s, s] (:func:`mmshbm.core.projection.project_contact`): the instants where
+p = ±s are the zeros of the trigonometric polynomials p ∓ s, located by its root finder,
+the pieces are integrated in closed form, and its Jacobian G (the projection of the
+indicator of |p| > s) gives ∂proj[clip]/∂p = I − G exactly. This module calls that
+projection and does not copy it; the pointwise kernels below are self-contained (Numba
+caches a kernel per file). The displacement-level projection (:func:`project_coulomb_play`)
+calls the root-finding kernels of :mod:`mmshbm.core.contact_kernels` (``_zeros``,
+``_refine``) from Python: no compiled kernel here calls one in another file, so Numba's
+per-file cache cannot go stale across files.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ..core.kernels import JIT_OPTIONS
+
+__all__ = ["coulomb_residual", "coulomb_derivative", "project_coulomb", "project_coulomb_play", "play_pieces",
+           "derivative_matrix"]
+
+
+@njit(**JIT_OPTIONS)
+def _coulomb_residual(f, v, s, r, R):
+    """In place: R_j = f_j − clip(f_j + r v_j, −s_j, s_j); all arrays shape (N,), r > 0."""
+    for j in range(f.shape[0]):
+        p = f[j] + r * v[j]
+        if p > s[j]:
+            R[j] = f[j] - s[j]
+        elif p < -s[j]:
+            R[j] = f[j] + s[j]
+        else:
+            R[j] = -r * v[j]
+
+
+@njit(**JIT_OPTIONS)
+def _coulomb_derivative(f, v, s, r, dR_df, dR_dv):
+    """In place: ∂R/∂f = 1 − χ, ∂R/∂v = −r χ with χ_j = [|f_j + r v_j| < s_j] (stick)."""
+    for j in range(f.shape[0]):
+        p = f[j] + r * v[j]
+        if -s[j] < p < s[j]:
+            dR_df[j] = 0.0
+            dR_dv[j] = -r
+        else:
+            dR_df[j] = 1.0
+            dR_dv[j] = 0.0
+
+
+def _pointwise_args(f, v, s, r):
+    f = np.ascontiguousarray(f, dtype=float)
+    v = np.ascontiguousarray(v, dtype=float)
+    if f.ndim != 1 or v.shape != f.shape:
+        raise ValueError(f"f and v must be 1-D of equal length, got {f.shape} and {v.shape}")
+    s = np.ascontiguousarray(np.broadcast_to(np.asarray(s, dtype=float), f.shape))
+    if np.any(s < 0) or not np.all(np.isfinite(s)):
+        raise ValueError("slip force s must be finite and >= 0")
+    r = float(r)
+    if not r > 0:
+        raise ValueError(f"r must be > 0, got {r!r}")
+    return f, v, s, r
+
+
+def coulomb_residual(f: np.ndarray, v: np.ndarray, s, r: float) -> np.ndarray:
+    """Pointwise residual R = f − clip(f + r v, −s, s).
+
+    Parameters
+    ----------
+    f : ndarray, shape (N,)
+        Force the node exerts on the support (N).
+    v : ndarray, shape (N,)
+        Node velocity (m/s, or m per unit of normalised time when r is scaled alike).
+    s : float or ndarray (N,)
+        Slip force μN >= 0 (N).
+    r : float
+        Proximal parameter > 0 (N·s/m).
+
+    Returns
+    -------
+    R : ndarray, shape (N,) (N); zero exactly where (f, v) satisfy Coulomb's law.
+    """
+    f, v, s, r = _pointwise_args(f, v, s, r)
+    R = np.empty_like(f)
+    _coulomb_residual(f, v, s, r, R)
+    return R
+
+
+def coulomb_derivative(f: np.ndarray, v: np.ndarray, s, r: float) -> tuple[np.ndarray, np.ndarray]:
+    """Pointwise (∂R/∂f, ∂R/∂v), each shape (N,), of :func:`coulomb_residual` (the
+    semismooth derivative; at |p| = s exactly the slip branch is taken)."""
+    f, v, s, r = _pointwise_args(f, v, s, r)
+    a, b = np.empty_like(f), np.empty_like(f)
+    _coulomb_derivative(f, v, s, r, a, b)
+    return a, b
+
+
+def derivative_matrix(H: int) -> np.ndarray:
+    """(2H+1, 2H+1) matrix of d/dτ on NLvib-ordered coefficients [c_0, c_1, s_1, ...]:
+    (c_k cos kτ + s_k sin kτ)' = k s_k cos kτ − k c_k sin kτ."""
+    Dt = np.zeros((2 * H + 1, 2 * H + 1))
+    for k in range(1, H + 1):
+        Dt[2 * k - 1, 2 * k] = k
+        Dt[2 * k, 2 * k - 1] = -k
+    return Dt
+
+
+def project_coulomb(f: np.ndarray, v: np.ndarray, s: float, r: float, exact: bool = True,
+                    n_samples: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """Harmonic projection of R(τ) = f − clip(f + r v, −s, s) and its exact Jacobian.
+
+    Parameters
+    ----------
+    f, v : ndarray, shape (2H+1,)
+        NLvib-ordered coefficients of the force on the support (N) and of the velocity
+        (in the time unit that makes r v a force).
+    s : float
+        Constant slip force μN >= 0 (N).
+    r : float
+        Proximal parameter > 0.
+    exact : bool
+        Switching instants located and the pieces integrated in closed form (default), or
+        sampled on ``n_samples`` points (AFT).
+    n_samples : int, optional
+        Bracketing grid (exact) or sample count (sampled); default 16·(2H+1).
+
+    Returns
+    -------
+    R : ndarray (2H+1,)
+        NLvib-ordered projection of the residual (N).
+    dR_df, dR_dv : ndarray (2H+1, 2H+1)
+        G and −r (I − G), G the projection of the slip indicator [|p| > s].
+    slip : float
+        Fraction of the period in slip, G[0, 0] (0: the node sticks throughout).
+    """
+    from ..core.projection import project_contact
+
+    f = np.asarray(f, dtype=float)
+    v = np.asarray(v, dtype=float)
+    if f.ndim != 1 or f.shape[0] % 2 != 1 or v.shape != f.shape:
+        raise ValueError(f"f and v must be 1-D with 2H+1 entries each, got {f.shape} and {v.shape}")
+    s = float(s)
+    if not (s >= 0 and np.isfinite(s)):
+        raise ValueError(f"slip force s must be finite and >= 0, got {s!r}")
+    r = float(r)
+    if not r > 0:
+        raise ValueError(f"r must be > 0, got {r!r}")
+    p = f + r * v
+    phi, G = project_contact(p, -s, s, exact=exact, n_samples=n_samples)
+    # R = f − (p − φ) = φ − r v
+    R = phi - r * v
+    dR_dv = -r * (np.eye(len(f)) - G)
+    return R, G, dR_dv, float(G[0, 0])
+
+
+# ---------------------------------------------------------------------- displacement level
+def _phi(H: int, tau: float) -> np.ndarray:
+    """NLvib-ordered basis [1, cos τ, sin τ, ..., cos Hτ, sin Hτ] at one τ."""
+    k = np.arange(1, H + 1)
+    out = np.empty(2 * H + 1)
+    out[0] = 1.0
+    out[1::2] = np.cos(k * tau)
+    out[2::2] = np.sin(k * tau)
+    return out
+
+
+def _arc(H: int, a: float, b: float) -> tuple[np.ndarray, np.ndarray]:
+    """Spectrum (C, S), n = 0..2H, of the indicator of the arc [a, b]:
+    C_n = (1/2π)∫_a^b cos nτ dτ, S_n = (1/2π)∫_a^b sin nτ dτ (closed form)."""
+    n = np.arange(1, 2 * H + 1)
+    C = np.empty(2 * H + 1)
+    S = np.empty(2 * H + 1)
+    C[0], S[0] = b - a, 0.0
+    C[1:] = (np.sin(n * b) - np.sin(n * a)) / n
+    S[1:] = (np.cos(n * a) - np.cos(n * b)) / n
+    return C / (2 * np.pi), S / (2 * np.pi)
+
+
+def _indicator(C: np.ndarray, S: np.ndarray, H: int) -> np.ndarray:
+    """NLvib-ordered projection of an indicator with spectrum (C, S)."""
+    out = np.empty(2 * H + 1)
+    out[0] = C[0]
+    out[1::2] = 2 * C[1:H + 1]
+    out[2::2] = 2 * S[1:H + 1]
+    return out
+
+
+def play_pieces(y: np.ndarray, s: float, r: float, n_samples: int | None = None) -> list:
+    """Stick and slip pieces of the periodic Coulomb law driven by ``y`` (see
+    :func:`project_coulomb_play`), over one period starting at y's global maximum.
+
+    Returns a list of (a, b, σ, u, τ_e): the arc [a, b] (a in [0, 2π), b <= a + 2π), σ = 0
+    stick at the node position u (set at the extremum τ_e of y, so ∂u/∂y = φ(τ_e)), σ = ±1
+    slip in the direction σ (u = y − σ s/r). Full stick (y's range <= 2s/r): one piece
+    [0, 2π] at the symmetric position u = mean(y) (mean force zero, τ_e = NaN: ∂u/∂y = e_0),
+    or clamped into the band where |r (u − y)| <= s (at y's maximum or minimum, τ_e there).
+    """
+    from ..core.contact_kernels import _TWO_PI, _refine, _zeros
+
+    y = np.asarray(y, dtype=float)
+    H = (y.shape[0] - 1) // 2
+    N = 16 * (2 * H + 1) if n_samples is None else int(n_samples)
+    k = np.arange(1, H + 1)
+    c, sn = np.concatenate([[y[0]], y[1::2]]), np.concatenate([[0.0], y[2::2]])
+    dc, ds = np.concatenate([[0.0], k * sn[1:]]), np.concatenate([[0.0], -k * c[1:]])  # y′
+    tau = _TWO_PI * np.arange(N) / N
+    cos_t, sin_t = np.cos(np.outer(np.arange(H + 1), tau)), np.sin(np.outer(np.arange(H + 1), tau))
+    d1 = dc @ cos_t + ds @ sin_t
+    d2 = (k * ds[1:]) @ cos_t[1:] - (k * dc[1:]) @ sin_t[1:]
+    roots = np.empty(2 * N + 2)
+    n_ext = _zeros(dc, ds, d1, d2, tau, roots)
+    ext = roots[:n_ext]
+    width = s / r
+    if n_ext == 0:
+        return [(0.0, _TWO_PI, 0, float(y[0]), np.nan)]
+    vals = np.array([c[0] + c[1:] @ np.cos(k * t) + sn[1:] @ np.sin(k * t) for t in ext])
+    i_max, i_min = int(np.argmax(vals)), int(np.argmin(vals))
+    y_max, y_min = vals[i_max], vals[i_min]
+    if y_max - y_min <= 2 * width:
+        if y[0] < y_max - width:
+            return [(0.0, _TWO_PI, 0, y_max - width, float(ext[i_max]))]
+        if y[0] > y_min + width:
+            return [(0.0, _TWO_PI, 0, y_min + width, float(ext[i_min]))]
+        return [(0.0, _TWO_PI, 0, float(y[0]), np.nan)]
+    order = np.roll(np.arange(n_ext), -i_max)
+    pts = np.concatenate([ext[order], [ext[i_max] + _TWO_PI]])
+    pv = np.concatenate([vals[order], [y_max]])
+    pts[1:-1] = np.where(pts[1:-1] < pts[0], pts[1:-1] + _TWO_PI, pts[1:-1])
+    u, t_e = y_max - width, float(pts[0])
+    pieces = []
+    zero = np.int64(0)
+    for a, b, ya, yb in zip(pts[:-1], pts[1:], pv[:-1], pv[1:], strict=True):
+        if b <= a:
+            continue
+        sigma = 1 if yb > ya else -1
+        level = u + sigma * width
+        if sigma * (yb - level) <= 0:  # does not reach the slip threshold: sticks throughout
+            pieces.append((a, b, 0, u, t_e))
+            continue
+        if sigma * (ya - level) >= 0:
+            t_sw = a
+        else:
+            gc = c.copy()
+            gc[0] -= level
+            t_sw = _refine(gc, sn, a, b, ya - level, zero)
+        if t_sw > a:
+            pieces.append((a, t_sw, 0, u, t_e))
+        pieces.append((t_sw, b, sigma, np.nan, np.nan))
+        u, t_e = yb - sigma * width, float(b)
+    return pieces
+
+
+def project_coulomb_play(y: np.ndarray, s: float, r: float,
+                         n_samples: int | None = None) -> tuple[np.ndarray, np.ndarray, float]:
+    """Exact harmonic projection of the support's force g = r (u − y) of a massless Coulomb
+    node whose position u is driven by the periodic signal y, and its exact Jacobian.
+
+    The law at the displacement level. For a massless node with the force g the support
+    exerts on it and any r > 0, write y = u − g/r. Coulomb's law (stick while |g| < s,
+    slip with g = −s sign u̇) is then exactly: u stays put while |u − y| < s/r and is
+    dragged at u = y ∓ s/r when y pushes it (the play operator of half-width s/r, the time
+    integral of the proximal equation). For a periodic y with range > 2s/r the periodic
+    motion is reached in one pass from y's global maximum, where the node has just been
+    dragged up, u = y_max − s/r (:func:`play_pieces`); with a smaller range the node sticks
+    throughout and its position is history: the symmetric position (mean force zero) is
+    taken. Extrema of y are the zeros of the trigonometric polynomial y′ and stick-to-slip
+    instants the zeros of y − level, located by the unilateral projection's root finder
+    (:mod:`mmshbm.core.contact_kernels`); g is r (u − y) or −σ s on the pieces, integrated
+    in closed form. g is continuous at every switch and u's dependence on the extremum's
+    time vanishes there (y′ = 0), so the Jacobian has no boundary terms:
+
+        ∂proj[g]/∂y = Σ_stick r (proj[χ_arc] φ(τ_e)ᵀ − proj[χ_arc φ_b]).
+
+    Parameters
+    ----------
+    y : ndarray (2H+1,)
+        NLvib-ordered coefficients of y (m).
+    s : float
+        Slip force >= 0 (N).
+    r : float
+        Stiffness parameter > 0 (N/m).
+    n_samples : int, optional
+        Bracketing grid of the root finder; default 16·(2H+1).
+
+    Returns
+    -------
+    g : ndarray (2H+1,)
+        NLvib-ordered projection of the support's force (N).
+    dg_dy : ndarray (2H+1, 2H+1)
+    slip : float
+        Fraction of the period in slip.
+    """
+    from ..core.projection import _product_matrix
+
+    y = np.asarray(y, dtype=float)
+    if y.ndim != 1 or y.shape[0] % 2 != 1:
+        raise ValueError(f"y must be 1-D with 2H+1 entries, got shape {y.shape}")
+    s, r = float(s), float(r)
+    if not (s >= 0 and np.isfinite(s)):
+        raise ValueError(f"slip force s must be finite and >= 0, got {s!r}")
+    if not r > 0:
+        raise ValueError(f"r must be > 0, got {r!r}")
+    H = (y.shape[0] - 1) // 2
+    g = np.zeros(2 * H + 1)
+    J = np.zeros((2 * H + 1, 2 * H + 1))
+    C_stick = np.zeros(2 * H + 1)
+    S_stick = np.zeros(2 * H + 1)
+    slip = 0.0
+    for a, b, sigma, u, t_e in play_pieces(y, s, r, n_samples):
+        C, S = _arc(H, a, b)
+        ind = _indicator(C, S, H)
+        if sigma != 0:
+            g -= sigma * s * ind
+            slip += (b - a) / (2 * np.pi)
+            continue
+        C_stick += C
+        S_stick += S
+        g += r * u * ind
+        if np.isnan(t_e):  # full stick at the symmetric position u = mean(y)
+            J[:, 0] += r * ind
+        else:
+            J += r * np.outer(ind, _phi(H, t_e))
+    G = _product_matrix(C_stick, S_stick, H)
+    g -= r * (G @ y)
+    J -= r * G
+    return g, J, slip

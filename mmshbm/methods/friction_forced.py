@@ -1,0 +1,380 @@
+"""Forced responses by MMS-HBM of structures with Coulomb friction at massless DOFs.
+
+The structure of :class:`~mmshbm.model.Model` with damping C (optional: friction alone
+damps it), a harmonic force on the DOFs with mass, unilateral contacts (optional) and
+friction contacts with constant normal load on massless DOFs,
+
+    M q'' + C q' + K q = Σ w_i λ_i − Σ e_t f_t + Re(F̂ e^{iΩt}),
+    f_t = clip(f_t + r u̇_t, −s_t, s_t),   s_t = μ_t N_t,   u_t = q[dof_t],
+
+f_t the force node t exerts on its support (:mod:`mmshbm.contact.coulomb`). The ansatz,
+unknowns and condensation are those of :class:`~mmshbm.methods.forced.ForcedResponseProblem`
+(the full cosine/sine series of the massless DOFs, F = 𝔇(Ω) x − P the force the structure
+needs there, so f_t = −F_t; the support's force on node t is F_t). Each friction DOF's
+2H+1 rows are the Coulomb law projected exactly on harmonics 0..H, in one of two
+equivalent forms (``law=``), both with ρ = 1/(K_cc⁻¹)_tt, the node's stiffness with the
+DOFs with mass held (N/m):
+
+* ``"play"`` (default), displacement level: with y = u_t − F_t/ρ (= wᵀq_l when no other
+  massless DOF is loaded: where the free node would sit, as smooth as the motion of the
+  DOFs with mass), Coulomb's law says that
+  u_t is the play operator of y of half-width s/ρ (the time integral of the proximal
+  equation), so R_t = F_t − proj[ρ (Play(y) − y)] = 0
+  (:func:`~mmshbm.contact.coulomb.project_coulomb_play`: extrema of y and stick-to-slip
+  instants located as zeros of trigonometric polynomials, closed-form integrals, exact
+  Jacobian);
+* ``"velocity"``, the velocity-level proximal equation
+  R_t = F_t + proj[clip(−F_t + ρ u_t′, −s, s)] = 0, u_t′ = d u_t/dτ = u̇_t/Ω (physical
+  parameter r = ρ/Ω, N·s/m) (:func:`~mmshbm.contact.coulomb.project_coulomb`, exact
+  projection and Jacobian ∂R/∂F = G, ∂R/∂u′ = ρ (I − G), G the projection of the slip
+  indicator [|p| > s]).
+
+Both have the exact law's solutions as H → ∞; they differ in how fast they get there. The
+velocity form asks the truncated u_t, which has kinks at every stick-to-slip switch, to
+have zero velocity on the stick arcs in the Galerkin sense: on the Jenkins oscillator of
+the tests its largest displacement is still 0.5–1.3 % off the exact orbit at H = 31. The
+play form evaluates the law exactly on the smooth y and is 5e-7 off at H = 31 (7e-5 at
+H = 7) on the same orbit (docs/friction.md).
+
+Full stick. Where node t sticks over the whole period its position is history, not a
+steady state (the velocity form's mean row vanishes identically). Both forms take the
+symmetric position: mean friction force zero (the play form: u_t = mean(y) when that
+keeps |F_t| <= s; the velocity form replaces its mean row by F_t,0 = 0), the limit of the
+slipping orbits of a symmetric structure under a harmonic force as the slip vanishes.
+
+Not yet: friction coupled to a unilateral contact's force (``normal_contact=``) and the
+Floquet multipliers of friction orbits (both raise NotImplementedError).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..contact.coulomb import derivative_matrix, project_coulomb, project_coulomb_play
+from ..model.model import Model
+from .forced import ForcedResponseProblem
+
+__all__ = ["FrictionRows", "FrictionForcedProblem", "check_friction_model", "check_law"]
+
+
+def check_law(law: str, projection: str) -> None:
+    """Raise ValueError for an unknown ``law`` or the play law with a sampled projection."""
+    if law not in ("play", "velocity"):
+        raise ValueError(f"law must be 'play' or 'velocity', got {law!r}")
+    if law == "play" and projection != "exact":
+        raise ValueError("law='play' is projected exactly only: pass projection='exact'")
+
+
+def check_friction_model(model: Model) -> None:
+    """Raise unless ``model`` has friction contacts this module solves (constant loads)."""
+    if not isinstance(model, Model):
+        raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
+    if not model.friction:
+        raise ValueError("the model has no friction contact")
+    coupled = [fc.dof for fc in model.friction if fc.normal_contact is not None]
+    if coupled:
+        raise NotImplementedError(f"friction coupled to a unilateral contact's force (normal_contact=, "
+                                  f"DOFs {coupled}) is not yet solved by MMS-HBM: give a constant "
+                                  "normal_load")
+
+
+class FrictionRows:
+    """The friction rows shared by the forced-response and EPMC problems with friction
+    (mixed in before a :class:`~mmshbm.methods._damped_hbm.DampedHBMBase` subclass): the
+    law of every friction contact replaces the rows F_t = 0 of its massless DOF."""
+
+    def _init_friction(self, model: Model, law: str, projection: str) -> None:
+        c = model.c
+        self.friction_rows = np.searchsorted(c, [fc.dof for fc in model.friction])
+        self.slip_force = np.array([fc.slip_force for fc in model.friction])
+        # the node's stiffness with the DOFs with mass held: then y = u − F_t/ρ = wᵀq_l is the
+        # position the free node would take, as smooth as the motion of the DOFs with mass
+        flex = np.linalg.inv(model.blocks["K_cc"])
+        self.rho = 1.0 / np.diag(flex)[self.friction_rows]
+        self._Dt = derivative_matrix(self.H)
+        self._exact = projection == "exact"
+        self.law = law
+
+    def _rescale(self, length: float, extra_cols: int) -> None:
+        """Unknowns in units of ``length`` (m) times the first mode's shape; ``extra_cols``
+        parameters (scaled by ω_ref) after them."""
+        self.length = length
+        shape = np.abs(self.mode_shape_c)
+        self.xscale_c = length * np.maximum(shape, 1e-3 * max(shape.max(), 1e-300))
+        self.xscale = np.tile(self.xscale_c, self.n_coef)
+        fscale = np.abs(self.cond.D0) @ self.xscale_c
+        self.rowscale = np.tile(fscale, self.n_coef)
+        for j, i in enumerate(self.contact_rows):
+            self.rowscale[self._coef_index[i]] = self.r[j] * length
+        for j, i in enumerate(self.friction_rows):
+            self.rowscale[self._coef_index[i]] = self.rho[j] * length
+        self.colscale = np.concatenate([self.xscale, np.full(extra_cols, self.omega_ref)])
+
+    def friction_law(self, x: np.ndarray, F: np.ndarray, j: int):
+        """(R (2H+1,), ∂R/∂F_t, ∂R/∂x_t (2H+1, 2H+1), slip fraction) of friction contact j."""
+        idx = self._coef_index[self.friction_rows[j]]
+        if self.law == "play":
+            rho = self.rho[j]
+            g, Jg, slip = project_coulomb_play(x[idx] - F[idx] / rho, self.slip_force[j], rho)
+            return F[idx] - g, np.eye(len(idx)) + Jg / rho, -Jg, slip
+        v = self._Dt @ x[idx]
+        Rc, A, B, slip = project_coulomb(-F[idx], v, self.slip_force[j], self.rho[j], self._exact,
+                                         None if self._exact else self.N)
+        # R = −Rc = F_t + proj[clip(−F_t + ρ u′)]
+        return -Rc, A, -B @ self._Dt, slip
+
+    def contact_residual(self, x: np.ndarray, F: np.ndarray, dF: np.ndarray | None, dFp: np.ndarray | None):
+        R, Jx, Jp = super().contact_residual(x, F, dF, dFp)
+        for j, i in enumerate(self.friction_rows):
+            idx = self._coef_index[i]
+            Rt, A, B, slip = self.friction_law(x, F, j)
+            R[idx] = Rt
+            if Jx is not None:
+                Jx[idx] = A @ dF[idx]
+                Jx[np.ix_(idx, idx)] += B
+                if Jp is not None:
+                    Jp[idx] = A @ dFp[idx]
+            if slip == 0.0 and self.law == "velocity":
+                # full stick: the symmetric position, mean friction force zero
+                m = idx[0]
+                R[m] = F[m]
+                if Jx is not None:
+                    Jx[m] = dF[m]
+                    if Jp is not None:
+                        Jp[m] = dFp[m]
+        return R, Jx, Jp
+
+    def friction_records(self, x: np.ndarray, omega: float, sigma: float = 1.0) -> dict:
+        """``slip_fraction`` (largest over the friction nodes) and ``friction_dissipation``
+        (J per period: Σ_t ∫ f_t u_t′ dτ with f_t = −F_t, by Parseval)."""
+        F = self._needed(x, omega, sigma)
+        slip, work = 0.0, 0.0
+        for j, i in enumerate(self.friction_rows):
+            idx = self._coef_index[i]
+            slip = max(slip, self.friction_law(x, F, j)[3])
+            f, v = -F[idx], self._Dt @ x[idx]
+            work += np.pi * (2 * f[0] * v[0] + f[1:] @ v[1:])
+        return {"slip_fraction": slip, "friction_dissipation": float(work)}
+
+
+class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
+    """MMS-HBM forced response of a model with Coulomb friction, continued in (x, Ω).
+
+    Parameters
+    ----------
+    model : Model
+        With at least one friction contact (``model.with_friction``, constant normal load);
+        unilateral contacts and viscous damping optional.
+    force, harmonics, n_samples, backend, projection
+        As :class:`~mmshbm.methods.forced.ForcedResponseProblem`.
+    r : float, optional
+        Proximal parameter of the unilateral contacts (N/m); the friction contacts use
+        ρ = 1/(K_cc⁻¹)_tt, the node's stiffness with the DOFs with mass held.
+    stability : bool or "auto"
+        Floquet multipliers are not yet available with friction: "auto" and False skip
+        them, True raises NotImplementedError.
+    law : {"play", "velocity"}
+        The form of the friction rows (module docstring); "play" needs the exact projection.
+
+    Notes
+    -----
+    Records per point, besides those of the unilateral problem: ``slip_fraction`` (the
+    largest fraction of the period any friction node slips, 0 in full stick) and
+    ``friction_dissipation`` (J per period, Σ_t ∮ f_t u̇_t dt of the degree-H signals).
+    The length scale of the unknowns is the static response of the structure with free
+    friction nodes to the force. When the amplitude DOF carries mass, harmonic 1 of it is
+    carried as two more unknowns (scaled u = [x, a_1, b_1, Ω]) with rows equating them to
+    their recovery from x: a stuck node's coefficients vanish, and without them the
+    arclength would not see (and step over) the resonances of the stuck structure.
+    """
+
+    def __init__(self, model: Model, force, harmonics: int = 5, n_samples: int | None = None,
+                 r: float | None = None, backend: str = "auto", stability: bool | str = "auto",
+                 projection: str = "exact", law: str = "play"):
+        check_friction_model(model)
+        check_law(law, projection)
+        if stability is True:
+            raise NotImplementedError("Floquet multipliers of orbits with friction are not yet available: "
+                                      "pass stability=False")
+        if not (stability is False or stability == "auto"):
+            raise ValueError(f"stability must be True, False or 'auto', got {stability!r}")
+        super().__init__(model, force, harmonics, n_samples, r, backend, False, projection)
+        self._init_friction(model, law, projection)
+        self._rescale(self._static_length(), 1)
+        # harmonic 1 of the amplitude DOF (when it carries mass) as two more unknowns
+        hit = np.flatnonzero(model.l == self.amplitude_dof)
+        self._track = int(hit[0]) if len(hit) else None
+        if self._track is not None:
+            self.colscale = np.concatenate([self.xscale, [self.length, self.length, self.omega_ref]])
+            self.n_unknowns = self.n_x + 3
+
+    # ------------------------------------------------------------------ unknowns
+    def unpack(self, u: np.ndarray) -> tuple[np.ndarray, float]:
+        """Scaled unknowns -> (x (n_x,) in m/rad, Ω in rad/s); the tracked harmonic of the
+        amplitude DOF is dropped (it follows from x and Ω)."""
+        if self._track is None:
+            return super().unpack(u)
+        if np.shape(u) != (self.n_unknowns,):
+            raise ValueError(f"u must have shape ({self.n_unknowns},), got {np.shape(u)}")
+        y = np.asarray(u, dtype=float) * self.colscale
+        return y[:self.n_x], float(y[-1])
+
+    def pack(self, x: np.ndarray, omega: float) -> np.ndarray:
+        if self._track is None:
+            return super().pack(x, omega)
+        ab = self._tracked(np.asarray(x, dtype=float), omega)[0]
+        return np.concatenate([x, ab, [omega]]) / self.colscale
+
+    def _tracked(self, x: np.ndarray, omega: float):
+        """(cos, sin) of harmonic 1 of the amplitude DOF (m) and ∂/∂x (2, n_x).
+
+        Q̂ = −z·Û_1 + σ Y_1, z the amplitude DOF's row of Z_1 = S_1⁻¹K_lc."""
+        ch = self._condensed(omega, recover=True)
+        s, _ = self.excitation.scale(omega)
+        z = ch.Z[1][self._track]
+        n_c = self.n_c
+        Uc, Us = x[n_c:2 * n_c], x[2 * n_c:3 * n_c]
+        q = -z @ (Uc - 1j * Us) + s * ch.Y[self._track, 0]
+        dx = np.zeros((2, self.n_x))
+        dx[0, n_c:2 * n_c], dx[0, 2 * n_c:3 * n_c] = -z.real, -z.imag
+        dx[1, n_c:2 * n_c], dx[1, 2 * n_c:3 * n_c] = z.imag, -z.real
+        return np.array([q.real, -q.imag]), dx
+
+    def evaluate(self, u: np.ndarray, jacobian: bool = True):
+        """Scaled residual and, if asked, its Jacobian; with the amplitude DOF tracked, two
+        more rows (its harmonic-1 unknowns equal their recovery from x; the Ω column of
+        these rows by central differences of the recovery, step 1e-6 Ω)."""
+        if self._track is None:
+            return super().evaluate(u, jacobian)
+        x, omega = self.unpack(u)
+        ab = np.asarray(u[self.n_x:self.n_x + 2], dtype=float) * self.length
+        R_x, Jx, Jw, _ = self.residual_parts(x, omega, 1.0, jacobian)
+        rec, drec = self._tracked(x, omega)
+        R = np.concatenate([R_x / self.rowscale, (ab - rec) / self.length])
+        if not jacobian:
+            return R
+        h = 1e-6 * omega
+        dw = (self._tracked(x, omega + h)[0] - self._tracked(x, omega - h)[0]) / (2 * h)
+        self._condensed(omega, 0.0, True, recover=True)  # back to Ω in the cache
+        J = np.zeros((self.n_x + 2, self.n_unknowns))
+        J[:self.n_x, :self.n_x] = Jx * self.xscale[None, :] / self.rowscale[:, None]
+        J[:self.n_x, -1] = Jw * self.omega_ref / self.rowscale
+        J[self.n_x:, :self.n_x] = -drec * self.xscale[None, :] / self.length
+        J[self.n_x:, self.n_x:self.n_x + 2] = np.eye(2)
+        J[self.n_x:, -1] = -dw * self.omega_ref / self.length
+        return R, J
+
+    def _static_length(self) -> float:
+        """The static response (m) to the force, friction nodes free (1 if it is zero)."""
+        import scipy.sparse.linalg as spla
+
+        s, _ = self.excitation.scale(self.omega_ref)
+        F_l = s * self.force_l
+        K_red = self.model.reduced_stiffness.tocsc()
+        stat = [spla.spsolve(K_red, part) for part in (F_l.real, F_l.imag) if np.any(part)]
+        length = max(float(np.abs(q).max()) for q in stat)
+        return length if length > 0 else 1.0
+
+    # ------------------------------------------------------------------ start
+    def stuck_point(self, frequency: float) -> np.ndarray:
+        """Scaled unknowns of the linear response with every friction node held at 0
+        (the full-stick orbit in the symmetric position)."""
+        omega = 2 * np.pi * frequency
+        ch = self._condensed(omega)
+        s, _ = self.excitation.scale(omega)
+        free = np.setdiff1d(np.arange(self.n_c), self.friction_rows)
+        Qc = np.zeros(self.n_c, dtype=complex)
+        if len(free):
+            Qc[free] = np.linalg.solve(ch.D[1][np.ix_(free, free)], s * ch.P[free, 0])
+        x = np.zeros(self.n_x)
+        x[self.n_c:2 * self.n_c] = Qc.real
+        x[2 * self.n_c:3 * self.n_c] = -Qc.imag
+        return self.pack(x, omega)
+
+    def solve_at(self, frequency: float, guess: np.ndarray, max_iter: int = 50, tol: float = 1e-11):
+        """Newton at fixed Ω from the scaled ``guess``, with a backtracking line search on
+        max|R/rowscale|: (scaled unknowns, converged)."""
+        x, omega = self.unpack(guess)
+        omega = 2 * np.pi * frequency
+
+        def merit(x):
+            R = self.residual_parts(x, omega, 1.0, False)[0]
+            return float(np.abs(R / self.rowscale).max()), R
+
+        r, R = merit(x)
+        for _ in range(max_iter):
+            if not np.isfinite(r):
+                return guess, False
+            if r < tol:
+                return self.pack(x, omega), True
+            _, Jx, _, _ = self.residual_parts(x, omega, 1.0, True)
+            try:
+                dx = np.linalg.solve(Jx, -R)
+            except np.linalg.LinAlgError:
+                dx = np.linalg.lstsq(Jx, -R, rcond=None)[0]
+            x, r, R, ok = _backtrack(merit, x, dx, r)
+            if not ok:
+                return self.pack(x, omega), False
+        return self.pack(x, omega), r < tol
+
+    def fast_newton(self, u, u_pred, tangent, tol, max_iter, step_tol):
+        """The continuation's corrector on [R(u); t·(u − u_pred)] = 0, globalised: each Newton
+        step is halved until the merit max(|R|, |t·(u − u_pred)|) (scaled) decreases. The
+        friction rows are semismooth, and where a node sticks only briefly (a stiff node,
+        slip over > 99 % of the period) plain Newton cycles. Returns (u, iterations,
+        residual history, Jacobian at u); raises RuntimeError when it does not converge."""
+        from ..core.bordered import bordered_solve
+
+        def merit(u):
+            R = self.evaluate(u, jacobian=False)
+            return max(float(np.abs(R).max()), abs(float(tangent @ (u - u_pred)))), R
+
+        r, _ = merit(u)
+        history = [r]
+        for it in range(max_iter + 1):
+            if not np.isfinite(r):
+                raise RuntimeError("non-finite residual")
+            R, J = self.evaluate(u, jacobian=True)
+            if r <= tol:
+                return u, it, np.array(history), J
+            if it == max_iter:
+                break
+            du = -bordered_solve(J, tangent, np.append(R, tangent @ (u - u_pred)))
+            if not np.all(np.isfinite(du)):
+                raise RuntimeError("singular Jacobian")
+            if float(np.abs(du).max()) <= step_tol and r <= np.sqrt(tol):
+                return u, it, np.array(history), J
+            u, r, _, ok = _backtrack(merit, u, du, r)
+            history.append(r)
+            if not ok:
+                break
+        raise RuntimeError(f"no convergence in {max_iter} iterations (residual {history[-1]:.2e})")
+
+    def start_point(self, frequency: float, max_iter: int = 50) -> np.ndarray:
+        """Converged unknowns at ``frequency`` (Hz) by Newton from the free-slip, then the
+        full-stick linear response (the first that converges); the stuck response when
+        neither does (the continuation's first corrector then tries)."""
+        for guess in (self.linear_point(frequency), self.stuck_point(frequency)):
+            u, ok = self.solve_at(frequency, guess, max_iter)
+            if ok:
+                return u
+        return self.stuck_point(frequency)
+
+    # ------------------------------------------------------------------ results
+    def _record(self, x: np.ndarray, omega: float, sigma: float) -> dict:
+        rec = super()._record(x, omega, sigma)
+        rec.update(self.friction_records(x, omega, sigma))
+        return rec
+
+
+def _backtrack(merit, x: np.ndarray, dx: np.ndarray, r: float, min_step: float = 1.0 / 4096):
+    """x + λ dx with λ = 1, 1/2, ... down to ``min_step``: the first with merit below
+    (1 − 1e-4 λ) r. Returns (x, merit, residual, decreased)."""
+    lam = 1.0
+    while True:
+        r_new, R_new = merit(x + lam * dx)
+        if r_new < (1 - 1e-4 * lam) * r:
+            return x + lam * dx, r_new, R_new, True
+        if lam <= min_step:
+            return x, r, merit(x)[1], False
+        lam *= 0.5

@@ -1,0 +1,53 @@
+"""The kernels' cache policy: a cached kernel is recompiled when a kernel it calls in
+another file changes (Numba alone checks only the caller's file)."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import mmshbm._kernel_cache as kc
+from mmshbm.core import kernels
+
+
+def test_package_kernels_use_the_package_locator():
+    assert kc.install()
+    impl = kernels._proximal_contact._cache._impl
+    assert type(impl.locator).__module__ == "mmshbm._kernel_cache"
+    stamp = impl.locator.get_source_stamp()
+    assert stamp[1] == kc.kernel_fingerprint()
+
+
+def _run(package_root: Path, cache_dir: Path) -> str:
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache_dir), PYTHONPATH=str(package_root))
+    code = "from probe.caller import f; print(f())"
+    return subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                          check=True, timeout=300).stdout.strip()
+
+
+def test_editing_a_callee_in_another_file_recompiles_its_caller(tmp_path):
+    pkg = tmp_path / "probe"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("")
+    shutil.copy(kc.__file__, pkg / "_kernel_cache.py")
+    (pkg / "caller.py").write_text(textwrap.dedent("""
+        from numba import njit
+        from ._kernel_cache import install
+        install()
+        from .callee import g
+
+        @njit(cache=True)
+        def f():
+            return g()
+        """))
+    callee = pkg / "callee.py"
+    callee.write_text("from numba import njit\n\n@njit(cache=True)\ndef g():\n    return 1\n")
+    cache = tmp_path / "cache"
+    assert _run(tmp_path, cache) == "1"
+    assert _run(tmp_path, cache) == "1"  # from the cache
+    callee.write_text("from numba import njit\n\n@njit(cache=True)\ndef g():\n    return 2\n")
+    assert _run(tmp_path, cache) == "2"  # Numba's own locator would answer 1 here
