@@ -112,6 +112,13 @@ def test_forced_response_of_an_undamped_model_is_refused():
     assert not model_has_damping(types.SimpleNamespace(damping=None, friction=None))
 
 
+def test_frf_without_damping_is_refused_with_the_options(tmp_path, capsys):
+    for extra in (["--damping", "0"], ["--rayleigh", "0", "0"]):
+        assert main(["frf", *extra, "--out", str(tmp_path)]) == 2
+        err = capsys.readouterr().err
+        assert "needs damping" in err and "--damping > 0 or --rayleigh" in err and "mmshbm backbone" in err
+
+
 def test_shooting_baseline_on_another_family_exits_1(tmp_path, capsys):
     assert main(["backbone", "--method", "shooting", "--out", str(tmp_path)]) == 1
     err = capsys.readouterr().err

@@ -46,6 +46,10 @@ def run(args) -> int:
     from ..plotting.response import plot_frequency_response, plot_phase_resonance
 
     measured = common.measured(args)
+    if (args.damping == 0) if args.rayleigh is None else not any(args.rayleigh):
+        raise ValueError("a forced response needs damping (without it the response grows along the backbone "
+                         "without bound): give --damping > 0 or --rayleigh, or compute the conservative "
+                         "backbone with mmshbm backbone")
     model = common.model(args)
     if args.rayleigh is not None:
         model = model.with_damping(rayleigh=tuple(args.rayleigh))
