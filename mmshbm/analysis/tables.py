@@ -312,7 +312,8 @@ def findings_table(runs: Sequence[dict], branches: Sequence, axes: Sequence[str]
     arrays and left out of the backbone), truncation effects of the Fourier series (the
     contact DOF through the stop, in gaps; the contact force pulling, as a share of its
     peak), skipped amplitude intervals of the family front (gaps, with the internal
-    resonance k:j), and the count of the run's other warnings (in :func:`run_details`)."""
+    resonance k:j), and the count of the run's other warnings (in :func:`run_details`). A run
+    whose family front stops short of its end is named "another family above A gaps"."""
     from .skips import cell_summary
 
     head = ["run", "status", "family", "truncation effects", "skipped (gaps)", "notes"]
@@ -326,6 +327,11 @@ def findings_table(runs: Sequence[dict], branches: Sequence, axes: Sequence[str]
             f = kinds["left_family"]
             off = f.last - f.first + 1
         family = f"{off} of {c['points']} points off" if off else "on"
+        front = b.family_front() if len(b) else []
+        if len(front) and b.amplitude[front].max() < b.amplitude.max() * (1 - 1e-9):
+            top = float(b.amplitude[front].max())
+            family = f"another family above {top / b.gap:.3g} gaps" if b.gap else \
+                f"another family above {top:.3g} m"
         trunc = []
         if "penetration" in kinds:
             trunc.append(f"stop passed {kinds['penetration'].value:.2g} gaps")
