@@ -108,8 +108,8 @@ def test_other_warnings_from_the_package_are_one_line(monkeypatch, tmp_path, cap
 
 
 def test_a_baseline_on_another_family_is_named_in_its_row():
-    study = studies.run_study(harmonics=(3,), elements=(4,), methods=("mmshbm", "shooting"), executor="serial",
-                              max_amplitude=2.0, unit="gap", warn=False)
+    study = studies.run_study(harmonics=(3,), elements=(4,), methods=("mmshbm", "shooting"),
+                              executor="serial", max_amplitude=2.0, unit="gap", warn=False)
     rows = dict(line.split(maxsplit=1) for line in study.findings().splitlines()[1:3])
     shooting = study.branch(method="shooting")
     end = shooting.amplitude[shooting.family_front()].max() / shooting.gap
