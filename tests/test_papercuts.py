@@ -11,7 +11,6 @@ import pytest
 
 import mmshbm
 from mmshbm.cli import build_parser, main
-from mmshbm.model.damping import model_has_damping
 
 README = " ".join((Path(__file__).parent.parent / "README.md").read_text().split())
 
@@ -100,6 +99,8 @@ def test_a_contact_dof_with_mass_as_the_readme_says():
 
 
 def test_forced_response_of_an_undamped_model_is_refused():
+    from mmshbm.model.damping import model_has_damping
+
     model = mmshbm.OneDofOscillator(1, 1, 4, 1).model()
     for undamped in (model, model.with_damping(modal_ratio=0.0)):
         assert not model_has_damping(undamped)

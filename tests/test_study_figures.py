@@ -12,8 +12,6 @@ from matplotlib.text import Text
 import mmshbm
 from mmshbm import BranchWarning, ModelWarning, plotting, studies
 from mmshbm.cli import main
-from mmshbm.plotting.data import BranchData, reference_frequencies, resonance_orders, symmetric_clearance
-from mmshbm.plotting.grids import plot_convergence, plot_family_grid
 
 
 @pytest.fixture(scope="module")
@@ -68,6 +66,8 @@ def _overlaps(fig) -> list[tuple[str, str]]:
 
 
 def test_cli_plot_of_a_large_grid_study_reads_at_a_glance(grid, tmp_path, capsys):
+    from mmshbm.plotting.grids import plot_family_grid
+
     path = tmp_path / "study.npz"
     grid.save(path)
     with warnings.catch_warnings(record=True) as caught:
@@ -91,6 +91,8 @@ def test_cli_plot_of_a_large_grid_study_reads_at_a_glance(grid, tmp_path, capsys
 
 @pytest.mark.parametrize("make", ["figure2", "family_grid", "convergence", "energy"])
 def test_grid_figures_have_no_layout_warning_and_no_overlapping_text(grid, make):
+    from mmshbm.plotting.grids import plot_convergence, plot_family_grid
+
     runs, styles = grid.runs, plotting.study_styles(grid.runs)
     labels = plotting.study_labels(runs)
 
@@ -145,6 +147,8 @@ def test_resonance_markers_only_where_the_branch_resonates(tmp_path, capsys):
 
 
 def test_symmetric_clearance_has_odd_resonance_lines_only():
+    from mmshbm.plotting.data import BranchData, reference_frequencies, resonance_orders, symmetric_clearance
+
     clearance = mmshbm.ClearanceOscillator(m=1.0, k1=1.0, k2=4.0, gap=1.0).model()
     assert symmetric_clearance(clearance)
     assert not symmetric_clearance(mmshbm.default_beam().model(6))
