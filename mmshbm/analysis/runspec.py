@@ -7,6 +7,7 @@ the solver is rebuilt on the parent side when a per-point method needs it.
 
 from __future__ import annotations
 
+import os
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -105,7 +106,7 @@ def _execute(spec: RunSpec) -> Branch:
         branch = backbone(model, harmonics=spec.harmonics, method=spec.method, max_amplitude=max_amplitude,
                           **spec.options)
     notes = []
-    package = str(Path(__file__).resolve().parents[1])
+    package = str(Path(__file__).resolve().parents[1]) + os.sep
     for w in caught:
         if issubclass(w.category, MmshbmWarning) or str(w.filename).startswith(package):
             notes.append(f"{w.category.__name__}: {w.message}")

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import sys
 import warnings
 
@@ -109,7 +110,7 @@ def _one_line_warning(command: str):
     from pathlib import Path
 
     default = warnings.showwarning
-    package = str(Path(__file__).resolve().parents[1])
+    package = str(Path(__file__).resolve().parents[1]) + os.sep
 
     def show(message, category, filename, lineno, file=None, line=None):
         if issubclass(category, MmshbmWarning):
