@@ -116,3 +116,15 @@ def test_a_baseline_on_another_family_is_named_in_its_row():
     assert end < 1.5  # shooting's orbits leave mode 1 just above grazing (docs/shooting.md)
     assert f"another family above {end:.3g} gaps" in rows["shooting"]
     assert "another family" not in rows["mmshbm"]
+
+
+@pytest.mark.slow
+def test_the_35_run_study_prints_at_most_40_lines(tmp_path, capfd):
+    """The convergence grid of the README, as a user runs it (process pool): 39 lines on
+    stdout, nothing on stderr (no warning lines, no raw warnings from the workers)."""
+    argv = ["study", "-H", "1", "3", "5", "7", "9", "11", "15", "--elements", "8", "21", "40", "100", "200",
+            "--out", str(tmp_path)]
+    assert main(argv) == 0
+    out, err = capfd.readouterr()
+    assert len(out.splitlines()) == 35 + 4 <= 40
+    assert err == ""
