@@ -72,3 +72,17 @@ def test_a_point_beyond_the_front_is_the_nearest_family_point(h5):
     marked = h5.solve_at([20.0], unit="gap")
     assert marked.records["solved"].tolist() == [0]
     assert marked.amplitude[0] == pytest.approx(h5.amplitude[h5.family_front()[-1]], rel=1e-9)
+
+
+def test_without_a_solver_the_stored_family_points_stand_in(h5):
+    from dataclasses import replace
+
+    bare = replace(h5, solver=None, model=None, metadata={**h5.metadata, "model": {}})
+    with pytest.raises(RuntimeError, match="no solver"):
+        bare._require_solver()
+    marked = bare.solve_at([1.5 * h5.gap, 3.0 * h5.gap])
+    front = h5.family_front()
+    assert marked.solver is None and marked.records["solved"].tolist() == [0, 0]
+    for a, f in zip((1.5, 3.0), marked.frequency, strict=True):
+        i = front[np.argmin(np.abs(h5.amplitude[front] - a * h5.gap))]
+        assert f == h5.frequency[i]

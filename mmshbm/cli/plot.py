@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 from . import common
@@ -86,6 +87,11 @@ def run(args) -> int:
     if "peak_force" in kinds:
         files.append(out / f"{stem}_peak_force.png")
         plotting.plot_peak_contact_force(branch, measured=measured, path=files[-1])
+    if points.solver is None and kinds & {"signals", "force", "harmonics"}:
+        print(f"mmshbm plot: warning: {args.file}: no solver can be rebuilt for this branch (its model is "
+              "not described in the file): the signal, contact-force and harmonic plots are left out and "
+              "the marked points are the stored family points nearest in amplitude", file=sys.stderr)
+        kinds = kinds - {"signals", "force", "harmonics"}
     if "signals" in kinds:
         files.append(out / f"{stem}_signals.png")
         plotting.plot_time_signals(points, pts, path=files[-1])

@@ -179,14 +179,18 @@ def solve_at(branch, amplitudes, *, tol: float = 1e-10):
     amplitude (beyond its ends, inside a skipped interval, or a failed solve) the front's
     stored point nearest in amplitude stands in. ``records["requested_amplitude"]`` holds
     the amplitudes asked for, ``records["solved"]`` 1 for a solved point and 0 for a
-    stand-in."""
+    stand-in. A branch whose solver cannot be rebuilt (a file of a model that is not
+    described) gets its stored front points, without a solver."""
     from dataclasses import replace
 
     amps = np.atleast_1d(np.asarray(amplitudes, dtype=float))
     front = family_front(branch)
     if not len(front):
         raise ValueError("the branch has no point on its family to mark")
-    solver = branch._require_solver() if len(amps) else None
+    try:
+        solver = branch._require_solver() if len(amps) else None
+    except RuntimeError:
+        return _stored_points(branch, front, amps)
     rows, states, solved = [], [], []
     for a in amps:
         f, u = family_point(branch, a, tol=tol) if math.isfinite(a) else (math.nan, None)
@@ -212,4 +216,19 @@ def solve_at(branch, amplitudes, *, tol: float = 1e-10):
                    contact_force_max=column("contact_force_max"), newton_iterations=np.zeros(n, dtype=int),
                    step_size=np.zeros(n), states=np.array(states).reshape(n, -1), special_points=[],
                    metadata=dict(branch.metadata), solver=solver, residual_histories=[], model=branch.model,
+                   records=records)
+
+
+def _stored_points(branch, front, amps):
+    """solve_at without a solver: the front's stored points nearest to ``amps``."""
+    from dataclasses import replace
+
+    idx = np.array([int(front[np.argmin(np.abs(branch.amplitude[front] - a))]) for a in amps], dtype=int)
+    n = len(idx)
+    records = {"requested_amplitude": amps, "solved": np.zeros(n, dtype=int)}
+    return replace(branch, frequency=branch.frequency[idx], amplitude=branch.amplitude[idx],
+                   energy=branch.energy[idx], contact_force_max=branch.contact_force_max[idx],
+                   newton_iterations=np.zeros(n, dtype=int), step_size=np.zeros(n),
+                   states=np.asarray(branch.states)[idx].reshape(n, -1), special_points=[],
+                   metadata=dict(branch.metadata), solver=None, residual_histories=[], model=branch.model,
                    records=records)
