@@ -22,7 +22,14 @@ import numpy as np
 from numba import njit
 
 from ..core.kernels import JIT_OPTIONS
-from ._shooting_kernels import _band_solve, _band_symv
+from ._shooting_kernels import (
+    _band_solve,
+    _band_symv,
+    _block_band_solve,
+    _block_band_terms,
+    _block_inertia,
+    _block_update,
+)
 
 __all__ = ["lcp_solve"]
 
@@ -305,7 +312,6 @@ def _tangent_step_multi(Sf, Mb, Kb, A, Z, F0, Cm, h, q, v, qn, dq, dv, dh, Wb, Y
     """
     n, npar = dq.shape
     m = A.shape[0]
-    p = Mb.shape[0] - 1
     c1 = 4.0 / (h * h)
     c2 = 4.0 / h
     c3 = 8.0 / (h * h * h)
@@ -313,10 +319,7 @@ def _tangent_step_multi(Sf, Mb, Kb, A, Z, F0, Cm, h, q, v, qn, dq, dv, dh, Wb, Y
     c6 = 2.0 / (h * h)
     for c0 in range(0, npar, _BLOCK):
         nb = min(_BLOCK, npar - c0)
-        for i in range(n):
-            base = c3 * (qn[i] - q[i]) - c1 * v[i]
-            for j in range(nb):
-                Wb[i, j] = c1 * dq[i, c0 + j] + c2 * dv[i, c0 + j] + dh[c0 + j] * base
+        _block_inertia(c1, c2, c3, q, qn, v, dq, dv, dh, c0, nb, Wb)
         # AD = A dq0, T = F0 AD
         for k in range(m):
             for j in range(nb):
@@ -341,29 +344,8 @@ def _tangent_step_multi(Sf, Mb, Kb, A, Z, F0, Cm, h, q, v, qn, dq, dv, dh, Wb, Y
                 for k in range(m):
                     acc += A[k, i] * T[k, j]
                 Yb[i, j] = acc
-        for d in range(1, p + 1):
-            for r in range(n - d):
-                md = Mb[d, r]
-                kd = Kb[d, r]
-                for j in range(nb):
-                    Yb[r + d, j] += md * Wb[r, j] - kd * dq[r, c0 + j]
-                    Yb[r, j] += md * Wb[r + d, j] - kd * dq[r + d, c0 + j]
-        for i in range(n):
-            for k in range(max(0, i - p), i):
-                lik = Sf[i - k, k]
-                for j in range(nb):
-                    Yb[i, j] -= lik * Yb[k, j]
-            inv = 1.0 / Sf[0, i]
-            for j in range(nb):
-                Yb[i, j] *= inv
-        for i in range(n - 1, -1, -1):
-            for k in range(i + 1, min(n, i + p + 1)):
-                lki = Sf[k - i, i]
-                for j in range(nb):
-                    Yb[i, j] -= lki * Yb[k, j]
-            inv = 1.0 / Sf[0, i]
-            for j in range(nb):
-                Yb[i, j] *= inv
+        _block_band_terms(Mb, Kb, Wb, dq, c0, nb, Yb)
+        _block_band_solve(Sf, Yb, nb)
         # dq1 = Y + Z Cm (A Y)
         for k in range(m):
             for j in range(nb):
@@ -383,12 +365,7 @@ def _tangent_step_multi(Sf, Mb, Kb, A, Z, F0, Cm, h, q, v, qn, dq, dv, dh, Wb, Y
                 if zik != 0.0:
                     for j in range(nb):
                         Yb[i, j] += zik * T[k, j]
-        for i in range(n):
-            base = c6 * (qn[i] - q[i])
-            for j in range(nb):
-                col = c0 + j
-                dv[i, col] = c5 * (Yb[i, j] - dq[i, col]) - dv[i, col] - dh[col] * base
-                dq[i, col] = Yb[i, j]
+        _block_update(c5, c6, q, qn, Yb, dq, dv, dh, c0, nb)
 
 
 @njit(**JIT_OPTIONS)
