@@ -300,6 +300,18 @@ def _step_forces(G, AZ, h0, hy, act0, lam0, J0, F_prev, avf, h1, act1, lam1, F, 
 
 
 @njit(**JIT_OPTIONS)
+def _contact_product(C, X, nb, out):
+    """out[:, :nb] = C X[:, :nb] for a small (m, m) contact-space matrix C."""
+    m = C.shape[0]
+    for k in range(m):
+        for j in range(nb):
+            acc = 0.0
+            for l2 in range(m):
+                acc += C[k, l2] * X[l2, j]
+            out[k, j] = acc
+
+
+@njit(**JIT_OPTIONS)
 def _tangent_step_multi(Sf, Mb, Kb, A, Z, F0, Cm, h, q, v, qn, dq, dv, dh, Wb, Yb, AD, T):
     """One step of the tangent columns dq, dv (n, n_par) with several contacts, in place:
 
@@ -329,12 +341,7 @@ def _tangent_step_multi(Sf, Mb, Kb, A, Z, F0, Cm, h, q, v, qn, dq, dv, dh, Wb, Y
                 if aki != 0.0:
                     for j in range(nb):
                         AD[k, j] += aki * dq[i, c0 + j]
-        for k in range(m):
-            for j in range(nb):
-                acc = 0.0
-                for l2 in range(m):
-                    acc += F0[k, l2] * AD[l2, j]
-                T[k, j] = acc
+        _contact_product(F0, AD, nb, T)
         # Y = M W − K dq + Aᵀ T
         for i in range(n):
             m0 = Mb[0, i]
@@ -353,12 +360,7 @@ def _tangent_step_multi(Sf, Mb, Kb, A, Z, F0, Cm, h, q, v, qn, dq, dv, dh, Wb, Y
                 for i in range(n):
                     acc += A[k, i] * Yb[i, j]
                 AD[k, j] = acc
-        for k in range(m):
-            for j in range(nb):
-                acc = 0.0
-                for l2 in range(m):
-                    acc += Cm[k, l2] * AD[l2, j]
-                T[k, j] = acc
+        _contact_product(Cm, AD, nb, T)
         for i in range(n):
             for k in range(m):
                 zik = Z[i, k]
