@@ -11,7 +11,7 @@ import warnings
 from pathlib import Path
 
 import mmshbm
-from mmshbm.plotting import plot_time_signals, points_at
+from mmshbm.plotting import plot_time_signals
 
 # sphinx-gallery runs the examples in their folder without __file__
 out = (Path(__file__).resolve().parent if "__file__" in globals() else Path.cwd()) / "out"
@@ -19,5 +19,5 @@ model = mmshbm.default_beam().model(21)
 with warnings.catch_warnings():
     warnings.simplefilter("ignore", mmshbm.BranchWarning)
     branch = mmshbm.backbone(model, harmonics=5, max_amplitude=4e-3)
-points = points_at(branch, [1.5e-3, 3e-3])
-plot_time_signals(branch, points, path=out / "signals.png")
+points = branch.solve_at([1.5, 3.0], unit="gap")  # on the backbone, past the 5:2 tongue at 2 gaps
+plot_time_signals(points, [0, 1], path=out / "signals.png")

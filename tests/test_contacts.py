@@ -45,7 +45,8 @@ def test_a_clearance_is_one_dof_with_two_sides():
     ({"contact_dof": [1, 1], "gap": 1.0, "stop_side": [1, 1]}, "both put a stop on the \\+ side of DOF 1"),
     ({"contact_dof": [1, 3], "gap": 1.0, "stop_side": [1, 0]}, r"stop_side\[1\] must be \+1 or -1"),
     ({"contact_dof": [1, 4], "gap": 1.0, "stop_side": 1}, r"contact_dof\[1\] must be in \[0, 3\], got 4"),
-    ({"contact_dof": [], "gap": 1.0, "stop_side": 1}, "contact_dof is empty"),
+    ({"contact_dof": [], "gap": 1.0, "stop_side": 1}, "contact_dof is empty but gap is 1.0"),
+    ({"contact_dof": [], "gap": [1.0], "stop_side": 1}, "contact_dof is empty but gap has 1 entries"),
     ({"contact_dof": [1, 3], "gap": [1.0, -1.0], "stop_side": 1}, r"gap\[1\] must be >= 0"),
     ({"contact_dof": [1, 3], "gap": 1.0, "stop_side": 1, "amplitude_dof": 9}, "amplitude_dof must be in"),
 ])

@@ -41,9 +41,12 @@ def exact_orbit(osc):
 
 
 def _at_frequency(problem, u):
+    """Newton at fixed frequency to a scaled residual of 1e-10: above the round-off floor of
+    the stiffest problem here (1.8e-12 for penalty-HBM with k_p = 8e3 k_c under some BLAS
+    kernels, above a 1e-12 target) and far below the accuracies these tests compare."""
     t = np.zeros(problem.n_unknowns)
     t[-1] = 1.0
-    return newton(problem, u, t, u.copy(), 1e-12, 40, 1e-14)[0]
+    return newton(problem, u, t, u.copy(), 1e-10, 40, 1e-12)[0]
 
 
 def _fd(problem, u, h=1e-5):

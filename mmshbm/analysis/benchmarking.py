@@ -157,7 +157,13 @@ def _reached_frequency(branch, amplitude: float) -> float:
     top = int(np.nanargmax(branch.amplitude))
     if not branch.amplitude[top] >= amplitude * (1 - _REACH_RTOL):
         return math.nan
-    f = float(branch.frequency_at(amplitude))
+    import warnings
+
+    from .._warnings import BranchWarning
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", BranchWarning)  # just past the end the top point answers
+        f = float(branch.frequency_at(amplitude))
     return f if math.isfinite(f) else float(branch.frequency[top])
 
 

@@ -7,12 +7,14 @@ the solver is rebuilt on the parent side when a per-point method needs it.
 
 from __future__ import annotations
 
+import os
 import warnings
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
-from .._warnings import BranchWarning
+from .._warnings import BranchWarning, MmshbmWarning
 from ..results.branch import Branch
 
 __all__ = ["RunSpec", "build_model", "execute", "matrix_source"]
@@ -95,11 +97,23 @@ def _execute(spec: RunSpec) -> Branch:
     max_amplitude = spec.max_amplitude
     if max_amplitude is not None and spec.unit == "gap":
         max_amplitude *= model.gap
-    with warnings.catch_warnings():
-        # recorded in branch.metadata["checks"]; run_study warns once per run, on the parent side
+    with warnings.catch_warnings(record=True) as caught:
+        # the checks are recorded in branch.metadata["checks"], the package's other warnings
+        # (e.g. a modal condensation's left-out mode) in metadata["run_warnings"]: a worker
+        # process has no terminal of its own, and the study summarises both on the parent side
+        warnings.simplefilter("always", MmshbmWarning)
         warnings.simplefilter("ignore", BranchWarning)
         branch = backbone(model, harmonics=spec.harmonics, method=spec.method, max_amplitude=max_amplitude,
                           **spec.options)
+    notes = []
+    package = str(Path(__file__).resolve().parents[1]) + os.sep
+    for w in caught:
+        if issubclass(w.category, MmshbmWarning) or str(w.filename).startswith(package):
+            notes.append(f"{w.category.__name__}: {w.message}")
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    if notes:
+        branch.metadata["run_warnings"] = list(dict.fromkeys(notes))
     branch.solver = None
     return branch
 

@@ -41,10 +41,19 @@ from ..results.branch import (
     versions,
     write_archive,
 )
+from ..results.family_points import frequency_at
 from .convergence import ConvergenceFit, format_convergence
 from .executors import run_specs
 from .runspec import RunSpec, build_model, execute, matrix_source
-from .tables import FrequencyTable, coords_text, format_cells, series_note, summarize
+from .tables import (
+    FrequencyTable,
+    findings_count,
+    findings_table,
+    format_cells,
+    run_details,
+    series_note,
+    summarize,
+)
 
 __all__ = ["run_study", "figure2_study", "monte_carlo", "Study", "RunSpec", "FrequencyTable",
            "ConvergenceFit", "STUDY_FORMAT", "execute", "build_model"]
@@ -141,7 +150,7 @@ class Study:
             notes.append([])
             partner.append([])
             for j, a in enumerate(amps):
-                f[i, j] = b.frequency_at(a * scale)
+                f[i, j] = frequency_at(b, a * scale)  # no warning beyond the branch: notes say why
                 share[i, j] = mode_share_at(b, a * scale)
                 partner[i].append(partner_at(b, a * scale))
                 notes[i].append(explain(b, a * scale, f[i, j], intervals))
@@ -196,7 +205,8 @@ class Study:
     def report(self, amplitudes, unit: str = "gap") -> str:
         """Text: the frequency table (with the reason for every empty cell), elements × H
         matrices, convergence, what each run met (jumps, skipped intervals, resonances),
-        the study's wall time and the summary (what the CLI prints)."""
+        the summary, every finding and warning of every run, and the study's wall time
+        (the CLI writes it to the study's ``*_table.txt``)."""
         table = self.table(amplitudes, unit)
         parts = [table.to_text()]
         if {"harmonics", "elements"} <= set(self.axes):
@@ -209,6 +219,9 @@ class Study:
         if any(b.records.get("on_family") is not None for b in self.branches):
             parts.append(format_cells(self.runs, self.branches, self.axes))
         parts.append(self.summary())
+        details = run_details(self.runs, self.branches)
+        if details:
+            parts.append(details)
         elapsed = self.metadata.get("elapsed_s")
         if elapsed is not None:
             text = f"wall time: {len(self)} runs in {elapsed:.1f} s, {self.metadata.get('executor', '?')}"
@@ -256,6 +269,13 @@ class Study:
         """Text: runs that reached their bounds, those that did not and why, and findings."""
         return summarize(self.runs, self.branches)
 
+    def findings(self) -> str:
+        """Text: one row per run (status, family, truncation effects, skipped intervals,
+        other warnings: :func:`~mmshbm.analysis.tables.findings_table`) and a line of
+        counts; every message in :meth:`report`."""
+        return "\n".join([findings_table(self.runs, self.branches, _varying(self.runs)),
+                          findings_count(self.runs, self.branches)])
+
     def __repr__(self) -> str:
         done = sum(b.completed for b in self.branches)
         return f"Study({len(self)} runs over {self.axes}, {done} completed, {len(self) - done} incomplete)"
@@ -267,7 +287,7 @@ def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
               params: Mapping[str, Sequence] | None = None, samples: Mapping[str, Sequence] | None = None,
               grading: float = 10.0, max_amplitude: float | None = None, unit: str = "m",
               executor="process", workers: int = 2, chunksize="auto", verbose: bool = False,
-              **options) -> Study:
+              warn: bool = True, **options) -> Study:
     """Run :func:`mmshbm.backbone` over a grid and collect the branches.
 
     Parameters
@@ -312,6 +332,10 @@ def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
         per-task cost of the executor is paid per chunk; the numbers do not depend on it.
     verbose : bool
         Progress bar (tqdm; also hidden when not on a terminal).
+    warn : bool
+        Issue one :class:`~mmshbm.BranchWarning` summarising what the checks of the runs
+        found (counts; :meth:`Study.findings` gives a row per run, :meth:`Study.report`
+        every message), rather than a warning per finding.
     **options
         Passed to every :func:`mmshbm.backbone` call (continuation and method options).
 
@@ -348,9 +372,11 @@ def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
     study = Study(runs=[dict(s.coords) for s in specs], branches=branches,
                   metadata={"grid": grid, "executor": kind, "workers": workers, "elapsed_s": elapsed, **info,
                             "model_file": str(model) if isinstance(model, str | Path) else None})
-    for coords, branch in study:
-        for finding in branch.findings:
-            warnings.warn(f"run {coords_text(coords)}: {finding.message}", BranchWarning, stacklevel=2)
+    if warn:
+        flagged = sum(bool(b.findings or b.metadata.get("run_warnings")) for b in branches)
+        if flagged:
+            warnings.warn(f"study: {findings_count(study.runs, branches)}; study.findings() gives a row per "
+                          "run, study.report(...) every message", BranchWarning, stacklevel=2)
     return study
 
 
@@ -471,6 +497,14 @@ def monte_carlo(n: int, ranges: Mapping[str, tuple[float, float]], seed: int = 0
         strata = (rng.permutation(n) + rng.random(n)) / n
         out[name] = [float(v) for v in lo + (hi - lo) * strata]
     return out
+
+
+def _varying(runs: list[dict]) -> list[str]:
+    """The coordinates whose value differs between runs (all of the first run's when none)."""
+    keys = list(dict.fromkeys(k for r in runs for k in r))
+    varying = [k for k in keys if len({repr(r.get(k)) for r in runs}) > 1] or keys
+    first = [k for k in ("harmonics", "elements") if k in varying]  # "H5, 21 el.", as the plots name runs
+    return first + [k for k in varying if k not in first]
 
 
 def _parent_models(model, specs: list[RunSpec]):

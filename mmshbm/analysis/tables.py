@@ -293,3 +293,91 @@ def series_note(vary: str, runs: Sequence[dict], frequency, notes: Sequence[str]
         if not np.isfinite(f) or note:
             out.append(f"{vary}={r[vary]}: {note or 'no value'}")
     return "; ".join(out)
+
+
+# ---------------------------------------------------------------------- findings
+def run_label(coords: dict, axes: Sequence[str]) -> str:
+    """The short name of a run by the coordinates that vary, e.g. "H5, 21 el."."""
+    parts = []
+    for k in axes:
+        v = coords.get(k)
+        parts.append(f"H{v}" if k == "harmonics" else f"{v} el." if k == "elements" else
+                     str(v) if k == "method" else f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}")
+    return ", ".join(parts) or "run"
+
+
+def findings_table(runs: Sequence[dict], branches: Sequence, axes: Sequence[str]) -> str:
+    """One row per run, what a reader must know before using it: status (complete, or
+    where and why it stopped), family (points off the starting mode's family, kept in the
+    arrays and left out of the backbone), truncation effects of the Fourier series (the
+    contact DOF through the stop, in gaps; the contact force pulling, as a share of its
+    peak), skipped amplitude intervals of the family front (gaps, with the internal
+    resonance k:j), and the count of the run's other warnings (in :func:`run_details`). A run
+    whose family front stops short of its end is named "another family above A gaps"."""
+    from .skips import cell_summary
+
+    head = ["run", "status", "family", "truncation effects", "skipped (gaps)", "notes"]
+    rows = []
+    for coords, b in zip(runs, branches, strict=True):
+        kinds = {f.kind: f for f in b.findings}
+        c = cell_summary(b)
+        status = "complete" if b.completed else f"short: {_reached(b).removesuffix(', ')}, {_short_status(b)}"
+        off = c["points"] - c["on_family"] if "on_family" in b.records else 0
+        if not off and "left_family" in kinds:
+            f = kinds["left_family"]
+            off = f.last - f.first + 1
+        family = f"{off} of {c['points']} points off" if off else "on"
+        front = b.family_front() if len(b) else []
+        if len(front) and b.amplitude[front].max() < b.amplitude.max() * (1 - 1e-9):
+            top = float(b.amplitude[front].max())
+            family = f"another family above {top / b.gap:.3g} gaps" if b.gap else \
+                f"another family above {top:.3g} m"
+        trunc = []
+        if "penetration" in kinds:
+            trunc.append(f"stop passed {kinds['penetration'].value:.2g} gaps")
+        if "negative_force" in kinds:
+            trunc.append(f"λ pulls {abs(kinds['negative_force'].value):.2g} of peak")
+        skipped = [f"{lo:.3g}-{hi:.3g}" + (f" ({kj[0]}:{kj[1]})" if kj else "")
+                   for lo, hi, kj in c["skipped"]]
+        if len(skipped) > 2:
+            skipped = [*skipped[:2], f"+{len(skipped) - 2}"]
+        extra = len(b.metadata.get("run_warnings", ()))
+        rows.append([run_label(coords, axes), status, family, ", ".join(trunc) or "-",
+                     ", ".join(skipped) or "-", f"{extra} warning{'s' * (extra != 1)}" if extra else "-"])
+    widths = [max(len(h), *(len(r[i]) for r in rows)) if rows else len(h) for i, h in enumerate(head)]
+    fmt = "  ".join(f"{{:<{w}}}" for w in widths)
+    return "\n".join(fmt.format(*r).rstrip() for r in [head, *rows])
+
+
+def findings_count(runs: Sequence[dict], branches: Sequence) -> str:
+    """One line: runs that reached their bounds, incomplete, off the family, with
+    truncation effects, with skipped intervals, with other warnings."""
+    from .skips import cell_summary
+
+    n = len(runs)
+    done = sum(b.completed for b in branches)
+    kinds = [{f.kind for f in b.findings} for b in branches]
+    parts = [f"{n} runs: {done} reached their bounds, {n - done} incomplete"]
+    counts = [("{} left the family (excursions kept in the arrays)", sum("left_family" in k for k in kinds)),
+              ("{} with truncation effects", sum(bool({"penetration", "negative_force"} & k) for k in kinds)),
+              ("{} with skipped intervals", sum(bool(cell_summary(b)["skipped"]) for b in branches)),
+              ("{} with other warnings", sum(bool(b.metadata.get("run_warnings")) for b in branches))]
+    parts += [what.format(count) for what, count in counts if count]
+    return "; ".join(parts)
+
+
+def run_details(runs: Sequence[dict], branches: Sequence) -> str:
+    """Every finding and every other warning of every run, one line each, under the run's
+    coordinates (the study's details, written to its report)."""
+    lines = ["Details per run: what the checks found and the run's other warnings"]
+    for coords, b in zip(runs, branches, strict=True):
+        found = [f.message for f in b.findings] + list(b.metadata.get("run_warnings", ()))
+        if found:
+            lines.append(f"run {coords_text(coords)}:")
+            lines += [f"  {m}" for m in found]
+    return "\n".join(lines) if len(lines) > 1 else ""
+
+
+def _short_status(branch) -> str:
+    key = branch.status.split(":", 1)[0]
+    return "step budget" if key == "max_steps" else key.replace("_", " ")

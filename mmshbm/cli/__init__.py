@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import sys
 import warnings
 
@@ -104,12 +105,18 @@ def console() -> int:
 
 
 def _one_line_warning(command: str):
-    """A ``warnings.showwarning`` that prints the package's warnings as one line each."""
+    """A ``warnings.showwarning`` that prints the package's warnings as one line each: its
+    own categories, and any other warning raised from its code (named by category)."""
+    from pathlib import Path
+
     default = warnings.showwarning
+    package = str(Path(__file__).resolve().parents[1]) + os.sep
 
     def show(message, category, filename, lineno, file=None, line=None):
         if issubclass(category, MmshbmWarning):
             print(f"mmshbm {command}: warning: {message}", file=sys.stderr)
+        elif str(filename).startswith(package):
+            print(f"mmshbm {command}: warning: {category.__name__}: {message}", file=sys.stderr)
         else:
             default(message, category, filename, lineno, file, line)
 

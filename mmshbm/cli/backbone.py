@@ -13,12 +13,13 @@ def register(sub) -> None:
     common.beam_options(p)
     p.add_argument("-H", "--harmonics", type=common.positive_int, default=5, help="harmonics H (default 5)")
     p.add_argument("--method", default="mmshbm", choices=["mmshbm", "penalty", "shooting"],
-                   help="MMS-HBM or a baseline")
+                   help="MMS-HBM, or a baseline: penalty harmonic balance or time-domain shooting (exit "
+                        "code 1 when a baseline's branch turns into another family)")
     p.add_argument("--max-amplitude", type=common.positive_float, default=None,
                    help="largest amplitude, in gaps (default 10)")
     p.add_argument("--max-steps", type=common.positive_int, default=None,
                    help="continuation step budget (default 1000); a run that uses it up exits 1")
-    p.add_argument("--measured", default=None, help="measured backbone CSV to overlay")
+    common.measured_option(p)
     p.add_argument("--checkpoint", default=None, metavar="FILE",
                    help="write converged points to FILE as they go")
     p.add_argument("--resume", default=None, metavar="FILE", help="continue from a checkpoint FILE")
@@ -66,20 +67,46 @@ def _run(args, worker) -> int:
     for line in _special_lines(branch, model.gap):
         print(line)
     common.wrote(*files)
-    return common.exit_code([branch])
+    code = common.exit_code([branch])
+    if args.method != "mmshbm" and _another_family(branch, model.gap):
+        code = 1
+    return code
+
+
+def _another_family(branch, gap: float) -> bool:
+    """Whether a baseline's branch ends on another family than its starting mode's (its
+    family front stops short of the branch's reach); says so on stderr."""
+    import sys
+
+    if not len(branch):
+        return False
+    front = branch.family_front()
+    top = float(branch.amplitude.max())
+    if len(front) and float(branch.amplitude[front].max()) >= top * (1 - 1e-9):
+        return False
+    end = int(front[-1]) if len(front) else 0
+
+    def amp(a):
+        return f"{a / gap:.3g} gaps" if gap > 0 else f"{a:.3g} m"
+
+    print(f"mmshbm backbone: {branch.method} branch: the backbone of linear mode 1 ends at "
+          f"{amp(branch.amplitude[end])} ({branch.frequency[end]:.4g} Hz); up to {amp(top)} the branch is "
+          "another family of motions, not that mode's backbone (exit code 1)", file=sys.stderr)
+    return True
 
 
 def _special_lines(branch, gap: float) -> list[str]:
     """The internal resonances the branch met and the jumps it made, one line each kind."""
-    from ..plotting.data import resonance_label
+    from ..plotting.data import resonance_label, resonances_met
 
     def amp(a):
         return f"{a / gap:.3g} gaps" if gap > 0 else f"{a:.3g} m"
 
     res, jumps, seen = [], [], set()
+    met = {id(sp) for sp in resonances_met(branch)}
     for sp in branch.special_points:
         d = getattr(sp, "data", {}) or {}
-        if sp[0] == "internal_resonance" and (d.get("k"), d.get("j")) not in seen:
+        if id(sp) in met and (d.get("k"), d.get("j")) not in seen:
             seen.add((d.get("k"), d.get("j")))
             i = int(sp[1])
             res.append(f"{resonance_label(d['k'], d['j'])} at {amp(branch.amplitude[i])} "

@@ -124,13 +124,11 @@ def progress(args) -> bool:
 
 
 def beam(args):
-    from dataclasses import replace
-
+    """The default beam with the options' ``--gap``, ``--E``, ``--rho``."""
     from ..fe.beam import default_beam
 
-    beam = default_beam()
-    changes = {k: v for k, v in (("gap", args.gap), ("E", args.E), ("rho", args.rho)) if v is not None}
-    return replace(beam, **changes) if changes else beam
+    return default_beam(**{k: v for k, v in (("gap", args.gap), ("E", args.E), ("rho", args.rho))
+                           if v is not None})
 
 
 def model(args):
@@ -143,11 +141,7 @@ def model(args):
         raise ValueError("--contact-layer and --massless-contact are two ways to the same end: give one")
     convert = layer is not None or massless is not None
     if getattr(args, "model_file", None):
-        from ..model.model import Model
-
-        model = Model.from_npz(args.model_file)
-        if args.gap is not None:
-            model = model.with_gap(args.gap)
+        model = _model_file(args)
     else:
         from ..methods.limits import check_beam_elements
 
@@ -158,6 +152,29 @@ def model(args):
     elif massless is not None:
         model = model.with_massless_contact(massless or None)
     return model
+
+
+def _model_file(args):
+    """The model of ``--model-file``, with ``--contact-dof``, ``--gap`` and ``--stop-side``
+    given in place of (or over) the file's entries."""
+    import re
+
+    from ..model.model import Model
+
+    def one_or_list(values):
+        return None if values is None else values[0] if len(values) == 1 else list(values)
+
+    try:
+        return Model.from_npz(args.model_file, contact_dof=one_or_list(getattr(args, "contact_dof", None)),
+                              gap=args.gap, stop_side=one_or_list(getattr(args, "stop_side", None)))
+    except ValueError as err:  # the library's "pass name=..." is an option here
+        raise ValueError(re.sub(r"pass (\w+)=\.\.\.", lambda m: f"give --{m.group(1).replace('_', '-')}",
+                                str(err))) from None
+
+
+def stop_side(text: str) -> int:
+    """argparse type: +1 or -1."""
+    return _number(text, int, "+1 or -1", lambda v: v in (1, -1))
 
 
 def stiffness(text: str):
@@ -194,6 +211,18 @@ def params(items) -> dict:
 
 
 
+#: the help of --measured: the CSV format load_measured reads
+MEASURED_HELP = ("measured backbone to overlay: a CSV file with a header line naming the columns frequency "
+                 "(Hz) and amplitude (m), optionally contact_force (N); units may be written into the names "
+                 "(frequency_hz, amplitude [m]) but must be these; ',', ';' or tab separate fields, lines "
+                 "starting with # are skipped (a backbone.csv this program wrote is one)")
+
+
+def measured_option(p) -> None:
+    """--measured, with the file format in its help."""
+    p.add_argument("--measured", default=None, metavar="CSV", help=MEASURED_HELP)
+
+
 def out_option(p):
     """--out."""
     p.add_argument("--out", default="out", help="output folder (default ./out)")
@@ -205,13 +234,21 @@ def beam_options(p, elements=True, model_file=True, conversions=None):
     if elements:
         p.add_argument("--elements", type=positive_int, default=21, help="beam elements (default 21)")
     p.add_argument("--grading", type=positive_float, default=10.0, help="root/tip element length ratio")
-    p.add_argument("--gap", type=positive_float, default=None, help="gap (m) (default: the beam's, 1 mm)")
+    p.add_argument("--gap", type=positive_float, default=None,
+                   help="gap (m) (default: the beam's, 1 mm; with --model-file the file's)")
     p.add_argument("--E", type=positive_float, default=None, help="Young's modulus (Pa) (default 210e9)")
     p.add_argument("--rho", type=positive_float, default=None, help="density (kg/m^3) (default 7850)")
     if model_file:
         p.add_argument("--model-file", default=None,
-                       help="a user model (.npz of Model.save_npz) instead of the beam; its contact DOF may "
-                            "carry mass (runs with --method penalty, or convert it for MMS-HBM)")
+                       help="a user model (.npz of Model.save_npz, or any .npz with M and K) instead of the "
+                            "beam; its contact DOF may carry mass (runs with --method penalty, or convert it "
+                            "for MMS-HBM)")
+        p.add_argument("--contact-dof", type=non_negative_int, nargs="+", default=None, metavar="DOF",
+                       help="--model-file: the contact DOF(s), over the file's 'contact_dof' (default: the "
+                            "file's)")
+        p.add_argument("--stop-side", type=stop_side, nargs="+", default=None, metavar="SIDE",
+                       help="--model-file: +1 (stop at +gap) or -1 per contact (default: the file's, "
+                            "else +1)")
     if conversions if conversions is not None else model_file:
         g = p.add_mutually_exclusive_group()
         g.add_argument("--contact-layer", type=stiffness, default=None, metavar="K",

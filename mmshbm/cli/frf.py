@@ -10,11 +10,13 @@ def register(sub) -> None:
     p = sub.add_parser("frf", help="forced response (damped, harmonic force): frf.csv/.npz/.png",
                        description="Frequency response of a damped structure with impact by MMS-HBM (or a "
                                    "baseline), continued through folds, stable parts solid and unstable "
-                                   "dashed. Default: the default beam with 0.5 %% modal damping, a force at "
+                                   "dashed. Default: the default beam with 0.5 % modal damping, a force at "
                                    "the last node with mass.")
     common.beam_options(p)
     p.add_argument("-H", "--harmonics", type=common.positive_int, default=5, help="harmonics (default 5)")
-    p.add_argument("--method", default="mmshbm", choices=["mmshbm", "penalty", "shooting"])
+    p.add_argument("--method", default="mmshbm", choices=["mmshbm", "penalty", "shooting"],
+                   help="MMS-HBM, or a baseline on the same forced problem: penalty harmonic balance or "
+                        "time-domain shooting (default mmshbm)")
     p.add_argument("--damping", type=common.non_negative_float, default=0.005,
                    help="modal damping ratio of every mode (default 0.005)")
     p.add_argument("--rayleigh", type=common.non_negative_float, nargs=2, default=None,
@@ -34,7 +36,7 @@ def register(sub) -> None:
                         "(phase_resonance.png/.csv)")
     p.add_argument("--max-amplitude", type=common.positive_float, default=6.0,
                    help="phase resonance: in gaps (default 6)")
-    p.add_argument("--measured", default=None, help="measured backbone CSV to overlay")
+    common.measured_option(p)
     p.set_defaults(func=run)
 
 
@@ -44,6 +46,10 @@ def run(args) -> int:
     from ..plotting.response import plot_frequency_response, plot_phase_resonance
 
     measured = common.measured(args)
+    if (args.damping == 0) if args.rayleigh is None else not any(args.rayleigh):
+        raise ValueError("a forced response needs damping (without it the response grows along the backbone "
+                         "without bound): give --damping > 0 or --rayleigh, or compute the conservative "
+                         "backbone with mmshbm backbone")
     model = common.model(args)
     if args.rayleigh is not None:
         model = model.with_damping(rayleigh=tuple(args.rayleigh))

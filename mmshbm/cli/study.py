@@ -2,6 +2,11 @@
 
 from __future__ import annotations
 
+import sys
+import warnings
+from pathlib import Path
+
+from .._warnings import MmshbmWarning
 from . import common
 
 #: amplitudes (gaps) of the table of a convergence study (issue 12: f at 2, 5 and 10 gaps)
@@ -45,17 +50,56 @@ def register(sub) -> None:
                         "H and elements from -H/--elements, default 3 and 8) serially, through a process "
                         "pool and a Dask cluster: backbones/s and parallel efficiency "
                         "(throughput.txt, throughput.json)")
-    p.add_argument("--measured", default=None, help="measured backbone CSV to overlay")
+    common.measured_option(p)
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
-    from ..analysis import studies
-    from ..plotting import plot_figure2, plot_study
-    from ..plotting.studies import plot_convergence, plot_family_grid
-
     if args.throughput is not None:
         return _throughput(args)
+    with warnings.catch_warnings(record=True) as caught:
+        # the package's warnings (the runs' checks, a model's truncation, ...) go to the
+        # report file, one count on the terminal, every line with -v
+        warnings.simplefilter("always", MmshbmWarning)
+        study, name, marks, measured = _run_study(args)
+        out = common.out_dir(args)
+        table = study.table(marks, unit="gap")
+        report = study.report(marks, unit="gap")
+        files = [study.save(out / f"{name}.npz"), table.to_csv(out / f"{name}_table.csv")]
+        pictures = _plots(args, study, name, marks, measured, table, out)
+    raised = [w for w in caught if issubclass(w.category, MmshbmWarning)]
+    for w in caught:
+        if not issubclass(w.category, MmshbmWarning):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    notes = list(dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in raised))
+    text = out / f"{name}_table.txt"
+    text.write_text(report + ("\n\nWarnings raised while tabulating\n" + "\n".join(notes) if notes else "")
+                    + "\n")
+    files += [text, *pictures]
+    if args.verbose:
+        print(report)
+        for line in notes:
+            print(f"mmshbm study: warning: {line}", file=sys.stderr)
+    print(study.findings())
+    if args.figure2:
+        from .plot import _print_points
+
+        _print_points(study, marks)
+    elapsed = study.metadata.get("elapsed_s")
+    timing = f"wall time: {len(study)} runs in {elapsed:.1f} s, {study.metadata.get('executor', '?')}; " \
+        if elapsed is not None else ""
+    more = f"{len(notes)} further warning{'s' * (len(notes) != 1)} and " if notes else ""
+    print(f"{timing}{more}the frequency table, convergence and every message: {text}"
+          + ("" if args.verbose else " (or -v)"))
+    print(f"wrote {out}/: " + ", ".join(str(f.relative_to(out)) if f.is_relative_to(out) else str(f)
+                                         for f in map(Path, files)))
+    return common.exit_code(study.branches)
+
+
+def _run_study(args):
+    """(study, file stem, table amplitudes, measured backbone) of the options."""
+    from ..analysis import studies
+
     params = common.params(args.param)
     if "normal_load" in params:
         from .friction_study import run_normal_load
@@ -68,7 +112,7 @@ def run(args) -> int:
     measured = common.measured(args)
     executor = None if args.executor == "serial" else (args.executor or "process")
     shared = {"executor": executor, "workers": args.workers, "chunksize": args.chunksize,
-              "verbose": common.progress(args)}
+              "verbose": common.progress(args), "warn": False}
     if args.max_amplitude is not None:
         shared.update(max_amplitude=args.max_amplitude, unit="gap")
     if args.max_steps is not None:
@@ -93,15 +137,15 @@ def run(args) -> int:
         name = "study"
     marks = common.DEFAULT_MARKS if args.figure2 else STUDY_MARKS
     marks = tuple(args.amplitudes) if args.amplitudes else marks
-    out = common.out_dir(args)
-    table = study.table(marks, unit="gap")
-    report = study.report(marks, unit="gap")
-    files = [study.save(out / f"{name}.npz"), table.to_csv(out / f"{name}_table.csv")]
-    text = out / f"{name}_table.txt"
-    text.write_text(report + "\n")
-    files.append(text)
+    return study, name, marks, measured
+
+
+def _plots(args, study, name, marks, measured, table, out) -> list:
+    from ..plotting import plot_figure2, plot_study
+    from ..plotting.grids import plot_convergence, plot_family_grid
+
     png = out / f"{name}.png"
-    files.append(png)
+    files = [png]
     if args.figure2:
         plot_figure2(study, marks=marks, measured=measured, path=png)
     elif common.has_grid(study):
@@ -110,10 +154,7 @@ def run(args) -> int:
         plot_convergence(study, amplitudes=marks, table=table, path=files[-1])
     else:
         plot_study(study, measured=measured, path=png)
-    print(report)
-    print(repr(study))
-    common.wrote(*files)
-    return common.exit_code(study.branches)
+    return files
 
 
 def _throughput(args) -> int:

@@ -218,8 +218,21 @@ class TimoshenkoBeam:
         return bl**2 / self.length**2 * c / (2 * np.pi)
 
 
-def default_beam() -> TimoshenkoBeam:
+def default_beam(**overrides) -> TimoshenkoBeam:
     """The benchmark beam: steel, L = 0.5 m, b = 20 mm, h = 13.5 mm, E = 210 GPa,
-    ρ = 7850 kg/m³, ν = 0.3, κ = 5/6, gap = 1 mm."""
-    return TimoshenkoBeam(length=0.5, width=0.020, height=0.0135, E=210e9, rho=7850.0, nu=0.3,
-                          shear_factor=5.0 / 6.0, gap=1e-3)
+    ρ = 7850 kg/m³, ν = 0.3, κ = 5/6, gap = 1 mm; ``overrides`` replace any of these
+    fields (``default_beam(E=200e9, gap=2e-3)``), validated as the constructor validates.
+
+    Raises
+    ------
+    TypeError
+        For a name that is not a field of :class:`TimoshenkoBeam` (the fields are listed).
+    """
+    values = {"length": 0.5, "width": 0.020, "height": 0.0135, "E": 210e9, "rho": 7850.0, "nu": 0.3,
+              "shear_factor": 5.0 / 6.0, "gap": 1e-3}
+    names = [f.name for f in fields(TimoshenkoBeam)]
+    unknown = sorted(set(overrides) - set(names))
+    if unknown:
+        raise TypeError(f"default_beam() got unknown field{'s' * (len(unknown) > 1)} {', '.join(unknown)}; "
+                        f"the beam's fields: {', '.join(names)}")
+    return TimoshenkoBeam(**(values | overrides))

@@ -22,7 +22,14 @@ import numpy as np
 from numba import njit
 
 from ..core.kernels import JIT_OPTIONS
-from ._shooting_kernels import _band_solve, _band_symv
+from ._shooting_kernels import (
+    _band_solve,
+    _band_symv,
+    _block_band_solve,
+    _block_band_terms,
+    _block_inertia,
+    _block_update,
+)
 
 __all__ = ["lcp_solve"]
 
@@ -293,6 +300,18 @@ def _step_forces(G, AZ, h0, hy, act0, lam0, J0, F_prev, avf, h1, act1, lam1, F, 
 
 
 @njit(**JIT_OPTIONS)
+def _contact_product(C, X, nb, out):
+    """out[:, :nb] = C X[:, :nb] for a small (m, m) contact-space matrix C."""
+    m = C.shape[0]
+    for k in range(m):
+        for j in range(nb):
+            acc = 0.0
+            for l2 in range(m):
+                acc += C[k, l2] * X[l2, j]
+            out[k, j] = acc
+
+
+@njit(**JIT_OPTIONS)
 def _tangent_step_multi(Sf, Mb, Kb, A, Z, F0, Cm, h, q, v, qn, dq, dv, dh, Wb, Yb, AD, T):
     """One step of the tangent columns dq, dv (n, n_par) with several contacts, in place:
 
@@ -305,7 +324,6 @@ def _tangent_step_multi(Sf, Mb, Kb, A, Z, F0, Cm, h, q, v, qn, dq, dv, dh, Wb, Y
     """
     n, npar = dq.shape
     m = A.shape[0]
-    p = Mb.shape[0] - 1
     c1 = 4.0 / (h * h)
     c2 = 4.0 / h
     c3 = 8.0 / (h * h * h)
@@ -313,10 +331,7 @@ def _tangent_step_multi(Sf, Mb, Kb, A, Z, F0, Cm, h, q, v, qn, dq, dv, dh, Wb, Y
     c6 = 2.0 / (h * h)
     for c0 in range(0, npar, _BLOCK):
         nb = min(_BLOCK, npar - c0)
-        for i in range(n):
-            base = c3 * (qn[i] - q[i]) - c1 * v[i]
-            for j in range(nb):
-                Wb[i, j] = c1 * dq[i, c0 + j] + c2 * dv[i, c0 + j] + dh[c0 + j] * base
+        _block_inertia(c1, c2, c3, q, qn, v, dq, dv, dh, c0, nb, Wb)
         # AD = A dq0, T = F0 AD
         for k in range(m):
             for j in range(nb):
@@ -326,12 +341,7 @@ def _tangent_step_multi(Sf, Mb, Kb, A, Z, F0, Cm, h, q, v, qn, dq, dv, dh, Wb, Y
                 if aki != 0.0:
                     for j in range(nb):
                         AD[k, j] += aki * dq[i, c0 + j]
-        for k in range(m):
-            for j in range(nb):
-                acc = 0.0
-                for l2 in range(m):
-                    acc += F0[k, l2] * AD[l2, j]
-                T[k, j] = acc
+        _contact_product(F0, AD, nb, T)
         # Y = M W − K dq + Aᵀ T
         for i in range(n):
             m0 = Mb[0, i]
@@ -341,29 +351,8 @@ def _tangent_step_multi(Sf, Mb, Kb, A, Z, F0, Cm, h, q, v, qn, dq, dv, dh, Wb, Y
                 for k in range(m):
                     acc += A[k, i] * T[k, j]
                 Yb[i, j] = acc
-        for d in range(1, p + 1):
-            for r in range(n - d):
-                md = Mb[d, r]
-                kd = Kb[d, r]
-                for j in range(nb):
-                    Yb[r + d, j] += md * Wb[r, j] - kd * dq[r, c0 + j]
-                    Yb[r, j] += md * Wb[r + d, j] - kd * dq[r + d, c0 + j]
-        for i in range(n):
-            for k in range(max(0, i - p), i):
-                lik = Sf[i - k, k]
-                for j in range(nb):
-                    Yb[i, j] -= lik * Yb[k, j]
-            inv = 1.0 / Sf[0, i]
-            for j in range(nb):
-                Yb[i, j] *= inv
-        for i in range(n - 1, -1, -1):
-            for k in range(i + 1, min(n, i + p + 1)):
-                lki = Sf[k - i, i]
-                for j in range(nb):
-                    Yb[i, j] -= lki * Yb[k, j]
-            inv = 1.0 / Sf[0, i]
-            for j in range(nb):
-                Yb[i, j] *= inv
+        _block_band_terms(Mb, Kb, Wb, dq, c0, nb, Yb)
+        _block_band_solve(Sf, Yb, nb)
         # dq1 = Y + Z Cm (A Y)
         for k in range(m):
             for j in range(nb):
@@ -371,24 +360,14 @@ def _tangent_step_multi(Sf, Mb, Kb, A, Z, F0, Cm, h, q, v, qn, dq, dv, dh, Wb, Y
                 for i in range(n):
                     acc += A[k, i] * Yb[i, j]
                 AD[k, j] = acc
-        for k in range(m):
-            for j in range(nb):
-                acc = 0.0
-                for l2 in range(m):
-                    acc += Cm[k, l2] * AD[l2, j]
-                T[k, j] = acc
+        _contact_product(Cm, AD, nb, T)
         for i in range(n):
             for k in range(m):
                 zik = Z[i, k]
                 if zik != 0.0:
                     for j in range(nb):
                         Yb[i, j] += zik * T[k, j]
-        for i in range(n):
-            base = c6 * (qn[i] - q[i])
-            for j in range(nb):
-                col = c0 + j
-                dv[i, col] = c5 * (Yb[i, j] - dq[i, col]) - dv[i, col] - dh[col] * base
-                dq[i, col] = Yb[i, j]
+        _block_update(c5, c6, q, qn, Yb, dq, dv, dh, c0, nb)
 
 
 @njit(**JIT_OPTIONS)

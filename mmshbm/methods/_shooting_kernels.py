@@ -145,6 +145,64 @@ _BLOCK = 16
 
 
 @njit(**JIT_OPTIONS)
+def _block_inertia(c1, c2, c3, q, qn, v, dq, dv, dh, c0, nb, Wb):
+    """Wb[:, :nb] = c1 dq0 + c2 dv0 + e (c3 (q1 − q0) − c1 v0) for the columns c0 … c0+nb−1
+    (e = dh[col], the column's step-size derivative)."""
+    for i in range(qn.shape[0]):
+        base = c3 * (qn[i] - q[i]) - c1 * v[i]
+        for j in range(nb):
+            Wb[i, j] = c1 * dq[i, c0 + j] + c2 * dv[i, c0 + j] + dh[c0 + j] * base
+
+
+@njit(**JIT_OPTIONS)
+def _block_band_terms(Mb, Kb, Wb, dq, c0, nb, Yb):
+    """Yb[:, :nb] += (M W − K dq) from the off-diagonal bands (the diagonal is the caller's,
+    fused with its contact terms)."""
+    n = Yb.shape[0]
+    for d in range(1, Mb.shape[0]):
+        for r in range(n - d):
+            md = Mb[d, r]
+            kd = Kb[d, r]
+            for j in range(nb):
+                Yb[r + d, j] += md * Wb[r, j] - kd * dq[r, c0 + j]
+                Yb[r, j] += md * Wb[r + d, j] - kd * dq[r + d, c0 + j]
+
+
+@njit(**JIT_OPTIONS)
+def _block_band_solve(Sf, Yb, nb):
+    """In place: Yb[:, :nb] <- S⁻¹ Yb by the band Cholesky factor (forward, then backward)."""
+    n = Yb.shape[0]
+    p = Sf.shape[0] - 1
+    for i in range(n):
+        for k in range(max(0, i - p), i):
+            lik = Sf[i - k, k]
+            for j in range(nb):
+                Yb[i, j] -= lik * Yb[k, j]
+        inv = 1.0 / Sf[0, i]
+        for j in range(nb):
+            Yb[i, j] *= inv
+    for i in range(n - 1, -1, -1):
+        for k in range(i + 1, min(n, i + p + 1)):
+            lki = Sf[k - i, i]
+            for j in range(nb):
+                Yb[i, j] -= lki * Yb[k, j]
+        inv = 1.0 / Sf[0, i]
+        for j in range(nb):
+            Yb[i, j] *= inv
+
+
+@njit(**JIT_OPTIONS)
+def _block_update(c5, c6, q, qn, Yb, dq, dv, dh, c0, nb):
+    """The block's new columns: dq1 = Y, dv1 = c5 (dq1 − dq0) − dv0 − e c6 (q1 − q0)."""
+    for i in range(qn.shape[0]):
+        base = c6 * (qn[i] - q[i])
+        for j in range(nb):
+            col = c0 + j
+            dv[i, col] = c5 * (Yb[i, j] - dq[i, col]) - dv[i, col] - dh[col] * base
+            dq[i, col] = Yb[i, j]
+
+
+@njit(**JIT_OPTIONS)
 def _tangent_step(Sf, Mb, Kb, a, z, alpha, F0, F1, h, q, v, qn, dq, dv, dh, Wb, Yb, ad):
     """One step of the tangent columns dq, dv (n, m), in place, given the step's states
     q (start), qn (end), v (start velocity) and the force-sum derivatives F0, F1:
@@ -156,7 +214,6 @@ def _tangent_step(Sf, Mb, Kb, a, z, alpha, F0, F1, h, q, v, qn, dq, dv, dh, Wb, 
     Wb, Yb (n, _BLOCK) and ad (_BLOCK,) are work arrays.
     """
     n, m = dq.shape
-    p = Mb.shape[0] - 1
     c1 = 4.0 / (h * h)
     c2 = 4.0 / h
     c3 = 8.0 / (h * h * h)
@@ -165,13 +222,11 @@ def _tangent_step(Sf, Mb, Kb, a, z, alpha, F0, F1, h, q, v, qn, dq, dv, dh, Wb, 
     sm = F1 / (1.0 - F1 * alpha)
     for c0 in range(0, m, _BLOCK):
         nb = min(_BLOCK, m - c0)
+        _block_inertia(c1, c2, c3, q, qn, v, dq, dv, dh, c0, nb, Wb)
         for j in range(nb):
             ad[j] = 0.0
         for i in range(n):
             ai = a[i]
-            base = c3 * (qn[i] - q[i]) - c1 * v[i]
-            for j in range(nb):
-                Wb[i, j] = c1 * dq[i, c0 + j] + c2 * dv[i, c0 + j] + dh[c0 + j] * base
             if ai != 0.0:
                 for j in range(nb):
                     ad[j] += ai * dq[i, c0 + j]
@@ -182,30 +237,8 @@ def _tangent_step(Sf, Mb, Kb, a, z, alpha, F0, F1, h, q, v, qn, dq, dv, dh, Wb, 
             fa = F0 * a[i]
             for j in range(nb):
                 Yb[i, j] = m0 * Wb[i, j] - k0 * dq[i, c0 + j] + fa * ad[j]
-        for d in range(1, p + 1):
-            for r in range(n - d):
-                md = Mb[d, r]
-                kd = Kb[d, r]
-                for j in range(nb):
-                    Yb[r + d, j] += md * Wb[r, j] - kd * dq[r, c0 + j]
-                    Yb[r, j] += md * Wb[r + d, j] - kd * dq[r + d, c0 + j]
-        # S⁻¹ by the band Cholesky factor: forward, then backward
-        for i in range(n):
-            for k in range(max(0, i - p), i):
-                lik = Sf[i - k, k]
-                for j in range(nb):
-                    Yb[i, j] -= lik * Yb[k, j]
-            inv = 1.0 / Sf[0, i]
-            for j in range(nb):
-                Yb[i, j] *= inv
-        for i in range(n - 1, -1, -1):
-            for k in range(i + 1, min(n, i + p + 1)):
-                lki = Sf[k - i, i]
-                for j in range(nb):
-                    Yb[i, j] -= lki * Yb[k, j]
-            inv = 1.0 / Sf[0, i]
-            for j in range(nb):
-                Yb[i, j] *= inv
+        _block_band_terms(Mb, Kb, Wb, dq, c0, nb, Yb)
+        _block_band_solve(Sf, Yb, nb)
         # Sherman–Morrison along z for the contact's own derivative
         if F1 != 0.0:
             for j in range(nb):
@@ -221,12 +254,7 @@ def _tangent_step(Sf, Mb, Kb, a, z, alpha, F0, F1, h, q, v, qn, dq, dv, dh, Wb, 
                 zi = z[i]
                 for j in range(nb):
                     Yb[i, j] += ad[j] * zi
-        for i in range(n):
-            base = c6 * (qn[i] - q[i])
-            for j in range(nb):
-                col = c0 + j
-                dv[i, col] = c5 * (Yb[i, j] - dq[i, col]) - dv[i, col] - dh[col] * base
-                dq[i, col] = Yb[i, j]
+        _block_update(c5, c6, q, qn, Yb, dq, dv, dh, c0, nb)
 
 
 

@@ -22,6 +22,7 @@ import numpy as np
 from .. import _validate as check
 from ..core.continuation import ContinuationOptions, continue_branch
 from ..core.special_points import SpecialPoint
+from ..model.damping import model_has_damping
 from ..model.model import Model
 from ..results.response import FrequencyResponse
 from .forced import Excitation, harmonic_force
@@ -117,12 +118,18 @@ def frequency_response(model: Model, force, frequency_range, harmonics: int = 5,
     Raises
     ------
     ValueError, TypeError
-        Naming the offending input: an empty or inverted frequency range, a force of the
-        wrong length or on a massless DOF, an unknown method or option.
+        Naming the offending input: a model without damping
+        (:func:`~mmshbm.model.damping.model_has_damping`), an empty or inverted frequency
+        range, a force of the wrong length or on a massless DOF, an unknown method or option.
     """
     if not isinstance(model, Model):
         raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
     f0, f1 = _frequency_range(frequency_range)
+    if not model_has_damping(model):
+        raise ValueError("the model has no damping: its forced response grows along the backbone without "
+                         "bound (no resonance peak to continue around); give it damping with "
+                         "model.with_damping(modal_ratio=...) or (rayleigh=(alpha, beta)), or compute the "
+                         "conservative backbone, mmshbm.backbone(model)")
     if method not in FORCED_METHODS:
         raise ValueError(f"unknown method {method!r}; choose one of {sorted(FORCED_METHODS)}")
     if method != "shooting":

@@ -251,12 +251,7 @@ class FrictionEPMCProblem(FrictionRows, DampedHBMBase):
         D, _, _ = self._dense(omega, xi, False)
         F = self._force(x, a1, b1, D)
         Q = self.coefficients(u)
-        slip, work = 0.0, 0.0
-        for j, i in enumerate(self.friction_rows):
-            idx = self._coef_index[i]
-            slip = max(slip, self.friction_law(x, F, j)[3])
-            f, v = -F[idx], self._Dt @ x[idx]
-            work += np.pi * (2 * f[0] * v[0] + f[1:] @ v[1:])
+        slip, work = self.slip_and_work(x, F)
         # ∮ q̇ᵀCq̇ dt = Ω ∫ q′ᵀCq′ dτ = π Ω Σ_k k² (a_kᵀCa_k + b_kᵀCb_k)
         Ql = Q[self.model.l]
         k = np.repeat(np.arange(1, self.H + 1), 2)

@@ -151,14 +151,19 @@ class FrictionRows:
     def friction_records(self, x: np.ndarray, omega: float, sigma: float = 1.0) -> dict:
         """``slip_fraction`` (largest over the friction nodes) and ``friction_dissipation``
         (J per period: Σ_t ∫ f_t u_t′ dτ with f_t = −F_t, by Parseval)."""
-        F = self._needed(x, omega, sigma)
+        slip, work = self.slip_and_work(x, self._needed(x, omega, sigma))
+        return {"slip_fraction": slip, "friction_dissipation": work}
+
+    def slip_and_work(self, x: np.ndarray, F: np.ndarray) -> tuple[float, float]:
+        """(largest slip fraction over the friction nodes, friction work per period (J)):
+        Σ_t ∫ f_t u_t′ dτ with f_t = −F_t, by Parseval, for the force F the structure needs."""
         slip, work = 0.0, 0.0
         for j, i in enumerate(self.friction_rows):
             idx = self._coef_index[i]
             slip = max(slip, self.friction_law(x, F, j, False)[3])
             f, v = -F[idx], self._Dt @ x[idx]
             work += np.pi * (2 * f[0] * v[0] + f[1:] @ v[1:])
-        return {"slip_fraction": slip, "friction_dissipation": float(work)}
+        return slip, float(work)
 
 
 class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):

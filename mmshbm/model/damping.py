@@ -41,7 +41,7 @@ import scipy.sparse as sp
 
 from .. import _validate as check
 
-__all__ = ["damping_matrix", "modal_damping_ratios"]
+__all__ = ["damping_matrix", "modal_damping_ratios", "model_has_damping", "DISSIPATIVE_ATTRIBUTES"]
 
 
 def _ratios(modal_ratio, n_l: int) -> np.ndarray:
@@ -141,3 +141,23 @@ def modal_damping_ratios(model, n: int = 1) -> np.ndarray:
         return np.zeros(len(freqs))
     C = model.damping
     return np.einsum("ij,ij->j", modes, C @ modes) / (2.0 * 2 * np.pi * freqs)
+
+
+#: model attributes besides the viscous matrix ``damping`` that dissipate energy when they
+#: are set (not None, not empty): :func:`model_has_damping` counts them as damping
+DISSIPATIVE_ATTRIBUTES = ("friction",)
+
+
+def model_has_damping(model) -> bool:
+    """Whether ``model`` dissipates energy: a viscous damping matrix with a nonzero entry,
+    or one of :data:`DISSIPATIVE_ATTRIBUTES` set (e.g. a non-empty tuple of friction
+    contacts). A forced response needs it (undamped, the response grows along the
+    backbone without bound)."""
+    C = getattr(model, "damping", None)
+    if C is not None and (C.count_nonzero() if sp.issparse(C) else np.count_nonzero(C)) > 0:
+        return True
+    for name in DISSIPATIVE_ATTRIBUTES:
+        value = getattr(model, name, None)
+        if value is not None and (len(value) > 0 if hasattr(value, "__len__") else True):
+            return True
+    return False

@@ -182,9 +182,12 @@ def friction_from_json(text) -> list[dict]:
 
 def no_contacts(contact_dof, gap, stop_side) -> bool:
     """True when ``contact_dof`` is an empty sequence (a model without unilateral contacts);
-    ``gap`` and ``stop_side`` must then be empty sequences or scalars."""
+    ``gap`` must then be an empty sequence (a gap of no stop is a mistake) and ``stop_side``
+    an empty sequence or its scalar default."""
     if isinstance(contact_dof, str | bytes) or np.ndim(contact_dof) != 1 or len(contact_dof) != 0:
         return False
+    if np.ndim(gap) != 1:
+        raise ValueError(f"contact_dof is empty but gap is {gap!r}: a model without stops takes gap=[]")
     for name, value in (("gap", gap), ("stop_side", stop_side)):
         if np.ndim(value) == 1 and len(value) != 0:
             raise ValueError(f"contact_dof is empty but {name} has {len(value)} entries: give none")

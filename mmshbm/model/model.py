@@ -44,7 +44,9 @@ class Model:
     """A linear structure with rigid stops.
 
     Build it with :meth:`from_matrices` (or a beam's ``.model()``); the constructor
-    does no validation of its own.
+    does no validation of its own. With one contact, :attr:`contact_dof`, :attr:`gap` and
+    :attr:`stop_side` are its data (the names of mmshbm 0.1); with several, :attr:`gap` is
+    the smallest gap (the unit of amplitudes "in gaps") and :attr:`contacts` holds the rest.
 
     Attributes
     ----------
@@ -59,10 +61,6 @@ class Model:
         Viscous damping matrix C (N·s/m), zero on the massless DOFs; None: undamped.
     friction : tuple of FrictionContact
         Coulomb friction contacts on massless DOFs (:meth:`with_friction`); empty: none.
-
-    With one contact, :attr:`contact_dof`, :attr:`gap` and :attr:`stop_side` are its data
-    (the names of mmshbm 0.1); with several, :attr:`gap` is the smallest gap (the unit of
-    amplitudes "in gaps") and :attr:`contacts` holds the rest.
     """
 
     M: sp.csr_matrix

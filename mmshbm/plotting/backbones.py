@@ -14,6 +14,7 @@ from .common import (
     _finish,
     _gap,
     _overlay_measured,
+    _point_label,
     _reference_lines,
     branch_label,
     distinct_models,
@@ -21,7 +22,7 @@ from .common import (
     log,
     reference_frequencies,
 )
-from .data import resonance_label
+from .data import odd_harmonics, resonance_label, resonance_orders, resonances_met
 
 
 def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=None, model=None,
@@ -41,11 +42,15 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
     model : Model or (f_lin, f_zero), optional
         For the reference lines (default: every distinct model of the branches); or the
         pair :func:`~mmshbm.plotting.data.reference_frequencies` gives.
-    marks : sequence of (branch index, point index), optional
-        Points to mark and number 1, 2, ... (e.g. those of :func:`plot_time_signals`).
+    marks : Branch or sequence of (branch index, point index), optional
+        Points to mark and number 1, 2, ..., each with a legend entry "marked point n:
+        f Hz, A gaps": the points of a Branch (those :meth:`~mmshbm.Branch.solve_at`
+        solves on the family front, as :func:`plot_time_signals` draws them), or points of
+        the plotted branches.
     reference_lines : bool
         Mark the linear frequency f_1, the zero-gap limit and f_k/n for ``modes`` k and
-        orders n = 2..``max_order`` that fall inside the plotted frequency range, once
+        orders n = 2..``max_order`` that fall inside the plotted frequency range and that
+        the branches carry (n <= H; odd n only for a symmetric clearance), once
         per distinct model (in that model's colour when there are several).
     ax : matplotlib Axes, optional
         Draw there instead of a new figure.
@@ -92,14 +97,10 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
     excursion_labelled = False
     for i, (b, label) in enumerate(zip(branches, labels, strict=True)):
         style = {"lw": 1.4} | dict(styles[i])
-        f, a = _family_curve(b)
-        (line,) = ax.plot(f, a / scales[i], label=label, **style)
+        y = np.asarray(b.amplitude) / scales[i]
+        line, drawn = _draw_family(ax, b, y, label, style, not excursion_labelled)
+        excursion_labelled |= drawn
         colors.append(line.get_color())
-        if len(f) != len(b):  # the branch went into internal-resonance tongues: drawn thin
-            fp, ap = _broken_at_jumps(b)
-            ax.plot(fp, ap / scales[i], color=line.get_color(), lw=0.6, alpha=0.35,
-                    zorder=1, label=None if excursion_labelled else "off the family (internal resonance)")
-            excursion_labelled = True
         if special:
             _special_points(ax, b, scales[i], line.get_color())
     if measured is not None:
@@ -108,12 +109,12 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
 
             measured = load_measured(measured)
         _overlay_measured(ax, measured, scales[0])
-    for n, (bi, pi) in enumerate(marks or (), start=1):
-        b = branches[bi]
-        ax.plot(b.frequency[pi], b.amplitude[pi] / scales[bi], "o", color=_POINT_COLORS[(n - 1) % 6], ms=7,
-                mec="w", zorder=5)
-        ax.annotate(str(n), (b.frequency[pi], b.amplitude[pi] / scales[bi]), xytext=(-9, 4),
-                    textcoords="offset points", fontsize=10, fontweight="bold", zorder=6)
+    for n, (b, pi, scale) in enumerate(_marked(marks, branches, scales), start=1):
+        x, y = b.frequency[pi], b.amplitude[pi] / scale
+        ax.plot(x, y, "o", color=_POINT_COLORS[(n - 1) % 6], ms=7, mec="w", zorder=5,
+                label=f"marked point {_point_label(b, n, pi)}")
+        ax.annotate(str(n), (x, y), xytext=(-9, 4), textcoords="offset points", fontsize=10,
+                    fontweight="bold", zorder=6)
     if reference_lines:
         f_all = np.concatenate([b.frequency for b in branches if len(b)] or [np.array([np.nan])])
         if np.any(np.isfinite(f_all)):
@@ -125,7 +126,8 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
                 tag = "" if len(lines) == 1 else _model_tag([branches[i] for i in members], branches)
                 shade = _MODEL_COLORS[m % len(_MODEL_COLORS)]
                 color = {} if len(lines) == 1 else dict(color_open=shade, color_zero=shade, color_ir=shade)
-                _reference_lines(ax, values, lo - pad, hi + pad, modes, max_order, tag=tag, **color)
+                _reference_lines(ax, values, lo - pad, hi + pad, modes, max_order, tag=tag,
+                                 orders=_orders([branches[i] for i in members], max_order), **color)
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel(ylabel)
     ax.set_ylim(bottom=0)
@@ -134,6 +136,27 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
     if title:
         ax.set_title(title)
     return _finish(fig, path)
+
+
+def _orders(branches, max_order: int) -> list[int]:
+    """The orders n of the lines f_j/n that ``branches`` can meet: up to the largest H
+    among them (every order for a method without truncation), odd ones only when every
+    branch's motion carries odd harmonics only."""
+    H = [int(b.harmonics) for b in branches]
+    top = max_order if not H or min(H) <= 0 else max(H)
+    return resonance_orders(top, max_order, odd=bool(branches) and all(odd_harmonics(b) for b in branches))
+
+
+def _marked(marks, branches, scales) -> list[tuple[object, int, float]]:
+    """(branch, point index, amplitude scale) of every marked point."""
+    if marks is None:
+        return []
+    if hasattr(marks, "frequency"):  # a branch of marked points
+        gap = _gap(marks)
+        scale = gap if all(s == g for s, g in zip(scales, [_gap(b) for b in branches], strict=True)) \
+            and gap > 0 else 1e-3
+        return [(marks, i, scale) for i in range(len(marks))]
+    return [(branches[bi], int(pi), scales[bi]) for bi, pi in marks]
 
 
 #: colours of the reference lines when several models are drawn
@@ -187,13 +210,14 @@ def _front(branch) -> np.ndarray | None:
     return family_front(branch)
 
 
-def _family_curve(branch) -> tuple[np.ndarray, np.ndarray]:
-    """(frequency, amplitude) of the starting mode's backbone in ``branch``: its family
-    front, broken (NaN) where the front skips points (a tongue or a jump); the whole
-    branch when it records no family or never leaves it."""
+def _family_curve(branch, y=None) -> tuple[np.ndarray, np.ndarray]:
+    """(frequency, ``y``) of the starting mode's backbone in ``branch`` (``y`` per point,
+    default the amplitude): its family front, broken (NaN) where the front skips points (a
+    tongue or a jump); the whole branch when it records no family or never leaves it."""
+    y = np.asarray(branch.amplitude if y is None else y, dtype=float)
     front = _front(branch)
     if front is None or len(front) == len(branch):
-        return np.asarray(branch.frequency), np.asarray(branch.amplitude)
+        return np.asarray(branch.frequency), y
     jumps = {int(sp[1]) for sp in branch.special_points if sp[0] == "jump"}
     f, a = [], []
     for n, i in enumerate(front):
@@ -201,18 +225,31 @@ def _family_curve(branch) -> tuple[np.ndarray, np.ndarray]:
             f.append(np.nan)
             a.append(np.nan)
         f.append(branch.frequency[i])
-        a.append(branch.amplitude[i])
+        a.append(y[i])
     return np.array(f), np.array(a)
 
 
-def _broken_at_jumps(branch) -> tuple[np.ndarray, np.ndarray]:
-    """(frequency, amplitude) of every point of ``branch``, NaN-broken before each jump
-    (the path is not continuous there)."""
+def _broken_at_jumps(branch, y=None) -> tuple[np.ndarray, np.ndarray]:
+    """(frequency, ``y``) of every point of ``branch`` (``y`` default the amplitude),
+    NaN-broken before each jump (the path is not continuous there)."""
     n = len(branch)
     cuts = sorted({int(sp[1]) for sp in branch.special_points if sp[0] == "jump" and 0 < int(sp[1]) < n})
     f = np.insert(np.asarray(branch.frequency, dtype=float), cuts, np.nan)
-    a = np.insert(np.asarray(branch.amplitude, dtype=float), cuts, np.nan)
+    a = np.insert(np.asarray(branch.amplitude if y is None else y, dtype=float), cuts, np.nan)
     return f, a
+
+
+def _draw_family(ax, branch, y, label, style, first_excursion: bool):
+    """The branch's family front as its line (``style``) and its excursions off the family
+    thin in the same colour; returns (line, whether an excursion was drawn)."""
+    f, v = _family_curve(branch, y)
+    (line,) = ax.plot(f, v, label=label, **style)
+    if len(f) - np.count_nonzero(np.isnan(f)) == len(branch):
+        return line, False
+    fp, vp = _broken_at_jumps(branch, y)
+    ax.plot(fp, vp, color=line.get_color(), lw=0.6, alpha=0.35, zorder=1,
+            label="off the family (internal resonance)" if first_excursion else None)
+    return line, True
 
 
 def _special_points(ax, branch, scale: float, color) -> None:
@@ -220,9 +257,10 @@ def _special_points(ax, branch, scale: float, color) -> None:
     f, a = branch.frequency, branch.amplitude / scale
     seen, named = set(), set()
     front = _front(branch)
+    met = {id(sp) for sp in resonances_met(branch)}
     for sp in branch.special_points:
         kind, i = sp[0], int(sp[1])
-        if not 0 <= i < n:
+        if not 0 <= i < n or kind == "internal_resonance" and id(sp) not in met:
             continue
         data = getattr(sp, "data", {}) or {}
         if kind in SPECIAL_MARKERS:
@@ -267,21 +305,26 @@ def _legend(ax, **kwargs) -> None:
 
 def plot_frequency_energy(branches, labels: Sequence[str] | None = None, *, ax=None, path=None,
                           title: str | None = None, styles: Sequence[dict] | None = None) -> Figure:
-    """Frequency–energy plot: log10 of the mechanical energy (J) against frequency (Hz);
-    ``styles`` are line keyword arguments per branch."""
+    """Frequency–energy plot: log10 of the mechanical energy (J) against frequency (Hz),
+    drawn as :func:`plot_backbone` draws the backbone (the family front as the line,
+    excursions into internal-resonance tongues thin); ``styles`` are line keyword
+    arguments per branch."""
     branches = _as_list(branches)
     if not branches:
         raise ValueError("no branches to plot")
     fig, ax = _figure(ax, (6.4, 4.6))
     labels = list(labels) if labels is not None else [branch_label(b) for b in branches]
+    excursion_labelled = False
     for i, (b, label) in enumerate(zip(branches, labels, strict=True)):
         style = {"lw": 1.4} | (dict(styles[i]) if styles is not None else {})
         with np.errstate(divide="ignore", invalid="ignore"):
-            ax.plot(b.frequency, np.log10(b.energy), label=label, **style)
+            energy = np.log10(np.asarray(b.energy, dtype=float))
+        _, drawn = _draw_family(ax, b, energy, label, style, not excursion_labelled)
+        excursion_labelled |= drawn
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel("log₁₀(energy / J)")
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
+    _legend(ax, fontsize=8)
     if title:
         ax.set_title(title)
     return _finish(fig, path)

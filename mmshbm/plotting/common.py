@@ -51,12 +51,52 @@ def _set_margins(fig: Figure, title: bool) -> None:
 def _finish(fig: Figure, path) -> Figure:
     if getattr(fig, "_mmshbm_fixed_margins", False):
         _set_margins(fig, title=any(a.get_title() for a in fig.axes))
+    declutter(fig)
     if path is not None:
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         fig.savefig(path, dpi=_DPI)
         log.info("wrote %s", path)
     return fig
+
+
+def declutter(fig: Figure) -> int:
+    """Move the annotations of every axes (labels of special points, resonances, skipped
+    intervals, reference lines) apart: each in turn keeps its place when it overlaps no
+    annotation already placed, else is shifted up or down by whole text heights, else
+    hidden (the legend and the command line still say what it said). Bold texts (the
+    numbers of marked points) are placed first. Returns the number hidden."""
+    from matplotlib.text import Annotation
+
+    axes = [ax for ax in fig.axes
+            if ax.get_visible() and sum(isinstance(t, Annotation) for t in ax.texts) > 1]
+    if not axes:
+        return 0
+    if fig.get_layout_engine() is not None:
+        fig.draw_without_rendering()  # place the axes first
+    renderer = fig._get_renderer()
+    hidden = 0
+    for ax in axes:
+        frame = ax.get_window_extent(renderer)
+        texts = [t for t in ax.texts if isinstance(t, Annotation) and t.get_visible() and t.get_text()]
+        texts.sort(key=lambda t: t.get_fontweight() not in ("bold", 700))
+        placed = []
+        for t in texts:
+            x0, y0 = t.xyann
+            step = 1.15 * t.get_fontsize()
+            movable = t.anncoords == "offset points"  # shifts are in points
+            for k in (0, -1, 1, -2, 2, -3, 3) if movable else (0,):
+                t.xyann = (x0, y0 + k * step)
+                box = t.get_window_extent(renderer)
+                if not any(box.overlaps(p) for p in placed) and (k == 0 or frame.contains(box.x0, box.y0)
+                                                                and frame.contains(box.x1, box.y1)):
+                    placed.append(box)
+                    break
+            else:
+                t.xyann = (x0, y0)
+                t.set_visible(False)
+                hidden += 1
+    return hidden
 
 
 def _as_list(branches) -> list:
@@ -133,10 +173,10 @@ def points_at(branch, amplitudes) -> list[int]:
 
 
 def _reference_lines(ax, model, fmin, fmax, modes, max_order, *, color_open="0.55", color_zero="0.3",
-                     color_ir="C3", tag: str = "") -> None:
+                     color_ir="C3", tag: str = "", orders=None) -> None:
     """Vertical lines: linear f1, zero-gap limit, f_k/n of higher modes inside [fmin, fmax]
-    (sparse eigen-solves: about 0.2 s on 1000 elements). ``tag`` names the model in the
-    legend when several models are drawn."""
+    for the ``orders`` n (default 2..``max_order``; sparse eigen-solves: about 0.2 s on 1000
+    elements). ``tag`` names the model in the legend when several models are drawn."""
     values = reference_frequencies(model, modes) if not isinstance(model, tuple) else model
     if values is None:
         return
@@ -149,7 +189,7 @@ def _reference_lines(ax, model, fmin, fmax, modes, max_order, *, color_open="0.5
     for k in modes:
         if k - 1 >= len(f_lin):
             continue
-        for order in range(2, max_order + 1):
+        for order in (range(2, max_order + 1) if orders is None else orders):
             f = f_lin[k - 1] / order
             if fmin <= f <= fmax:
                 ax.axvline(f, color=color_ir, ls="-.", lw=0.8, alpha=0.7,

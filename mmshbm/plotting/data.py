@@ -9,7 +9,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["BranchData", "reference_frequencies", "resonance_label"]
+__all__ = ["BranchData", "reference_frequencies", "resonance_label", "resonance_orders", "resonances_met",
+           "symmetric_clearance", "marked_run"]
 
 log = logging.getLogger(__name__)
 
@@ -44,6 +45,7 @@ class BranchData:
     metadata: dict = field(default_factory=dict)
     gap: float | None = None
     records: dict = field(default_factory=dict)
+    odd_harmonics: bool = False
 
     #: the per-point records the plots read (the family front: mmshbm.results.family_points)
     RECORDS = ("on_family", "mode_share")
@@ -56,7 +58,8 @@ class BranchData:
                    if key in getattr(branch, "records", {})}
         return cls(np.asarray(branch.frequency), np.asarray(branch.amplitude), np.asarray(branch.energy),
                    np.asarray(branch.contact_force_max), str(branch.status), str(branch.method),
-                   int(branch.harmonics), list(branch.special_points), meta, _gap(branch), records)
+                   int(branch.harmonics), list(branch.special_points), meta, _gap(branch), records,
+                   odd_harmonics(branch))
 
     def __len__(self) -> int:
         return len(self.frequency)
@@ -86,3 +89,51 @@ def resonance_label(k, j) -> str:
     "5Ω≈f₂"."""
     sub = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
     return f"{k}Ω≈f{str(j).translate(sub)}"
+
+
+def symmetric_clearance(model) -> bool:
+    """True for a symmetric clearance: two stops on one DOF, on opposite sides, with equal
+    gaps. Its periodic motions have half-wave symmetry, so they carry odd harmonics only
+    and only odd harmonics can meet another mode."""
+    contacts = list(getattr(model, "contacts", ()) or ())
+    if len(contacts) != 2:
+        return False
+    a, b = contacts
+    return a.dof == b.dof and a.side == -b.side and np.isclose(a.gap, b.gap, rtol=1e-12, atol=0)
+
+
+def odd_harmonics(branch) -> bool:
+    """Whether ``branch``'s motion carries odd harmonics only (its model is a symmetric
+    clearance); False when the model cannot be had."""
+    if hasattr(branch, "odd_harmonics"):
+        return bool(branch.odd_harmonics)
+    try:
+        return symmetric_clearance(branch.get_model())
+    except ValueError:
+        return False
+
+
+def resonance_orders(harmonics: int, max_order: int, odd: bool = False) -> list[int]:
+    """The orders n of the reference lines f_j/n a branch can meet: harmonics 2..H that
+    its ansatz carries (all up to ``max_order`` for a method without truncation, H = 0),
+    odd ones only for a motion with half-wave symmetry (``odd``)."""
+    top = max_order if harmonics <= 0 else min(int(harmonics), max_order)
+    return [n for n in range(2, top + 1) if not odd or n % 2]
+
+
+def resonances_met(branch) -> list:
+    """The branch's ``"internal_resonance"`` special points where the branch resonates:
+    a stretch named at the branch's last point is left out (the run ended on its way
+    toward kΩ = ω_j, at a bound or a stop, and its largest share is only where it stopped)."""
+    n = len(branch)
+    return [sp for sp in branch.special_points if sp[0] == "internal_resonance" and 0 <= int(sp[1]) < n - 1]
+
+
+def marked_run(runs) -> dict:
+    """The coordinates (method, harmonics, elements) of the run of a study that carries
+    the marked points of its figures: the largest H with the most elements."""
+    runs = list(runs)
+    if not runs:
+        raise ValueError("the study is empty")
+    best = max(runs, key=lambda r: (r.get("harmonics", 0), r.get("elements", 0)))
+    return {k: best[k] for k in ("method", "harmonics", "elements") if k in best}

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Sequence
 
 import numpy as np
@@ -83,7 +84,7 @@ def plot_time_signals(branch, points, dofs: Sequence[int] | None = None, *, n_sa
     axes[-1].set_xlabel("t / T")
     axes[-1].set_xlim(0, 1)
     axes[0].legend(fontsize=8, loc="best")
-    axes[0].set_title(_signals_note(branch, signals), fontsize=8, loc="left")
+    axes[0].set_title(textwrap.fill(_signals_note(branch, signals), 90), fontsize=8, loc="left")
     return _finish(fig, path)
 
 
@@ -133,14 +134,15 @@ def plot_contact_force(branch, points, *, n_samples: int = 512, ax=None, path=No
             what += f"; λ < 0 (down to {lowest:.3g} N) is a truncation effect"
     else:
         what = f"{branch.method}: exact static contact force along the orbit"
-    ax.set_title(what, fontsize=8, loc="left")
+    ax.set_title(textwrap.fill(what, 90), fontsize=8, loc="left")
     return _finish(fig, path)
 
 
 def plot_harmonic_content(branch, point: int, dof: int | None = None, *, log_scale: bool = True, ax=None,
-                          path=None) -> Figure:
+                          path=None, number: int | None = None) -> Figure:
     """Bar chart of the harmonic amplitudes |Q_k|, k = 0..H, of ``dof`` (default the
-    contact DOF) at ``point``."""
+    contact DOF) at ``point``; ``number`` names it in the title as a marked point (default:
+    its index)."""
     (i,) = _points(branch, [point])
     fig, ax = _figure(ax, (5.2, 3.4))
     amp = np.asarray(branch.harmonic_content(i, dof))
@@ -154,7 +156,8 @@ def plot_harmonic_content(branch, point: int, dof: int | None = None, *, log_sca
     ax.set_xticks(k)
     ax.set_xlabel("harmonic k")
     ax.set_ylabel(f"|Q_k| of {label}")
-    ax.set_title(f"point {i}: {branch.frequency[i]:.2f} Hz", fontsize=10)
+    title = f"point {i}" if number is None else f"marked point {_point_label(branch, number, i)}"
+    ax.set_title(title if number is not None else f"{title}: {branch.frequency[i]:.2f} Hz", fontsize=10)
     ax.grid(True, axis="y", alpha=0.3)
     return _finish(fig, path)
 

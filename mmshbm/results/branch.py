@@ -25,7 +25,7 @@ import numpy as np
 
 from ..core.special_points import special_from_json, special_to_json
 from .archive import read_archive, write_archive
-from .family_points import family_front, frequency_at
+from .family_points import amplitude_in_m, family_front, frequency_at, solve_at, warn_outside_front
 from .models import _model_arrays, _model_from_arrays, rebuild_model  # noqa: F401 - rebuild_model is public here
 
 __all__ = ["Branch", "rebuild_model", "read_archive", "write_archive"]
@@ -373,8 +373,9 @@ class Branch:
         into internal-resonance tongues, and the way back down a loop, are left out."""
         return family_front(self)
 
-    def frequency_at(self, amplitude: float, *, interpolate: bool = False, tol: float = 1e-10) -> float:
-        """Frequency (Hz) of the backbone at ``amplitude`` (m).
+    def frequency_at(self, amplitude: float, *, unit: str = "m", interpolate: bool = False,
+                     tol: float = 1e-10) -> float:
+        """Frequency (Hz) of the backbone at ``amplitude`` (m, or gaps with ``unit="gap"``).
 
         By default the point is *solved*: Newton on the method's equations with the
         amplitude pinned (:func:`mmshbm.core.pinned.solve_at_amplitude`), started between
@@ -388,15 +389,36 @@ class Branch:
         Parameters
         ----------
         amplitude : float
-            m.
+            In m (``unit="m"``) or in multiples of the model's gap (``unit="gap"``).
+        unit : {"m", "gap"}
+            Unit of ``amplitude``.
         interpolate : bool
             Linear interpolation between the neighbouring front points instead (no solve;
             the 0.1 behaviour, with an error of the order of the curvature times the
             step).
         tol : float
             Newton tolerance of the solve.
+
+        Warns
+        -----
+        BranchWarning
+            When ``amplitude`` lies outside the amplitude range of the family front (the
+            answer is then NaN): the message gives that range in m and in gaps.
         """
-        return frequency_at(self, amplitude, interpolate=interpolate, tol=tol)
+        a = amplitude_in_m(self, amplitude, unit)
+        warn_outside_front(self, a)
+        return frequency_at(self, a, interpolate=interpolate, tol=tol)
+
+    def solve_at(self, amplitudes, *, unit: str = "m", tol: float = 1e-10) -> Branch:
+        """The backbone's points at ``amplitudes`` (m, or gaps with ``unit="gap"``), solved
+        on the family front (as :meth:`frequency_at`): a Branch with one point per
+        amplitude and this branch's solver, so that ``time_signals``, ``contact_force`` and
+        ``harmonic_content`` give the on-family orbits (the marked points of the plots).
+        Where the front has no point at an amplitude, its stored point nearest in amplitude
+        stands in (``records["solved"]`` is 0 there, 1 for solved points).
+        """
+        amps = [amplitude_in_m(self, a, unit) for a in np.atleast_1d(amplitudes)]
+        return solve_at(self, amps, tol=tol)
 
     def _index(self, point: int) -> int:
         n = len(self)

@@ -17,8 +17,8 @@ study summaries):
     Fourier series), passes its stop by more than :attr:`CheckThresholds.penetration`
     gaps (default 0.05).
 ``"negative_force"``
-    The contact force, as the method represents it, falls below
-    −:attr:`CheckThresholds.negative_force` (default 0.05) times the point's peak force:
+    The contact force, as the method represents it, is negative by more than
+    :attr:`CheckThresholds.negative_force` (default 0.05) times the point's peak force:
     a tensile contact force is not Signorini's (checked where the contact DOF comes
     within the penetration tolerance of its stop). Forces below
     :attr:`CheckThresholds.force_floor` (default 1e-9) times the larger of the branch's

@@ -11,10 +11,15 @@ or was not sampled (a jump), never a guess across a tongue.
 from __future__ import annotations
 
 import logging
+import math
+import warnings
 
 import numpy as np
 
-__all__ = ["family_front", "frequency_at"]
+from .._warnings import BranchWarning
+
+__all__ = ["family_front", "frequency_at", "family_point", "amplitude_in_m", "warn_outside_front",
+           "solve_at"]
 
 log = logging.getLogger(__name__)
 
@@ -50,12 +55,22 @@ def frequency_at(branch, amplitude: float, *, interpolate: bool = False, tol: fl
     of the path that leave the last front point and that arrive at the next one are tried:
     a point there counts when the starting mode still holds ``family_share`` of the
     kinetic energy (the family ends inside the segment, not at its sampled end)."""
+    return family_point(branch, amplitude, interpolate=interpolate, tol=tol)[0]
+
+
+def family_point(branch, amplitude: float, *, interpolate: bool = False,
+                 tol: float = 1e-10) -> tuple[float, np.ndarray | None]:
+    """(frequency (Hz), state) of the backbone at ``amplitude`` (m), found as
+    :func:`frequency_at` finds it; the state is the solved point's unknowns (the branch's
+    ``states`` layout, for ``branch.solver``'s signals), a stored point's when the
+    amplitude is one, None with ``interpolate`` or where the frequency is NaN or was
+    interpolated after a failed solve."""
     a = float(amplitude)
     front = family_front(branch)
-    A, f = branch.amplitude, branch.frequency
+    A = branch.amplitude
     for i in front:
         if np.isclose(A[i], a, rtol=1e-9, atol=0):
-            return float(f[i])
+            return float(branch.frequency[i]), np.asarray(branch.states[i])
     jumps = {int(s[1]) for s in branch.special_points if s[0] == "jump"}
     for i, j in zip(front[:-1], front[1:], strict=False):
         if not (min(A[i], A[j]) <= a <= max(A[i], A[j])) or A[i] == A[j]:
@@ -70,10 +85,54 @@ def frequency_at(branch, amplitude: float, *, interpolate: bool = False, tol: fl
             edges.append((j - 1, j))
         for p, q in edges:
             value = _on_segment(branch, p, q, a, interpolate, tol, require_share=True)
-            if np.isfinite(value):
+            if np.isfinite(value[0]):
                 return value
-        return float("nan")
-    return float("nan")
+        return float("nan"), None
+    return float("nan"), None
+
+
+def amplitude_in_m(branch, amplitude, unit: str) -> float:
+    """``amplitude`` in m: as it is for ``unit="m"``, times the branch's gap for
+    ``unit="gap"``."""
+    if unit not in ("m", "gap"):
+        raise ValueError(f"unit must be 'm' or 'gap', got {unit!r}")
+    try:
+        a = float(amplitude)
+    except (TypeError, ValueError):
+        raise TypeError(f"amplitude must be a number, got {amplitude!r}") from None
+    if unit == "m":
+        return a
+    gap = branch.gap
+    if not gap or gap <= 0:
+        raise ValueError("unit='gap' needs a branch whose model has a positive gap; give the amplitude in m")
+    return a * gap
+
+
+def warn_outside_front(branch, amplitude: float, stacklevel: int = 3) -> bool:
+    """Warn (:class:`~mmshbm.BranchWarning`) when ``amplitude`` (m) is outside the
+    amplitude range of the branch's family front, naming that range in m and in gaps;
+    returns whether it warned."""
+    front = family_front(branch)
+    a = float(amplitude)
+    if len(front):
+        lo, hi = float(np.min(branch.amplitude[front])), float(np.max(branch.amplitude[front]))
+    else:
+        lo = hi = math.nan
+    if len(front) and math.isfinite(a) and lo * (1 - 1e-9) <= a <= hi * (1 + 1e-9):
+        return False
+    gap = branch.gap
+    if not len(front):
+        where = "the branch has no point on its family"
+    else:
+        where = f"the branch's family spans {lo:.4g}..{hi:.4g} m"
+        if gap and gap > 0:
+            where += f" ({lo / gap:.4g}..{hi / gap:.4g} gaps)"
+    hint = ""
+    if gap and gap > 0 and len(front) and math.isfinite(a) and lo <= a * gap <= hi:
+        hint = f"; if you meant {a:g} gaps, pass unit='gap' (or {a * gap:.4g} m)"
+    warnings.warn(f"frequency_at({a:.4g} m): outside the amplitude range of the backbone, the answer is NaN: "
+                  f"{where}{hint}", BranchWarning, stacklevel=stacklevel)
+    return True
 
 
 def _family_share(branch) -> float:
@@ -81,20 +140,22 @@ def _family_share(branch) -> float:
 
 
 def _on_segment(branch, i: int, j: int, a: float, interpolate: bool, tol: float, *,
-                require_share: bool) -> float:
-    """The point at amplitude ``a`` between the branch points i and j (A[i] != A[j]); with
-    ``require_share``, NaN unless the starting mode holds the family's share there."""
+                require_share: bool) -> tuple[float, np.ndarray | None]:
+    """(frequency, state) of the point at amplitude ``a`` between the branch points i and j
+    (A[i] != A[j]); with ``require_share``, NaN unless the starting mode holds the family's
+    share there."""
     from ..core.pinned import PinnedFailure, solve_at_amplitude
 
+    nan = (float("nan"), None)
     A, f = branch.amplitude, branch.frequency
     s = (a - A[i]) / (A[j] - A[i])
     share = branch.records.get("mode_share")
     if require_share and share is None:
-        return float("nan")
+        return nan
     if interpolate:
         if require_share and share[i] + s * (share[j] - share[i]) < _family_share(branch):
-            return float("nan")
-        return float(f[i] + s * (f[j] - f[i]))
+            return nan
+        return float(f[i] + s * (f[j] - f[i])), None
     solver = branch._require_solver()
     u0 = branch.states[i] + s * (branch.states[j] - branch.states[i])
     try:
@@ -102,9 +163,72 @@ def _on_segment(branch, i: int, j: int, a: float, interpolate: bool, tol: float,
         record = solver.monitor(u)
     except (PinnedFailure, ArithmeticError, ValueError) as err:
         if require_share:
-            return float("nan")
+            return nan
         log.warning("frequency_at(%g): the pinned solve failed (%s); interpolating", a, err)
-        return float(f[i] + s * (f[j] - f[i]))
+        return float(f[i] + s * (f[j] - f[i])), None
     if require_share and float(record.get("mode_share", 0.0)) < _family_share(branch):
-        return float("nan")
-    return float(record["frequency"])
+        return nan
+    return float(record["frequency"]), np.asarray(u)
+
+
+def solve_at(branch, amplitudes, *, tol: float = 1e-10):
+    """The backbone's points at ``amplitudes`` (m), solved on the family front as
+    :func:`frequency_at` solves them: a branch of the same type, one point per amplitude,
+    sharing ``branch``'s solver and model (so its signals, contact force and harmonic
+    content are those of the on-family orbits). Where the front has no point at an
+    amplitude (beyond its ends, inside a skipped interval, or a failed solve) the front's
+    stored point nearest in amplitude stands in. ``records["requested_amplitude"]`` holds
+    the amplitudes asked for, ``records["solved"]`` 1 for a solved point and 0 for a
+    stand-in. A branch whose solver cannot be rebuilt (a file of a model that is not
+    described) gets its stored front points, without a solver."""
+    from dataclasses import replace
+
+    amps = np.atleast_1d(np.asarray(amplitudes, dtype=float))
+    front = family_front(branch)
+    if not len(front):
+        raise ValueError("the branch has no point on its family to mark")
+    try:
+        solver = branch._require_solver() if len(amps) else None
+    except RuntimeError:
+        return _stored_points(branch, front, amps)
+    rows, states, solved = [], [], []
+    for a in amps:
+        f, u = family_point(branch, a, tol=tol) if math.isfinite(a) else (math.nan, None)
+        if u is None or not math.isfinite(f):
+            i = int(front[np.argmin(np.abs(branch.amplitude[front] - a))])
+            u = np.asarray(branch.states[i])
+            solved.append(0)
+        else:
+            solved.append(1)
+        states.append(u)
+        rows.append(solver.monitor(u))
+    n = len(amps)
+
+    def column(name):
+        return np.array([r[name] for r in rows], dtype=float)
+
+    records = {"requested_amplitude": amps, "solved": np.array(solved, dtype=int)}
+    if rows and "mode_share" in rows[0]:
+        records["mode_share"] = column("mode_share")
+        records["on_family"] = np.ones(n)
+    return replace(branch, frequency=column("frequency"), amplitude=column("amplitude"),
+                   energy=column("energy"),
+                   contact_force_max=column("contact_force_max"), newton_iterations=np.zeros(n, dtype=int),
+                   step_size=np.zeros(n), states=np.array(states).reshape(n, -1), special_points=[],
+                   metadata=dict(branch.metadata), solver=solver, residual_histories=[], model=branch.model,
+                   records=records)
+
+
+def _stored_points(branch, front, amps):
+    """solve_at without a solver: the front's stored points nearest to ``amps``."""
+    from dataclasses import replace
+
+    idx = np.array([int(front[np.argmin(np.abs(branch.amplitude[front] - a))]) for a in amps], dtype=int)
+    n = len(idx)
+    records = {"requested_amplitude": amps, "solved": np.zeros(n, dtype=int)}
+    return replace(branch, frequency=branch.frequency[idx], amplitude=branch.amplitude[idx],
+                   energy=branch.energy[idx], contact_force_max=branch.contact_force_max[idx],
+                   newton_iterations=np.zeros(n, dtype=int), step_size=np.zeros(n),
+                   states=np.asarray(branch.states)[idx].reshape(n, -1), special_points=[],
+                   metadata=dict(branch.metadata), solver=None, residual_histories=[], model=branch.model,
+                   records=records)

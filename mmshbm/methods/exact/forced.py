@@ -290,18 +290,26 @@ class ForcedOrbit:
 
     def amplitude(self, dof: int | None = None, n: int = 4096) -> float:
         """Largest |q[dof]| over the period (m), refined around the sampled peak."""
-        dof = self.system.model.amplitude_dof if dof is None else dof
-        T = self.system.period
-        t = T * np.arange(n) / n
-        q = self.evaluate(t)[0][dof]
-        j = int(np.argmax(np.abs(q)))
-        sign = np.sign(q[j])
-        from scipy.optimize import minimize_scalar
+        return orbit_amplitude(self, dof, n)
 
-        res = minimize_scalar(lambda s: -sign * self.evaluate([s % T])[0][dof, 0],
-                              bounds=(t[j] - T / n, t[j] + T / n), method="bounded",
-                              options={"xatol": 1e-14 * T})
-        return float(max(abs(q[j]), -res.fun))
+
+def orbit_amplitude(orbit, dof: int | None = None, n: int = 4096) -> float:
+    """Largest |q[dof]| (m) of a periodic orbit over its period: the largest of n samples,
+    refined by a bounded scalar search within a sample spacing around it. ``orbit`` has
+    ``evaluate(t)`` (its first output q, (n_dof, len(t))) and ``system`` with ``model``
+    and ``period`` (s); ``dof`` defaults to the model's amplitude DOF."""
+    from scipy.optimize import minimize_scalar
+
+    dof = orbit.system.model.amplitude_dof if dof is None else dof
+    T = orbit.system.period
+    t = T * np.arange(n) / n
+    q = orbit.evaluate(t)[0][dof]
+    j = int(np.argmax(np.abs(q)))
+    sign = np.sign(q[j])
+    res = minimize_scalar(lambda s: -sign * orbit.evaluate([s % T])[0][dof, 0],
+                          bounds=(t[j] - T / n, t[j] + T / n), method="bounded",
+                          options={"xatol": 1e-14 * T})
+    return float(max(abs(q[j]), -res.fun))
 
 
 def forced_orbit(model, force, frequency: float, guess=None, *, tol: float = 1e-12, max_iter: int = 40,

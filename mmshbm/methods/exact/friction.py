@@ -46,7 +46,7 @@ import scipy.linalg as la
 from scipy.optimize import brentq
 
 from ... import _validate as check
-from .forced import _Phase
+from .forced import _Phase, orbit_amplitude
 
 __all__ = ["FrictionSystem", "FrictionOrbit", "friction_orbit"]
 
@@ -349,18 +349,7 @@ class FrictionOrbit:
 
     def amplitude(self, dof: int | None = None, n: int = 4096) -> float:
         """Largest |q[dof]| over the period (m), refined around the sampled peak."""
-        from scipy.optimize import minimize_scalar
-
-        dof = self.system.model.amplitude_dof if dof is None else dof
-        T = self.system.period
-        t = T * np.arange(n) / n
-        q = self.evaluate(t)[0][dof]
-        j = int(np.argmax(np.abs(q)))
-        sign = np.sign(q[j])
-        res = minimize_scalar(lambda s: -sign * self.evaluate([s % T])[0][dof, 0],
-                              bounds=(t[j] - T / n, t[j] + T / n), method="bounded",
-                              options={"xatol": 1e-14 * T})
-        return float(max(abs(q[j]), -res.fun))
+        return orbit_amplitude(self, dof, n)
 
 
 def friction_orbit(model, force, frequency: float, guess=None, *, tol: float = 1e-12, max_iter: int = 40,
