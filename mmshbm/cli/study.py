@@ -57,6 +57,11 @@ def register(sub) -> None:
 def run(args) -> int:
     if args.throughput is not None:
         return _throughput(args)
+    params = common.params(args.param)
+    if "normal_load" in params:
+        from .friction_study import run_normal_load
+
+        return run_normal_load(args, params)
     with warnings.catch_warnings(record=True) as caught:
         # the package's warnings (the runs' checks, a model's truncation, ...) go to the
         # report file, one count on the terminal, every line with -v
@@ -101,10 +106,6 @@ def _run_study(args):
     from ..analysis import studies
 
     params = common.params(args.param)
-    if "normal_load" in params:
-        from .friction_study import run_normal_load
-
-        return run_normal_load(args, params)
     if args.elements:
         from ..methods.limits import check_beam_elements
 
