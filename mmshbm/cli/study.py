@@ -30,7 +30,9 @@ def register(sub) -> None:
     p.add_argument("--methods", nargs="+", default=None, choices=["mmshbm", "penalty", "shooting"],
                    help="methods (default mmshbm)")
     p.add_argument("--param", action="append", default=None, metavar="NAME=V1,V2",
-                   help="a further grid axis: a beam field (gap, E, rho, ...), grading or a backbone option")
+                   help="a further grid axis: a beam field (gap, E, rho, ...), grading or a backbone option; "
+                        "normal_load=N1,N2,... runs the optimal-normal-load study of the beam with a "
+                        "friction damper on its tip instead (with mu=, at=, band=LO,HI, force=)")
     p.add_argument("--amplitudes", type=common.positive_float, nargs="+", default=None,
                    help="amplitudes (gaps) of the table (default 2 5 10; 1.5 3 6 with --figure2)")
     p.add_argument("--max-amplitude", type=common.positive_float, default=None,
@@ -55,6 +57,11 @@ def register(sub) -> None:
 def run(args) -> int:
     if args.throughput is not None:
         return _throughput(args)
+    params = common.params(args.param)
+    if "normal_load" in params:
+        from .friction_study import run_normal_load
+
+        return run_normal_load(args, params)
     with warnings.catch_warnings(record=True) as caught:
         # the package's warnings (the runs' checks, a model's truncation, ...) go to the
         # report file, one count on the terminal, every line with -v

@@ -27,20 +27,29 @@ the pieces are integrated in closed form, and its Jacobian G (the projection of 
 indicator of |p| > s) gives ∂proj[clip]/∂p = I − G exactly. This module calls that
 projection and does not copy it; the pointwise kernels below are self-contained (Numba
 caches a kernel per file). The displacement-level projection (:func:`project_coulomb_play`)
-calls the root-finding kernels of :mod:`mmshbm.core.contact_kernels` (``_zeros``,
-``_refine``) from Python: no compiled kernel here calls one in another file, so Numba's
-per-file cache cannot go stale across files.
+uses the root-finding kernels of :mod:`mmshbm.core.contact_kernels` (``_zeros`` from
+Python, ``_refine`` from the compiled walk over the extrema, ``_play_walk``: the package's
+cache policy, :mod:`mmshbm._kernel_cache`, recompiles a caller when a callee's file
+changes).
+
+The Jenkins element of penalty harmonic balance (a spring in series with the slider:
+Coulomb's law at a massless node behind a spring) is evaluated by AFT with the return map
+f_j = clip(f_{j−1} + k Δu_j, −s, s) over two passes (:func:`jenkins_hysteresis`), the same
+clip as the proximal equation above, applied to displacement increments.
 """
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from numba import njit
 
+from ..core.contact_kernels import _TWO_PI, _refine, _zeros
 from ..core.kernels import JIT_OPTIONS
 
 __all__ = ["coulomb_residual", "coulomb_derivative", "project_coulomb", "project_coulomb_play", "play_pieces",
-           "derivative_matrix"]
+           "derivative_matrix", "jenkins_hysteresis"]
 
 
 @njit(**JIT_OPTIONS)
@@ -185,25 +194,89 @@ def _phi(H: int, tau: float) -> np.ndarray:
     return out
 
 
-def _arc(H: int, a: float, b: float) -> tuple[np.ndarray, np.ndarray]:
-    """Spectrum (C, S), n = 0..2H, of the indicator of the arc [a, b]:
-    C_n = (1/2π)∫_a^b cos nτ dτ, S_n = (1/2π)∫_a^b sin nτ dτ (closed form)."""
-    n = np.arange(1, 2 * H + 1)
-    C = np.empty(2 * H + 1)
-    S = np.empty(2 * H + 1)
-    C[0], S[0] = b - a, 0.0
-    C[1:] = (np.sin(n * b) - np.sin(n * a)) / n
-    S[1:] = (np.cos(n * a) - np.cos(n * b)) / n
-    return C / (2 * np.pi), S / (2 * np.pi)
-
-
-def _indicator(C: np.ndarray, S: np.ndarray, H: int) -> np.ndarray:
-    """NLvib-ordered projection of an indicator with spectrum (C, S)."""
-    out = np.empty(2 * H + 1)
-    out[0] = C[0]
-    out[1::2] = 2 * C[1:H + 1]
-    out[2::2] = 2 * S[1:H + 1]
+@functools.lru_cache(maxsize=32)
+def _sample_basis(H: int, N: int):
+    """τ_j = 2πj/N and cos/sin(k τ_j), k = 0..H ((H+1, N) each), read-only."""
+    tau = 2 * np.pi * np.arange(N) / N
+    k = np.arange(H + 1)
+    out = (tau, np.cos(np.outer(k, tau)), np.sin(np.outer(k, tau)))
+    for arr in out:
+        arr.flags.writeable = False
     return out
+
+
+@njit(**JIT_OPTIONS)
+def _play_walk(pts, pv, c, sn, width, A, B, SG, U, TE):
+    """The pieces of the play operator between consecutive extrema ``pts`` (values ``pv``)
+    of y = c_0 + Σ c_k cos kτ + sn_k sin kτ, starting dragged up at pts[0]; written to
+    A, B (arc), SG (σ), U (stick position), TE (extremum that set it). Returns the count."""
+    m = 0
+    u = pv[0] - width
+    t_e = pts[0]
+    gc = c.copy()
+    zero = np.int64(0)
+    for i in range(pts.shape[0] - 1):
+        a, b, ya, yb = pts[i], pts[i + 1], pv[i], pv[i + 1]
+        if b <= a:
+            continue
+        sigma = 1 if yb > ya else -1
+        level = u + sigma * width
+        if sigma * (yb - level) <= 0:  # does not reach the slip threshold: sticks throughout
+            A[m], B[m], SG[m], U[m], TE[m] = a, b, 0, u, t_e
+            m += 1
+            continue
+        if sigma * (ya - level) >= 0:
+            t_sw = a
+        else:
+            gc[0] = c[0] - level
+            t_sw = _refine(gc, sn, a, b, ya - level, zero)
+        if t_sw > a:
+            A[m], B[m], SG[m], U[m], TE[m] = a, t_sw, 0, u, t_e
+            m += 1
+        A[m], B[m], SG[m], U[m], TE[m] = t_sw, b, sigma, np.nan, np.nan
+        m += 1
+        u, t_e = yb - sigma * width, b
+    return m
+
+
+def _play_arrays(y: np.ndarray, s: float, r: float, n_samples: int | None = None):
+    """The pieces of :func:`play_pieces` as arrays (a, b, σ, u, τ_e)."""
+    y = np.asarray(y, dtype=float)
+    H = (y.shape[0] - 1) // 2
+    N = 16 * (2 * H + 1) if n_samples is None else int(n_samples)
+    k = np.arange(1, H + 1)
+    c, sn = np.concatenate([[y[0]], y[1::2]]), np.concatenate([[0.0], y[2::2]])
+    dc, ds = np.concatenate([[0.0], k * sn[1:]]), np.concatenate([[0.0], -k * c[1:]])  # y′
+    tau, cos_t, sin_t = _sample_basis(H, N)
+    d1 = dc @ cos_t + ds @ sin_t
+    d2 = (k * ds[1:]) @ cos_t[1:] - (k * dc[1:]) @ sin_t[1:]
+    roots = np.empty(2 * N + 2)
+    n_ext = _zeros(dc, ds, d1, d2, tau, roots)
+    ext = roots[:n_ext]
+    width = s / r
+
+    def one(a, b, sg, u, te):
+        return tuple(np.array([v], dtype=float) for v in (a, b, sg, u, te))
+
+    if n_ext == 0:
+        return one(0.0, _TWO_PI, 0, float(y[0]), np.nan)
+    vals = c[0] + np.cos(np.outer(ext, k)) @ c[1:] + np.sin(np.outer(ext, k)) @ sn[1:]
+    i_max, i_min = int(np.argmax(vals)), int(np.argmin(vals))
+    y_max, y_min = vals[i_max], vals[i_min]
+    if y_max - y_min <= 2 * width:
+        if y[0] < y_max - width:
+            return one(0.0, _TWO_PI, 0, y_max - width, float(ext[i_max]))
+        if y[0] > y_min + width:
+            return one(0.0, _TWO_PI, 0, y_min + width, float(ext[i_min]))
+        return one(0.0, _TWO_PI, 0, float(y[0]), np.nan)
+    order = np.roll(np.arange(n_ext), -i_max)
+    pts = np.concatenate([ext[order], [ext[i_max] + _TWO_PI]])
+    pv = np.concatenate([vals[order], [y_max]])
+    pts[1:-1] = np.where(pts[1:-1] < pts[0], pts[1:-1] + _TWO_PI, pts[1:-1])
+    cap = 2 * len(pts)
+    out = [np.empty(cap) for _ in range(5)]
+    m = _play_walk(pts, pv, c, sn, width, *out)
+    return tuple(arr[:m] for arr in out)
 
 
 def play_pieces(y: np.ndarray, s: float, r: float, n_samples: int | None = None) -> list:
@@ -216,63 +289,12 @@ def play_pieces(y: np.ndarray, s: float, r: float, n_samples: int | None = None)
     [0, 2π] at the symmetric position u = mean(y) (mean force zero, τ_e = NaN: ∂u/∂y = e_0),
     or clamped into the band where |r (u − y)| <= s (at y's maximum or minimum, τ_e there).
     """
-    from ..core.contact_kernels import _TWO_PI, _refine, _zeros
-
-    y = np.asarray(y, dtype=float)
-    H = (y.shape[0] - 1) // 2
-    N = 16 * (2 * H + 1) if n_samples is None else int(n_samples)
-    k = np.arange(1, H + 1)
-    c, sn = np.concatenate([[y[0]], y[1::2]]), np.concatenate([[0.0], y[2::2]])
-    dc, ds = np.concatenate([[0.0], k * sn[1:]]), np.concatenate([[0.0], -k * c[1:]])  # y′
-    tau = _TWO_PI * np.arange(N) / N
-    cos_t, sin_t = np.cos(np.outer(np.arange(H + 1), tau)), np.sin(np.outer(np.arange(H + 1), tau))
-    d1 = dc @ cos_t + ds @ sin_t
-    d2 = (k * ds[1:]) @ cos_t[1:] - (k * dc[1:]) @ sin_t[1:]
-    roots = np.empty(2 * N + 2)
-    n_ext = _zeros(dc, ds, d1, d2, tau, roots)
-    ext = roots[:n_ext]
-    width = s / r
-    if n_ext == 0:
-        return [(0.0, _TWO_PI, 0, float(y[0]), np.nan)]
-    vals = np.array([c[0] + c[1:] @ np.cos(k * t) + sn[1:] @ np.sin(k * t) for t in ext])
-    i_max, i_min = int(np.argmax(vals)), int(np.argmin(vals))
-    y_max, y_min = vals[i_max], vals[i_min]
-    if y_max - y_min <= 2 * width:
-        if y[0] < y_max - width:
-            return [(0.0, _TWO_PI, 0, y_max - width, float(ext[i_max]))]
-        if y[0] > y_min + width:
-            return [(0.0, _TWO_PI, 0, y_min + width, float(ext[i_min]))]
-        return [(0.0, _TWO_PI, 0, float(y[0]), np.nan)]
-    order = np.roll(np.arange(n_ext), -i_max)
-    pts = np.concatenate([ext[order], [ext[i_max] + _TWO_PI]])
-    pv = np.concatenate([vals[order], [y_max]])
-    pts[1:-1] = np.where(pts[1:-1] < pts[0], pts[1:-1] + _TWO_PI, pts[1:-1])
-    u, t_e = y_max - width, float(pts[0])
-    pieces = []
-    zero = np.int64(0)
-    for a, b, ya, yb in zip(pts[:-1], pts[1:], pv[:-1], pv[1:], strict=True):
-        if b <= a:
-            continue
-        sigma = 1 if yb > ya else -1
-        level = u + sigma * width
-        if sigma * (yb - level) <= 0:  # does not reach the slip threshold: sticks throughout
-            pieces.append((a, b, 0, u, t_e))
-            continue
-        if sigma * (ya - level) >= 0:
-            t_sw = a
-        else:
-            gc = c.copy()
-            gc[0] -= level
-            t_sw = _refine(gc, sn, a, b, ya - level, zero)
-        if t_sw > a:
-            pieces.append((a, t_sw, 0, u, t_e))
-        pieces.append((t_sw, b, sigma, np.nan, np.nan))
-        u, t_e = yb - sigma * width, float(b)
-    return pieces
+    a, b, sg, u, te = _play_arrays(y, s, r, n_samples)
+    return [(float(a[i]), float(b[i]), int(sg[i]), float(u[i]), float(te[i])) for i in range(len(a))]
 
 
-def project_coulomb_play(y: np.ndarray, s: float, r: float,
-                         n_samples: int | None = None) -> tuple[np.ndarray, np.ndarray, float]:
+def project_coulomb_play(y: np.ndarray, s: float, r: float, n_samples: int | None = None,
+                         jacobian: bool = True) -> tuple[np.ndarray, np.ndarray | None, float]:
     """Exact harmonic projection of the support's force g = r (u − y) of a massless Coulomb
     node whose position u is driven by the periodic signal y, and its exact Jacobian.
 
@@ -302,12 +324,14 @@ def project_coulomb_play(y: np.ndarray, s: float, r: float,
         Stiffness parameter > 0 (N/m).
     n_samples : int, optional
         Bracketing grid of the root finder; default 16·(2H+1).
+    jacobian : bool
+        If False skip the Jacobian (returned as None): a residual-only evaluation.
 
     Returns
     -------
     g : ndarray (2H+1,)
         NLvib-ordered projection of the support's force (N).
-    dg_dy : ndarray (2H+1, 2H+1)
+    dg_dy : ndarray (2H+1, 2H+1) or None
     slip : float
         Fraction of the period in slip.
     """
@@ -322,26 +346,147 @@ def project_coulomb_play(y: np.ndarray, s: float, r: float,
     if not r > 0:
         raise ValueError(f"r must be > 0, got {r!r}")
     H = (y.shape[0] - 1) // 2
-    g = np.zeros(2 * H + 1)
+    a, b, sigma, u, t_e = _play_arrays(y, s, r, n_samples)
+    # spectra C_n = (1/2π)∫_a^b cos nτ, S_n = (1/2π)∫_a^b sin nτ (n = 0..2H) of every
+    # piece's indicator, in closed form
+    n = np.arange(1, 2 * H + 1)
+    C = np.empty((len(a), 2 * H + 1))
+    S = np.empty((len(a), 2 * H + 1))
+    C[:, 0], S[:, 0] = b - a, 0.0
+    C[:, 1:] = (np.sin(np.outer(b, n)) - np.sin(np.outer(a, n))) / n
+    S[:, 1:] = (np.cos(np.outer(a, n)) - np.cos(np.outer(b, n))) / n
+    C /= 2 * np.pi
+    S /= 2 * np.pi
+    ind = np.empty((len(a), 2 * H + 1))  # NLvib-ordered projection of each indicator
+    ind[:, 0] = C[:, 0]
+    ind[:, 1::2] = 2 * C[:, 1:H + 1]
+    ind[:, 2::2] = 2 * S[:, 1:H + 1]
+    slipping = sigma != 0
+    stick = ~slipping
+    slip = float(np.sum(b[slipping] - a[slipping]) / (2 * np.pi))
+    g = -s * (sigma[slipping] @ ind[slipping]) + r * (u[stick] @ ind[stick])
+    C_stick, S_stick = C[stick].sum(axis=0), S[stick].sum(axis=0)
+    if not jacobian:
+        return g - r * _product_vector(C_stick, S_stick, y, H), None, slip
     J = np.zeros((2 * H + 1, 2 * H + 1))
-    C_stick = np.zeros(2 * H + 1)
-    S_stick = np.zeros(2 * H + 1)
-    slip = 0.0
-    for a, b, sigma, u, t_e in play_pieces(y, s, r, n_samples):
-        C, S = _arc(H, a, b)
-        ind = _indicator(C, S, H)
-        if sigma != 0:
-            g -= sigma * s * ind
-            slip += (b - a) / (2 * np.pi)
-            continue
-        C_stick += C
-        S_stick += S
-        g += r * u * ind
-        if np.isnan(t_e):  # full stick at the symmetric position u = mean(y)
-            J[:, 0] += r * ind
+    for i in np.flatnonzero(stick):
+        if np.isnan(t_e[i]):  # full stick at the symmetric position u = mean(y)
+            J[:, 0] += r * ind[i]
         else:
-            J += r * np.outer(ind, _phi(H, t_e))
+            J += r * np.outer(ind[i], _phi(H, t_e[i]))
     G = _product_matrix(C_stick, S_stick, H)
     g -= r * (G @ y)
     J -= r * G
     return g, J, slip
+
+
+def _product_vector(C: np.ndarray, S: np.ndarray, y: np.ndarray, H: int) -> np.ndarray:
+    """proj[χ y] for the indicator χ of spectrum (C, S) (n = 0..2H) and the NLvib-ordered
+    y (2H+1,): the product of the two series truncated to harmonics 0..H, without forming
+    the product matrix."""
+    a = np.concatenate([[y[0]], 0.5 * y[1::2]])   # y = Σ_k a_k e^{ikτ} + c.c. (a_0 real)
+    b = np.concatenate([[0.0], -0.5 * y[2::2]])
+    yc = a + 1j * b                                 # complex coefficient of e^{ikτ}, k >= 0
+    chi = C - 1j * S                                # χ = Σ_n χ_n e^{inτ}, χ_{-n} = conj(χ_n)
+    full_y = np.concatenate([np.conj(yc[:0:-1]), yc])         # k = −H..H
+    full_c = np.concatenate([np.conj(chi[:0:-1]), chi])       # n = −2H..2H
+    prod = np.convolve(full_c, full_y)                        # index of m: m + 3H
+    p = prod[3 * H:4 * H + 1]                                 # m = 0..H
+    out = np.empty(2 * H + 1)
+    out[0] = p[0].real
+    out[1::2] = 2 * p[1:].real
+    out[2::2] = -2 * p[1:].imag
+    return out
+
+
+@njit(**JIT_OPTIONS)
+def _jenkins_passes(u, B, s, k, f, df):
+    """In place: the periodic force f (N,) of a Jenkins element (spring k, slider of slip
+    force s) driven by the samples u (N,) and df[j] = ∂f_j/∂c (N, m) for u = B c (B the
+    (N, m) derivative of the samples with respect to m parameters), by two passes of the
+    return map f_j = clip(f_{j−1} + k (u_j − u_{j−1}), −s, s). The first pass starts
+    with the slider at mean(u) (f = k (u_0 − mean u), clipped); the second starts from the
+    end of the first, so the hysteresis is periodic whenever the slider slipped in the
+    first pass (and the symmetric stuck position, mean force zero, where it never slips)."""
+    n, m = B.shape
+    mean = 0.0
+    for i in range(n):
+        mean += u[i]
+    mean /= n
+    d = np.zeros(m)  # ∂f_prev/∂c
+    for i in range(n):
+        for c in range(m):
+            d[c] -= k * B[i, c] / n
+    for c in range(m):
+        d[c] += k * B[0, c]
+    fp = k * (u[0] - mean)
+    if fp > s or fp < -s:
+        fp = s if fp > s else -s
+        d[:] = 0.0
+    for sweep in range(2):
+        for j in range(n):
+            jm = j - 1 if j > 0 else n - 1
+            if sweep == 0 and j == 0:
+                trial = fp  # the start itself
+            else:
+                trial = fp + k * (u[j] - u[jm])
+                for c in range(m):
+                    d[c] += k * (B[j, c] - B[jm, c])
+            if trial > s or trial < -s:
+                fp = s if trial > s else -s
+                d[:] = 0.0
+            else:
+                fp = trial
+            if sweep == 1:
+                f[j] = fp
+                for c in range(m):
+                    df[j, c] = d[c]
+
+
+def jenkins_hysteresis(u: np.ndarray, s: float, k: float,
+                       basis: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Periodic force of a Jenkins element (a spring k in series with a Coulomb slider of
+    slip force s) driven by the samples u of one period, and its exact derivative.
+
+    The slider is Coulomb's law at a massless node joined to the driven point by the
+    spring: the node sticks while |k (u − w)| < s and slides with |f| = s, the discrete
+    return map f_j = clip(f_{j−1} + k Δu_j, −s, s) being its exact solution for u
+    piecewise linear between samples. Two passes over the period make the hysteresis
+    periodic (the slip erases the start); this is the alternating frequency-time (AFT)
+    evaluation of the Jenkins element of penalty harmonic balance (NLvib's
+    ``elasticDryFriction``, pyHarm's Jenkins element).
+
+    Parameters
+    ----------
+    u : ndarray (N,)
+        Displacement of the driven point at τ_j = 2πj/N (m).
+    s : float
+        Slip force >= 0 (N).
+    k : float
+        Spring stiffness > 0 (N/m).
+    basis : ndarray (N, m), optional
+        ∂u/∂c for m parameters c (e.g. the harmonic coefficients: the synthesis matrix);
+        default the identity (derivatives with respect to the samples).
+
+    Returns
+    -------
+    f : ndarray (N,)
+        The force the element exerts on its support (N), the spring's tension k (u − w).
+    df : ndarray (N, m)
+        ∂f_j/∂c (∂f_j/∂u_i without ``basis``), propagated along the passes (O(N m)).
+    """
+    u = np.ascontiguousarray(u, dtype=float)
+    if u.ndim != 1 or u.shape[0] < 2:
+        raise ValueError(f"u must be 1-D with at least 2 samples, got shape {u.shape}")
+    s, k = float(s), float(k)
+    if not (s >= 0 and np.isfinite(s)):
+        raise ValueError(f"slip force s must be finite and >= 0, got {s!r}")
+    if not (k > 0 and np.isfinite(k)):
+        raise ValueError(f"spring stiffness k must be finite and > 0, got {k!r}")
+    B = np.eye(u.shape[0]) if basis is None else np.ascontiguousarray(basis, dtype=float)
+    if B.ndim != 2 or B.shape[0] != u.shape[0]:
+        raise ValueError(f"basis must have shape ({u.shape[0]}, m), got {B.shape}")
+    f = np.empty(u.shape[0])
+    df = np.empty((u.shape[0], B.shape[1]))
+    _jenkins_passes(u, B, s, k, f, df)
+    return f, df

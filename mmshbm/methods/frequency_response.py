@@ -59,9 +59,9 @@ def make_forced_problem(model: Model, force, method: str = "mmshbm", harmonics: 
         force = Excitation.from_json(force)
     module, cls = FORCED_METHODS[method].split(":")
     if getattr(model, "friction", ()):
-        if method != "mmshbm":
-            raise NotImplementedError(f"method {method!r} does not yet take friction contacts: use 'mmshbm'")
-        module, cls = "mmshbm.methods.friction_forced", "FrictionForcedProblem"
+        module, cls = {"mmshbm": ("mmshbm.methods.friction_forced", "FrictionForcedProblem"),
+                       "penalty": ("mmshbm.methods.friction_penalty", "JenkinsForcedProblem"),
+                       "shooting": ("mmshbm.methods.friction_shooting", "FrictionShootingProblem")}[method]
     problem_class = getattr(importlib.import_module(module), cls)
     options = dict(options or {})
     params = list(inspect.signature(problem_class).parameters.values())[2:]
