@@ -40,6 +40,7 @@ import numpy as np
 from .. import _validate as check
 from ..core.damped_condense import CondensedHarmonics, DampedCondensation
 from ..core.harmonics import check_harmonics
+from ..core.projection import _contact_rows, sample_tables
 from ..model.contact import admissible_intervals
 from ..model.model import Model
 
@@ -57,6 +58,12 @@ def contact_projection(projection: str, H: int, N: int):
     if projection == "sampled":
         return functools.partial(project_contact, exact=False, n_samples=N)
     raise ValueError(f"projection must be 'exact' or 'sampled', got {projection!r}")
+
+
+def _projection_grid(projection: str, H: int, N: int) -> tuple[bool, int]:
+    """(exact, samples per period) of the contact projection: 16·(2H+1) for the exact one
+    (its bracketing grid, as :func:`~mmshbm.core.projection.project_contact`), N sampled."""
+    return projection == "exact", (16 * (2 * H + 1) if projection == "exact" else N)
 
 
 def synthesis_matrix(H: int, tau: np.ndarray) -> np.ndarray:
@@ -139,6 +146,9 @@ class DampedHBMBase:
         self.r = stiff.copy() if r is None else np.full(len(dofs), check.positive("r", r))
         self._project = contact_projection(projection, self.H, self.N)
         self.projection = projection
+        self._exact, n_grid = _projection_grid(projection, self.H, self.N)
+        self._tables = sample_tables(self.H, n_grid)
+        self._rows = np.ascontiguousarray(self.contact_rows, dtype=np.int64)
         self._coef_index = [np.arange(self.n_coef) * self.n_c + i for i in range(self.n_c)]
         # scales: the first open mode's shape on the massless DOFs, the gap as length
         freqs, modes = model.linear_modes(1)
@@ -191,14 +201,14 @@ class DampedHBMBase:
         """The real (n_x, n_x) matrix 𝔇 of the complex D_k (H+1, n_c, n_c)."""
         n_c, H = self.n_c, self.H
         A = np.zeros((self.n_x, self.n_x))
-        A[:n_c, :n_c] = D[0].real
-        for k in range(1, H + 1):
-            c, s = (2 * k - 1) * n_c, 2 * k * n_c
-            Dr, Di = D[k].real, D[k].imag
-            A[c:c + n_c, c:c + n_c] = Dr
-            A[c:c + n_c, s:s + n_c] = Di
-            A[s:s + n_c, c:c + n_c] = -Di
-            A[s:s + n_c, s:s + n_c] = Dr
+        A4 = A.reshape(self.n_coef, n_c, self.n_coef, n_c)  # A4[a, i, b, j] = A[a n_c + i, b n_c + j]
+        A4[0, :, 0, :] = D[0].real
+        cos, sin = np.arange(1, 2 * H + 1, 2), np.arange(2, 2 * H + 2, 2)
+        Dr, Di = D[1:].real, D[1:].imag
+        A4[cos, :, cos, :] = Dr
+        A4[cos, :, sin, :] = Di
+        A4[sin, :, cos, :] = -Di
+        A4[sin, :, sin, :] = Dr
         return A
 
     def first_harmonic_vector(self, v: np.ndarray) -> np.ndarray:
@@ -216,16 +226,18 @@ class DampedHBMBase:
         R = F.copy()
         Jx = None if dF is None else dF.copy()
         Jp = None if dFp is None else dFp.copy()
-        for j, i in enumerate(self.contact_rows):
-            idx = self._coef_index[i]
-            r = self.r[j]
-            p = x[idx] - F[idx] / r
-            phi, G = self._project(p, self.lo[j], self.hi[j])
-            R[idx] = F[idx] + r * phi
-            if Jx is not None:
-                A = np.eye(self.n_coef) - G
+        if len(self._rows) == 0:
+            return R, Jx, Jp
+        tau, cos_t, sin_t = self._tables
+        G = np.empty((len(self._rows), self.n_coef, self.n_coef))
+        _contact_rows(np.ascontiguousarray(x, dtype=float), np.ascontiguousarray(F, dtype=float), self._rows,
+                      self.n_c, self.lo, self.hi, self.r, self._exact, cos_t, sin_t, tau, R, G)
+        if Jx is not None:
+            for j, i in enumerate(self.contact_rows):
+                idx = self._coef_index[i]
+                A = np.eye(self.n_coef) - G[j]
                 Jx[idx] = A @ dF[idx]
-                Jx[np.ix_(idx, idx)] += r * G
+                Jx[np.ix_(idx, idx)] += self.r[j] * G[j]
                 if Jp is not None:
                     Jp[idx] = A @ dFp[idx]
         return R, Jx, Jp
