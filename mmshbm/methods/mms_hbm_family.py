@@ -116,9 +116,13 @@ class FamilyMixin:
         return self._modal
 
     def _upper_frequency(self) -> float:
-        """First eigenfrequency (Hz) of the structure with its massless DOFs clamped."""
+        """First eigenfrequency (Hz) of the structure with its massless DOFs clamped: the modal
+        reduction's first fixed-interface mode when the condensation has one."""
         import scipy.linalg as la
 
+        red = getattr(self.cond, "reduction", None)
+        if red is not None and red.n_modes:
+            return float(red.omega[0] / (2 * np.pi))
         b = self.model.blocks
         if len(self.model.l) <= 600:
             w2 = la.eigh(b["K_ll"].toarray(), b["M_ll"].toarray(), eigvals_only=True, subset_by_index=(0, 0))

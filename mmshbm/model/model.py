@@ -368,10 +368,13 @@ class Model:
     def fingerprint(self) -> str:
         """SHA-256 of the matrices (CSR parts), contacts, damping and amplitude DOF: equal
         fingerprints mean the same model (a checkpoint can only be resumed on it). A
-        single undamped contact hashes as in mmshbm 0.1."""
+        single undamped contact hashes as in mmshbm 0.1. Kept with the model (immutable)."""
         import hashlib
         import json
 
+        digest = self.__dict__.get("_memo_fingerprint")
+        if digest is not None:
+            return digest
         h = hashlib.sha256()
         mats = [self.M, self.K] + ([self.damping] if self.damping is not None else [])
         for A in mats:
@@ -384,7 +387,8 @@ class Model:
         h.update(json.dumps(contacts[0] if len(contacts) == 1 else contacts).encode())
         if self._amplitude_dof is not None:
             h.update(json.dumps({"amplitude_dof": int(self._amplitude_dof)}).encode())
-        return h.hexdigest()
+        digest = self.__dict__["_memo_fingerprint"] = h.hexdigest()
+        return digest
 
     def same_as(self, other: Model) -> bool:
         """True when both models have identical matrices, contacts, damping and amplitude DOF."""
