@@ -161,6 +161,112 @@ def _contact_rows(x, F, rows, n_c, lo, hi, rr, exact, cos_t, sin_t, tau, R, G):
             R[m * n_c + i] = F[m * n_c + i] + rj * phi[m]
 
 
+@njit(**JIT_OPTIONS)
+def _block_times(D, x, out):
+    """out (n_x,) = 𝔇 x for the real block matrix 𝔇 of the complex D_k (H+1, n_c, n_c) in NLvib
+    order: D_0 on the mean, [[Re, Im], [−Im, Re]] D_k on (cos k, sin k)."""
+    H1 = D.shape[0]
+    n_c = D.shape[1]
+    for i in range(n_c):
+        acc = 0.0
+        for j in range(n_c):
+            acc += D[0, i, j].real * x[j]
+        out[i] = acc
+    for k in range(1, H1):
+        c = (2 * k - 1) * n_c
+        s = 2 * k * n_c
+        for i in range(n_c):
+            acc_c = 0.0
+            acc_s = 0.0
+            for j in range(n_c):
+                dr = D[k, i, j].real
+                di = D[k, i, j].imag
+                acc_c += dr * x[c + j] + di * x[s + j]
+                acc_s += dr * x[s + j] - di * x[c + j]
+            out[c + i] = acc_c
+            out[s + i] = acc_s
+
+
+@njit(**JIT_OPTIONS)
+def _damped_residual(D, dD, x, load, dload, rows, lo, hi, rr, exact, cos_t, sin_t, tau, jacobian, R, Jx, Jp):
+    """The damped MMS-HBM contact residual (:mod:`mmshbm.methods._damped_hbm`) with F = 𝔇 x − load
+    the force the structure needs, in place.
+
+    D      : (H+1, n_c, n_c) complex D_k; dD : (n_p, H+1, n_c, n_c) their derivatives in the
+             parameters (read if ``jacobian``)
+    x      : (n_x,) NLvib-ordered coefficients of the massless DOFs, n_x = (2H+1) n_c
+    load   : (n_x,) the condensed load; dload : (n_x, n_p) its derivatives
+    rows, lo, hi, rr : per contact its massless DOF, interval and proximal parameter
+    R      : (n_x,) <- F, and on contact rows F + r φ(x − F/r)
+    Jx, Jp : (n_x, n_x), (n_x, n_p) <- ∂R/∂x, ∂R/∂params (if ``jacobian``)
+    """
+    n_c = D.shape[1]
+    n = 2 * D.shape[0] - 1
+    n_x = n * n_c
+    n_p = dD.shape[0]
+    n_k = rows.shape[0]
+    _block_times(D, x, R)
+    for a in range(n_x):
+        R[a] -= load[a]
+    F = R.copy()
+    G = np.empty((n_k, n, n))
+    _contact_rows(x, F, rows, n_c, lo, hi, rr, exact, cos_t, sin_t, tau, R, G)
+    if not jacobian:
+        return
+    dF = np.empty(n_x)
+    for p in range(n_p):
+        _block_times(dD[p], x, dF)
+        for a in range(n_x):
+            Jp[a, p] = dF[a] - dload[a, p]
+    for a in range(n_x):
+        for b in range(n_x):
+            Jx[a, b] = 0.0
+    for i in range(n_c):
+        for j in range(n_c):
+            Jx[i, j] = D[0, i, j].real
+    for k in range(1, D.shape[0]):
+        c = (2 * k - 1) * n_c
+        s = 2 * k * n_c
+        for i in range(n_c):
+            for j in range(n_c):
+                dr = D[k, i, j].real
+                di = D[k, i, j].imag
+                Jx[c + i, c + j] = dr
+                Jx[c + i, s + j] = di
+                Jx[s + i, c + j] = -di
+                Jx[s + i, s + j] = dr
+    # contact rows: ∂R/∂x = (I − G) 𝔇 + r G on the DOF's own columns, ∂R/∂params = (I − G) ∂F
+    dFi = np.empty((n, n_p))
+    for jc in range(n_k):
+        i = rows[jc]
+        Gj = G[jc]
+        for m in range(n):
+            for p in range(n_p):
+                dFi[m, p] = Jp[m * n_c + i, p]
+        for m in range(n):
+            row = m * n_c + i
+            w0 = (1.0 if m == 0 else 0.0) - Gj[m, 0]
+            for j in range(n_c):
+                Jx[row, j] = w0 * D[0, i, j].real
+            for k in range(1, D.shape[0]):
+                c = 2 * k - 1
+                s = 2 * k
+                wc = (1.0 if m == c else 0.0) - Gj[m, c]
+                ws = (1.0 if m == s else 0.0) - Gj[m, s]
+                for j in range(n_c):
+                    dr = D[k, i, j].real
+                    di = D[k, i, j].imag
+                    Jx[row, c * n_c + j] = wc * dr - ws * di
+                    Jx[row, s * n_c + j] = wc * di + ws * dr
+            for b in range(n):
+                Jx[row, b * n_c + i] += rr[jc] * Gj[m, b]
+            for p in range(n_p):
+                v = 0.0
+                for mm in range(n):
+                    v += ((1.0 if mm == m else 0.0) - Gj[m, mm]) * dFi[mm, p]
+                Jp[row, p] = v
+
+
 def project_contact(p: np.ndarray, lo: float, hi: float, exact: bool = True,
                     n_samples: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Harmonic projection of (p − hi)₊ − (lo − p)₊ and its Jacobian.

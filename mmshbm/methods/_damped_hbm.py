@@ -40,7 +40,7 @@ import numpy as np
 from .. import _validate as check
 from ..core.damped_condense import CondensedHarmonics, DampedCondensation
 from ..core.harmonics import check_harmonics
-from ..core.projection import _contact_rows, sample_tables
+from ..core.projection import _contact_rows, _damped_residual, sample_tables
 from ..model.contact import admissible_intervals
 from ..model.model import Model
 
@@ -241,6 +241,30 @@ class DampedHBMBase:
                 if Jp is not None:
                     Jp[idx] = A @ dFp[idx]
         return R, Jx, Jp
+
+    def fused_residual(self, D: np.ndarray, x: np.ndarray, load: np.ndarray | None,
+                       dD: np.ndarray | None = None, dload: np.ndarray | None = None):
+        """:meth:`contact_residual` of F = 𝔇 x − load in one compiled pass (no dense 𝔇 formed
+        for the residual): R (n_x,) and, with the derivatives ``dD`` (n_p, H+1, n_c, n_c) of
+        the D_k in the parameters and ``dload`` (n_x, n_p) of the load, ∂R/∂x (n_x, n_x) and
+        ∂R/∂params (n_x, n_p); else None, None."""
+        n_x = self.n_x
+        load = np.zeros(n_x) if load is None else np.ascontiguousarray(load, dtype=float)
+        jacobian = dD is not None
+        if jacobian:
+            dD = np.ascontiguousarray(dD, dtype=complex)
+            n_p = dD.shape[0]
+            dload = np.zeros((n_x, n_p)) if dload is None else np.ascontiguousarray(dload, dtype=float)
+            Jx, Jp = np.empty((n_x, n_x)), np.empty((n_x, n_p))
+        else:
+            dD = np.zeros((0,) + D.shape, dtype=complex)
+            dload, Jx, Jp = np.zeros((n_x, 0)), np.empty((0, 0)), np.empty((0, 0))
+        R = np.empty(n_x)
+        tau, cos_t, sin_t = self._tables
+        _damped_residual(np.ascontiguousarray(D, dtype=complex), dD, np.ascontiguousarray(x, dtype=float),
+                         load, dload, self._rows, self.lo, self.hi, self.r, self._exact, cos_t, sin_t, tau,
+                         jacobian, R, Jx, Jp)
+        return (R, Jx, Jp) if jacobian else (R, None, None)
 
     def full_coefficients(self, x: np.ndarray, ch: CondensedHarmonics, force_l: np.ndarray | None
                           ) -> np.ndarray:
