@@ -11,11 +11,7 @@ asv suites:
   elements (goal >= 20).
 * ``ModalReductionScale``: the one-time reduction (eigen-solve, static parts) of beams:
   time and peak memory.
-* ``BackboneScale``: the whole default backbone (H = 5) after the reduction (cached by the
-  first call in ``setup``), to 1.9 gaps (31 points on every mesh) and to 2 gaps (33
-  points; from 1000 elements the family guard tries a jump over the 5:1 tongue at 1.97
-  gaps there, 13 pinned solves that the 21-element run does not make); the ratios
-  10 000 / 21 elements of both in ``ScaleRatios`` (goal <= 1.5).
+* The whole backbone after the reduction against the model size: ``bench_backbone_scale.py``.
 * ``SolidScale``: the 3-D solid beam with >= 10⁵ DOFs: reduction time and peak memory,
   one condensation evaluation, one Newton iteration of penalty HBM on the condensed
   contact DOFs, and MMS-HBM's backbone to 10 gaps (skipped until MMS-HBM takes several
@@ -118,64 +114,6 @@ class ScaleRatios:
         return banded / modal
 
     track_banded_over_modal_iteration_1000.unit = "ratio"
-
-    def track_backbone_10000_over_21(self):
-        """Whole backbone to 1.9 gaps after the reduction, 10 000 / 21 elements (goal <= 1.5)."""
-        return _backbone_ratio(1.9)
-
-    track_backbone_10000_over_21.unit = "ratio"
-
-    def track_backbone_2_gaps_10000_over_21(self):
-        """As above to 2 gaps (the 10 000-element run also tries a family jump)."""
-        return _backbone_ratio(2.0)
-
-    track_backbone_2_gaps_10000_over_21.unit = "ratio"
-
-
-def _backbone_run(elements: int, gaps: float):
-    """A callable running the default backbone to ``gaps`` (its reduction done here)."""
-    import warnings
-
-    import mmshbm
-
-    model = mmshbm.default_beam().model(elements)
-
-    def run():
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", mmshbm.BranchWarning)
-            return mmshbm.backbone(model, harmonics=5, max_amplitude=gaps * model.gap)
-
-    run()
-    return run
-
-
-def _backbone_ratio(gaps: float) -> float:
-    small, large = _backbone_run(21, gaps), _backbone_run(10000, gaps)
-    t_small = t_large = np.inf
-    for _ in range(7):  # alternated, fastest of each
-        t_small = min(t_small, _seconds(small, 3, 1))
-        t_large = min(t_large, _seconds(large, 3, 1))
-    return t_large / t_small
-
-
-class BackboneScale:
-    """The whole default backbone (H = 5) on growing beams, after the reduction."""
-
-    params = [SCALE_ELEMENTS, (1.9, 2.0)]
-    param_names = ["elements", "gaps"]
-    timeout = 300
-
-    def setup(self, elements, gaps):
-        from benchmarks.common import warm_up
-
-        warm_up("mmshbm")
-        self.run = _backbone_run(elements, gaps)
-
-    def time_backbone(self, elements, gaps):
-        self.run()
-
-    def track_points(self, elements, gaps):
-        return len(self.run())
 
 
 class ModalReductionScale:
