@@ -13,6 +13,12 @@
   see SKIP_REASONS).
 * ``DampedModes``: the EPMC backbone of the beam to 10 gaps (H = 5, 0.5 %; H = 7 with the
   higher modes at 5 %) and the phase-resonance backbone to 5 gaps.
+* ``ForcedHarmonics``: the beam with 0.5 % on mode 1 and 5 % above, 5 N at the last node
+  with mass, 40–62 Hz, MMS-HBM at H = 5..40 with Floquet stability (the compiled projection;
+  goals H = 30 <= 2 s, H = 40 <= 5 s); where the response ends and its points.
+* ``EPMCBudget``: the EPMC backbone of that beam at H = 20 with the default step budget:
+  time, points and the amplitude reached (goal 6 gaps; the branch closes on a loop of
+  folds between 2 and 3.6 gaps after a branch point at 2.9 gaps, so no budget reaches it).
 """
 
 from __future__ import annotations
@@ -189,3 +195,93 @@ class DampedModes:
         import mmshbm
 
         mmshbm.backbone(mmshbm.default_beam().model(21), harmonics=5)
+
+
+#: the damped beam of the forced-harmonics figures: 5 N at node 19 (DOF 38), 40–62 Hz
+FORCED_H = (5, 10, 20, 30, 40)
+
+
+def forced_harmonics_response(H: int):
+    import mmshbm
+
+    m = beam(0.05)
+    F = np.zeros(m.n_dof)
+    F[38] = 5.0
+    return mmshbm.frequency_response(m, F, (40.0, 62.0), harmonics=H)
+
+
+class ForcedHarmonics:
+    """The damped beam's frequency response (5 N, 40–62 Hz) at growing H."""
+
+    params = [FORCED_H]
+    param_names = ["harmonics"]
+    number = 1
+    repeat = (1, 3, 60.0)
+    warmup_time = 0.0
+    timeout = 900
+
+    def setup_cache(self):
+        """Points and end frequency of every H, from one response each."""
+        warm_up()
+        out = {}
+        for H in FORCED_H:
+            r = forced_harmonics_response(H)
+            out[H] = (len(r), float(r.frequency[-1]))
+        return out
+
+    setup_cache.timeout = 1800
+
+    def setup(self, figures, harmonics):
+        warm_up()
+        forced_harmonics_response(3)
+
+    def time_response(self, figures, harmonics):
+        forced_harmonics_response(harmonics)
+
+    def track_points(self, figures, harmonics):
+        return figures[harmonics][0]
+
+    def track_end_frequency(self, figures, harmonics):
+        """Where the response ends (Hz): 62 when it covers the range."""
+        return figures[harmonics][1]
+
+
+def epmc_h20():
+    import warnings
+
+    import mmshbm
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", mmshbm.BranchWarning)
+        return mmshbm.backbone(beam(0.05), harmonics=20)
+
+
+class EPMCBudget:
+    """EPMC backbone of the 0.5 %/5 % beam at H = 20 within the default step budget."""
+
+    number = 1
+    repeat = (1, 3, 60.0)
+    warmup_time = 0.0
+    timeout = 900
+
+    def setup_cache(self):
+        """(points, largest amplitude in gaps) of one run."""
+        warm_up()
+        b = epmc_h20()
+        return len(b), float(b.amplitude.max() / 1e-3)
+
+    def setup(self, figures):
+        warm_up()
+        import mmshbm
+
+        mmshbm.backbone(beam(0.05), harmonics=3, max_amplitude=1e-3)
+
+    def time_epmc_h20(self, figures):
+        epmc_h20()
+
+    def track_epmc_h20_points(self, figures):
+        return figures[0]
+
+    def track_epmc_h20_max_gaps(self, figures):
+        """Largest amplitude (gaps) the branch reaches (goal 6)."""
+        return figures[1]

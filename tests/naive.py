@@ -1,4 +1,5 @@
-"""Plain-loop, dense references for the finite-element matrices of the beam.
+"""Plain-loop, dense references for the finite-element matrices of the beam, and for the
+harmonic projection of the contact law.
 
 Nothing here imports :mod:`mmshbm.fe`: the element matrices are rebuilt from the
 Timoshenko equations themselves (shape functions = exact static solution, integrated by
@@ -183,3 +184,60 @@ def shift_coefficients(A, B, theta):
     k = np.arange(A.shape[0])[:, None]
     c, s = np.cos(k * theta), np.sin(k * theta)
     return A * c + B * s, -A * s + B * c
+
+
+# ---------------------------------------------------------------------- contact projection
+def product_matrix(C: np.ndarray, S: np.ndarray, H: int) -> np.ndarray:
+    """G_ab = proj_a[s φ_b] in NLvib order (φ = 1, cos τ, sin τ, ..., cos Hτ, sin Hτ) from the
+    spectrum (C, S) of s, by a Python double loop over the product formulas."""
+    G = np.zeros((2 * H + 1, 2 * H + 1))
+    for a in range(2 * H + 1):
+        m, a_sin = (a + 1) // 2, a > 0 and a % 2 == 0
+        w = 1.0 if a == 0 else 2.0
+        for b in range(2 * H + 1):
+            k, b_sin = (b + 1) // 2, b > 0 and b % 2 == 0
+            d, t = abs(m - k), m + k
+            if not a_sin and not b_sin:
+                v = 0.5 * (C[d] + C[t])
+            elif a_sin and b_sin:
+                v = 0.5 * (C[d] - C[t])
+            elif not a_sin:  # cos m · sin k = ½ (sin (k+m) + sin (k−m))
+                v = 0.5 * (S[t] + np.sign(k - m) * S[d])
+            else:  # sin m · cos k = ½ (sin (m+k) + sin (m−k))
+                v = 0.5 * (S[t] + np.sign(m - k) * S[d])
+            G[a, b] = w * v
+    return G
+
+
+def sampled_spectrum(g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Sampled spectrum (C_n, S_n), n = 0..2H, of {g > 0} for samples g (N,) on τ_j = 2πj/N,
+    with a dense DFT matrix; H = (N_coef − 1)//2 is taken from the caller's slicing."""
+    N = g.shape[0]
+    tau = 2 * np.pi * np.arange(N) / N
+    n = np.arange(N)[:, None]
+    s = (g > 0).astype(float)
+    return (np.cos(n * tau) @ s) / N, (np.sin(n * tau) @ s) / N
+
+
+def project_contact(p: np.ndarray, lo: float, hi: float, spectrum) -> tuple[np.ndarray, np.ndarray]:
+    """Projection of (p − hi)₊ − (lo − p)₊ and its Jacobian for NLvib-ordered p (2H+1,),
+    composed in NumPy from ``spectrum(c, s) -> (C, S)`` (n = 0..2H) and :func:`product_matrix`."""
+    H = (p.shape[0] - 1) // 2
+    c = np.concatenate([[p[0]], p[1::2]])
+    s = np.concatenate([[0.0], p[2::2]])
+    r = np.zeros(2 * H + 1)
+    G = np.zeros((2 * H + 1, 2 * H + 1))
+    for theta, sign in ((hi, 1.0), (lo, -1.0)):
+        if np.isinf(theta):
+            continue
+        gc, gs = sign * c, sign * s
+        gc[0] -= sign * theta
+        C, S = spectrum(gc, gs)
+        Gt = product_matrix(C, S, H)
+        G += Gt
+        indicator = np.zeros(2 * H + 1)
+        indicator[0] = C[0]
+        indicator[1::2] = 2 * C[1:H + 1]
+        indicator[2::2] = 2 * S[1:H + 1]
+        r += Gt @ p - theta * indicator
+    return r, G

@@ -86,3 +86,20 @@ def test_modal_back_end_refuses_non_proportional_damping():
     assert DampedCondensation(damped).backend == "direct"
     with pytest.raises(ValueError, match="backend 'modal' needs"):
         DampedCondensation(damped, backend="modal")
+
+
+def test_compiled_modal_condensation_equals_the_numpy_one():
+    """The compiled modal back end (no recovery) against its NumPy formulas (with recovery),
+    including ξ on the linear EPMC point (γ_1 = ξ: the removed mode's d_j infinite)."""
+    model = _models()[0]
+    cond = DampedCondensation(model, _loads(model), "modal")
+    w1 = 2 * np.pi * model.linear_frequencies(1)[0]
+    gamma1 = 2 * 0.01 * w1
+    for ratio, xi, H in ((0.9, 0.0, 3), (1.0, gamma1, 5), (1.7, -0.1, 12), (3.1, 0.4, 30)):
+        a = cond.evaluate(ratio * w1, H, xi, True, True, recover=True)
+        b = cond.evaluate(ratio * w1, H, xi, True, True, recover=False)
+        for name in FIELDS[:6]:
+            x, y = getattr(a, name), getattr(b, name)
+            assert np.abs(x - y).max() <= 1e-12 * np.abs(x).max(), name
+        c = cond.evaluate(ratio * w1, H, xi, False, False, recover=False)
+        assert c.dD_domega is None and c.dD_dxi is None and np.array_equal(c.D, b.D)

@@ -40,13 +40,14 @@ def exact_orbit(osc):
     return orbit
 
 
-def _at_frequency(problem, u):
-    """Newton at fixed frequency to a scaled residual of 1e-10: above the round-off floor of
-    the stiffest problem here (1.8e-12 for penalty-HBM with k_p = 8e3 k_c under some BLAS
-    kernels, above a 1e-12 target) and far below the accuracies these tests compare."""
+def _at_frequency(problem, u, tol=1e-10):
+    """Newton at fixed frequency to a scaled residual of ``tol``: 1e-10 is above the
+    round-off floor of the stiffest problem here (1e-12 to 4e-12 for penalty-HBM with
+    k_p = 8e3 k_c, depending on the BLAS kernel and the start's last bits) and far below the
+    accuracies these tests compare."""
     t = np.zeros(problem.n_unknowns)
     t[-1] = 1.0
-    return newton(problem, u, t, u.copy(), 1e-10, 40, 1e-12)[0]
+    return newton(problem, u, t, u.copy(), tol, 40, 1e-12)[0]
 
 
 def _fd(problem, u, h=1e-5):
@@ -91,7 +92,9 @@ def test_penalty_approaches_the_exact_orbit(osc, exact_orbit):
         Q = np.zeros(pen.n * pen.n_coef)
         Q.reshape(pen.n_coef, pen.n)[:, 1] = ref
         Q.reshape(pen.n_coef, pen.n)[:, 0] = exact_orbit.fourier(0, 20)
-        u = _at_frequency(pen, pen.pack(Q, 2 * np.pi * FREQ))
+        # the penalty residual's round-off floor is 1e-12..4e-12 here, depending on the last
+        # bits of the start: 1e-10 converges whatever they are (the errors compared are > 1e-4)
+        u = _at_frequency(pen, pen.pack(Q, 2 * np.pi * FREQ), tol=1e-10)
         errs.append(np.abs(pen.coefficients(u)[1] - ref).max() / np.abs(ref).max())
     assert errs[1] < errs[0] < 0.1 and errs[1] < 0.01
 

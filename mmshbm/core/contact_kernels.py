@@ -206,14 +206,16 @@ def _spectrum(c, s, cos_table, sin_table, tau_t, exact, g_t, dg_t, roots, C, S):
     g_t (and g′ for the exact route) from the tables, then the sampled or exact spectrum."""
     N = g_t.shape[0]
     H = c.shape[0] - 1
+    # harmonic by harmonic along the table rows (contiguous), each sample summed in k order
     for j in range(N):
-        g = c[0]
-        dg = 0.0
-        for k in range(1, H + 1):
-            g += c[k] * cos_table[k, j] + s[k] * sin_table[k, j]
-            dg += k * (s[k] * cos_table[k, j] - c[k] * sin_table[k, j])
-        g_t[j] = g
-        dg_t[j] = dg
+        g_t[j] = c[0]
+        dg_t[j] = 0.0
+    for k in range(1, H + 1):
+        ck = c[k]
+        sk = s[k]
+        for j in range(N):
+            g_t[j] += ck * cos_table[k, j] + sk * sin_table[k, j]
+            dg_t[j] += k * (sk * cos_table[k, j] - ck * sin_table[k, j])
     if exact:
         _arc_spectrum(c, s, g_t, dg_t, tau_t, roots, C, S)
     else:

@@ -56,6 +56,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..model.model import Model
+from ._damped_modal_kernels import _damped_modal
 from .condense import SingularDynamicStiffness
 
 __all__ = ["DampedCondensation", "CondensedHarmonics", "DENSE_LIMIT"]
@@ -166,6 +167,10 @@ class DampedCondensation:
         self._w2, self._gamma = (2 * np.pi * freqs) ** 2, gamma
         self._beta = Phi_l.T @ self.B  # modal loads (n_modes, m)
         self._Kcc_inv = la.inv(self.K_cc)
+        self._Phi_c_contiguous = np.ascontiguousarray(Phi_c, dtype=float)
+        self._beta_contiguous = np.ascontiguousarray(self._beta, dtype=complex)
+        self._w2 = np.ascontiguousarray(self._w2, dtype=float)
+        self._gamma = np.ascontiguousarray(gamma, dtype=float)
         return True
 
     # ------------------------------------------------------------------ evaluation
@@ -193,7 +198,10 @@ class DampedCondensation:
         """The receptance form with the nearest mode of each harmonic taken out by a rank-one
         update (module docstring): D_k = B − (Bφ)(Bφ)ᵀ/g, B = A⁻¹, A = K_cc⁻¹ + Σ_{m≠j}
         φ_m d_m φ_mᵀ, g = 1/d_j + φᵀBφ, with φ = φ_c,j of the mode j nearest kΩ: regular
-        even where d_j is infinite (a harmonic on an undamped open mode, the linear EPMC)."""
+        even where d_j is infinite (a harmonic on an undamped open mode, the linear EPMC).
+        Without the recovery, the compiled kernel (:mod:`mmshbm.core._damped_modal_kernels`)."""
+        if not recover:
+            return self._evaluate_modal_compiled(omega, H, xi, derivative, xi_derivative)
         k = np.arange(1, H + 1, dtype=float)
         w = k * omega
         gamma = self._gamma - xi
@@ -258,6 +266,22 @@ class DampedCondensation:
             resid = beta - Pc.T @ P  # β_m − φ_c,mᵀ P̂ (n_m, m)
             Y = Pl @ (d[0][:, None] * resid) + np.outer(Pl[:, j[0]], beta_j - Bphi[0] @ h_far) / g[0]
         return CondensedHarmonics(float(omega), float(xi), D, dD, dDx, P, dP, dPx, Z, Y)
+
+    def _evaluate_modal_compiled(self, omega, H, xi, derivative, xi_derivative):
+        n_c, m = self.n_c, self.B.shape[1]
+        shape = (H + 1, n_c, n_c)
+        D = np.empty(shape, dtype=complex)
+        dD = np.empty(shape, dtype=complex) if derivative else np.empty((0, 0, 0), dtype=complex)
+        dDx = np.empty(shape, dtype=complex) if xi_derivative else np.empty((0, 0, 0), dtype=complex)
+        P, dP, dPx = (np.empty((n_c, m), dtype=complex) for _ in range(3))
+        status = _damped_modal(float(omega), float(xi), H, self._w2, self._gamma, self._Phi_c_contiguous,
+                               self._Kcc_inv, self.D0, self._beta_contiguous, derivative, xi_derivative,
+                               D, dD, dDx, P, dP, dPx)
+        if status:
+            raise SingularDynamicStiffness(f"condensation singular at Ω = {omega:.6g} rad/s")
+        return CondensedHarmonics(float(omega), float(xi), D, dD if derivative else None,
+                                  dDx if xi_derivative else None, P, dP if derivative else None,
+                                  dPx if xi_derivative else None, None, None)
 
     def _evaluate_direct(self, omega, H, xi, derivative, xi_derivative, recover):
         n_l, n_c = self.n_l, self.n_c

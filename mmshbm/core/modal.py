@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import math
 import warnings
+import weakref
 
 import numpy as np
 
@@ -60,6 +61,10 @@ MAX_RESIDUAL_TERMS = 2 * KRYLOV_BLOCKS - 1
 #: default bound on the truncation error ‖D_k − D_k^exact‖₂ / ‖D_0‖₂ over the design range
 DEFAULT_TOL = 1e-10
 _POLE_RTOL = 64 * np.finfo(float).eps
+#: reduction -> {m: (Ṽ_i, Z_0)} of the recovery with m modes kept (read only)
+_RECOVERY: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: projectors whose projections :meth:`ModalCondensation.projected_cosine_recovery` keeps
+_PROJECTORS = 4
 #: warn once when kΩ exceeds this fraction of the first left-out mode
 _LEFT_OUT_WARNING = 0.8
 
@@ -217,6 +222,7 @@ class ModalCondensation:
         self.cutoff = self._omega_next / (2 * np.pi)
         self.Rs = np.ascontiguousarray(np.array([_tail(red, m, p) for p in range(2, self.P + 2)]))
         self._V = None  # recovery blocks, built on the first recover()
+        self._projections = {}  # projector id -> its projections (projected_cosine_recovery)
         self.design_frequency = self.H * self._omega_max(red) / (2 * np.pi)
         self.error_estimate = float(self.truncation_error(2 * np.pi * self.design_frequency / self.H,
                                                           self.H)[-1]) if math.isfinite(
@@ -328,12 +334,7 @@ class ModalCondensation:
         if np.any(np.abs(den) <= _POLE_RTOL * self._w2[None, :]):
             raise SingularDynamicStiffness(f"a harmonic of Ω = {omega:.6g} rad/s sits on a fixed-interface "
                                            "eigenfrequency: the DOFs with mass are unbounded there")
-        if self._V is None:
-            # the left-out modes' share: Ṽ_i(m) = Σ_{j>m} φ_j b_jᵀ/ω_j^{2i+2}, and Z_0 from it
-            red, left = self.reduction, slice(self.n_modes, self.reduction.n_modes)
-            self._V = [red.V[i] + red.phi[:, left] @ (red.B[left] / red.omega[left, None] ** (2 * i + 2))
-                       for i in range(KRYLOV_BLOCKS)]
-            self._Z0 = self._V[0] + self.phi_j @ (self.b_j / self._w2[:, None])
+        self._static_recovery()
         c = np.where(excluded, 0.0, x[:, None] / (self._w2[None, :] * den))  # (2H+1, m)
         Z = self._Z0 @ Qc + self.phi_j @ ((self.b_j @ Qc) * c.T)
         if not self.complete:
@@ -341,21 +342,39 @@ class ModalCondensation:
                 Z += (self._V[i] @ Qc) * x[None, :] ** i
         return -Z
 
+    def _static_recovery(self) -> None:
+        """Builds the left-out modes' share Ṽ_i(m) = Σ_{j>m} φ_j b_jᵀ/ω_j^{2i+2} and Z_0 once per
+        reduction and m (n_l-sized: kept with the reduction for the next condensation)."""
+        if self._V is None:
+            red, m = self.reduction, self.n_modes
+            memo = _RECOVERY.setdefault(red, {})
+            if m not in memo:
+                left = slice(m, red.n_modes)
+                V = [red.V[i] + red.phi[:, left] @ (red.B[left] / red.omega[left, None] ** (2 * i + 2))
+                     for i in range(KRYLOV_BLOCKS)]
+                memo[m] = (V, V[0] + self.phi_j @ (self.b_j / self._w2[:, None]))
+            self._V, self._Z0 = memo[m]
+
     def projected_cosine_recovery(self, omega: float, a: np.ndarray, projector: np.ndarray,
                                   exclude=()) -> np.ndarray:
         """``projector @ Q_l,k`` of the cosine motion ``a`` (H+1, n_c) of the massless DOFs,
         shape (n_p, H+1), without forming Q_l: the projections of Z_0, φ_j and Ṽ_i are
         computed once per projector (n_p, n_l) and reused (e.g. modal coordinates
-        Φᵀ M q_l of a few modes, for their energy shares along a branch). Same formula and
-        ``exclude`` convention as :meth:`recover`."""
+        Φᵀ M q_l of a few modes, for their energy shares along a branch; the last
+        :data:`_PROJECTORS` projectors are kept). Same formula and ``exclude`` convention
+        as :meth:`recover`."""
         a = np.asarray(a, dtype=float)
         key = id(projector)
-        cached = getattr(self, "_projections", {}).get(key)
+        store = self._projections
+        cached = store.get(key)
         if cached is None or cached[0] is not projector:
-            self.recover(0.0, np.zeros((self.n_c, 1)))  # builds Z_0 and Ṽ_i
+            self._static_recovery()
             P = np.asarray(projector, dtype=float)
             cached = (projector, P @ self._Z0, P @ self.phi_j, [P @ V for V in self._V])
-            self._projections = {key: cached}
+            store.pop(key, None)
+            while len(store) >= _PROJECTORS:
+                del store[next(iter(store))]
+            store[key] = cached
         _, S0, S, SV = cached
         H = a.shape[0] - 1
         x = (np.arange(H + 1) * float(omega)) ** 2

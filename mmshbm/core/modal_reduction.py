@@ -67,6 +67,7 @@ REDUCTION_FORMAT = "mmshbm-modal-reduction-1"
 DENSE_LIMIT = 200
 
 _MEMORY: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_KEYS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 _ARRAYS = ("omega", "phi", "B", "D0", "V", "R")
 #: Krylov blocks Ṽ_0..Ṽ_q kept (q = KRYLOV_BLOCKS − 1): residual moments R(2)..R(2q+2)
 KRYLOV_BLOCKS = 3
@@ -162,9 +163,13 @@ class ModalReduction:
 
 def structure_key(model: Model) -> str:
     """:meth:`Model.fingerprint` of the bare structure (M and K; contacts, damping and
-    amplitude DOF stripped): the key of its modal reduction."""
-    bare = dataclasses.replace(model, contacts=(Contact(0, 0.0, 1),), damping=None, _amplitude_dof=None)
-    return bare.fingerprint()
+    amplitude DOF stripped): the key of its modal reduction (kept per model object: hashing
+    the matrices of a large model costs milliseconds)."""
+    key = _KEYS.get(model)
+    if key is None:
+        bare = dataclasses.replace(model, contacts=(Contact(0, 0.0, 1),), damping=None, _amplitude_dof=None)
+        key = _KEYS[model] = bare.fingerprint()
+    return key
 
 
 def reduce_model(model: Model, enough, *, cache=None, dense_limit: int = DENSE_LIMIT,

@@ -40,6 +40,7 @@ import numpy as np
 from .. import _validate as check
 from ..core.damped_condense import CondensedHarmonics, DampedCondensation
 from ..core.harmonics import check_harmonics
+from ..core.projection import _contact_rows, _damped_residual, sample_tables
 from ..model.contact import admissible_intervals
 from ..model.model import Model
 
@@ -57,6 +58,12 @@ def contact_projection(projection: str, H: int, N: int):
     if projection == "sampled":
         return functools.partial(project_contact, exact=False, n_samples=N)
     raise ValueError(f"projection must be 'exact' or 'sampled', got {projection!r}")
+
+
+def _projection_grid(projection: str, H: int, N: int) -> tuple[bool, int]:
+    """(exact, samples per period) of the contact projection: 16·(2H+1) for the exact one
+    (its bracketing grid, as :func:`~mmshbm.core.projection.project_contact`), N sampled."""
+    return projection == "exact", (16 * (2 * H + 1) if projection == "exact" else N)
 
 
 def synthesis_matrix(H: int, tau: np.ndarray) -> np.ndarray:
@@ -139,6 +146,9 @@ class DampedHBMBase:
         self.r = stiff.copy() if r is None else np.full(len(dofs), check.positive("r", r))
         self._project = contact_projection(projection, self.H, self.N)
         self.projection = projection
+        self._exact, n_grid = _projection_grid(projection, self.H, self.N)
+        self._tables = sample_tables(self.H, n_grid)
+        self._rows = np.ascontiguousarray(self.contact_rows, dtype=np.int64)
         self._coef_index = [np.arange(self.n_coef) * self.n_c + i for i in range(self.n_c)]
         # scales: the first open mode's shape on the massless DOFs, the gap as length
         freqs, modes = model.linear_modes(1)
@@ -191,14 +201,14 @@ class DampedHBMBase:
         """The real (n_x, n_x) matrix 𝔇 of the complex D_k (H+1, n_c, n_c)."""
         n_c, H = self.n_c, self.H
         A = np.zeros((self.n_x, self.n_x))
-        A[:n_c, :n_c] = D[0].real
-        for k in range(1, H + 1):
-            c, s = (2 * k - 1) * n_c, 2 * k * n_c
-            Dr, Di = D[k].real, D[k].imag
-            A[c:c + n_c, c:c + n_c] = Dr
-            A[c:c + n_c, s:s + n_c] = Di
-            A[s:s + n_c, c:c + n_c] = -Di
-            A[s:s + n_c, s:s + n_c] = Dr
+        A4 = A.reshape(self.n_coef, n_c, self.n_coef, n_c)  # A4[a, i, b, j] = A[a n_c + i, b n_c + j]
+        A4[0, :, 0, :] = D[0].real
+        cos, sin = np.arange(1, 2 * H + 1, 2), np.arange(2, 2 * H + 2, 2)
+        Dr, Di = D[1:].real, D[1:].imag
+        A4[cos, :, cos, :] = Dr
+        A4[cos, :, sin, :] = Di
+        A4[sin, :, cos, :] = -Di
+        A4[sin, :, sin, :] = Dr
         return A
 
     def first_harmonic_vector(self, v: np.ndarray) -> np.ndarray:
@@ -216,19 +226,59 @@ class DampedHBMBase:
         R = F.copy()
         Jx = None if dF is None else dF.copy()
         Jp = None if dFp is None else dFp.copy()
-        for j, i in enumerate(self.contact_rows):
-            idx = self._coef_index[i]
-            r = self.r[j]
-            p = x[idx] - F[idx] / r
-            phi, G = self._project(p, self.lo[j], self.hi[j])
-            R[idx] = F[idx] + r * phi
-            if Jx is not None:
-                A = np.eye(self.n_coef) - G
+        if len(self._rows) == 0:
+            return R, Jx, Jp
+        tau, cos_t, sin_t = self._tables
+        G = np.empty((len(self._rows), self.n_coef, self.n_coef))
+        _contact_rows(np.ascontiguousarray(x, dtype=float), np.ascontiguousarray(F, dtype=float), self._rows,
+                      self.n_c, self.lo, self.hi, self.r, self._exact, cos_t, sin_t, tau, R, G)
+        if Jx is not None:
+            for j, i in enumerate(self.contact_rows):
+                idx = self._coef_index[i]
+                A = np.eye(self.n_coef) - G[j]
                 Jx[idx] = A @ dF[idx]
-                Jx[np.ix_(idx, idx)] += r * G
+                Jx[np.ix_(idx, idx)] += self.r[j] * G[j]
                 if Jp is not None:
                     Jp[idx] = A @ dFp[idx]
         return R, Jx, Jp
+
+    def fused_residual(self, D: np.ndarray, x: np.ndarray, load: np.ndarray | None,
+                       dD: np.ndarray | None = None, dload: np.ndarray | None = None):
+        """:meth:`contact_residual` of F = 𝔇 x − load in one compiled pass (no dense 𝔇 formed
+        for the residual): R (n_x,) and, with the derivatives ``dD`` (n_p, H+1, n_c, n_c) of
+        the D_k in the parameters and ``dload`` (n_x, n_p) of the load, ∂R/∂x (n_x, n_x) and
+        ∂R/∂params (n_x, n_p); else None, None."""
+        n_x = self.n_x
+        load = np.zeros(n_x) if load is None else np.ascontiguousarray(load, dtype=float)
+        jacobian = dD is not None
+        if jacobian:
+            dD = np.ascontiguousarray(dD, dtype=complex)
+            n_p = dD.shape[0]
+            dload = np.zeros((n_x, n_p)) if dload is None else np.ascontiguousarray(dload, dtype=float)
+            Jx, Jp = np.empty((n_x, n_x)), np.empty((n_x, n_p))
+        else:
+            dD = np.zeros((0,) + D.shape, dtype=complex)
+            dload, Jx, Jp = np.zeros((n_x, 0)), np.empty((0, 0)), np.empty((0, 0))
+        R = np.empty(n_x)
+        tau, cos_t, sin_t = self._tables
+        _damped_residual(np.ascontiguousarray(D, dtype=complex), dD, np.ascontiguousarray(x, dtype=float),
+                         load, dload, self._rows, self.lo, self.hi, self.r, self._exact, cos_t, sin_t, tau,
+                         jacobian, R, Jx, Jp)
+        return (R, Jx, Jp) if jacobian else (R, None, None)
+
+    def residual_from_blocks(self, D: np.ndarray, x: np.ndarray, load: np.ndarray | None,
+                             dD: np.ndarray | None = None, dload: np.ndarray | None = None):
+        """:meth:`fused_residual` in NumPy: F = 𝔇 x − load formed and passed to
+        :meth:`contact_residual`, for subclasses whose contact rows are not the compiled
+        unilateral ones (friction rows); same arguments and results."""
+        Dx = self.real_blocks(D)
+        F = Dx @ x - (0.0 if load is None else load)
+        if dD is None:
+            return self.contact_residual(x, F, None, None)[0], None, None
+        dFp = np.column_stack([self.real_blocks(dD[p]) @ x for p in range(dD.shape[0])])
+        if dload is not None:
+            dFp = dFp - dload
+        return self.contact_residual(x, F, Dx, dFp)
 
     def full_coefficients(self, x: np.ndarray, ch: CondensedHarmonics, force_l: np.ndarray | None
                           ) -> np.ndarray:

@@ -122,17 +122,13 @@ class EPMCProblem(DampedHBMBase):
         """Scaled residual (n_x + 1,) and, if asked, its Jacobian (n_x + 1, n_x + 2)."""
         x, xi, omega = self.unpack(u)
         ch = self._condensed(omega, xi, jacobian, jacobian)
-        Dx = self.real_blocks(ch.D)
-        F = Dx @ x
         R = np.empty(self.n_x + 1)
-        if not jacobian:
-            R[:-1] = self.contact_residual(x, F, None, None)[0] / self.rowscale
-            R[-1] = u[self._anchor_col]
-            return R
-        dFp = np.column_stack([self.real_blocks(ch.dD_dxi) @ x, self.real_blocks(ch.dD_domega) @ x])
-        Rx, Jx, Jp = self.contact_residual(x, F, Dx, dFp)
-        R[:-1] = Rx / self.rowscale
         R[-1] = u[self._anchor_col]
+        if not jacobian:
+            R[:-1] = self.fused_residual(ch.D, x, None)[0] / self.rowscale
+            return R
+        Rx, Jx, Jp = self.fused_residual(ch.D, x, None, np.stack([ch.dD_dxi, ch.dD_domega]))
+        R[:-1] = Rx / self.rowscale
         J = np.zeros((self.n_x + 1, self.n_x + 2))
         J[:-1, :-2] = Jx * self.xscale[None, :]
         J[:-1, -2:] = Jp * self.omega_ref

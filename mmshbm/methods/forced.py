@@ -292,16 +292,15 @@ class ForcedResponseProblem(DampedHBMBase):
         ∂R/∂σ (n_x,) for the force scaled by σ (the phase-resonance problem's unknown)."""
         ch = self._condensed(omega, 0.0, jacobian)
         s, ds = self.excitation.scale(omega)
-        P_hat = s * ch.P[:, 0]
-        Dx = self.real_blocks(ch.D)
-        Pv = self.first_harmonic_vector(P_hat)
-        F = Dx @ x - sigma * Pv
+        Pv = self.first_harmonic_vector(s * ch.P[:, 0])
         if not jacobian:
-            return self.contact_residual(x, F, None, None)[0], None, None, None
+            return self.fused_residual(ch.D, x, sigma * Pv)[0], None, None, None
         dP_hat = s * ch.dP_domega[:, 0] + ds * ch.P[:, 0]
-        dF_domega = self.real_blocks(ch.dD_domega) @ x - sigma * self.first_harmonic_vector(dP_hat)
-        dFp = np.column_stack([dF_domega, -Pv])
-        R, Jx, Jp = self.contact_residual(x, F, Dx, dFp)
+        # parameters (Ω, σ): ∂F/∂Ω = (∂𝔇/∂Ω) x − σ ∂P/∂Ω, ∂F/∂σ = −P
+        dD = np.zeros((2,) + ch.D.shape, dtype=complex)
+        dD[0] = ch.dD_domega
+        dload = np.column_stack([sigma * self.first_harmonic_vector(dP_hat), Pv])
+        R, Jx, Jp = self.fused_residual(ch.D, x, sigma * Pv, dD, dload)
         return R, Jx, Jp[:, 0], Jp[:, 1]
 
     def evaluate(self, u: np.ndarray, jacobian: bool = True):

@@ -20,6 +20,7 @@ import time
 import numpy as np
 
 from .. import _validate as check
+from .._threads import blas_limit
 from ..core.continuation import ContinuationOptions, continue_branch
 from ..core.special_points import SpecialPoint
 from ..model.damping import model_has_damping
@@ -149,9 +150,10 @@ def frequency_response(model: Model, force, frequency_range, harmonics: int = 5,
         progress = tqdm(desc=f"{method} frequency response", unit="pt", leave=False, disable=None)
     t0 = time.perf_counter()
     try:
-        start = problem.start_point(f0) if hasattr(problem, "start_point") else problem.linear_point(f0)
-        res = continue_branch(problem, start, problem.initial_tangent(), copts,
-                              callback=callback, progress=progress)
+        with blas_limit():  # small dense solves: one BLAS thread unless the user chose (mmshbm._threads)
+            start = problem.start_point(f0) if hasattr(problem, "start_point") else problem.linear_point(f0)
+            res = continue_branch(problem, start, problem.initial_tangent(), copts,
+                                  callback=callback, progress=progress)
     finally:
         if progress is not None:
             progress.close()

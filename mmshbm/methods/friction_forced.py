@@ -127,6 +127,11 @@ class FrictionRows:
         # R = −Rc = F_t + proj[clip(−F_t + ρ u′)]
         return -Rc, A, -B @ self._Dt, slip
 
+    def fused_residual(self, D, x, load, dD=None, dload=None):
+        """The residual with the friction rows (NumPy: the compiled fused kernel knows the
+        unilateral rows only)."""
+        return self.residual_from_blocks(D, x, load, dD, dload)
+
     def contact_residual(self, x: np.ndarray, F: np.ndarray, dF: np.ndarray | None, dFp: np.ndarray | None):
         R, Jx, Jp = super().contact_residual(x, F, dF, dFp)
         for j, i in enumerate(self.friction_rows):

@@ -4,11 +4,16 @@ landings of the jumps over internal-resonance tongues (a mixin of
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 
 from ..core.modal_energy import kinetic_energy_shares
 
 __all__ = ["FamilyMixin"]
+
+#: model -> {(H, mode): modal basis of the energy shares} (the model is immutable)
+_BASES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 class FamilyMixin:
@@ -100,9 +105,13 @@ class FamilyMixin:
     def _modal_basis(self):
         """Open-contact modes tracked for the energy shares: those below (H + 1) times the
         first clamped-contact frequency (an upper bound of Ω on the backbone), at least the
-        starting mode and the next, at most 30."""
+        starting mode and the next, at most 30; built once per model, H and mode."""
         if self._modal is None:
             model = self.model
+            memo = _BASES.setdefault(model, {})
+            if (self.H, self.mode) in memo:
+                self._modal = memo[self.H, self.mode]
+                return self._modal
             n_l = len(model.l)
             f_track = (self.H + 1) * self._upper_frequency()
             n = min(n_l, 30, max(self.mode + 1, 2))
@@ -112,13 +121,17 @@ class FamilyMixin:
             freqs, modes = model.linear_modes(n)
             Phi = modes[model.l]
             M_ll = model.blocks["M_ll"]
-            self._modal = (freqs, Phi, np.ascontiguousarray((M_ll @ Phi).T), M_ll)
+            self._modal = memo[self.H, self.mode] = (freqs, Phi, np.ascontiguousarray((M_ll @ Phi).T), M_ll)
         return self._modal
 
     def _upper_frequency(self) -> float:
-        """First eigenfrequency (Hz) of the structure with its massless DOFs clamped."""
+        """First eigenfrequency (Hz) of the structure with its massless DOFs clamped: the modal
+        reduction's first fixed-interface mode when the condensation has one."""
         import scipy.linalg as la
 
+        red = getattr(self.cond, "reduction", None)
+        if red is not None and red.n_modes:
+            return float(red.omega[0] / (2 * np.pi))
         b = self.model.blocks
         if len(self.model.l) <= 600:
             w2 = la.eigh(b["K_ll"].toarray(), b["M_ll"].toarray(), eigvals_only=True, subset_by_index=(0, 0))
@@ -131,7 +144,7 @@ class FamilyMixin:
     @property
     def tracked_frequencies(self) -> np.ndarray:
         """Open-contact linear frequencies (Hz) of the modes in ``records["modal_shares"]``."""
-        return self._modal_basis()[0]
+        return self._modal_basis()[0].copy()
 
     def modal_shares(self, u: np.ndarray) -> np.ndarray:
         """Period-mean kinetic energy share of each tracked open-contact mode j (rows) in

@@ -7,8 +7,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import njit
 
 from .. import _validate as check
+from ..core.kernels import JIT_OPTIONS
 
 __all__ = ["SignalsMixin"]
 
@@ -171,27 +173,13 @@ class SignalsMixin:
         on the fine grid and refined by Newton on q′(τ) = 0.
         """
         a, omega = self.unpack(u)
-        row = self._amplitude_row(a, omega, self.unpack_eta(u))
-        sign = self._amp_sign
-        q = row @ self._cos_fine
-        y = sign * q if sign != 0.0 else np.abs(q)
-        tau = self._tau_fine[int(np.argmax(y))]
-        k = np.arange(self.H + 1)
-        for _ in range(8):  # Newton on q'(τ) = 0 at the peak
-            d1 = -(k * row) @ np.sin(k * tau)
-            d2 = -(k * k * row) @ np.cos(k * tau)
-            if d2 == 0.0:
-                break
-            step = d1 / d2
-            tau -= step
-            if abs(step) < 1e-14:
-                break
-        value = row @ np.cos(k * tau)
-        s = sign if sign != 0.0 else math.copysign(1.0, value)
+        row = np.ascontiguousarray(self._amplitude_row(a, omega, self.unpack_eta(u)), dtype=float)
+        cos_k = np.empty(self.H + 1)  # cos kτ at the maximiser
+        amplitude, s = _cosine_peak(row, self._amp_sign, self._cos_fine, self._tau_fine, cos_k)
         grad = np.zeros(self.n_unknowns)
         if self._amp_in_c:
             n_a = (self.H + 1) * self.n_c
-            grad[self._amp_index:n_a:self.n_c] = s * np.cos(k * tau)
+            grad[self._amp_index:n_a:self.n_c] = s * cos_k
         else:  # finite differences through the recovery (amplitude DOF with mass)
             h = 1e-7
             for i in range(self.n_unknowns):
@@ -201,7 +189,46 @@ class SignalsMixin:
                 am, om_m = self.unpack(u - e)
                 diff = (self._amplitude_row(ap, om_p, self.unpack_eta(u + e))
                         - self._amplitude_row(am, om_m, self.unpack_eta(u - e)))
-                grad[i] = s * (diff @ np.cos(k * tau)) / (2 * h)
-            return float(s * value), grad
+                grad[i] = s * (diff @ cos_k) / (2 * h)
+            return amplitude, grad
         grad[-1] = 0.0
-        return float(s * value), grad * self.colscale
+        return amplitude, grad * self.colscale
+
+
+@njit(**JIT_OPTIONS)
+def _cosine_peak(row, sign, cos_fine, tau_fine, cos_k):
+    """Largest value of sign·q (|q| when sign is 0) for q(τ) = Σ_k row_k cos kτ: the largest
+    sample on the fine grid (cos_fine (H+1, n), tau_fine (n,)), refined by Newton on
+    q′(τ) = 0 (at most 8 steps, to 1e-14 in τ). Returns (the value, the sign s with
+    value = s·q(τ*)); ``cos_k`` <- cos kτ* (the gradient of q(τ*) in row, envelope theorem)."""
+    H1 = row.shape[0]
+    n = tau_fine.shape[0]
+    best = -np.inf
+    j = 0
+    for i in range(n):
+        q = 0.0
+        for k in range(H1):
+            q += row[k] * cos_fine[k, i]
+        y = sign * q if sign != 0.0 else abs(q)
+        if y > best:
+            best = y
+            j = i
+    tau = tau_fine[j]
+    for _ in range(8):
+        d1 = 0.0
+        d2 = 0.0
+        for k in range(H1):
+            d1 -= k * row[k] * math.sin(k * tau)
+            d2 -= k * k * row[k] * math.cos(k * tau)
+        if d2 == 0.0:
+            break
+        step = d1 / d2
+        tau -= step
+        if abs(step) < 1e-14:
+            break
+    value = 0.0
+    for k in range(H1):
+        cos_k[k] = math.cos(k * tau)
+        value += row[k] * cos_k[k]
+    s = sign if sign != 0.0 else math.copysign(1.0, value)
+    return s * value, s

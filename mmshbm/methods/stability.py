@@ -45,7 +45,7 @@ from scipy.optimize import brentq
 from ..core.special_points import SpecialPoint
 from ..model.contact import admissible_intervals
 from ..model.model import Model
-from ._damped_hbm import fine_samples, synthesis_matrix
+from ._damped_hbm import fine_samples
 
 __all__ = ["FloquetSolver", "classify", "conservative_multipliers", "branch_stability"]
 
@@ -160,6 +160,7 @@ class FloquetSolver:
         H = (Ql.shape[1] - 1) // 2
         n = n_grid or max(512, 2 ** int(np.ceil(np.log2(32 * (2 * H + 1)))))
         tau = 2 * np.pi * np.arange(n + 1) / n
+        harmonics = np.arange(1, H + 1)
         closed = self.phase_at(Ql[:, 0] + Ql[:, 1::2].sum(axis=1))
         t, segments = 0.0, []
         for _ in range(4 * n):
@@ -180,8 +181,8 @@ class FloquetSolver:
             g = i0 + int(first[k])
             c = coef[k]
 
-            def fun(s, c=c):
-                return float(synthesis_matrix(H, [s])[0] @ c)
+            def fun(s, c=c):  # the switching function's series at s
+                return float(c[0] + c[1::2] @ np.cos(harmonics * s) + c[2::2] @ np.sin(harmonics * s))
 
             left = tau[g - 1] if g - 1 >= i0 else t
             left = max(left, t)

@@ -390,10 +390,13 @@ class Model:
     def fingerprint(self) -> str:
         """SHA-256 of the matrices (CSR parts), contacts, damping and amplitude DOF: equal
         fingerprints mean the same model (a checkpoint can only be resumed on it). A
-        single undamped contact hashes as in mmshbm 0.1."""
+        single undamped contact hashes as in mmshbm 0.1. Kept with the model (immutable)."""
         import hashlib
         import json
 
+        digest = self.__dict__.get("_memo_fingerprint")
+        if digest is not None:
+            return digest
         h = hashlib.sha256()
         mats = [self.M, self.K] + ([self.damping] if self.damping is not None else [])
         for A in mats:
@@ -410,7 +413,8 @@ class Model:
             from .friction import friction_to_json
 
             h.update(friction_to_json(self.friction).encode())
-        return h.hexdigest()
+        digest = self.__dict__["_memo_fingerprint"] = h.hexdigest()
+        return digest
 
     def same_as(self, other: Model) -> bool:
         """True when both models have identical matrices, contacts, damping and amplitude DOF."""

@@ -1,0 +1,133 @@
+"""Before/after figures of two source trees, measured alternately in one script.
+
+Each figure runs in a fresh subprocess per tree (``PYTHONPATH=<tree>``), the trees
+alternating, ``--rounds`` times; the table shows the fastest wall-clock and CPU time of
+each (the CPU time of the process is less sensitive to other load on a shared machine).
+Numba kernels are compiled (or loaded from each tree's cache) before any timed call.
+
+    python benchmarks/before_after.py --before /path/to/old/tree --after . --rounds 2
+    python benchmarks/before_after.py ... --only forced     # one group
+
+Groups: ``forced`` (damped beam, 5 N, 40–62 Hz, H = 5..40), ``epmc`` (H = 20, default
+budget), ``scale`` (whole backbone after the reduction, 21/1000/10 000 elements, 1.9 and 2
+gaps), ``main`` (the default backbone to 10 gaps, warm).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+
+PRELUDE = """
+import json, time, warnings
+import numpy as np
+import mmshbm
+warnings.simplefilter("ignore")
+
+def clock(f, repeat):
+    best = (float("inf"), float("inf"))
+    out = None
+    for _ in range(repeat):
+        t, c = time.perf_counter(), time.process_time()
+        out = f()
+        best = (min(best[0], time.perf_counter() - t), min(best[1], time.process_time() - c))
+    return best, out
+
+def damped_beam():
+    m = mmshbm.default_beam().model(21)
+    return m.with_damping(modal_ratio=[0.005] + [0.05] * (len(m.l) - 1))
+"""
+
+JOBS = {
+    "forced": """
+m = damped_beam()
+F = np.zeros(m.n_dof); F[38] = 5.0
+mmshbm.frequency_response(m, F, (40.0, 41.0), harmonics=3)
+(w, c), r = clock(lambda: mmshbm.frequency_response(m, F, (40.0, 62.0), harmonics={H}), {repeat})
+print(json.dumps({{"wall": w, "cpu": c, "points": len(r), "end_hz": float(r.frequency[-1]),
+                  "peak_gaps": float(r.amplitude.max() / m.gap)}}))
+""",
+    "epmc": """
+m = damped_beam()
+mmshbm.backbone(m, harmonics=3, max_amplitude=1.5e-3)
+(w, c), b = clock(lambda: mmshbm.backbone(m, harmonics=20), 1)
+print(json.dumps({{"wall": w, "cpu": c, "points": len(b), "status": b.status,
+                  "max_gaps": float(b.amplitude.max() / m.gap)}}))
+""",
+    "scale": """
+m = mmshbm.default_beam().model({elements})
+mmshbm.backbone(m, harmonics=5, max_amplitude={gaps} * m.gap)
+(w, c), b = clock(lambda: mmshbm.backbone(m, harmonics=5, max_amplitude={gaps} * m.gap), 15)
+print(json.dumps({{"wall": w, "cpu": c, "points": len(b), "status": b.status}}))
+""",
+    "main": """
+m = mmshbm.default_beam().model(21)
+mmshbm.backbone(m, harmonics=5, max_amplitude=10 * m.gap)
+(w, c), b = clock(lambda: mmshbm.backbone(m, harmonics=5, max_amplitude=10 * m.gap), 30)
+print(json.dumps({{"wall": w, "cpu": c, "points": len(b), "status": b.status}}))
+""",
+}
+
+
+def cases(only):
+    out = []
+    if only in (None, "main"):
+        out.append(("main", "default backbone to 10 gaps", {}))
+    if only in (None, "scale"):
+        for gaps in (1.9, 2.0):
+            for elements in (21, 1000, 10000):
+                out.append(("scale", f"backbone {elements} el. to {gaps} gaps",
+                            {"elements": elements, "gaps": gaps}))
+    if only in (None, "epmc"):
+        out.append(("epmc", "EPMC H = 20, default budget", {}))
+    if only in (None, "forced"):
+        for H in (5, 10, 20, 30, 40):
+            out.append(("forced", f"forced response H = {H}", {"H": H, "repeat": 2 if H < 40 else 1}))
+    return out
+
+
+def run(tree: str, job: str, params: dict, timeout: float) -> dict:
+    env = dict(os.environ, PYTHONPATH=os.path.abspath(tree))
+    code = PRELUDE + JOBS[job].format(**params)
+    try:
+        p = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                           timeout=timeout, cwd="/tmp")
+    except subprocess.TimeoutExpired:
+        return {"error": f"timeout {timeout:.0f} s"}
+    if p.returncode:
+        return {"error": p.stderr.strip().splitlines()[-1] if p.stderr.strip() else f"rc {p.returncode}"}
+    return json.loads(p.stdout.strip().splitlines()[-1])
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--before", required=True)
+    ap.add_argument("--after", required=True)
+    ap.add_argument("--rounds", type=int, default=2)
+    ap.add_argument("--only", choices=sorted(JOBS))
+    ap.add_argument("--timeout", type=float, default=600.0)
+    args = ap.parse_args(argv)
+    for job, label, params in cases(args.only):
+        best = {}
+        for _ in range(args.rounds):
+            for name, tree in (("before", args.before), ("after", args.after)):
+                res = run(tree, job, params, args.timeout)
+                prev = best.get(name)
+                if prev is None or "error" in prev or ("wall" in res and res["wall"] < prev["wall"]):
+                    if prev is not None and "wall" in res and "cpu" in prev:
+                        res["cpu"] = min(res["cpu"], prev["cpu"])
+                    best[name] = res
+        b, a = best["before"], best["after"]
+        extra = {k: (b.get(k), a.get(k)) for k in a if k not in ("wall", "cpu")}
+        if "wall" in b and "wall" in a:
+            print(f"{label}: wall {b['wall']:.4g} -> {a['wall']:.4g} s ({b['wall'] / a['wall']:.2f}x), "
+                  f"cpu {b['cpu']:.4g} -> {a['cpu']:.4g} s ({b['cpu'] / a['cpu']:.2f}x); {extra}", flush=True)
+        else:
+            print(f"{label}: before {b}, after {a}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
