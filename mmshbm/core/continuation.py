@@ -26,7 +26,7 @@ from collections.abc import Callable
 import numpy as np
 
 from .bordered import bordered_solve as _bordered_solve  # noqa: F401 (the benchmarks' name)
-from .family import FamilyGuard, jump
+from .family import FAMILY_RECORD, FamilyGuard, family_value, jump
 from .options import ContinuationOptions, ContinuationProblem, ContinuationResult, ContinuationState
 from .pinned import PinnedFailure
 from .special_points import SpecialPoint
@@ -304,7 +304,7 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
 
 def _backfill(problem, u, t, frontier: float, landing: float, opt: ContinuationOptions) -> list:
     """The family below a jump's landing point: continued backwards from it (plain path
-    following) until it leaves the family (mode share refined onto ``family_share``) or
+    following) until it leaves the family (its family measure refined onto ``family_share``) or
     reaches the frontier. Returns the points in increasing amplitude, as tuples
     (u, iterations, history, record, tangent oriented to growing amplitude), without the
     landing point."""
@@ -312,12 +312,13 @@ def _backfill(problem, u, t, frontier: float, landing: float, opt: ContinuationO
         ds=opt.ds, ds_min=opt.ds_min, ds_max=opt.ds_max, max_steps=opt.max_excursion,
         newton_tol=opt.newton_tol, step_tol=opt.step_tol, max_newton=opt.max_newton, growth=opt.growth,
         max_angle=opt.max_angle, corner_ds=opt.corner_ds, follow="path",
-        bounds={"amplitude": (frontier, landing * (1 + 1e-6)), "mode_share": (opt.family_share, 2.0)})
+        bounds={"amplitude": (frontier, landing * (1 + 1e-6)), FAMILY_RECORD: (opt.family_share, 2.0)})
     res = continue_branch(problem, u, -t, back, catch_interrupt=False)
     out = []
     for i in range(len(res.u) - 1, 0, -1):
         rec = {k: v[i] for k, v in res.records.items()}
-        if rec.get("mode_share", 1.0) < opt.family_share * (1 - 1e-6):
+        share = family_value(rec)
+        if share is not None and share < opt.family_share * (1 - 1e-6):
             continue
         tangent = res.u[i - 1] - res.u[i]
         tangent /= max(np.linalg.norm(tangent), 1e-300)

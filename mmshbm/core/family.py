@@ -38,23 +38,54 @@ import numpy as np
 
 from .pinned import PinnedFailure, solve_at_amplitude
 
-__all__ = ["FamilyGuard", "jump"]
+__all__ = ["FAMILY_RECORD", "FamilyGuard", "family_value", "jump"]
 
 log = logging.getLogger(__name__)
+
+#: the record that decides membership of the family: the fundamental harmonic's share of
+#: the motion (MMS-HBM's ``fundamental_share``; see docs/resonances.md)
+FAMILY_RECORD = "fundamental_share"
+
+
+def family_value(rec: dict) -> float | None:
+    """The family measure of a point's record: ``rec["fundamental_share"]``, or the
+    starting mode's share ``rec["mode_share"]`` for records without it (branches saved by
+    earlier versions); None when the record has neither."""
+    value = rec.get(FAMILY_RECORD)
+    if value is None:
+        value = rec.get("mode_share")
+    return None if value is None else float(value)
+
 
 #: a branch that left the family and comes back onto it this far (relative) below the
 #: frontier is going back down the family: a loop (a passage may dip less than this)
 _LOOP_DROP = 0.05
 
 
+#: a stretch of the branch above the frontier whose amplitude grows by this factor while
+#: its frequency grows by less than _LOCK_FREQUENCY (relative) is locked onto ω_j/k: a
+#: tongue climbing without folding
+_LOCK_AMPLITUDE = 1.5
+_LOCK_FREQUENCY = 0.005
+
+
 class FamilyGuard:
     """Bookkeeping of the family's frontier along a branch (see the module docstring).
+
+    A point is on the family when the fundamental harmonic carries at least
+    ``family_share`` of the kinetic energy (:func:`family_value`), or when it continues the
+    family from its frontier without folding: amplitude and frequency still growing,
+    the frequency not locked (a *pending* stretch, where a higher harmonic holds most of
+    the kinetic energy without resonating). A pending stretch that folds back (amplitude
+    or frequency turning) or locks its frequency was the climb into a tongue: its points
+    are marked off the family after the fact and the frontier goes back to where the
+    stretch began.
 
     Parameters
     ----------
     family_share : float
-        Share of the kinetic energy in the starting mode above which a point is on the
-        family.
+        Share of the kinetic energy in the fundamental harmonic above which a point is
+        on the family.
     max_excursion : int
         Steps allowed off the family (or on it below the frontier) before a jump.
     """
@@ -63,31 +94,47 @@ class FamilyGuard:
         self.family_share = family_share
         self.max_excursion = max_excursion
         self.frontier = -math.inf  # largest amplitude on the family so far
+        self.frontier_frequency = math.nan
         self.frontier_index = -1
         self.away = 0  # steps since the frontier last moved
         self.left = False  # the branch left the family since the frontier moved
         self.clean = []  # indices of frontier points (for extrapolation)
-        self.shares = {}  # mode share of the frontier points
-        self.active = False  # the problem records mode_share
+        self.shares = {}  # family measure of the frontier points
+        self.pending = []  # (index, amplitude, frequency, record) of a pending stretch
+        self.active = False  # the problem records the family measure
 
     def observe(self, index: int, rec: dict) -> str | None:
         """Register the accepted point ``index`` with record ``rec``; sets
-        ``rec["on_family"]`` and returns ``"jump"`` when a jump is due, else None."""
-        share = rec.get("mode_share")
+        ``rec["on_family"]`` (and resets it on the points of a pending stretch that
+        turns out to be a tongue) and returns ``"jump"`` when a jump is due, else None."""
+        share = family_value(rec)
         if share is None:
             return None
         self.active = True
         amplitude = float(rec["amplitude"])
+        frequency = float(rec.get("frequency", math.nan))
         on = bool(share >= self.family_share)
-        rec["on_family"] = 1.0 if on else 0.0
-        if on and amplitude >= self.frontier * (1 - 1e-9):
-            self.frontier = amplitude
-            self.frontier_index = index
-            self.away = 0
-            self.left = False
-            self.clean.append(index)
-            self.shares[index] = float(share)
+        if self.pending:
+            _, a_last, f_last, _ = self.pending[-1]
+            advancing = amplitude >= a_last * (1 - 1e-9) and not frequency < f_last * (1 - 1e-9)
+            if advancing and not self._locked(amplitude, frequency):
+                if not on:
+                    self.pending.append((index, amplitude, frequency, rec))
+                    rec["on_family"] = 1.0
+                    return None
+                self._confirm()
+            else:
+                self._revert()
+        ahead = amplitude >= self.frontier * (1 - 1e-9)
+        if on and ahead:
+            self._advance(index, rec, share)
             return None
+        if (not on and ahead and self.away == 0 and not self.left and self.frontier_index >= 0
+                and not frequency < self.frontier_frequency * (1 - 1e-9)):
+            self.pending = [(index, amplitude, frequency, rec)]
+            rec["on_family"] = 1.0
+            return None
+        rec["on_family"] = 1.0 if on else 0.0
         self.away += 1
         if not on:
             self.left = True
@@ -97,15 +144,40 @@ class FamilyGuard:
             return "jump"
         return None
 
-    def jumped(self, index: int, rec: dict) -> None:
-        """Register the point a jump landed on (a new frontier)."""
+    def _advance(self, index: int, rec: dict, share: float) -> None:
         rec["on_family"] = 1.0
         self.frontier = float(rec["amplitude"])
+        self.frontier_frequency = float(rec.get("frequency", math.nan))
         self.frontier_index = index
         self.away = 0
         self.left = False
         self.clean.append(index)
-        self.shares[index] = float(rec.get("mode_share", 1.0))
+        self.shares[index] = float(share)
+
+    def _locked(self, amplitude: float, frequency: float) -> bool:
+        _, a0, f0, _ = self.pending[0]
+        return amplitude >= _LOCK_AMPLITUDE * a0 and frequency <= f0 * (1 + _LOCK_FREQUENCY)
+
+    def _confirm(self) -> None:
+        """The pending stretch came back to a fundamental majority without folding: it is
+        the family (its last point becomes the frontier)."""
+        for index, _, _, rec in self.pending:
+            self._advance(index, rec, family_value(rec))
+        self.pending = []
+
+    def _revert(self) -> None:
+        """The pending stretch folded or locked: it was a tongue's climb."""
+        for _, _, _, rec in self.pending:
+            rec["on_family"] = 0.0
+        self.away = len(self.pending)
+        self.left = True
+        self.pending = []
+
+    def jumped(self, index: int, rec: dict) -> None:
+        """Register the point a jump landed on (a new frontier)."""
+        self.pending = []
+        share = family_value(rec)
+        self._advance(index, rec, 1.0 if share is None else share)
 
     def origins(self, amplitudes) -> list[int]:
         """Frontier points to jump from, best first: in each of the amplitude windows
@@ -210,12 +282,22 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
         if not targets or target > targets[-1]:
             targets.append(target)
 
+    frequency_of = getattr(problem, "frequency_of", None)
+    admissible = None
+    if frequency_of is not None and math.isfinite(f_frontier) and f_frontier > 0:
+        # the trust region: a landing is accepted within 30 % of the frontier's frequency,
+        # so no iterate needs to leave [f/2, 2f]
+        def admissible(u):
+            return 0.5 * f_frontier <= frequency_of(u) <= 2.0 * f_frontier
+
     def accept(u0, target, f_pred):
-        u, nit, hist, t = solve_at_amplitude(problem, u0, target, tol=newton_tol, max_iter=3 * max_newton)
+        u, nit, hist, t = solve_at_amplitude(problem, u0, target, tol=newton_tol, max_iter=3 * max_newton,
+                                             admissible=admissible)
         rec = monitor(problem, u)
         f = rec.get("frequency", math.nan)
-        if rec.get("mode_share", 1.0) < guard.family_share:
-            raise PinnedFailure(f"landed off the family (mode share {rec['mode_share']:.3f}) at {target:.4g}")
+        share = family_value(rec)
+        if share is not None and share < guard.family_share:
+            raise PinnedFailure(f"landed off the family (fundamental share {share:.3f}) at {target:.4g}")
         if math.isfinite(f_pred) and not abs(f - f_pred) <= 0.15 * abs(f_pred):
             raise PinnedFailure(f"landed on another branch ({f:.4g} instead of about {f_pred:.4g})")
         if math.isfinite(f_frontier) and not abs(f - f_frontier) <= 0.3 * abs(f_frontier):
@@ -238,23 +320,39 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
                 log.debug("jump from %d by filtering: %s", origin, last_error)
     for origin in guard.origins(lambda i: float(recs[i]["amplitude"])):
         A_o = float(recs[origin]["amplitude"])
-        u_o = us[origin]
         for target in targets:
             if target <= A_o * (1 + 1e-12):
                 continue
-            u0 = None
-            if predictor is not None:
+            for name, u0 in _predictors(problem, us, recs, guard, origin, target, amplitude_max):
                 try:
-                    u0 = predictor(u_o, A_o, target, amplitude_max)
-                except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
-                    u0 = None
-            if u0 is None:
-                u0 = _extrapolated(us, recs, [i for i in guard.clean if i <= origin], target)
-            try:
-                f_pred = monitor(problem, u0).get("frequency", math.nan)
-                u, nit, hist, rec, t = accept(u0, target, f_pred)
-                return u, nit, hist, rec, t, target, origin
-            except (PinnedFailure, ArithmeticError, ValueError) as err:
-                last_error = str(err)
-            log.debug("jump attempt from %d (%.4g) to %.4g: %s", origin, A_o, target, last_error)
+                    f_pred = problem.frequency_of(u0) if frequency_of is not None else \
+                        monitor(problem, u0).get("frequency", math.nan)
+                    u, nit, hist, rec, t = accept(u0, target, f_pred)
+                    return u, nit, hist, rec, t, target, origin
+                except (PinnedFailure, ArithmeticError, ValueError) as err:
+                    last_error = str(err)
+                log.debug("jump attempt from %d (%.4g) to %.4g by the %s predictor: %s", origin, A_o, target,
+                          name, last_error)
     raise PinnedFailure(f"jump from amplitude {frontier:.4g} failed: {last_error}")
+
+
+def _predictors(problem, us, recs, guard, origin: int, target: float, amplitude_max: float):
+    """Starts of a jump's pinned solve at ``target`` from the family point ``origin``, in
+    order: the problem's family predictor (along an auxiliary low-harmonic branch), the
+    polynomial extrapolation through the last frontier points, and the origin scaled to
+    the target amplitude (``problem.scaled_state``: the homogeneous limit far above the
+    gap). Yields (name, u0); each is tried until one lands."""
+    A_o = float(recs[origin]["amplitude"])
+    u_o = us[origin]
+    predictor = getattr(problem, "family_predictor", None)
+    if predictor is not None:
+        try:
+            yield "family", predictor(u_o, A_o, target, amplitude_max)
+        except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
+            pass
+    clean = [i for i in guard.clean if i <= origin]
+    if clean:
+        yield "extrapolated", _extrapolated(us, recs, clean, target)
+    scaled = getattr(problem, "scaled_state", None)
+    if scaled is not None and A_o > 0:
+        yield "scaled", scaled(u_o, target / A_o)

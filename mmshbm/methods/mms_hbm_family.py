@@ -15,6 +15,19 @@ class FamilyMixin:
     """Family bookkeeping of an MMS-HBM problem (needs the attributes of ``MMSHBMProblem``)."""
 
     # ------------------------------------------------------------------ jumps
+    def frequency_of(self, u: np.ndarray) -> float:
+        """Ω/2π (Hz) of the scaled unknowns ``u`` (no evaluation: the trust region of the
+        jumps' Newton iterates)."""
+        return float(u[-1] * self.colscale[-1] / (2 * np.pi))
+
+    def scaled_state(self, u: np.ndarray, factor: float) -> np.ndarray:
+        """``u`` with every displacement coefficient (and pole unknown) times ``factor``,
+        Ω kept: far above the gap a piecewise-linear system is nearly homogeneous, so
+        this predicts the family at ``factor`` times the amplitude of ``u``."""
+        out = np.array(u, dtype=float)
+        out[:-1] *= factor
+        return out
+
     def family_predictor(self, u_from: np.ndarray, amplitude_from: float, amplitude_to: float,
                          amplitude_max: float) -> np.ndarray:
         """Predicted unknowns on the starting mode's family at ``amplitude_to``, from the
@@ -161,6 +174,31 @@ class FamilyMixin:
         D0, B, w2, Rs, keep, static, rtol = fast["cond"]
         return float(_start_mode_share(np.ascontiguousarray(a), self.unpack_eta(u), omega, dD, self._pole_k,
                                        pole_j, self._pole_w2, B, w2, keep, s0, s, sv))
+
+    def harmonic_energies(self, u: np.ndarray) -> np.ndarray:
+        """Period-mean kinetic energy (J) of each harmonic k = 0..H of the motion, shape (H+1,),
+        from the condensed stiffness alone: T_k = −(Ω/8) a_kᵀ ∂D_k/∂Ω a_k (with the pole
+        unknowns' part). Exact for the condensation used (no modal basis needed): the
+        kinetic energy of the DOFs with mass in harmonic k, whatever their shape."""
+        a, omega = self.unpack(u)
+        _, dD = self._condensed(omega, True)
+        eta = self.unpack_eta(u)
+        quad = np.einsum("ki,kij,kj->k", a, dD, a)
+        for p, k in enumerate(self._pole_k):
+            quad[k] -= 2.0 * k * k * omega * eta[p] ** 2
+        energies = -omega / 8.0 * quad
+        energies[0] = 0.0
+        return np.maximum(energies, 0.0)
+
+    def fundamental_share(self, u: np.ndarray) -> float:
+        """Share (0..1) of the period-mean kinetic energy in the fundamental harmonic (k = 1),
+        all DOFs together (:meth:`harmonic_energies`): the family measure of
+        :mod:`mmshbm.core.family` (see docs/resonances.md). A change of the fundamental's
+        shape (toward the closed-contact mode) leaves it unchanged; energy moving into a
+        harmonic k >= 2 (near an internal resonance kΩ ≈ ω_j) lowers it."""
+        energies = self.harmonic_energies(u)
+        total = float(energies[1:].sum())
+        return float(energies[1] / total) if total > 0 else 1.0
 
     def _share_setup(self):
         """(row, s0, s, sv, pole_j): the starting mode's projections for

@@ -7,11 +7,13 @@ A backbone is meant to be the nonlinear continuation of one linear mode up to a 
 study summaries):
 
 ``"left_family"``
-    The starting mode's share of the period-mean kinetic energy (``records["mode_share"]``,
-    0..1, see :mod:`mmshbm.core.modal_energy`) falls below
-    :attr:`CheckThresholds.min_mode_share` (default 0.5): from there on the motion is
-    mostly another mode, e.g. a k:1 internal-resonance tongue or another family of
-    periodic motions. The message says where it leaves and whether it comes back.
+    The family measure falls below :attr:`CheckThresholds.min_mode_share` (default 0.5):
+    the fundamental harmonic's share of the motion (``records["fundamental_share"]``,
+    MMS-HBM, see docs/resonances.md) or, for the methods without it, the starting mode's
+    share of the period-mean kinetic energy (``records["mode_share"]``, 0..1, see
+    :mod:`mmshbm.core.modal_energy`): from there on the motion is mostly another
+    harmonic, a k:1 internal-resonance tongue or another family of periodic motions. The
+    message says where it leaves and whether it comes back.
 ``"penetration"``
     The contact DOF, as the method represents it (for harmonic balance the truncated
     Fourier series), passes its stop by more than :attr:`CheckThresholds.penetration`
@@ -173,7 +175,11 @@ def check_branch(branch, thresholds: CheckThresholds | None = None, *, warn: boo
             except (ValueError, AttributeError, np.linalg.LinAlgError) as err:
                 log.info("no mode shares for this branch: %s", err)
                 shares = None
-        if shares is not None:
+        fundamental = branch.records.get("fundamental_share")
+        if fundamental is not None and len(fundamental) == len(branch):
+            out += _family(branch, _family_measure(branch, np.asarray(fundamental, dtype=float), th), th,
+                           fundamental=True)
+        elif shares is not None:
             out += _family(branch, np.asarray(shares, dtype=float), th)
         out += _contact(branch, solver, th)
     if not branch.status.startswith("bound:"):
@@ -257,7 +263,26 @@ def _where(branch, i: int) -> str:
     return f"point {i}, {branch.frequency[i]:.4g} Hz, {a}"
 
 
-def _family(branch, shares: np.ndarray, th: CheckThresholds) -> list[Finding]:
+def _family_measure(branch, fundamental: np.ndarray, th: CheckThresholds) -> np.ndarray:
+    """The fundamental's share where the point is off the family, 1 where it is on it: a
+    branch followed plainly is classified by replaying the family guard over its points
+    (:class:`mmshbm.core.family.FamilyGuard`: a stretch where a higher harmonic holds most
+    of the kinetic energy but the backbone keeps rising without folding or locking is the
+    family, not a tongue)."""
+    if "on_family" in branch.records:
+        return fundamental
+    from ..core.family import FamilyGuard
+
+    guard = FamilyGuard(th.min_mode_share, max_excursion=len(branch) + 1)
+    recs = [{"amplitude": float(branch.amplitude[i]), "frequency": float(branch.frequency[i]),
+             "fundamental_share": float(fundamental[i])} for i in range(len(branch))]
+    for i, rec in enumerate(recs):
+        guard.observe(i, rec)
+    on = np.array([rec.get("on_family", 1.0) for rec in recs]) > 0.5
+    return np.where(on, np.maximum(fundamental, 1.0), fundamental)
+
+
+def _family(branch, shares: np.ndarray, th: CheckThresholds, fundamental: bool = False) -> list[Finding]:
     low = np.flatnonzero(shares < th.min_mode_share)
     if not len(low):
         return []
@@ -268,8 +293,10 @@ def _family(branch, shares: np.ndarray, th: CheckThresholds) -> list[Finding]:
     first, worst = int(low[0]), int(low[np.argmin(shares[low])])
     back = np.flatnonzero(shares[first:] >= th.min_mode_share)
     ended_low = shares[-1] < th.min_mode_share
-    head = (f"{branch.method} branch leaves the family of linear mode {mode}: that mode's share of the "
-            f"kinetic energy falls below {th.min_mode_share:g} at {_where(branch, first)} "
+    what = ("the fundamental harmonic's share of the kinetic energy" if fundamental
+            else "that mode's share of the kinetic energy")
+    head = (f"{branch.method} branch leaves the family of linear mode {mode}: {what} "
+            f"falls below {th.min_mode_share:g} at {_where(branch, first)} "
             f"(lowest {shares[worst]:.3g} at point {worst})")
     if ended_low:
         tail = (f" and is {shares[-1]:.3g} at the end ({_where(branch, len(shares) - 1)}): "

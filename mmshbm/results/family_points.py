@@ -14,6 +14,8 @@ import logging
 
 import numpy as np
 
+from ..core.family import family_value
+
 __all__ = ["family_front", "frequency_at"]
 
 log = logging.getLogger(__name__)
@@ -24,13 +26,14 @@ def family_front(branch) -> np.ndarray:
     points on the family whose amplitude is at least every earlier family point's.
     Excursions into internal-resonance tongues, and the way back down a loop, are left
     out. On the family: ``records["on_family"]`` (set by the continuation's family guard);
-    for a branch without it (plain path following, the baselines) the starting mode's
-    energy share ``records["mode_share"]`` is at least ``family_share``; all points when
+    for a branch without it (plain path following, the baselines) the family measure
+    (``records["fundamental_share"]``, else ``records["mode_share"]``) is at least
+    ``family_share``; all points when
     the branch has neither record."""
     if "on_family" in branch.records:
         on = np.asarray(branch.records["on_family"], dtype=float) > 0.5
-    elif "mode_share" in branch.records:
-        on = np.asarray(branch.records["mode_share"], dtype=float) >= _family_share(branch)
+    elif _share_record(branch) is not None:
+        on = np.asarray(_share_record(branch), dtype=float) >= _family_share(branch)
     else:
         on = np.ones(len(branch), dtype=bool)
     front, best = [], -np.inf
@@ -76,6 +79,14 @@ def frequency_at(branch, amplitude: float, *, interpolate: bool = False, tol: fl
     return float("nan")
 
 
+def _share_record(branch):
+    """The branch's family measure per point (:func:`mmshbm.core.family.family_value`)."""
+    from ..core.family import FAMILY_RECORD
+
+    share = branch.records.get(FAMILY_RECORD)
+    return branch.records.get("mode_share") if share is None else share
+
+
 def _family_share(branch) -> float:
     return float(dict(branch.metadata.get("continuation") or {}).get("family_share", 0.5))
 
@@ -88,7 +99,7 @@ def _on_segment(branch, i: int, j: int, a: float, interpolate: bool, tol: float,
 
     A, f = branch.amplitude, branch.frequency
     s = (a - A[i]) / (A[j] - A[i])
-    share = branch.records.get("mode_share")
+    share = _share_record(branch)
     if require_share and share is None:
         return float("nan")
     if interpolate:
@@ -105,6 +116,6 @@ def _on_segment(branch, i: int, j: int, a: float, interpolate: bool, tol: float,
             return float("nan")
         log.warning("frequency_at(%g): the pinned solve failed (%s); interpolating", a, err)
         return float(f[i] + s * (f[j] - f[i]))
-    if require_share and float(record.get("mode_share", 0.0)) < _family_share(branch):
+    if require_share and (family_value(record) or 0.0) < _family_share(branch):
         return float("nan")
     return float(record["frequency"])
