@@ -94,3 +94,65 @@ def test_a_climb_that_keeps_rising_is_the_family():
     for i, r in enumerate(recs):
         guard.observe(i, r)
     assert [r["on_family"] for r in recs] == [1] * 5 and guard.frontier_index == 4
+
+
+# ----------------------------------------------------------------- clearances
+@pytest.fixture(scope="module")
+def clearance(stiff_chain):
+    return mmshbm.Model.from_matrices(stiff_chain.M, stiff_chain.K, [2, 2], [0.01, 0.01], [1, -1])
+
+
+def test_a_clearance_measures_its_amplitude_at_a_dof_with_mass(clearance):
+    """The massless node between the stops never passes them: by default the amplitude is
+    that of the mass next to it (the DOF with mass that moves most with the node), and
+    the branch reaches 10 gaps."""
+    assert clearance.amplitude_dof == 1
+    b = mmshbm.backbone(clearance, harmonics=7)
+    assert b.status == "bound:amplitude" and b.amplitude[-1] == pytest.approx(0.1, rel=1e-9)
+
+
+def test_an_amplitude_dof_that_cannot_pass_the_clearance_is_refused(clearance):
+    with pytest.raises(ValueError, match="massless and held between two stops.*DOF 1"):
+        mmshbm.backbone(clearance.with_amplitude_dof(2), harmonics=7)
+    # within the clearance it is a valid choice
+    b = mmshbm.backbone(clearance.with_amplitude_dof(2), harmonics=7, max_amplitude=0.009)
+    assert b.status == "bound:amplitude"
+
+
+def test_the_force_check_reads_each_stop_on_its_own():
+    """Two stops push in opposite directions: the net force on the node is ±(peak) over a
+    period, which read as one stop's force would be a pull of 1 of the peak. Per stop, the
+    pull left is the Fourier series' truncation (below the 0.05 threshold at H = 15 on
+    this oscillator: no finding; a net-force reading gives 1)."""
+    model = mmshbm.ClearanceOscillator(1.0, 1.0, 4.0, 1.0).model()
+    b = mmshbm.backbone(model, harmonics=15, max_amplitude=5.0)
+    pulls = [f["value"] for f in b.metadata["checks"] if f["kind"] == "negative_force"]
+    assert not pulls or -min(pulls) < 0.5
+
+
+# ----------------------------------------------------------------- trust region
+def test_jump_iterates_stay_near_the_branch():
+    """At H = 15 the beam's jumps solve points at pinned amplitudes; an iterate that ran
+    away to 14.9 kHz (the branch lives at 45-71 Hz) made the modal condensation warn that
+    a harmonic passed its last mode. The trust region keeps every iterate within [f/2, 2f]
+    of the frontier's frequency."""
+    import warnings
+
+    beam = mmshbm.default_beam().model(21)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        b = mmshbm.backbone(beam, harmonics=15)
+    assert b.status == "bound:amplitude"
+    assert not [w for w in caught if "the modal condensation leaves out" in str(w.message)]
+
+
+def test_a_pinned_solve_stops_at_the_trust_region(stiff_chain):
+    from mmshbm.core.pinned import PinnedFailure, solve_at_amplitude
+
+    b = mmshbm.backbone(stiff_chain, harmonics=3, follow="path", max_amplitude=0.03)
+    p, u = b.solver, b.states[-1]
+    f = p.frequency_of(u)
+    assert f == pytest.approx(b.frequency[-1], rel=1e-12)
+    u0 = p.scaled_state(u, 1.5)
+    with pytest.raises(PinnedFailure, match="trust region"):
+        solve_at_amplitude(p, u0, 0.045, admissible=lambda v: abs(p.frequency_of(v) / f - 1) < 1e-9)

@@ -97,6 +97,7 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
             raise ValueError("the model's gap is 0: pass max_amplitude (m)")
         max_amplitude = 10.0 * gap
     max_amplitude = check.positive("max_amplitude", max_amplitude)
+    model.check_amplitude_reach(max_amplitude)
     if start_amplitude is None:
         start_amplitude = 0.5 * gap if gap > 0 else 0.01 * max_amplitude
     start_amplitude = check.positive("start_amplitude", start_amplitude)

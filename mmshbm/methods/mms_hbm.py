@@ -387,7 +387,7 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin):
             "energy": float(out[1]),
             "contact_force_max": float(out[2]),
             "mode_share": self.mode_share(u),
-            "fundamental_share": self.fundamental_share(u),
+            **self.family_records(u),
         }
 
 

@@ -200,6 +200,26 @@ class FamilyMixin:
         total = float(energies[1:].sum())
         return float(energies[1] / total) if total > 0 else 1.0
 
+    def family_records(self, u: np.ndarray) -> dict:
+        """The per-point records of the family guard: ``fundamental_share``
+        (:meth:`fundamental_share`) and, for the harmonic k >= 2 with the most kinetic
+        energy, the detuning ``resonance_detuning`` = kΩ/ω_j − 1 from the nearest tracked
+        open-contact mode j (``resonance_harmonic`` k, ``resonance_mode`` j, 1-based; 0
+        and NaN for H = 1). A detuning that changes sign along the branch is an internal
+        resonance crossed."""
+        energies = self.harmonic_energies(u)
+        total = float(energies[1:].sum())
+        out = {"fundamental_share": float(energies[1] / total) if total > 0 else 1.0,
+               "resonance_harmonic": 0.0, "resonance_mode": 0.0, "resonance_detuning": float("nan")}
+        if self.H >= 2 and total > 0:
+            k = int(np.argmax(energies[2:])) + 2
+            freqs = self.tracked_frequencies
+            f = k * float(u[-1] * self.colscale[-1]) / (2 * np.pi)
+            j = int(np.argmin(np.abs(freqs - f)))
+            out.update(resonance_harmonic=float(k), resonance_mode=float(j + 1),
+                       resonance_detuning=float(f / freqs[j] - 1.0))
+        return out
+
     def _share_setup(self):
         """(row, s0, s, sv, pole_j): the starting mode's projections for
         :func:`~mmshbm.core.corrector_kernels._start_mode_share` (modal back end; built once)."""

@@ -346,7 +346,7 @@ def _contact(branch, solver, th: CheckThresholds) -> list[Finding]:
     # (numpy calls per point cost more than the signals of a small model)
     n_pts, n_k = len(branch), len(dofs)
     Q = np.empty((n_pts, n_k, n))
-    L = np.zeros((n_pts, n_k if cheap else len(model.contacts), n))
+    L = np.zeros((n_pts, n_k, n))  # the force of each stop, > 0 when it pushes
     amp = np.maximum(np.asarray(branch.amplitude, dtype=float), 1e-300)[:, None, None]
     scale = np.where(gaps[None] > 0, gaps[None], amp)  # (n_pts, n_k, 1)
     many = cheap and hasattr(solver, "contact_signals_many")
@@ -359,17 +359,18 @@ def _contact(branch, solver, th: CheckThresholds) -> list[Finding]:
             Q[i] = solver.time_signals(u, dofs, n)[1]
             # the force right after the motion: a solver may cache the last point's orbit
             if np.max((sides * Q[i] - gaps) / scale[i]) >= -th.penetration:
-                L[i] = np.atleast_2d(solver.contact_force(u, n)[1])
+                L[i] = _stop_forces(model, Q[i], np.atleast_2d(solver.contact_force(u, n)[1]))
     pen = np.max((sides[None] * Q - gaps[None]) / scale, axis=(1, 2)) if n_pts else np.zeros(0)
     # a contact that never comes near its stop carries no force but Newton's residual
     need_force = pen >= -th.penetration
     neg = np.zeros(n_pts)
-    if n_pts:
+    if n_pts:  # per stop: its pull against its own peak push
         floor = th.force_floor * f_scale
-        peak = np.maximum(L.max(axis=(1, 2)), floor)
-        lo = L.min(axis=(1, 2))
-        bad = need_force & (peak > 0) & (lo < -floor)
-        neg[bad] = -lo[bad] / peak[bad]
+        near = np.max((sides[None] * Q - gaps[None]) / scale, axis=2) >= -th.penetration  # (n_pts, n_k)
+        peak = np.maximum(L.max(axis=2), floor)
+        lo = L.min(axis=2)
+        ratio = np.where(near & (peak > 0) & (lo < -floor), -lo / peak, 0.0)
+        neg = ratio.max(axis=1) * need_force
     out = []
     bad = np.flatnonzero(pen > th.penetration)
     if len(bad):
@@ -393,6 +394,35 @@ def _contact(branch, solver, th: CheckThresholds) -> list[Finding]:
             f"{_where(branch, int(bad[0]))}; worst {neg[worst]:.3g} of the peak at point {worst}"
             + (" (a truncation effect of the Fourier series)" if branch.harmonics else ""),
             int(bad[0]), int(bad[-1]), float(-neg[worst])))
+    return out
+
+
+def _stop_forces(model, q: np.ndarray, lam: np.ndarray) -> np.ndarray:
+    """The force of each stop (rows in the order of ``model.contacts``, > 0 when it pushes)
+    from a solver's contact forces ``lam``: one row per contact (already per stop), or one
+    per contact DOF (:func:`~mmshbm.model.contact.admissible_intervals` order; the net force
+    the structure needs, > 0 for a push of an upper stop, < 0 for one of a lower stop).
+    On a DOF between two stops the net force is the upper stop's where the DOF is nearer
+    to it and the lower one's elsewhere: the two never push at once. ``q`` (n_contacts, n)
+    is the motion of each contact's DOF."""
+    from ..model.contact import admissible_intervals
+
+    contacts = model.contacts
+    if lam.shape[0] == len(contacts):
+        return lam
+    dofs, lo, hi = admissible_intervals(contacts)
+    if lam.shape[0] != len(dofs):  # a solver reporting fewer rows: the same force for every stop
+        return np.broadcast_to(lam, (len(contacts), lam.shape[1]))
+    row = {int(d): i for i, d in enumerate(dofs)}
+    out = np.zeros((len(contacts), lam.shape[1]))
+    for i, ct in enumerate(contacts):
+        r = row[ct.dof]
+        if np.isfinite(lo[r]) and np.isfinite(hi[r]):
+            mid = 0.5 * (lo[r] + hi[r])
+            mine = q[i] >= mid if ct.side > 0 else q[i] < mid
+            out[i] = np.where(mine, ct.side * lam[r], 0.0)
+        else:
+            out[i] = lam[r]
     return out
 
 
