@@ -277,7 +277,7 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
             det_sign["last"] = sign or det_sign["last"]
             action = guard.observe(len(us), rec) if guard is not None else None
             ds_prev = ds
-            ds = min(opt.ds_max, _next_step(ds, nit, hist, opt))
+            ds = min(_step_cap(opt, recs[-1], rec, ds_prev), _next_step(ds, nit, hist, opt))
             accept(u_new, nit, ds_prev, hist, rec, t_new, ds, step, new_special)
             # κ ≈ dt/ds from the last step, for the next predictor (not across a fold's turn)
             curvature["k"] = _curvature(t, t_new, ds_prev)
@@ -324,6 +324,27 @@ def _backfill(problem, u, t, frontier: float, landing: float, opt: ContinuationO
         tangent /= max(np.linalg.norm(tangent), 1e-300)
         out.append((res.u[i], int(res.newton_iterations[i]), res.residual_histories[i], rec, tangent))
     return out
+
+
+#: the cap on the step grows past ds_max up to the step that would change the amplitude by
+#: this fraction (linearly extrapolated from the last step), at most _CAP_GROWTH ds_max
+_CAP_AMPLITUDE = 0.02
+_CAP_GROWTH = 1000.0
+
+
+def _step_cap(opt: ContinuationOptions, rec_prev: dict, rec_new: dict, ds_prev: float) -> float:
+    """The largest next step: ``ds_max``, or more where the scaled unknowns move much while
+    the amplitude barely does (a branch whose unknowns grow along a direction that moves
+    the amplitude DOF little, e.g. a pole unknown near kΩ = ω_j): up to the step that
+    changes the amplitude by 2 %. Depends only on the last two points, so a resumed run
+    takes the same steps."""
+    a0, a1 = rec_prev.get("amplitude"), rec_new.get("amplitude")
+    if a0 is None or a1 is None or not ds_prev > 0:
+        return opt.ds_max
+    da = abs(float(a1) - float(a0))
+    if not da > 0:
+        return opt.ds_max
+    return max(opt.ds_max, min(_CAP_GROWTH * opt.ds_max, _CAP_AMPLITUDE * abs(float(a1)) * ds_prev / da))
 
 
 def _check_bound_names(bounds, rec: dict) -> None:

@@ -207,6 +207,14 @@ class FamilyGuard:
         return out
 
 
+#: pinned solves a jump may try before it gives up (bounds the cost of a failing jump)
+_MAX_SOLVES = 40
+
+
+class _Exhausted(PinnedFailure):
+    """A jump used up its pinned solves."""
+
+
 def _extrapolated(us: list, recs: list, clean: list, amplitude: float) -> np.ndarray:
     """u at ``amplitude`` by a polynomial in the amplitude (degree <= 2) through the last
     clean frontier points."""
@@ -301,7 +309,12 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
         def admissible(u):
             return 0.5 * f_frontier <= frequency_of(u) <= 2.0 * f_frontier
 
+    solves = [0]
+
     def accept(u0, target, f_pred):
+        if solves[0] >= _MAX_SOLVES:
+            raise _Exhausted(f"{_MAX_SOLVES} pinned solves tried")
+        solves[0] += 1
         u, nit, hist, t = solve_at_amplitude(problem, u0, target, tol=newton_tol, max_iter=3 * max_newton,
                                              admissible=admissible)
         rec = monitor(problem, u)
@@ -326,6 +339,8 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
                 if nearer is not None:
                     u, nit, hist, rec, t, target = nearer
                 return u, nit, hist, rec, t, target, origin
+            except _Exhausted:
+                break
             except (PinnedFailure, ArithmeticError, ValueError, RuntimeError) as err:
                 last_error = f"filtered passage: {err}"
                 log.debug("jump from %d by filtering: %s", origin, last_error)
@@ -340,6 +355,9 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
                         monitor(problem, u0).get("frequency", math.nan)
                     u, nit, hist, rec, t = accept(u0, target, f_pred)
                     return u, nit, hist, rec, t, target, origin
+                except _Exhausted:
+                    raise PinnedFailure(f"jump from amplitude {frontier:.4g} failed after {_MAX_SOLVES} "
+                                        f"pinned solves: {last_error}") from None
                 except (PinnedFailure, ArithmeticError, ValueError) as err:
                     last_error = str(err)
                 log.debug("jump attempt from %d (%.4g) to %.4g by the %s predictor: %s", origin, A_o, target,

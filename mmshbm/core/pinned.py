@@ -127,7 +127,8 @@ def solve_at_amplitude(problem, u0: np.ndarray, amplitude: float, *, tol: float 
                 continue
             try:
                 R_t = problem.evaluate(trial, jacobian=False)
-                A_t, _ = amplitude_and_gradient(problem, trial)
+                A_t = (problem.amplitude_value(trial) if hasattr(problem, "amplitude_value")
+                       else amplitude_and_gradient(problem, trial)[0])
                 n_t = max(float(np.abs(R_t).max()), abs(A_t / amplitude - 1.0))
             except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError):
                 n_t = math.inf

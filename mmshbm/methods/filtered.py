@@ -63,6 +63,11 @@ class FilteredProblem:
     def amplitude_and_gradient(self, u: np.ndarray):
         return amplitude_and_gradient(self.problem, u)
 
+    def amplitude_value(self, u: np.ndarray) -> float:
+        if hasattr(self.problem, "amplitude_value"):
+            return self.problem.amplitude_value(u)
+        return amplitude_and_gradient(self.problem, u)[0]
+
 
 def _resonant_harmonic(problem, u: np.ndarray, mode: int, exclude) -> int | None:
     """The harmonic k >= 1 (not in ``exclude``) of the largest energy share of a mode

@@ -163,13 +163,10 @@ class SignalsMixin:
         row = Ql[int(np.searchsorted(self.model.l, self.amplitude_dof))]
         return np.concatenate([[row[0]], row[1::2]])
 
-    def amplitude_and_gradient(self, u: np.ndarray) -> tuple[float, np.ndarray]:
-        """The amplitude (m) and its gradient with respect to the scaled unknowns.
-
-        The amplitude is the largest value of a smooth periodic function over τ, so its
-        derivative is that of the function at the maximiser (envelope theorem), located
-        on the fine grid and refined by Newton on q′(τ) = 0.
-        """
+    def _amplitude_peak(self, u: np.ndarray):
+        """(row, τ*, q(τ*), sign): the amplitude DOF's cosine coefficients, the time of its
+        largest excursion (fine grid, refined by Newton on q′(τ) = 0), the value there and
+        the excursion's sign."""
         a, omega = self.unpack(u)
         row = self._amplitude_row(a, omega, self.unpack_eta(u))
         sign = self._amp_sign
@@ -187,21 +184,49 @@ class SignalsMixin:
             if abs(step) < 1e-14:
                 break
         value = row @ np.cos(k * tau)
-        s = sign if sign != 0.0 else math.copysign(1.0, value)
+        return row, tau, value, (sign if sign != 0.0 else math.copysign(1.0, value))
+
+    def amplitude_value(self, u: np.ndarray) -> float:
+        """The amplitude (m) of :meth:`amplitude_and_gradient` without the gradient."""
+        _, _, value, s = self._amplitude_peak(u)
+        return float(s * value)
+
+    def amplitude_and_gradient(self, u: np.ndarray) -> tuple[float, np.ndarray]:
+        """The amplitude (m) and its gradient with respect to the scaled unknowns.
+
+        The amplitude is the largest value of a smooth periodic function over τ, so its
+        derivative is that of the function at the maximiser (envelope theorem), located
+        on the fine grid and refined by Newton on q′(τ) = 0.
+        """
+        a, omega = self.unpack(u)
+        row, tau, value, s = self._amplitude_peak(u)
+        k = np.arange(self.H + 1)
         grad = np.zeros(self.n_unknowns)
         if self._amp_in_c:
             n_a = (self.H + 1) * self.n_c
             grad[self._amp_index:n_a:self.n_c] = s * np.cos(k * tau)
-        else:  # finite differences through the recovery (amplitude DOF with mass)
-            h = 1e-7
-            for i in range(self.n_unknowns):
-                e = np.zeros(self.n_unknowns)
-                e[i] = h
-                ap, om_p = self.unpack(u + e)
-                am, om_m = self.unpack(u - e)
-                diff = (self._amplitude_row(ap, om_p, self.unpack_eta(u + e))
-                        - self._amplitude_row(am, om_m, self.unpack_eta(u - e)))
-                grad[i] = s * (diff @ np.cos(k * tau)) / (2 * h)
+        else:  # amplitude DOF with mass: the row is linear in (a, η) at fixed Ω
+            cosk = np.cos(k * tau)
+            n_a = (self.H + 1) * self.n_c
+            zero_eta = np.zeros(self.n_poles)
+            for c in range(self.n_c):  # harmonic k of the row from a_k = e_c, all k at once
+                e = np.zeros((self.H + 1, self.n_c))
+                e[:, c] = 1.0
+                grad[c:n_a:self.n_c] = s * self._amplitude_row(e, omega, zero_eta) * cosk
+            zero_a = np.zeros((self.H + 1, self.n_c))
+            for p in range(self.n_poles):
+                e_eta = np.zeros(self.n_poles)
+                e_eta[p] = 1.0
+                grad[n_a + p] = s * (self._amplitude_row(zero_a, omega, e_eta) @ cosk)
+            grad[:-1] *= self.colscale[:-1]
+            h = 1e-7  # Ω by central differences (scaled unknown)
+            e = np.zeros(self.n_unknowns)
+            e[-1] = h
+            ap, om_p = self.unpack(u + e)
+            am, om_m = self.unpack(u - e)
+            diff = (self._amplitude_row(ap, om_p, self.unpack_eta(u))
+                    - self._amplitude_row(am, om_m, self.unpack_eta(u)))
+            grad[-1] = s * (diff @ cosk) / (2 * h)
             return float(s * value), grad
         grad[-1] = 0.0
         return float(s * value), grad * self.colscale
