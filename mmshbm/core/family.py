@@ -301,13 +301,14 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
         if not targets or target > targets[-1]:
             targets.append(target)
 
+    f_lo, f_hi = _frequency_window(recs, guard, amplitude_max)
     frequency_of = getattr(problem, "frequency_of", None)
     admissible = None
-    if frequency_of is not None and math.isfinite(f_frontier) and f_frontier > 0:
-        # the trust region: a landing is accepted within 30 % of the frontier's frequency,
-        # so no iterate needs to leave [f/2, 2f]
+    if frequency_of is not None and math.isfinite(f_lo) and f_lo > 0:
+        # the trust region: a landing is accepted within 30 % of the family's frequencies,
+        # so no iterate needs to leave [f_lo/2, 2 f_hi]
         def admissible(u):
-            return 0.5 * f_frontier <= frequency_of(u) <= 2.0 * f_frontier
+            return 0.5 * f_lo <= frequency_of(u) <= 2.0 * f_hi
 
     solves = [0]
 
@@ -324,8 +325,9 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
             raise PinnedFailure(f"landed off the family (fundamental share {share:.3f}) at {target:.4g}")
         if math.isfinite(f_pred) and not abs(f - f_pred) <= 0.15 * abs(f_pred):
             raise PinnedFailure(f"landed on another branch ({f:.4g} instead of about {f_pred:.4g})")
-        if math.isfinite(f_frontier) and not abs(f - f_frontier) <= 0.3 * abs(f_frontier):
-            raise PinnedFailure(f"landed on another branch ({f:.4g}, the family was at {f_frontier:.4g})")
+        if math.isfinite(f_lo) and not 0.7 * f_lo <= f <= 1.3 * f_hi:
+            raise PinnedFailure(f"landed on another branch ({f:.4g} Hz, the family was at "
+                                f"{f_frontier:.4g} Hz, expected up to {f_hi:.4g} Hz)")
         return u, nit, hist, rec, t
 
     if landing is not None:  # the problem's own landing (MMS-HBM: filtering the resonant harmonic)
@@ -363,6 +365,25 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
                 log.debug("jump attempt from %d (%.4g) to %.4g by the %s predictor: %s", origin, A_o, target,
                           name, last_error)
     raise PinnedFailure(f"jump from amplitude {frontier:.4g} failed: {last_error}")
+
+
+def _frequency_window(recs, guard, amplitude_max: float) -> tuple[float, float]:
+    """(f_lo, f_hi): the frontier's frequency, and the highest frequency the family can
+    have at the largest target of a jump, extrapolated linearly in the amplitude from the
+    last two family points (a backbone that rises steeply, as a massive DOF held by a
+    clearance, reaches far above the frontier's frequency within a small amplitude step);
+    the frontier's frequency both times where the slope is not positive."""
+    f0 = float(recs[guard.frontier_index].get("frequency", math.nan))
+    a0 = float(recs[guard.frontier_index]["amplitude"])
+    clean = [i for i in guard.clean if i != guard.frontier_index]
+    if not clean or not math.isfinite(f0):
+        return f0, f0
+    prev = clean[-1]
+    a1, f1 = float(recs[prev]["amplitude"]), float(recs[prev].get("frequency", math.nan))
+    if not (a0 > a1 and f0 > f1):
+        return f0, f0
+    top = min(a0 * (1.0 + 0.02 * 2.0**6), amplitude_max)
+    return f0, max(f0, f0 + (f0 - f1) / (a0 - a1) * (top - a0))
 
 
 def _predictors(problem, us, recs, guard, origin: int, target: float, amplitude_max: float):
