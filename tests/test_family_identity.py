@@ -156,3 +156,20 @@ def test_a_pinned_solve_stops_at_the_trust_region(stiff_chain):
     u0 = p.scaled_state(u, 1.5)
     with pytest.raises(PinnedFailure, match="trust region"):
         solve_at_amplitude(p, u0, 0.045, admissible=lambda v: abs(p.frequency_of(v) / f - 1) < 1e-9)
+
+
+def test_the_first_point_has_every_contact_open():
+    """Two contact nodes: half the smallest gap at the amplitude DOF would close the other
+    contact on the linear mode (no solution there: the start failed). The first point
+    is taken at half the amplitude at which the linear mode's first contact closes."""
+    from mmshbm.analysis import corpus
+
+    case = corpus.generate(135, seed=0)[134]
+    assert case.contact == "several"
+    model = case.model()
+    b = mmshbm.backbone(model, harmonics=case.harmonics)
+    assert b.status == "bound:amplitude"
+    q = b.time_signals(0, dofs=list(model.contact_dofs))[1]
+    for row, ct in zip(q, model.contacts, strict=True):
+        assert ct.side * row.max() < ct.gap  # open at the start
+    assert b.amplitude[0] < 0.5 * model.gap

@@ -20,6 +20,19 @@ class FamilyMixin:
         jumps' Newton iterates)."""
         return float(u[-1] * self.colscale[-1] / (2 * np.pi))
 
+    def open_amplitude(self) -> float:
+        """The amplitude (m) of the linear mode at which its first contact reaches its stop
+        (above it the linear mode is no solution): min over the contacts of gap / |φ_c|,
+        φ normalised to a unit swing of the amplitude DOF."""
+        shape = self.mode_shape_c
+        c_list = self.model.c.tolist()
+        out = np.inf
+        for ct in self.model.contacts:
+            motion = abs(float(shape[c_list.index(ct.dof)]))
+            if motion > 0 and ct.gap > 0:
+                out = min(out, ct.gap / motion)
+        return float(out)
+
     def scaled_state(self, u: np.ndarray, factor: float) -> np.ndarray:
         """``u`` with every displacement coefficient (and pole unknown) times ``factor``,
         Ω kept: far above the gap a piecewise-linear system is nearly homogeneous, so
