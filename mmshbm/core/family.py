@@ -75,10 +75,10 @@ class FamilyGuard:
     A point is on the family when the fundamental harmonic carries at least
     ``family_share`` of the kinetic energy (:func:`family_value`), or when it continues the
     family from its frontier without folding: amplitude and frequency still growing,
-    the frequency not locked, no internal resonance kΩ = ω_j crossed (a *pending* stretch,
-    where higher harmonics hold most of the kinetic energy without resonating). A pending
-    stretch that folds back (amplitude or frequency turning), locks its frequency or
-    crosses a resonance was the climb into a tongue: its points
+    the frequency not locked (a *pending* stretch, where higher harmonics hold most of the
+    kinetic energy while the backbone keeps rising). A pending stretch that folds back
+    (amplitude or frequency turning) or locks its frequency was the climb into a tongue:
+    its points
     are marked off the family after the fact and the frontier goes back to where the
     stretch began.
 
@@ -118,7 +118,7 @@ class FamilyGuard:
         if self.pending:
             _, a_last, f_last, _ = self.pending[-1]
             advancing = amplitude >= a_last * (1 - 1e-9) and not frequency < f_last * (1 - 1e-9)
-            if advancing and not self._locked(amplitude, frequency) and not self._crossed(rec):
+            if advancing and not self._locked(amplitude, frequency):
                 if not on:
                     self.pending.append((index, amplitude, frequency, rec))
                     rec["on_family"] = 1.0
@@ -158,16 +158,6 @@ class FamilyGuard:
     def _locked(self, amplitude: float, frequency: float) -> bool:
         _, a0, f0, _ = self.pending[0]
         return amplitude >= _LOCK_AMPLITUDE * a0 and frequency <= f0 * (1 + _LOCK_FREQUENCY)
-
-    def _crossed(self, rec: dict) -> bool:
-        """True when the stretch crossed an internal resonance: the harmonic with most
-        energy after the fundamental met the nearest mode (its detuning changed sign)."""
-        _, _, _, prev = self.pending[-1]
-        pair = (rec.get("resonance_harmonic"), rec.get("resonance_mode"))
-        if pair[0] is None or pair != (prev.get("resonance_harmonic"), prev.get("resonance_mode")):
-            return False
-        d0, d1 = prev.get("resonance_detuning", math.nan), rec.get("resonance_detuning", math.nan)
-        return bool(d0 * d1 <= 0.0)
 
     def _confirm(self) -> None:
         """The pending stretch came back to a fundamental majority without folding: it is
