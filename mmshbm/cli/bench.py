@@ -29,7 +29,8 @@ def register(sub) -> None:
                    help="run the default backbone on N random models (mmshbm.analysis.corpus: chains, "
                         "trees, beams; one-sided, clearance, several contacts) and tabulate completion, "
                         "failures and times instead")
-    p.add_argument("--seed", type=int, default=0, help="with --corpus: the corpus seed (default 0)")
+    p.add_argument("--seed", type=common.non_negative_int, default=0,
+                   help="with --corpus: the corpus seed (default 0)")
     p.add_argument("--compare-path", action="store_true",
                    help="with --corpus: also follow each branch plainly and check that the default gives the "
                         "same branch wherever that one reaches the bound without a tongue")
