@@ -205,6 +205,10 @@ class _Exhausted(PinnedFailure):
     """A jump used up its pinned solves."""
 
 
+class _Outside(PinnedFailure):
+    """A predictor outside the jump's trust region (not solved, not counted)."""
+
+
 def _extrapolated(us: list, recs: list, clean: list, amplitude: float) -> np.ndarray:
     """u at ``amplitude`` by a polynomial in the amplitude (degree <= 2) through the last
     clean frontier points."""
@@ -303,6 +307,8 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     solves = [0]
 
     def accept(u0, target, f_pred):
+        if admissible is not None and not admissible(u0):
+            raise _Outside("the predictor lies outside the trust region")
         if solves[0] >= _MAX_SOLVES:
             raise _Exhausted(f"{_MAX_SOLVES} pinned solves tried")
         solves[0] += 1
@@ -350,6 +356,9 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
                 except _Exhausted:
                     raise PinnedFailure(f"jump from amplitude {frontier:.4g} failed after {_MAX_SOLVES} "
                                         f"pinned solves: {last_error}") from None
+                except _Outside as err:  # no solve tried: keep the last solve's reason
+                    if last_error == "no attempt":
+                        last_error = str(err)
                 except (PinnedFailure, ArithmeticError, ValueError) as err:
                     last_error = str(err)
                 log.debug("jump attempt from %d (%.4g) to %.4g by the %s predictor: %s", origin, A_o, target,
