@@ -8,11 +8,15 @@ the starting mode's family above the amplitude where it left (a *passage*); some
 becomes the nonlinear mode of mode j and leads back down onto the family below that
 amplitude, and the path follower cycles (a *loop*), or it never comes back.
 
-:class:`FamilyGuard` watches the kinetic-energy share of the starting mode
-(``record["mode_share"]``, 0..1) and the amplitude of every accepted point:
+:class:`FamilyGuard` watches the fundamental harmonic's share of the kinetic energy
+(``record["fundamental_share"]``, 0..1, :func:`family_value`), the amplitude and the
+frequency of every accepted point (docs/resonances.md says why):
 
-* a point is *on the family* when the starting mode carries at least ``family_share`` of
-  the kinetic energy (default a majority, 0.5);
+* a point is *on the family* when the fundamental carries at least ``family_share`` of
+  the kinetic energy (default a majority, 0.5), or when it continues the family from its
+  frontier with amplitude and frequency rising and the frequency not locked (a change of
+  shape or of harmonic content is not a resonance); a climb that then folds or locks was
+  a tongue and is marked off the family after the fact;
 * the *frontier* is the largest amplitude reached on the family so far;
 * it asks for a **jump** when the branch left the family and has not come back above the
   frontier within ``max_excursion`` steps, when it comes back onto the family 5 % or more
@@ -20,12 +24,14 @@ amplitude, and the path follower cycles (a *loop*), or it never comes back.
   ``max_excursion`` steps, or when the step size fails at ``ds_min``.
 
 A jump (:func:`jump`) solves the problem with the amplitude pinned
-(:mod:`mmshbm.core.pinned`) slightly beyond the frontier, from a predictor extrapolated
-along the family (``problem.family_predictor`` if the problem has one, else a quadratic
-through the last clean family points), and accepts the result only if it is on the
-family; otherwise it tries further out (amplitude steps 2, 4, 8, ... % beyond the
-frontier). The continuation goes on from there; the skipped interval is recorded as a
-``"jump"`` special point. Points of the excursion stay on the branch with
+(:mod:`mmshbm.core.pinned`) slightly beyond the frontier, in a frequency trust region,
+from the problem's own landing (MMS-HBM: the resonant harmonic filtered out) or from
+three predictors in turn (``problem.family_predictor`` along an auxiliary branch, a
+quadratic through the last clean family points, the frontier point scaled to the
+target), and accepts the result only if it is on the family; otherwise it tries further
+out (amplitude steps 2, 4, 8, ... % beyond the frontier), at most 40 pinned solves. The
+continuation goes on from there; the skipped interval is recorded as a ``"jump"``
+special point. Points of the excursion stay on the branch with
 ``record["on_family"] = 0``.
 """
 
