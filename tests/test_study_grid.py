@@ -127,9 +127,11 @@ def grid():
 
 
 def test_table_notes_every_empty_cell(grid):
-    """The H5 runs meet the 5:2 tongue (f2/5 ≈ 59–62 Hz on these coarse meshes) near 2–2.4
-    gaps: cells in the skipped interval are NaN with the resonance named, or lie on its edge
-    and say so; cells beyond the branch say so; the rest have no note."""
+    """The H5 runs cross 5Ω = ω2 (f2/5 ≈ 59–62 Hz on these coarse meshes) near 2–2.4 gaps
+    without folding: the backbone goes on through the crossing (docs/resonances.md), the
+    resonance is named, and no interval is skipped. Cells in a skipped interval would be
+    NaN with the resonance named, or lie on its edge and say so; cells beyond the branch
+    say so; the rest have no note."""
     amps = list(np.round(np.arange(1.9, 2.45, 0.01), 2)) + [4.0]
     table = grid.table(amps)
     nan_inside = 0
@@ -154,11 +156,14 @@ def test_table_notes_every_empty_cell(grid):
                 raise AssertionError(f"NaN outside a skipped interval: {r}, {a}")
             elif not any(s.discontinuous and s.lo * 0.98 <= a * 1e-3 <= s.hi * 1.02 for s in intervals):
                 assert note == "", (r, a, note)
-        if r["harmonics"] == 3:
-            assert not intervals and np.all(np.isfinite(table.frequency[i, :-1]))
-    assert nan_inside > 0
+        assert not intervals and np.all(np.isfinite(table.frequency[i, :-1]))
+        if r["harmonics"] == 5:
+            named = {(s.data["k"], s.data["j"]) for s in b.special_points if s.kind == "internal_resonance"}
+            assert (5, 2) in named
+            assert np.all(b.records["on_family"] == 1.0)
+    assert nan_inside == 0
     text = table.pivot_text()
-    assert "first mode's share of the kinetic energy" in text and "harmonics=5, elements=4: inside" in text
+    assert "first mode's share of the kinetic energy" in text and "harmonics=5, elements=4: beyond" in text
     md = table.pivot_text(markdown=True)
     assert md.count("| elements \\ harmonics | 3 | 5 |") == len(amps)
 
@@ -227,7 +232,7 @@ def test_cli_study_grid_writes_table_and_plots(tmp_path, capsys):
     for name in ("study.png", "study_convergence.png", "study_table.csv", "study_table.txt", "study.npz"):
         assert (tmp_path / name).stat().st_size > 0, name
     out = capsys.readouterr().out
-    assert "(5:2)" in out and "wall time: 4 runs" in out  # the per-run table names the tongue
+    assert "5:2" in out and "wall time: 4 runs" in out  # the per-run table names the resonance
     study = load(tmp_path / "study.npz")
     rows = (tmp_path / "study_table.csv").read_text().splitlines()[1:]
     for r, line in zip(study.runs, rows, strict=True):

@@ -25,6 +25,19 @@ def register(sub) -> None:
     p.add_argument("--update", nargs="+", default=None, metavar="FILE",
                    help="with --from-asv: write the tables into FILEs (README.md docs/benchmarks.md) between "
                         "their generated-block markers")
+    p.add_argument("--corpus", type=common.positive_int, default=None, metavar="N",
+                   help="run the default backbone on N random models (mmshbm.analysis.corpus: chains, "
+                        "trees, beams; one-sided, clearance, several contacts) and tabulate completion, "
+                        "failures and times instead")
+    p.add_argument("--seed", type=common.non_negative_int, default=0,
+                   help="with --corpus: the corpus seed (default 0)")
+    p.add_argument("--compare-path", action="store_true",
+                   help="with --corpus: also follow each branch plainly and check that the default gives the "
+                        "same branch wherever that one reaches the bound without a tongue")
+    p.add_argument("--time-limit", type=common.positive_float, default=30.0,
+                   help="with --corpus: seconds per model before it is interrupted (default 30)")
+    p.add_argument("--workers", type=common.positive_int, default=1,
+                   help="with --corpus: processes (default 1)")
     p.set_defaults(func=run)
 
 
@@ -40,7 +53,38 @@ def _from_asv(args) -> int:
     return 0
 
 
+def _corpus(args) -> int:
+    """The corpus run: one line per model as it ends, then the summary; writes
+    corpus.csv. Exit 1 when a model raised."""
+    import csv
+
+    from ..analysis import corpus
+
+    cases = corpus.generate(args.corpus, args.seed)
+
+    def progress(r):
+        print(f"{r.case.label:<34} {r.seconds:7.2f} s  {'ok ' if r.completed else 'NOT'} {r.status[:90]}",
+              flush=True)
+
+    results = corpus.run_corpus(cases, workers=args.workers, progress=progress, time_limit=args.time_limit,
+                                compare_path=args.compare_path)
+    print(corpus.summary(results))
+    path = common.out_dir(args) / "corpus.csv"
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["index", "seed", "kind", "contact", "harmonics", "completed", "status", "seconds",
+                    "points", "jumps", "frequency", "path_completed", "same_as_path"])
+        for r in results:
+            w.writerow([r.case.index, r.case.seed, r.case.kind, r.case.contact, r.case.harmonics,
+                        int(r.completed), r.status, f"{r.seconds:.4f}", r.points, r.jumps, repr(r.frequency),
+                        r.path_completed, r.same_as_path])
+    common.wrote(path)
+    return 1 if any(r.status.startswith("exception") for r in results) else 0
+
+
 def run(args) -> int:
+    if args.corpus is not None:
+        return _corpus(args)
     if args.from_asv is not None:
         return _from_asv(args)
     if args.update:

@@ -26,7 +26,7 @@ from collections.abc import Callable
 import numpy as np
 
 from .bordered import bordered_solve as _bordered_solve  # noqa: F401 (the benchmarks' name)
-from .family import FamilyGuard, jump
+from .family import FAMILY_RECORD, FamilyGuard, family_value, jump
 from .options import ContinuationOptions, ContinuationProblem, ContinuationResult, ContinuationState
 from .pinned import PinnedFailure
 from .special_points import SpecialPoint
@@ -277,7 +277,7 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
             det_sign["last"] = sign or det_sign["last"]
             action = guard.observe(len(us), rec) if guard is not None else None
             ds_prev = ds
-            ds = min(opt.ds_max, _next_step(ds, nit, hist, opt))
+            ds = min(_step_cap(opt, recs[-1], rec, ds_prev), _next_step(ds, nit, hist, opt))
             accept(u_new, nit, ds_prev, hist, rec, t_new, ds, step, new_special)
             # κ ≈ dt/ds from the last step, for the next predictor (not across a fold's turn)
             curvature["k"] = _curvature(t, t_new, ds_prev)
@@ -304,7 +304,7 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
 
 def _backfill(problem, u, t, frontier: float, landing: float, opt: ContinuationOptions) -> list:
     """The family below a jump's landing point: continued backwards from it (plain path
-    following) until it leaves the family (mode share refined onto ``family_share``) or
+    following) until it leaves the family (its family measure refined onto ``family_share``) or
     reaches the frontier. Returns the points in increasing amplitude, as tuples
     (u, iterations, history, record, tangent oriented to growing amplitude), without the
     landing point."""
@@ -312,17 +312,39 @@ def _backfill(problem, u, t, frontier: float, landing: float, opt: ContinuationO
         ds=opt.ds, ds_min=opt.ds_min, ds_max=opt.ds_max, max_steps=opt.max_excursion,
         newton_tol=opt.newton_tol, step_tol=opt.step_tol, max_newton=opt.max_newton, growth=opt.growth,
         max_angle=opt.max_angle, corner_ds=opt.corner_ds, follow="path",
-        bounds={"amplitude": (frontier, landing * (1 + 1e-6)), "mode_share": (opt.family_share, 2.0)})
+        bounds={"amplitude": (frontier, landing * (1 + 1e-6)), FAMILY_RECORD: (opt.family_share, 2.0)})
     res = continue_branch(problem, u, -t, back, catch_interrupt=False)
     out = []
     for i in range(len(res.u) - 1, 0, -1):
         rec = {k: v[i] for k, v in res.records.items()}
-        if rec.get("mode_share", 1.0) < opt.family_share * (1 - 1e-6):
+        share = family_value(rec)
+        if share is not None and share < opt.family_share * (1 - 1e-6):
             continue
         tangent = res.u[i - 1] - res.u[i]
         tangent /= max(np.linalg.norm(tangent), 1e-300)
         out.append((res.u[i], int(res.newton_iterations[i]), res.residual_histories[i], rec, tangent))
     return out
+
+
+#: the cap on the step grows past ds_max up to the step that would change the amplitude by
+#: this fraction (linearly extrapolated from the last step), at most _CAP_GROWTH ds_max
+_CAP_AMPLITUDE = 0.02
+_CAP_GROWTH = 1000.0
+
+
+def _step_cap(opt: ContinuationOptions, rec_prev: dict, rec_new: dict, ds_prev: float) -> float:
+    """The largest next step: ``ds_max``, or more where the scaled unknowns move much while
+    the amplitude barely does (a branch whose unknowns grow along a direction that moves
+    the amplitude DOF little, e.g. a pole unknown near kΩ = ω_j): up to the step that
+    changes the amplitude by 2 %. Depends only on the last two points, so a resumed run
+    takes the same steps."""
+    a0, a1 = rec_prev.get("amplitude"), rec_new.get("amplitude")
+    if a0 is None or a1 is None or not ds_prev > 0:
+        return opt.ds_max
+    da = abs(float(a1) - float(a0))
+    if not da > 0:
+        return opt.ds_max
+    return max(opt.ds_max, min(_CAP_GROWTH * opt.ds_max, _CAP_AMPLITUDE * abs(float(a1)) * ds_prev / da))
 
 
 def _check_bound_names(bounds, rec: dict) -> None:

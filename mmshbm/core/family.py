@@ -8,11 +8,15 @@ the starting mode's family above the amplitude where it left (a *passage*); some
 becomes the nonlinear mode of mode j and leads back down onto the family below that
 amplitude, and the path follower cycles (a *loop*), or it never comes back.
 
-:class:`FamilyGuard` watches the kinetic-energy share of the starting mode
-(``record["mode_share"]``, 0..1) and the amplitude of every accepted point:
+:class:`FamilyGuard` watches the fundamental harmonic's share of the kinetic energy
+(``record["fundamental_share"]``, 0..1, :func:`family_value`), the amplitude and the
+frequency of every accepted point (docs/resonances.md says why):
 
-* a point is *on the family* when the starting mode carries at least ``family_share`` of
-  the kinetic energy (default a majority, 0.5);
+* a point is *on the family* when the fundamental carries at least ``family_share`` of
+  the kinetic energy (default a majority, 0.5), or when it continues the family from its
+  frontier with amplitude and frequency rising and the frequency not locked (a change of
+  shape or of harmonic content is not a resonance); a climb that then folds or locks was
+  a tongue and is marked off the family after the fact;
 * the *frontier* is the largest amplitude reached on the family so far;
 * it asks for a **jump** when the branch left the family and has not come back above the
   frontier within ``max_excursion`` steps, when it comes back onto the family 5 % or more
@@ -20,12 +24,14 @@ amplitude, and the path follower cycles (a *loop*), or it never comes back.
   ``max_excursion`` steps, or when the step size fails at ``ds_min``.
 
 A jump (:func:`jump`) solves the problem with the amplitude pinned
-(:mod:`mmshbm.core.pinned`) slightly beyond the frontier, from a predictor extrapolated
-along the family (``problem.family_predictor`` if the problem has one, else a quadratic
-through the last clean family points), and accepts the result only if it is on the
-family; otherwise it tries further out (amplitude steps 2, 4, 8, ... % beyond the
-frontier). The continuation goes on from there; the skipped interval is recorded as a
-``"jump"`` special point. Points of the excursion stay on the branch with
+(:mod:`mmshbm.core.pinned`) slightly beyond the frontier, in a frequency trust region,
+from the problem's own landing (MMS-HBM: the resonant harmonic filtered out) or from
+three predictors in turn (``problem.family_predictor`` along an auxiliary branch, a
+quadratic through the last clean family points, the frontier point scaled to the
+target), and accepts the result only if it is on the family; otherwise it tries further
+out (amplitude steps 2, 4, 8, ... % beyond the frontier), at most 40 pinned solves. The
+continuation goes on from there; the skipped interval is recorded as a ``"jump"``
+special point. Points of the excursion stay on the branch with
 ``record["on_family"] = 0``.
 """
 
@@ -38,23 +44,55 @@ import numpy as np
 
 from .pinned import PinnedFailure, solve_at_amplitude
 
-__all__ = ["FamilyGuard", "jump"]
+__all__ = ["FAMILY_RECORD", "FamilyGuard", "family_value", "jump"]
 
 log = logging.getLogger(__name__)
+
+#: the record that decides membership of the family: the fundamental harmonic's share of
+#: the motion (MMS-HBM's ``fundamental_share``; see docs/resonances.md)
+FAMILY_RECORD = "fundamental_share"
+
+
+def family_value(rec: dict) -> float | None:
+    """The family measure of a point's record: ``rec["fundamental_share"]``, or the
+    starting mode's share ``rec["mode_share"]`` for records without it (branches saved by
+    earlier versions); None when the record has neither."""
+    value = rec.get(FAMILY_RECORD)
+    if value is None:
+        value = rec.get("mode_share")
+    return None if value is None else float(value)
+
 
 #: a branch that left the family and comes back onto it this far (relative) below the
 #: frontier is going back down the family: a loop (a passage may dip less than this)
 _LOOP_DROP = 0.05
 
 
+#: a stretch of the branch above the frontier whose amplitude grows by this factor while
+#: its frequency grows by less than _LOCK_FREQUENCY (relative) is locked onto ω_j/k: a
+#: tongue climbing without folding
+_LOCK_AMPLITUDE = 1.5
+_LOCK_FREQUENCY = 0.005
+
+
 class FamilyGuard:
     """Bookkeeping of the family's frontier along a branch (see the module docstring).
+
+    A point is on the family when the fundamental harmonic carries at least
+    ``family_share`` of the kinetic energy (:func:`family_value`), or when it continues the
+    family from its frontier without folding: amplitude and frequency still growing,
+    the frequency not locked (a *pending* stretch, where higher harmonics hold most of the
+    kinetic energy while the backbone keeps rising). A pending stretch that folds back
+    (amplitude or frequency turning) or locks its frequency was the climb into a tongue:
+    its points
+    are marked off the family after the fact and the frontier goes back to where the
+    stretch began.
 
     Parameters
     ----------
     family_share : float
-        Share of the kinetic energy in the starting mode above which a point is on the
-        family.
+        Share of the kinetic energy in the fundamental harmonic above which a point is
+        on the family.
     max_excursion : int
         Steps allowed off the family (or on it below the frontier) before a jump.
     """
@@ -63,31 +101,47 @@ class FamilyGuard:
         self.family_share = family_share
         self.max_excursion = max_excursion
         self.frontier = -math.inf  # largest amplitude on the family so far
+        self.frontier_frequency = math.nan
         self.frontier_index = -1
         self.away = 0  # steps since the frontier last moved
         self.left = False  # the branch left the family since the frontier moved
         self.clean = []  # indices of frontier points (for extrapolation)
-        self.shares = {}  # mode share of the frontier points
-        self.active = False  # the problem records mode_share
+        self.shares = {}  # family measure of the frontier points
+        self.pending = []  # (index, amplitude, frequency, record) of a pending stretch
+        self.active = False  # the problem records the family measure
 
     def observe(self, index: int, rec: dict) -> str | None:
         """Register the accepted point ``index`` with record ``rec``; sets
-        ``rec["on_family"]`` and returns ``"jump"`` when a jump is due, else None."""
-        share = rec.get("mode_share")
+        ``rec["on_family"]`` (and resets it on the points of a pending stretch that
+        turns out to be a tongue) and returns ``"jump"`` when a jump is due, else None."""
+        share = family_value(rec)
         if share is None:
             return None
         self.active = True
         amplitude = float(rec["amplitude"])
+        frequency = float(rec.get("frequency", math.nan))
         on = bool(share >= self.family_share)
-        rec["on_family"] = 1.0 if on else 0.0
-        if on and amplitude >= self.frontier * (1 - 1e-9):
-            self.frontier = amplitude
-            self.frontier_index = index
-            self.away = 0
-            self.left = False
-            self.clean.append(index)
-            self.shares[index] = float(share)
+        if self.pending:
+            _, a_last, f_last, _ = self.pending[-1]
+            advancing = amplitude >= a_last * (1 - 1e-9) and not frequency < f_last * (1 - 1e-9)
+            if advancing and not self._locked(amplitude, frequency):
+                if not on:
+                    self.pending.append((index, amplitude, frequency, rec))
+                    rec["on_family"] = 1.0
+                    return None
+                self._confirm()
+            else:
+                self._revert()
+        ahead = amplitude >= self.frontier * (1 - 1e-9)
+        if on and ahead:
+            self._advance(index, rec, share)
             return None
+        if (not on and ahead and self.away == 0 and not self.left and self.frontier_index >= 0
+                and not frequency < self.frontier_frequency * (1 - 1e-9)):
+            self.pending = [(index, amplitude, frequency, rec)]
+            rec["on_family"] = 1.0
+            return None
+        rec["on_family"] = 1.0 if on else 0.0
         self.away += 1
         if not on:
             self.left = True
@@ -97,15 +151,40 @@ class FamilyGuard:
             return "jump"
         return None
 
-    def jumped(self, index: int, rec: dict) -> None:
-        """Register the point a jump landed on (a new frontier)."""
+    def _advance(self, index: int, rec: dict, share: float) -> None:
         rec["on_family"] = 1.0
         self.frontier = float(rec["amplitude"])
+        self.frontier_frequency = float(rec.get("frequency", math.nan))
         self.frontier_index = index
         self.away = 0
         self.left = False
         self.clean.append(index)
-        self.shares[index] = float(rec.get("mode_share", 1.0))
+        self.shares[index] = float(share)
+
+    def _locked(self, amplitude: float, frequency: float) -> bool:
+        _, a0, f0, _ = self.pending[0]
+        return amplitude >= _LOCK_AMPLITUDE * a0 and frequency <= f0 * (1 + _LOCK_FREQUENCY)
+
+    def _confirm(self) -> None:
+        """The pending stretch came back to a fundamental majority without folding: it is
+        the family (its last point becomes the frontier)."""
+        for index, _, _, rec in self.pending:
+            self._advance(index, rec, family_value(rec))
+        self.pending = []
+
+    def _revert(self) -> None:
+        """The pending stretch folded or locked: it was a tongue's climb."""
+        for _, _, _, rec in self.pending:
+            rec["on_family"] = 0.0
+        self.away = len(self.pending)
+        self.left = True
+        self.pending = []
+
+    def jumped(self, index: int, rec: dict) -> None:
+        """Register the point a jump landed on (a new frontier)."""
+        self.pending = []
+        share = family_value(rec)
+        self._advance(index, rec, 1.0 if share is None else share)
 
     def origins(self, amplitudes) -> list[int]:
         """Frontier points to jump from, best first: in each of the amplitude windows
@@ -122,6 +201,18 @@ class FamilyGuard:
         if self.frontier_index >= 0 and self.frontier_index not in out:
             out.append(self.frontier_index)
         return out
+
+
+#: pinned solves a jump may try before it gives up (bounds the cost of a failing jump)
+_MAX_SOLVES = 40
+
+
+class _Exhausted(PinnedFailure):
+    """A jump used up its pinned solves."""
+
+
+class _Outside(PinnedFailure):
+    """A predictor outside the jump's trust region (not solved, not counted)."""
 
 
 def _extrapolated(us: list, recs: list, clean: list, amplitude: float) -> np.ndarray:
@@ -210,16 +301,35 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
         if not targets or target > targets[-1]:
             targets.append(target)
 
+    f_lo, f_hi = _frequency_window(recs, guard, amplitude_max)
+    frequency_of = getattr(problem, "frequency_of", None)
+    admissible = None
+    if frequency_of is not None and math.isfinite(f_lo) and f_lo > 0:
+        # the trust region: a landing is accepted within 30 % of the family's frequencies,
+        # so no iterate needs to leave [f_lo/2, 2 f_hi]
+        def admissible(u):
+            return 0.5 * f_lo <= frequency_of(u) <= 2.0 * f_hi
+
+    solves = [0]
+
     def accept(u0, target, f_pred):
-        u, nit, hist, t = solve_at_amplitude(problem, u0, target, tol=newton_tol, max_iter=3 * max_newton)
+        if admissible is not None and not admissible(u0):
+            raise _Outside("the predictor lies outside the trust region")
+        if solves[0] >= _MAX_SOLVES:
+            raise _Exhausted(f"{_MAX_SOLVES} pinned solves tried")
+        solves[0] += 1
+        u, nit, hist, t = solve_at_amplitude(problem, u0, target, tol=newton_tol, max_iter=3 * max_newton,
+                                             admissible=admissible)
         rec = monitor(problem, u)
         f = rec.get("frequency", math.nan)
-        if rec.get("mode_share", 1.0) < guard.family_share:
-            raise PinnedFailure(f"landed off the family (mode share {rec['mode_share']:.3f}) at {target:.4g}")
+        share = family_value(rec)
+        if share is not None and share < guard.family_share:
+            raise PinnedFailure(f"landed off the family (fundamental share {share:.3f}) at {target:.4g}")
         if math.isfinite(f_pred) and not abs(f - f_pred) <= 0.15 * abs(f_pred):
             raise PinnedFailure(f"landed on another branch ({f:.4g} instead of about {f_pred:.4g})")
-        if math.isfinite(f_frontier) and not abs(f - f_frontier) <= 0.3 * abs(f_frontier):
-            raise PinnedFailure(f"landed on another branch ({f:.4g}, the family was at {f_frontier:.4g})")
+        if math.isfinite(f_lo) and not 0.7 * f_lo <= f <= 1.3 * f_hi:
+            raise PinnedFailure(f"landed on another branch ({f:.4g} Hz, the family was at "
+                                f"{f_frontier:.4g} Hz, expected up to {f_hi:.4g} Hz)")
         return u, nit, hist, rec, t
 
     if landing is not None:  # the problem's own landing (MMS-HBM: filtering the resonant harmonic)
@@ -233,28 +343,71 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
                 if nearer is not None:
                     u, nit, hist, rec, t, target = nearer
                 return u, nit, hist, rec, t, target, origin
+            except _Exhausted:
+                break
             except (PinnedFailure, ArithmeticError, ValueError, RuntimeError) as err:
                 last_error = f"filtered passage: {err}"
                 log.debug("jump from %d by filtering: %s", origin, last_error)
     for origin in guard.origins(lambda i: float(recs[i]["amplitude"])):
         A_o = float(recs[origin]["amplitude"])
-        u_o = us[origin]
         for target in targets:
             if target <= A_o * (1 + 1e-12):
                 continue
-            u0 = None
-            if predictor is not None:
+            for name, u0 in _predictors(problem, us, recs, guard, origin, target, amplitude_max):
                 try:
-                    u0 = predictor(u_o, A_o, target, amplitude_max)
-                except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
-                    u0 = None
-            if u0 is None:
-                u0 = _extrapolated(us, recs, [i for i in guard.clean if i <= origin], target)
-            try:
-                f_pred = monitor(problem, u0).get("frequency", math.nan)
-                u, nit, hist, rec, t = accept(u0, target, f_pred)
-                return u, nit, hist, rec, t, target, origin
-            except (PinnedFailure, ArithmeticError, ValueError) as err:
-                last_error = str(err)
-            log.debug("jump attempt from %d (%.4g) to %.4g: %s", origin, A_o, target, last_error)
+                    f_pred = problem.frequency_of(u0) if frequency_of is not None else \
+                        monitor(problem, u0).get("frequency", math.nan)
+                    u, nit, hist, rec, t = accept(u0, target, f_pred)
+                    return u, nit, hist, rec, t, target, origin
+                except _Exhausted:
+                    raise PinnedFailure(f"jump from amplitude {frontier:.4g} failed after {_MAX_SOLVES} "
+                                        f"pinned solves: {last_error}") from None
+                except _Outside as err:  # no solve tried: keep the last solve's reason
+                    if last_error == "no attempt":
+                        last_error = str(err)
+                except (PinnedFailure, ArithmeticError, ValueError) as err:
+                    last_error = str(err)
+                log.debug("jump attempt from %d (%.4g) to %.4g by the %s predictor: %s", origin, A_o, target,
+                          name, last_error)
     raise PinnedFailure(f"jump from amplitude {frontier:.4g} failed: {last_error}")
+
+
+def _frequency_window(recs, guard, amplitude_max: float) -> tuple[float, float]:
+    """(f_lo, f_hi): the frontier's frequency, and the highest frequency the family can
+    have at the largest target of a jump, extrapolated linearly in the amplitude from the
+    last two family points (a backbone that rises steeply, as a massive DOF held by a
+    clearance, reaches far above the frontier's frequency within a small amplitude step);
+    the frontier's frequency both times where the slope is not positive."""
+    f0 = float(recs[guard.frontier_index].get("frequency", math.nan))
+    a0 = float(recs[guard.frontier_index]["amplitude"])
+    clean = [i for i in guard.clean if i != guard.frontier_index]
+    if not clean or not math.isfinite(f0):
+        return f0, f0
+    prev = clean[-1]
+    a1, f1 = float(recs[prev]["amplitude"]), float(recs[prev].get("frequency", math.nan))
+    if not (a0 > a1 and f0 > f1):
+        return f0, f0
+    top = min(a0 * (1.0 + 0.02 * 2.0**6), amplitude_max)
+    return f0, max(f0, f0 + (f0 - f1) / (a0 - a1) * (top - a0))
+
+
+def _predictors(problem, us, recs, guard, origin: int, target: float, amplitude_max: float):
+    """Starts of a jump's pinned solve at ``target`` from the family point ``origin``, in
+    order: the problem's family predictor (along an auxiliary low-harmonic branch), the
+    polynomial extrapolation through the last frontier points, and the origin scaled to
+    the target amplitude (``problem.scaled_state``: the homogeneous limit far above the
+    gap). Yields (name, u0); each is tried until one lands."""
+    A_o = float(recs[origin]["amplitude"])
+    u_o = us[origin]
+    predictor = getattr(problem, "family_predictor", None)
+    if predictor is not None:
+        try:
+            yield "family", predictor(u_o, A_o, target, amplitude_max)
+        except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
+            pass
+    clean = [i for i in guard.clean if i <= origin]
+    if clean:
+        yield "extrapolated", _extrapolated(us, recs, clean, target)
+    scaled = getattr(problem, "scaled_state", None)
+    if scaled is not None and A_o > 0:
+        yield "scaled", scaled(u_o, target / A_o)

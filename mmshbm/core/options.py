@@ -75,8 +75,9 @@ class ContinuationOptions:
         (:mod:`mmshbm.core.family`; needs a problem that records ``mode_share``).
         ``"path"``: plain path following (to study a tongue).
     family_share : float
-        Share (0..1) of the kinetic energy in the starting mode above which a point is on
-        its family.
+        Share (0..1) of the kinetic energy in the fundamental harmonic above which a point
+        is on the starting mode's family (below it, a point that continues the family
+        without a fold or a locked frequency still is; docs/resonances.md).
     max_excursion : int
         Steps the branch may spend off the family (or below its frontier) before a jump.
     jump_step : float

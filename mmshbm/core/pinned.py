@@ -42,7 +42,8 @@ def amplitude_and_gradient(problem, u: np.ndarray, h: float = 1e-7) -> tuple[flo
 
 
 def solve_at_amplitude(problem, u0: np.ndarray, amplitude: float, *, tol: float = 1e-10, max_iter: int = 20,
-                       step_tol: float = 1e-8, solve=None) -> tuple[np.ndarray, int, np.ndarray, np.ndarray]:
+                       step_tol: float = 1e-8, solve=None,
+                       admissible=None) -> tuple[np.ndarray, int, np.ndarray, np.ndarray]:
     """Newton on [R(u); A(u)/A* − 1] = 0 from ``u0``.
 
     Parameters
@@ -61,6 +62,12 @@ def solve_at_amplitude(problem, u0: np.ndarray, amplitude: float, *, tol: float 
         as in :func:`mmshbm.core.continuation.newton`).
     solve : callable(J_bordered_rows, rhs), optional
         Solver of the bordered system ``[J; g] x = rhs`` (default: the continuation's).
+    admissible : callable(u) -> bool, optional
+        The trust region: every iterate must satisfy it (e.g. a frequency window around
+        the branch being solved). A Newton step that leaves it is halved until it does
+        not (at most 6 times); an iterate that still leaves it ends the solve with
+        PinnedFailure, so no iterate is ever evaluated far from the branch (a harmonic of
+        a runaway frequency beyond the modes the condensation kept).
 
     Returns
     -------
@@ -76,6 +83,8 @@ def solve_at_amplitude(problem, u0: np.ndarray, amplitude: float, *, tol: float 
         raise ValueError(f"amplitude must be positive, got {amplitude!r}")
     solve = solve or bordered_solve
     u = np.array(u0, dtype=float)
+    if admissible is not None and not admissible(u):
+        raise PinnedFailure("the start lies outside the trust region")
     history = []
     du_norm = math.inf
     for it in range(max_iter + 1):
@@ -109,11 +118,17 @@ def solve_at_amplitude(problem, u0: np.ndarray, amplitude: float, *, tol: float 
         # backtracking: halve the step while the residual grows (nonsmooth, and far from
         # the solution a full step can land on another branch)
         lam = 1.0
-        for _ in range(6):
+        for _ in range(7):
             trial = u - lam * du
+            if admissible is not None and not admissible(trial):
+                if lam < 0.05:
+                    raise PinnedFailure(f"Newton left the trust region (iteration {it + 1})")
+                lam *= 0.5
+                continue
             try:
                 R_t = problem.evaluate(trial, jacobian=False)
-                A_t, _ = amplitude_and_gradient(problem, trial)
+                A_t = (problem.amplitude_value(trial) if hasattr(problem, "amplitude_value")
+                       else amplitude_and_gradient(problem, trial)[0])
                 n_t = max(float(np.abs(R_t).max()), abs(A_t / amplitude - 1.0))
             except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError):
                 n_t = math.inf

@@ -44,7 +44,9 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     max_amplitude : float, optional
         Stop at this amplitude (m) of the contact DOF; default 10 gaps.
     start_amplitude : float, optional
-        Amplitude (m) of the first point, on the linear mode; default half the gap.
+        Amplitude (m) of the first point, on the linear mode; default half the gap, or
+        less where a contact of the linear mode would reach its stop first (several
+        contacts): half the amplitude at which the first contact closes.
     bounds : dict, optional
         Further bounds on recorded quantities, e.g. ``{"frequency": (0, 60)}`` (Hz),
         ``{"energy": (0, 1.0)}`` (J).
@@ -97,6 +99,8 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
             raise ValueError("the model's gap is 0: pass max_amplitude (m)")
         max_amplitude = 10.0 * gap
     max_amplitude = check.positive("max_amplitude", max_amplitude)
+    model.check_amplitude_reach(max_amplitude)
+    default_start = start_amplitude is None
     if start_amplitude is None:
         start_amplitude = 0.5 * gap if gap > 0 else 0.01 * max_amplitude
         if model.friction and gap == 0:  # start stuck: below the amplitude where slip begins
@@ -121,6 +125,9 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     resume = _path_argument("resume", resume)
     check_resources(model, method, options)  # before any allocation: a clear error, not a MemoryError
     problem = make_problem(model, method, **options)
+    if default_start and gap > 0 and hasattr(problem, "open_amplitude"):
+        # the linear mode is a solution only while every contact is open
+        start_amplitude = min(start_amplitude, 0.5 * problem.open_amplitude())
     header = _checkpoint_header(model, method, problem, options)
 
     state, restored, previous = None, [], None

@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.continuation import ContinuationOptions, continue_branch
+from ..core.family import FAMILY_RECORD, family_value
 from ..core.pinned import PinnedFailure, amplitude_and_gradient, solve_at_amplitude
 
 __all__ = ["FilteredProblem", "pass_resonance"]
@@ -61,6 +62,11 @@ class FilteredProblem:
 
     def amplitude_and_gradient(self, u: np.ndarray):
         return amplitude_and_gradient(self.problem, u)
+
+    def amplitude_value(self, u: np.ndarray) -> float:
+        if hasattr(self.problem, "amplitude_value"):
+            return self.problem.amplitude_value(u)
+        return amplitude_and_gradient(self.problem, u)[0]
 
 
 def _resonant_harmonic(problem, u: np.ndarray, mode: int, exclude) -> int | None:
@@ -115,14 +121,14 @@ def pass_resonance(problem, u_from: np.ndarray, amplitude_from: float, harmonic:
         res = continue_branch(filt, u0, t0, ContinuationOptions(
             follow="path", max_steps=300, newton_tol=newton_tol,
             bounds={"amplitude": (0.0, amplitude_max), "frequency": (0.0, f_stop),
-                    "mode_share": (family_share, 2.0)}), catch_interrupt=False)
+                    FAMILY_RECORD: (family_share, 2.0)}), catch_interrupt=False)
         if not res.status.startswith("bound:") and len(res.u) < 2:
             raise PinnedFailure(f"the filtered branch stopped: {res.status}")
         A, f = res.records["amplitude"], res.records["frequency"]
         for i in range(1, len(res.u)):
             if f[i] > f_resonance * 1.01 and A[i] > amplitude_min * (1 + 1e-6):
                 candidates.append((res.u[i], float(A[i]), float(f[i])))
-        if res.status != "bound:mode_share":
+        if res.status != f"bound:{FAMILY_RECORD}":
             break
         # another resonance: filter its harmonic too and go on from the last family point
         k2 = _resonant_harmonic(problem, res.u[-1], mode, filtered)
@@ -165,8 +171,9 @@ def pass_resonance(problem, u_from: np.ndarray, amplitude_from: float, harmonic:
         except (PinnedFailure, ArithmeticError, ValueError) as err:
             last = f"release at {A_c:.4g} ({f_c:.4g} Hz, filtered {filtered}): {err}"
             continue
-        if rec.get("mode_share", 1.0) < family_share:
-            last = f"release at {A_c:.4g} landed off the family (mode share {rec['mode_share']:.3f})"
+        share = family_value(rec)
+        if share is not None and share < family_share:
+            last = f"release at {A_c:.4g} landed off the family (fundamental share {share:.3f})"
         elif not abs(rec["frequency"] - f_c) <= 0.05 * f_c:
             last = f"release at {A_c:.4g} landed on another branch ({rec['frequency']:.4g} Hz)"
         else:

@@ -364,9 +364,10 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin):
 
     def monitor(self, u: np.ndarray) -> dict:
         """The per-point quantities of a backbone: frequency (Hz), amplitude (m), energy
-        (J), contact_force_max (N) and mode_share (share of the kinetic energy in the
-        starting mode at the fundamental harmonic: what makes a point a member of the
-        starting mode's family, rather than a superharmonic or an internal resonance). The
+        (J), contact_force_max (N), mode_share (share of the kinetic energy in the
+        starting mode at the fundamental harmonic) and fundamental_share (share of the
+        kinetic energy in the fundamental harmonic: what makes a point a member of the
+        starting mode's family, rather than an internal resonance). The
         table of every tracked mode and harmonic, ``modal_shares``, is added for the whole
         branch at the end (:meth:`branch_records`)."""
         a, omega = self.unpack(u)
@@ -386,6 +387,7 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin):
             "energy": float(out[1]),
             "contact_force_max": float(out[2]),
             "mode_share": self.mode_share(u),
+            **self.family_records(u),
         }
 
 

@@ -20,6 +20,32 @@ class FamilyMixin:
     """Family bookkeeping of an MMS-HBM problem (needs the attributes of ``MMSHBMProblem``)."""
 
     # ------------------------------------------------------------------ jumps
+    def frequency_of(self, u: np.ndarray) -> float:
+        """Ω/2π (Hz) of the scaled unknowns ``u`` (no evaluation: the trust region of the
+        jumps' Newton iterates)."""
+        return float(u[-1] * self.colscale[-1] / (2 * np.pi))
+
+    def open_amplitude(self) -> float:
+        """The amplitude (m) of the linear mode at which its first contact reaches its stop
+        (above it the linear mode is no solution): min over the contacts of gap / |φ_c|,
+        φ normalised to a unit swing of the amplitude DOF."""
+        shape = self.mode_shape_c
+        c_list = self.model.c.tolist()
+        out = np.inf
+        for ct in self.model.contacts:
+            motion = abs(float(shape[c_list.index(ct.dof)]))
+            if motion > 0 and ct.gap > 0:
+                out = min(out, ct.gap / motion)
+        return float(out)
+
+    def scaled_state(self, u: np.ndarray, factor: float) -> np.ndarray:
+        """``u`` with every displacement coefficient (and pole unknown) times ``factor``,
+        Ω kept: far above the gap a piecewise-linear system is nearly homogeneous, so
+        this predicts the family at ``factor`` times the amplitude of ``u``."""
+        out = np.array(u, dtype=float)
+        out[:-1] *= factor
+        return out
+
     def family_predictor(self, u_from: np.ndarray, amplitude_from: float, amplitude_to: float,
                          amplitude_max: float) -> np.ndarray:
         """Predicted unknowns on the starting mode's family at ``amplitude_to``, from the
@@ -174,6 +200,51 @@ class FamilyMixin:
         D0, B, w2, Rs, keep, static, rtol = fast["cond"]
         return float(_start_mode_share(np.ascontiguousarray(a), self.unpack_eta(u), omega, dD, self._pole_k,
                                        pole_j, self._pole_w2, B, w2, keep, s0, s, sv))
+
+    def harmonic_energies(self, u: np.ndarray) -> np.ndarray:
+        """Period-mean kinetic energy (J) of each harmonic k = 0..H of the motion, shape (H+1,),
+        from the condensed stiffness alone: T_k = −(Ω/8) a_kᵀ ∂D_k/∂Ω a_k (with the pole
+        unknowns' part). Exact for the condensation used (no modal basis needed): the
+        kinetic energy of the DOFs with mass in harmonic k, whatever their shape."""
+        a, omega = self.unpack(u)
+        _, dD = self._condensed(omega, True)
+        eta = self.unpack_eta(u)
+        quad = np.einsum("ki,kij,kj->k", a, dD, a)
+        for p, k in enumerate(self._pole_k):
+            quad[k] -= 2.0 * k * k * omega * eta[p] ** 2
+        energies = -omega / 8.0 * quad
+        energies[0] = 0.0
+        return np.maximum(energies, 0.0)
+
+    def fundamental_share(self, u: np.ndarray) -> float:
+        """Share (0..1) of the period-mean kinetic energy in the fundamental harmonic (k = 1),
+        all DOFs together (:meth:`harmonic_energies`): the family measure of
+        :mod:`mmshbm.core.family` (see docs/resonances.md). A change of the fundamental's
+        shape (toward the closed-contact mode) leaves it unchanged; energy moving into a
+        harmonic k >= 2 (near an internal resonance kΩ ≈ ω_j) lowers it."""
+        energies = self.harmonic_energies(u)
+        total = float(energies[1:].sum())
+        return float(energies[1] / total) if total > 0 else 1.0
+
+    def family_records(self, u: np.ndarray) -> dict:
+        """The per-point records of the family guard: ``fundamental_share``
+        (:meth:`fundamental_share`) and, for the harmonic k >= 2 with the most kinetic
+        energy, the detuning ``resonance_detuning`` = kΩ/ω_j − 1 from the nearest tracked
+        open-contact mode j (``resonance_harmonic`` k, ``resonance_mode`` j, 1-based; 0
+        and NaN for H = 1). A detuning that changes sign along the branch is an internal
+        resonance crossed."""
+        energies = self.harmonic_energies(u)
+        total = float(energies[1:].sum())
+        out = {"fundamental_share": float(energies[1] / total) if total > 0 else 1.0,
+               "resonance_harmonic": 0.0, "resonance_mode": 0.0, "resonance_detuning": float("nan")}
+        if self.H >= 2 and total > 0:
+            k = int(np.argmax(energies[2:])) + 2
+            freqs = self.tracked_frequencies
+            f = k * float(u[-1] * self.colscale[-1]) / (2 * np.pi)
+            j = int(np.argmin(np.abs(freqs - f)))
+            out.update(resonance_harmonic=float(k), resonance_mode=float(j + 1),
+                       resonance_detuning=float(f / freqs[j] - 1.0))
+        return out
 
     def _share_setup(self):
         """(row, s0, s, sv, pole_j): the starting mode's projections for

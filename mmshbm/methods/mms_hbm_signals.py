@@ -165,6 +165,20 @@ class SignalsMixin:
         row = Ql[int(np.searchsorted(self.model.l, self.amplitude_dof))]
         return np.concatenate([[row[0]], row[1::2]])
 
+    def _amplitude_peak(self, u: np.ndarray):
+        """(row, cos kτ* (H+1,), amplitude (m), s): the amplitude DOF's cosine coefficients,
+        cos kτ at the time τ* of its largest excursion (fine grid, refined by Newton on
+        q′(τ) = 0, compiled), the amplitude s·q(τ*) and the excursion's sign s."""
+        a, omega = self.unpack(u)
+        row = np.ascontiguousarray(self._amplitude_row(a, omega, self.unpack_eta(u)), dtype=float)
+        cos_k = np.empty(self.H + 1)
+        amplitude, s = _cosine_peak(row, self._amp_sign, self._cos_fine, self._tau_fine, cos_k)
+        return row, cos_k, amplitude, s
+
+    def amplitude_value(self, u: np.ndarray) -> float:
+        """The amplitude (m) of :meth:`amplitude_and_gradient` without the gradient."""
+        return float(self._amplitude_peak(u)[2])
+
     def amplitude_and_gradient(self, u: np.ndarray) -> tuple[float, np.ndarray]:
         """The amplitude (m) and its gradient with respect to the scaled unknowns.
 
@@ -173,26 +187,35 @@ class SignalsMixin:
         on the fine grid and refined by Newton on q′(τ) = 0.
         """
         a, omega = self.unpack(u)
-        row = np.ascontiguousarray(self._amplitude_row(a, omega, self.unpack_eta(u)), dtype=float)
-        cos_k = np.empty(self.H + 1)  # cos kτ at the maximiser
-        amplitude, s = _cosine_peak(row, self._amp_sign, self._cos_fine, self._tau_fine, cos_k)
+        _, cosk, amplitude, s = self._amplitude_peak(u)
         grad = np.zeros(self.n_unknowns)
         if self._amp_in_c:
             n_a = (self.H + 1) * self.n_c
-            grad[self._amp_index:n_a:self.n_c] = s * cos_k
-        else:  # finite differences through the recovery (amplitude DOF with mass)
-            h = 1e-7
-            for i in range(self.n_unknowns):
-                e = np.zeros(self.n_unknowns)
-                e[i] = h
-                ap, om_p = self.unpack(u + e)
-                am, om_m = self.unpack(u - e)
-                diff = (self._amplitude_row(ap, om_p, self.unpack_eta(u + e))
-                        - self._amplitude_row(am, om_m, self.unpack_eta(u - e)))
-                grad[i] = s * (diff @ cos_k) / (2 * h)
-            return amplitude, grad
+            grad[self._amp_index:n_a:self.n_c] = s * cosk
+        else:  # amplitude DOF with mass: the row is linear in (a, η) at fixed Ω
+            n_a = (self.H + 1) * self.n_c
+            zero_eta = np.zeros(self.n_poles)
+            for c in range(self.n_c):  # harmonic k of the row from a_k = e_c, all k at once
+                e = np.zeros((self.H + 1, self.n_c))
+                e[:, c] = 1.0
+                grad[c:n_a:self.n_c] = s * self._amplitude_row(e, omega, zero_eta) * cosk
+            zero_a = np.zeros((self.H + 1, self.n_c))
+            for p in range(self.n_poles):
+                e_eta = np.zeros(self.n_poles)
+                e_eta[p] = 1.0
+                grad[n_a + p] = s * (self._amplitude_row(zero_a, omega, e_eta) @ cosk)
+            grad[:-1] *= self.colscale[:-1]
+            h = 1e-7  # Ω by central differences (scaled unknown)
+            e = np.zeros(self.n_unknowns)
+            e[-1] = h
+            ap, om_p = self.unpack(u + e)
+            am, om_m = self.unpack(u - e)
+            diff = (self._amplitude_row(ap, om_p, self.unpack_eta(u))
+                    - self._amplitude_row(am, om_m, self.unpack_eta(u)))
+            grad[-1] = s * (diff @ cosk) / (2 * h)
+            return float(amplitude), grad
         grad[-1] = 0.0
-        return amplitude, grad * self.colscale
+        return float(amplitude), grad * self.colscale
 
 
 @njit(**JIT_OPTIONS)

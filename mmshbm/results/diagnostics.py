@@ -7,11 +7,13 @@ A backbone is meant to be the nonlinear continuation of one linear mode up to a 
 study summaries):
 
 ``"left_family"``
-    The starting mode's share of the period-mean kinetic energy (``records["mode_share"]``,
-    0..1, see :mod:`mmshbm.core.modal_energy`) falls below
-    :attr:`CheckThresholds.min_mode_share` (default 0.5): from there on the motion is
-    mostly another mode, e.g. a k:1 internal-resonance tongue or another family of
-    periodic motions. The message says where it leaves and whether it comes back.
+    The family measure falls below :attr:`CheckThresholds.min_mode_share` (default 0.5):
+    the fundamental harmonic's share of the motion (``records["fundamental_share"]``,
+    MMS-HBM, see docs/resonances.md) or, for the methods without it, the starting mode's
+    share of the period-mean kinetic energy (``records["mode_share"]``, 0..1, see
+    :mod:`mmshbm.core.modal_energy`): from there on the motion is mostly another
+    harmonic, a k:1 internal-resonance tongue or another family of periodic motions. The
+    message says where it leaves and whether it comes back.
 ``"penetration"``
     The contact DOF, as the method represents it (for harmonic balance the truncated
     Fourier series), passes its stop by more than :attr:`CheckThresholds.penetration`
@@ -173,7 +175,11 @@ def check_branch(branch, thresholds: CheckThresholds | None = None, *, warn: boo
             except (ValueError, AttributeError, np.linalg.LinAlgError) as err:
                 log.info("no mode shares for this branch: %s", err)
                 shares = None
-        if shares is not None:
+        fundamental = branch.records.get("fundamental_share")
+        if fundamental is not None and len(fundamental) == len(branch):
+            out += _family(branch, _family_measure(branch, np.asarray(fundamental, dtype=float), th), th,
+                           fundamental=True)
+        elif shares is not None:
             out += _family(branch, np.asarray(shares, dtype=float), th)
         out += _contact(branch, solver, th)
     if not branch.status.startswith("bound:"):
@@ -257,7 +263,26 @@ def _where(branch, i: int) -> str:
     return f"point {i}, {branch.frequency[i]:.4g} Hz, {a}"
 
 
-def _family(branch, shares: np.ndarray, th: CheckThresholds) -> list[Finding]:
+def _family_measure(branch, fundamental: np.ndarray, th: CheckThresholds) -> np.ndarray:
+    """The fundamental's share where the point is off the family, 1 where it is on it: a
+    branch followed plainly is classified by replaying the family guard over its points
+    (:class:`mmshbm.core.family.FamilyGuard`: a stretch where a higher harmonic holds most
+    of the kinetic energy but the backbone keeps rising without folding or locking is the
+    family, not a tongue)."""
+    if "on_family" in branch.records:
+        return fundamental
+    from ..core.family import FamilyGuard
+
+    guard = FamilyGuard(th.min_mode_share, max_excursion=len(branch) + 1)
+    recs = [{"amplitude": float(branch.amplitude[i]), "frequency": float(branch.frequency[i]),
+             "fundamental_share": float(fundamental[i])} for i in range(len(branch))]
+    for i, rec in enumerate(recs):
+        guard.observe(i, rec)
+    on = np.array([rec.get("on_family", 1.0) for rec in recs]) > 0.5
+    return np.where(on, np.maximum(fundamental, 1.0), fundamental)
+
+
+def _family(branch, shares: np.ndarray, th: CheckThresholds, fundamental: bool = False) -> list[Finding]:
     low = np.flatnonzero(shares < th.min_mode_share)
     if not len(low):
         return []
@@ -268,8 +293,10 @@ def _family(branch, shares: np.ndarray, th: CheckThresholds) -> list[Finding]:
     first, worst = int(low[0]), int(low[np.argmin(shares[low])])
     back = np.flatnonzero(shares[first:] >= th.min_mode_share)
     ended_low = shares[-1] < th.min_mode_share
-    head = (f"{branch.method} branch leaves the family of linear mode {mode}: that mode's share of the "
-            f"kinetic energy falls below {th.min_mode_share:g} at {_where(branch, first)} "
+    what = ("the fundamental harmonic's share of the kinetic energy" if fundamental
+            else "that mode's share of the kinetic energy")
+    head = (f"{branch.method} branch leaves the family of linear mode {mode}: {what} "
+            f"falls below {th.min_mode_share:g} at {_where(branch, first)} "
             f"(lowest {shares[worst]:.3g} at point {worst})")
     if ended_low:
         tail = (f" and is {shares[-1]:.3g} at the end ({_where(branch, len(shares) - 1)}): "
@@ -319,7 +346,7 @@ def _contact(branch, solver, th: CheckThresholds) -> list[Finding]:
     # (numpy calls per point cost more than the signals of a small model)
     n_pts, n_k = len(branch), len(dofs)
     Q = np.empty((n_pts, n_k, n))
-    L = np.zeros((n_pts, n_k if cheap else len(model.contacts), n))
+    L = np.zeros((n_pts, n_k, n))  # the force of each stop, > 0 when it pushes
     amp = np.maximum(np.asarray(branch.amplitude, dtype=float), 1e-300)[:, None, None]
     scale = np.where(gaps[None] > 0, gaps[None], amp)  # (n_pts, n_k, 1)
     many = cheap and hasattr(solver, "contact_signals_many")
@@ -332,17 +359,18 @@ def _contact(branch, solver, th: CheckThresholds) -> list[Finding]:
             Q[i] = solver.time_signals(u, dofs, n)[1]
             # the force right after the motion: a solver may cache the last point's orbit
             if np.max((sides * Q[i] - gaps) / scale[i]) >= -th.penetration:
-                L[i] = np.atleast_2d(solver.contact_force(u, n)[1])
+                L[i] = _stop_forces(model, Q[i], np.atleast_2d(solver.contact_force(u, n)[1]))
     pen = np.max((sides[None] * Q - gaps[None]) / scale, axis=(1, 2)) if n_pts else np.zeros(0)
     # a contact that never comes near its stop carries no force but Newton's residual
     need_force = pen >= -th.penetration
     neg = np.zeros(n_pts)
-    if n_pts:
+    if n_pts:  # per stop: its pull against its own peak push
         floor = th.force_floor * f_scale
-        peak = np.maximum(L.max(axis=(1, 2)), floor)
-        lo = L.min(axis=(1, 2))
-        bad = need_force & (peak > 0) & (lo < -floor)
-        neg[bad] = -lo[bad] / peak[bad]
+        near = np.max((sides[None] * Q - gaps[None]) / scale, axis=2) >= -th.penetration  # (n_pts, n_k)
+        peak = np.maximum(L.max(axis=2), floor)
+        lo = L.min(axis=2)
+        ratio = np.where(near & (peak > 0) & (lo < -floor), -lo / peak, 0.0)
+        neg = ratio.max(axis=1) * need_force
     out = []
     bad = np.flatnonzero(pen > th.penetration)
     if len(bad):
@@ -366,6 +394,35 @@ def _contact(branch, solver, th: CheckThresholds) -> list[Finding]:
             f"{_where(branch, int(bad[0]))}; worst {neg[worst]:.3g} of the peak at point {worst}"
             + (" (a truncation effect of the Fourier series)" if branch.harmonics else ""),
             int(bad[0]), int(bad[-1]), float(-neg[worst])))
+    return out
+
+
+def _stop_forces(model, q: np.ndarray, lam: np.ndarray) -> np.ndarray:
+    """The force of each stop (rows in the order of ``model.contacts``, > 0 when it pushes)
+    from a solver's contact forces ``lam``: one row per contact (already per stop), or one
+    per contact DOF (:func:`~mmshbm.model.contact.admissible_intervals` order; the net force
+    the structure needs, > 0 for a push of an upper stop, < 0 for one of a lower stop).
+    On a DOF between two stops the net force is the upper stop's where the DOF is nearer
+    to it and the lower one's elsewhere: the two never push at once. ``q`` (n_contacts, n)
+    is the motion of each contact's DOF."""
+    from ..model.contact import admissible_intervals
+
+    contacts = model.contacts
+    if lam.shape[0] == len(contacts):
+        return lam
+    dofs, lo, hi = admissible_intervals(contacts)
+    if lam.shape[0] != len(dofs):  # a solver reporting fewer rows: the same force for every stop
+        return np.broadcast_to(lam, (len(contacts), lam.shape[1]))
+    row = {int(d): i for i, d in enumerate(dofs)}
+    out = np.zeros((len(contacts), lam.shape[1]))
+    for i, ct in enumerate(contacts):
+        r = row[ct.dof]
+        if np.isfinite(lo[r]) and np.isfinite(hi[r]):
+            mid = 0.5 * (lo[r] + hi[r])
+            mine = q[i] >= mid if ct.side > 0 else q[i] < mid
+            out[i] = np.where(mine, ct.side * lam[r], 0.0)
+        else:
+            out[i] = lam[r]
     return out
 
 

@@ -17,6 +17,7 @@ import warnings
 import numpy as np
 
 from .._warnings import BranchWarning
+from ..core.family import family_value
 
 __all__ = ["family_front", "frequency_at", "family_point", "amplitude_in_m", "warn_outside_front",
            "solve_at"]
@@ -29,13 +30,14 @@ def family_front(branch) -> np.ndarray:
     points on the family whose amplitude is at least every earlier family point's.
     Excursions into internal-resonance tongues, and the way back down a loop, are left
     out. On the family: ``records["on_family"]`` (set by the continuation's family guard);
-    for a branch without it (plain path following, the baselines) the starting mode's
-    energy share ``records["mode_share"]`` is at least ``family_share``; all points when
+    for a branch without it (plain path following, the baselines) the family measure
+    (``records["fundamental_share"]``, else ``records["mode_share"]``) is at least
+    ``family_share``; all points when
     the branch has neither record."""
     if "on_family" in branch.records:
         on = np.asarray(branch.records["on_family"], dtype=float) > 0.5
-    elif "mode_share" in branch.records:
-        on = np.asarray(branch.records["mode_share"], dtype=float) >= _family_share(branch)
+    elif _share_record(branch) is not None:
+        on = np.asarray(_share_record(branch), dtype=float) >= _family_share(branch)
     else:
         on = np.ones(len(branch), dtype=bool)
     front, best = [], -np.inf
@@ -135,6 +137,14 @@ def warn_outside_front(branch, amplitude: float, stacklevel: int = 3) -> bool:
     return True
 
 
+def _share_record(branch):
+    """The branch's family measure per point (:func:`mmshbm.core.family.family_value`)."""
+    from ..core.family import FAMILY_RECORD
+
+    share = branch.records.get(FAMILY_RECORD)
+    return branch.records.get("mode_share") if share is None else share
+
+
 def _family_share(branch) -> float:
     return float(dict(branch.metadata.get("continuation") or {}).get("family_share", 0.5))
 
@@ -149,7 +159,7 @@ def _on_segment(branch, i: int, j: int, a: float, interpolate: bool, tol: float,
     nan = (float("nan"), None)
     A, f = branch.amplitude, branch.frequency
     s = (a - A[i]) / (A[j] - A[i])
-    share = branch.records.get("mode_share")
+    share = _share_record(branch)
     if require_share and share is None:
         return nan
     if interpolate:
@@ -166,7 +176,7 @@ def _on_segment(branch, i: int, j: int, a: float, interpolate: bool, tol: float,
             return nan
         log.warning("frequency_at(%g): the pinned solve failed (%s); interpolating", a, err)
         return float(f[i] + s * (f[j] - f[i])), None
-    if require_share and float(record.get("mode_share", 0.0)) < _family_share(branch):
+    if require_share and (family_value(record) or 0.0) < _family_share(branch):
         return nan
     return float(record["frequency"]), np.asarray(u)
 
@@ -208,9 +218,10 @@ def solve_at(branch, amplitudes, *, tol: float = 1e-10):
         return np.array([r[name] for r in rows], dtype=float)
 
     records = {"requested_amplitude": amps, "solved": np.array(solved, dtype=int)}
-    if rows and "mode_share" in rows[0]:
-        records["mode_share"] = column("mode_share")
-        records["on_family"] = np.ones(n)
+    for name in ("mode_share", "fundamental_share"):
+        if rows and name in rows[0]:
+            records[name] = column(name)
+            records["on_family"] = np.ones(n)
     return replace(branch, frequency=column("frequency"), amplitude=column("amplitude"),
                    energy=column("energy"),
                    contact_force_max=column("contact_force_max"), newton_iterations=np.zeros(n, dtype=int),
