@@ -232,7 +232,9 @@ def test_cli_study_grid_writes_table_and_plots(tmp_path, capsys):
     for name in ("study.png", "study_convergence.png", "study_table.csv", "study_table.txt", "study.npz"):
         assert (tmp_path / name).stat().st_size > 0, name
     out = capsys.readouterr().out
-    assert "5:2" in out and "wall time: 4 runs" in out  # the per-run table names the resonance
+    assert "wall time: 4 runs" in out and "4 reached their bounds" in out
+    # the details file's per-run table names the resonance the H = 5 runs cross (5Ω ≈ f₂)
+    assert "5:2" in (tmp_path / "study_table.txt").read_text()
     study = load(tmp_path / "study.npz")
     rows = (tmp_path / "study_table.csv").read_text().splitlines()[1:]
     for r, line in zip(study.runs, rows, strict=True):
