@@ -403,7 +403,7 @@ def _held_frequency(model: Model, dofs, mode: int) -> float:
     import scipy.sparse as sp
     import scipy.sparse.linalg as spla
 
-    from ..model.model import _DENSE_EIG_LIMIT
+    from ..model.linear_modes import _DENSE_EIG_LIMIT
 
     keep = np.setdiff1d(np.arange(model.n_dof), np.asarray(dofs))
     M = sp.csr_matrix(model.M)[keep][:, keep]
