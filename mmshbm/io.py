@@ -25,7 +25,7 @@ def load(path, attach_solver: bool = False):
         return Branch.load(path, attach_solver=attach_solver)
     if meta.get("format") == STUDY_FORMAT:
         return Study.load(path, attach_solver=attach_solver)
-    if meta.get("format") == RESPONSE_FORMAT:  # issue 14
+    if meta.get("format") == RESPONSE_FORMAT:
         response = FrequencyResponse.load(path)
         if attach_solver:
             response.attach_solver()

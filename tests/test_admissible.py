@@ -1,4 +1,4 @@
-"""Admissible signals: the massless DOFs from the exact static contact problem (issue 16)."""
+"""Admissible signals: the massless DOFs from the exact static contact problem."""
 
 import warnings
 

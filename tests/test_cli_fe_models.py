@@ -1,4 +1,4 @@
-"""Command line for models as FE packages export them (issue 17, item 5):
+"""Command line for models as FE packages export them:
 ``--model-file`` with mass on the contact DOF, ``--contact-layer`` / ``--massless-contact``,
 ``mmshbm fit ... --measured``."""
 

@@ -1,4 +1,4 @@
-"""Contact-layer stiffness from a measured backbone (issue 17, item 4), on synthetic
+"""Contact-layer stiffness from a measured backbone, on synthetic
 measurements made with a known stiffness."""
 
 import numpy as np

@@ -1,5 +1,5 @@
-"""MMS-HBM on models as FE packages export them, through the contact layer (issue 17,
-"Done when"): the rigid limit of the layer, 10 gaps on the first-mode family, the CLI road."""
+"""MMS-HBM on models as FE packages export them, through the contact layer:
+the rigid limit of the layer, 10 gaps on the first-mode family, the CLI road."""
 
 import numpy as np
 import pytest
@@ -10,7 +10,7 @@ from mmshbm.fe.euler_bernoulli import cantilever_model
 
 L, B, H_SEC, E, RHO, GAP = 0.5, 0.020, 0.0135, 210e9, 7850.0, 1e-3
 K_S = 3 * (E * B * H_SEC**3 / 12) / L**3  # static tip stiffness of the cantilever (N/m)
-K_P = 1e3 * K_S  # NLvib's penalty spring of issue 17
+K_P = 1e3 * K_S  # NLvib's penalty spring
 
 
 @pytest.fixture(scope="module")

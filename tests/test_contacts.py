@@ -1,4 +1,4 @@
-"""Several contacts, clearances, amplitude DOF and damping on a Model (issue 13/14/17 contract)."""
+"""Several contacts, clearances, amplitude DOF and damping on a Model."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Model.with_damping: modal ratios and Rayleigh damping on the DOFs with mass (issue 14)."""
+"""Model.with_damping: modal ratios and Rayleigh damping on the DOFs with mass."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Every result says what it is: family, contact admissibility, completeness (issue 16)."""
+"""Every result says what it is: family, contact admissibility, completeness."""
 
 import warnings
 

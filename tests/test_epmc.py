@@ -1,5 +1,5 @@
 """Damped nonlinear modes (EPMC): the linear limit, the conservative limit, the Jacobian,
-the backbone dispatch (issue 14)."""
+the backbone dispatch."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The first-mode backbone through internal resonances (issue 12): jumps over tongues,
+"""The first-mode backbone through internal resonances: jumps over tongues,
 named resonances, exact points at an amplitude, Newton's convergence through grazing,
 and checkpoints across jumps."""
 

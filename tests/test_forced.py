@@ -1,5 +1,5 @@
 """Forced responses: MMS-HBM with the full cosine/sine ansatz against the linear closed form,
-finite differences and the exact event-driven reference (issue 14)."""
+finite differences and the exact event-driven reference."""
 
 from __future__ import annotations
 

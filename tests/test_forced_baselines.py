@@ -1,5 +1,5 @@
 """The forced baselines (penalty harmonic balance, shooting) against the exact reference
-on the one-DOF oscillator, and their Jacobians against finite differences (issue 14)."""
+on the one-DOF oscillator, and their Jacobians against finite differences."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
-"""MMS-HBM against ground truth: the one-DOF closed form, linear modes, the seed's
-observations on the beam, and Newton's convergence rate."""
+"""MMS-HBM against ground truth: the one-DOF closed form, linear modes, the
+paper's observations on the beam, and Newton's convergence rate."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Penalty-HBM on NLvib's full-mass cantilever against NLvib's own backbone (issue 17).
+"""Penalty-HBM on NLvib's full-mass cantilever against NLvib's own backbone.
 
 The reference (tests/data/nlvib_cantilever_impact_H5.csv, see tests/data/README.md) is
 NLvib's nonlinear-mode continuation of its 21-element Euler–Bernoulli cantilever with a

@@ -1,5 +1,5 @@
 """Phase resonance, damped-mode plots, the ``frf`` command, and damping against the
-internal-resonance tongues (issue 14)."""
+internal-resonance tongues."""
 
 from __future__ import annotations
 

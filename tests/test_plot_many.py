@@ -1,4 +1,4 @@
-"""Plots for many branches and the special points (issue 16)."""
+"""Plots for many branches and the special points."""
 
 import warnings
 

@@ -1,4 +1,4 @@
-"""The README runs as written: its Python snippets and its command lines (issue 16)."""
+"""The README runs as written: its Python snippets and its command lines."""
 
 import os
 import re

@@ -1,4 +1,4 @@
-"""Speed work changes no result beyond round-off (issue 15): backbone frequencies at fixed
+"""Speed work changes no result beyond round-off: backbone frequencies at fixed
 amplitudes against values stored from mmshbm at commit b861b41, before the compiled
 corrector, the residual step control and accept-by-prediction. The points of a branch may
 move (the step control chooses them); the curve may not, so the values are exact points

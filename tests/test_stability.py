@@ -1,5 +1,5 @@
-"""Floquet multipliers of harmonic-balance orbits along the exact piecewise-linear flow
-(issue 14): transitions, conservative structure, agreement with shooting, classification."""
+"""Floquet multipliers of harmonic-balance orbits along the exact piecewise-linear flow:
+transitions, conservative structure, agreement with shooting, classification."""
 
 from __future__ import annotations
 

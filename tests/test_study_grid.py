@@ -1,4 +1,4 @@
-"""The convergence study of issue 12 and the study throughput of issue 15: tables honest about
+"""The convergence study in H and elements and the study throughput: tables honest about
 empty cells (named resonances) and non-monotone series, chunked executors, Monte-Carlo samples,
 the CLI on a tiny grid."""
 

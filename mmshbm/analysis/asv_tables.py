@@ -154,7 +154,7 @@ def equal_accuracy_table(run: AsvRun, model: str) -> str:
 
 
 def goal_table(run: AsvRun) -> str:
-    """Issue 15's goal table with the measured figures."""
+    """The speed goals' table with the measured figures."""
     t10 = run.value("DefaultBackbone.time_backbone_to_10_gaps")
     evals = run.value("DefaultBackbone.track_evaluations_per_point")
     checks = run.value("DefaultBackbone.time_branch_checks")

@@ -9,7 +9,7 @@ from pathlib import Path
 from .._warnings import MmshbmWarning
 from . import common
 
-#: amplitudes (gaps) of the table of a convergence study (issue 12: f at 2, 5 and 10 gaps)
+#: amplitudes (gaps) of the table of a convergence study (f at 2, 5 and 10 gaps)
 STUDY_MARKS = (2.0, 5.0, 10.0)
 
 

@@ -10,8 +10,8 @@ textbooks: per element of length l, with EI and ρA constant,
 
 local order ``[w1, θ1, w2, θ2]`` (θ = dw/dx); no shear, no rotary inertia (the Φ → 0,
 ρI → 0 limit of :mod:`mmshbm.fe.element`). It serves to bring models as FE packages export
-them (the contact DOF carries mass) and to compare with those packages; the seed's own
-structure is :class:`~mmshbm.fe.beam.TimoshenkoBeam`.
+them (the contact DOF carries mass) and to compare with those packages; the benchmark
+structure of Schreyer, Peter & Leine is :class:`~mmshbm.fe.beam.TimoshenkoBeam`.
 """
 
 from __future__ import annotations

@@ -11,11 +11,10 @@ the 2×2 real blocks of the complex D_k = D_r + i D_i,
     [F_cos]   [ D_r  D_i] [a_k]
     [F_sin] = [−D_i  D_r] [b_k] ,       P_cos = Re P̂_k,   P_sin = −Im P̂_k.
 
-Contact law with intervals (the lead's formulation, shared with the conservative
-MMS-HBM): for a contact DOF with admissible interval [lo, hi]
-(:func:`mmshbm.model.contact.admissible_intervals`), f(τ) the force the structure needs
-there, q(τ) its displacement, r > 0 its condensed static contact stiffness and
-p = q − f/r,
+Contact law with intervals (the formulation of the conservative MMS-HBM): for a contact
+DOF with admissible interval [lo, hi] (:func:`mmshbm.model.contact.admissible_intervals`),
+f(τ) the force the structure needs there, q(τ) its displacement, r > 0 its condensed
+static contact stiffness and p = q − f/r,
 
     R(τ) = f + r [(p − hi)₊ − (lo − p)₊],
 
@@ -25,7 +24,7 @@ The other massless DOFs: R = f. R is projected on harmonics 0..H; with
 
     R = F + r φ(x_i − F/r),    ∂R/∂x_i = r G,    ∂R/∂F = I − G.
 
-The projection is the lead's :func:`mmshbm.core.projection.project_contact`: by default
+The projection is :func:`mmshbm.core.projection.project_contact`: by default
 exact (the switching instants, roots of p − hi and p − lo, located and the pieces integrated
 in closed form, so R is C¹ in x), or sampled by AFT on N samples (``projection="sampled"``; a
 sample switching state is a kink of the residual).
@@ -48,7 +47,7 @@ __all__: list[str] = []
 
 
 def contact_projection(projection: str, H: int, N: int):
-    """``project(p, lo, hi) -> (r, G)``: the lead's :func:`mmshbm.core.projection.project_contact`,
+    """``project(p, lo, hi) -> (r, G)``: :func:`mmshbm.core.projection.project_contact`,
     exact (``"exact"``: switching instants located, pieces integrated in closed form, C¹)
     or sampled on N points (``"sampled"``, AFT)."""
     from ..core.projection import project_contact

@@ -85,10 +85,9 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
         raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
     if not isinstance(method, str) or method not in METHODS:
         raise ValueError(f"unknown method {method!r}; choose one of {sorted(METHODS)}")
-    # --- issue 14: the backbone of a damped model is its damped nonlinear mode (EPMC) ---
+    # the backbone of a damped model (viscous or friction) is its damped nonlinear mode (EPMC)
     if method == "mmshbm" and (model.damping is not None or model.friction):
         method = "epmc"
-    # --- end issue 14 ---
     if method != "shooting":
         check.integer("harmonics", harmonics, minimum=1)
     if callback is not None and not callable(callback):

@@ -26,7 +26,7 @@ damping acts on the relative motion).
 
 The response phase is the lag of the amplitude DOF's fundamental behind the excitation
 force (``Excitation.reference``; for base excitation the inertia force −M r ü_b): π/2 at
-phase resonance, the criterion of the phase-locked-loop test of the seed's Part II.
+phase resonance, the criterion of the phase-locked-loop test.
 """
 
 from __future__ import annotations

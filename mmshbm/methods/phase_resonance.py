@@ -1,6 +1,6 @@
 """Phase resonance by MMS-HBM: the forced responses whose fundamental lags the force by 90°.
 
-The phase-locked-loop test of the seed's Part II drives the structure and adjusts the
+The phase-locked-loop test of experimental nonlinear modal analysis drives the structure and adjusts the
 excitation frequency until the response's fundamental lags the force by π/2; raising the
 force level traces the *phase-resonance backbone*, which for light damping approximates
 the nonlinear mode (Peeters et al. 2011). Here it is the one-parameter family of forced

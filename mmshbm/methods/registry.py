@@ -23,7 +23,7 @@ METHODS = {
     "penalty": "mmshbm.methods.penalty_hbm:PenaltyHBMProblem",
     "penalty-reduced": "mmshbm.methods.penalty_reduced:ReducedPenaltyHBMProblem",
     "shooting": "mmshbm.methods.shooting:ShootingProblem",
-    # damped nonlinear modes (issue 14): mmshbm.backbone(damped_model) dispatches here
+    # damped nonlinear modes: mmshbm.backbone(damped_model) dispatches here
     "epmc": "mmshbm.methods.epmc:EPMCProblem",
     "phase_resonance": "mmshbm.methods.phase_resonance:PhaseResonanceProblem",
 }

@@ -108,8 +108,8 @@ class Branch:
 
     @property
     def damping_ratio(self) -> np.ndarray:
-        """Modal damping ratio ξ/(2Ω) per point of a damped nonlinear mode (method "epmc",
-        issue 14); zeros for a conservative backbone."""
+        """Modal damping ratio ξ/(2Ω) per point of a damped nonlinear mode (method "epmc");
+        zeros for a conservative backbone."""
         return np.asarray(self.records.get("damping_ratio", np.zeros(len(self))), dtype=float)
 
     @property
