@@ -41,6 +41,8 @@ those scales produce.
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 
 from .. import _validate as check
@@ -55,6 +57,8 @@ from .mms_hbm_signals import SignalsMixin
 __all__ = ["MMSHBMProblem"]
 
 _PROJECTIONS = ("exact", "sampled")
+#: model -> {(held DOFs, mode): frequency (Hz)} of :func:`_held_frequency`
+_HELD: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 class MMSHBMProblem(SignalsMixin, FamilyMixin):
@@ -393,12 +397,21 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin):
 
 def _held_frequency(model: Model, dofs, mode: int) -> float:
     """Frequency (Hz) of linear mode ``mode`` with the DOFs ``dofs`` held fixed (all
-    contacts closed at once: the upper end of a backbone's frequency range).
+    contacts closed at once: the upper end of a backbone's frequency range); kept per
+    model (immutable) and (dofs, mode).
 
     Up to ``_DENSE_EIG_LIMIT`` DOFs with mass a dense eigen-solve; above, the sparse path
     of :meth:`Model.linear_modes` (static condensation of the other massless DOFs,
     shift-invert ARPACK at 0 with a minimum-degree LU): nothing of size n_dof² is formed.
     """
+    memo = _HELD.setdefault(model, {})
+    key = (tuple(int(d) for d in np.atleast_1d(dofs)), int(mode))
+    if key not in memo:
+        memo[key] = _held_frequency_solve(model, dofs, mode)
+    return memo[key]
+
+
+def _held_frequency_solve(model: Model, dofs, mode: int) -> float:
     import scipy.linalg as la
     import scipy.sparse as sp
     import scipy.sparse.linalg as spla

@@ -129,12 +129,21 @@ class SignalsMixin:
         (all DOFs when None)."""
         n_samples = check.integer("n_samples", n_samples, minimum=1)
         a, omega = self.unpack(u)
-        Q = self.coefficients(u)
-        if dofs is not None:
+        if dofs is None:
+            Q = self.coefficients(u)
+        else:
             dofs = np.atleast_1d(np.asarray(dofs))
             if dofs.dtype.kind not in "iu" or np.any((dofs < -self.model.n_dof) | (dofs >= self.model.n_dof)):
                 raise ValueError(f"dofs must be integer indices in [0, {self.model.n_dof - 1}], got {dofs}")
-            Q = Q[dofs]
+            c = self.model.c
+            pos = np.searchsorted(c, dofs % self.model.n_dof)
+            if len(c) and np.all(c[np.minimum(pos, len(c) - 1)] == dofs % self.model.n_dof):
+                # massless DOFs only: their coefficients are unknowns, nothing to recover
+                Q = np.zeros((len(dofs), 2 * self.H + 1))
+                Q[:, 0] = a[0, pos]
+                Q[:, 1::2] = a[1:, pos].T
+            else:
+                Q = self.coefficients(u)[dofs]
         tau = 2 * np.pi * np.arange(n_samples) / n_samples
         k = np.arange(1, self.H + 1)
         q = Q[:, :1] + Q[:, 1::2] @ np.cos(np.outer(k, tau)) + Q[:, 2::2] @ np.sin(np.outer(k, tau))
