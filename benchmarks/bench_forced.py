@@ -1,4 +1,4 @@
-"""Forced responses, damped nonlinear modes and phase resonance (issue 14).
+"""Forced responses, damped nonlinear modes and phase resonance.
 
 * ``ForcedOscillator``: the one-DOF forced damped oscillator (ζ = 2 %, F = 0.1 N, 0.1–0.3 Hz)
   by each method at *equal accuracy* — the setting that brings the amplitude at 0.185 Hz on

@@ -1,4 +1,4 @@
-"""The figures of the speed goals (issue 15), tracked per commit.
+"""The figures of the speed goals, tracked per commit.
 
 * ``DefaultBackbone``: the README's main job, the default beam (21 elements, H = 5) to
   10 gaps, warm: time, residual + Jacobian evaluations per point, the branch checks.

@@ -1,4 +1,4 @@
-"""Studies: the convergence grid of issue 12 and the study throughput of issue 15.
+"""Studies: the convergence grid in H and elements and the study throughput.
 
 - :class:`ReducedGrid`: the time of a small grid (H 5, 7 x 8, 21 elements to 10 gaps, in
   this process): the cost of backbones through internal-resonance tongues.
@@ -21,7 +21,7 @@ import warnings
 
 from benchmarks.common import warm_up
 
-#: the grid of issue 12
+#: the convergence grid: H x elements
 GRID_H = (1, 3, 5, 7, 9, 11, 15)
 GRID_ELEMENTS = (8, 21, 40, 100, 200)
 
@@ -53,7 +53,7 @@ class ReducedGrid:
 
 
 class ConvergenceGrid:
-    """The grid of issue 12, once per asv run (about 20-40 s on 2 cores)."""
+    """The convergence grid, once per asv run (about 20-40 s on 2 cores)."""
 
     params = [GRID_H, GRID_ELEMENTS]
     param_names = ["H", "elements"]
