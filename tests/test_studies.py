@@ -76,7 +76,7 @@ def test_pivot_matrix(serial):
 
 def test_progress_bar_off_when_not_a_terminal(capsys):
     studies.run_study(harmonics=(1,), elements=(4,), executor="serial", verbose=True, max_amplitude=2.0,
-                      unit="gap")
+                      unit="gap", warn=False)
     assert capsys.readouterr().err == ""  # pytest's stderr is not a terminal
 
 
