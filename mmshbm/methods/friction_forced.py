@@ -48,8 +48,9 @@ trigonometric polynomial on its closed arcs, 0 on the open ones, continuous); th
 with a time-varying half-width s/ρ (:mod:`mmshbm.contact.coulomb_coupled`), its Jacobian
 including ∂s/∂(the normal contact's coefficients). Play form only.
 
-Not yet: the velocity form with ``normal_contact=`` and the Floquet multipliers of friction
-orbits (both raise NotImplementedError).
+Floquet multipliers (``stability=True``): constant normal loads and no unilateral contact
+(:mod:`mmshbm.methods.friction_stability`). Not yet: the velocity form with
+``normal_contact=`` and the multipliers with unilateral contacts (NotImplementedError).
 """
 
 from __future__ import annotations
@@ -234,8 +235,9 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         Proximal parameter of the unilateral contacts (N/m); the friction contacts use
         ρ = 1/(K_cc⁻¹)_tt, the node's stiffness with the DOFs with mass held.
     stability : bool or "auto"
-        Floquet multipliers are not yet available with friction: "auto" and False skip
-        them, True raises NotImplementedError.
+        True: Floquet multipliers at every point (:mod:`~mmshbm.methods.friction_stability`;
+        constant normal loads, no unilateral contact, play form; NotImplementedError
+        otherwise). "auto" and False skip them.
     law : {"play", "velocity"}
         The form of the friction rows (module docstring); "play" needs the exact projection.
 
@@ -256,13 +258,18 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
                  projection: str = "exact", law: str = "play"):
         check_friction_model(model, coupled_ok=True)
         check_law(law, projection)
-        if stability is True:
-            raise NotImplementedError("Floquet multipliers of orbits with friction are not yet available: "
-                                      "pass stability=False")
-        if not (stability is False or stability == "auto"):
+        if not (stability is True or stability is False or stability == "auto"):
             raise ValueError(f"stability must be True, False or 'auto', got {stability!r}")
+        if stability is True and law != "play":
+            raise NotImplementedError("Floquet multipliers with friction take the stick arcs of the play "
+                                      "form: pass law='play'")
         super().__init__(model, force, harmonics, n_samples, r, backend, False, projection)
         self._init_friction(model, law, projection)
+        if stability is True:
+            from .friction_stability import FrictionFloquet
+
+            self._floquet = FrictionFloquet(model)  # NotImplementedError with unilateral contacts
+            self.stability = True
         self._rescale(self._static_length(), 1)
         # harmonic 1 of the amplitude DOF (when it carries mass) as two more unknowns
         hit = np.flatnonzero(model.l == self.amplitude_dof)
@@ -439,6 +446,20 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         return self.stuck_point(frequency)
 
     # ------------------------------------------------------------------ results
+    def _multipliers(self, Q: np.ndarray, omega: float) -> np.ndarray:
+        """Floquet multipliers (2 n_l + m,) of the orbit with coefficients Q (n_dof, 2H+1):
+        the phases from each node's stick arcs (:mod:`mmshbm.methods.friction_stability`)."""
+        from ..contact.coulomb import play_pieces
+
+        x = np.ascontiguousarray(Q[self.model.c].T).ravel()
+        F = self._needed(x, omega, 1.0)
+        arcs = []
+        for j, i in enumerate(self.friction_rows):
+            idx = self._coef_index[i]
+            pieces = play_pieces(x[idx] - F[idx] / self.rho[j], self.slip_force[j], self.rho[j])
+            arcs.append([(a, b) for a, b, sg, _, _ in pieces if sg == 0])
+        return self._floquet.multipliers(arcs, omega)
+
     def _record(self, x: np.ndarray, omega: float, sigma: float) -> dict:
         rec = super()._record(x, omega, sigma)
         rec.update(self.friction_records(x, omega, sigma))
