@@ -48,9 +48,9 @@ trigonometric polynomial on its closed arcs, 0 on the open ones, continuous); th
 with a time-varying half-width s/ρ (:mod:`mmshbm.contact.coulomb_coupled`), its Jacobian
 including ∂s/∂(the normal contact's coefficients). Play form only.
 
-Floquet multipliers (``stability=True``): constant normal loads and no unilateral contact
-(:mod:`mmshbm.methods.friction_stability`). Not yet: the velocity form with
-``normal_contact=`` and the multipliers with unilateral contacts (NotImplementedError).
+Floquet multipliers (``stability=True``, :mod:`mmshbm.methods.friction_stability`), play
+form. Not yet: the velocity form with ``normal_contact=`` or with stability
+(NotImplementedError).
 """
 
 from __future__ import annotations
@@ -236,8 +236,7 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         ρ = 1/(K_cc⁻¹)_tt, the node's stiffness with the DOFs with mass held.
     stability : bool or "auto"
         True: Floquet multipliers at every point (:mod:`~mmshbm.methods.friction_stability`;
-        constant normal loads, no unilateral contact, play form; NotImplementedError
-        otherwise). "auto" and False skip them.
+        play form, NotImplementedError otherwise). "auto" and False skip them.
     law : {"play", "velocity"}
         The form of the friction rows (module docstring); "play" needs the exact projection.
 
@@ -266,9 +265,9 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         super().__init__(model, force, harmonics, n_samples, r, backend, False, projection)
         self._init_friction(model, law, projection)
         if stability is True:
-            from .friction_stability import FrictionFloquet
+            from .friction_stability import FrictionFloquet, ImpactFrictionFloquet
 
-            self._floquet = FrictionFloquet(model)  # NotImplementedError with unilateral contacts
+            self._floquet = ImpactFrictionFloquet(model) if model.contacts else FrictionFloquet(model)
             self.stability = True
         self._rescale(self._static_length(), 1)
         # harmonic 1 of the amplitude DOF (when it carries mass) as two more unknowns
@@ -450,15 +449,31 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         """Floquet multipliers (2 n_l + m,) of the orbit with coefficients Q (n_dof, 2H+1):
         the phases from each node's stick arcs (:mod:`mmshbm.methods.friction_stability`)."""
         from ..contact.coulomb import play_pieces
+        from ..contact.coulomb_coupled import coupled_play_pieces
+        from .friction_stability import merge_phases
 
         x = np.ascontiguousarray(Q[self.model.c].T).ravel()
         F = self._needed(x, omega, 1.0)
-        arcs = []
+        pieces = []
         for j, i in enumerate(self.friction_rows):
             idx = self._coef_index[i]
-            pieces = play_pieces(x[idx] - F[idx] / self.rho[j], self.slip_force[j], self.rho[j])
-            arcs.append([(a, b) for a, b, sg, _, _ in pieces if sg == 0])
-        return self._floquet.multipliers(arcs, omega)
+            y = x[idx] - F[idx] / self.rho[j]
+            if self.coupling[j] is None:
+                pc = play_pieces(y, self.slip_force[j], self.rho[j])
+            else:
+                k, side, gap, mu, preload = self.coupling[j]
+                idx_n = self._coef_index[self.contact_rows[k]]
+                z = side * (x[idx_n] - F[idx_n] / self.r[k])
+                pc = coupled_play_pieces(y, z, mu * preload / self.rho[j], mu * self.r[k] / self.rho[j], gap)
+            pieces.append([(p[0], p[1], p[2]) for p in pc])
+        if not self.model.contacts:
+            return self._floquet.multipliers([[(a, b) for a, b, sg in pc if sg == 0] for pc in pieces], omega)
+        from .stability import FloquetSolver
+
+        if getattr(self, "_normal_floquet", None) is None:
+            self._normal_floquet = FloquetSolver(self.model)
+        normal = self._normal_floquet.phases(Q[self.model.l])
+        return self._floquet.multipliers(merge_phases(normal, pieces), omega)
 
     def _record(self, x: np.ndarray, omega: float, sigma: float) -> dict:
         rec = super()._record(x, omega, sigma)
