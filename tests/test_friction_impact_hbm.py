@@ -142,12 +142,22 @@ def test_an_unreachable_stop_is_constant_load_friction(H):
     assert np.abs(x - xc).max() <= 1e-12 * np.abs(xc).max()
 
 
-def test_against_shooting():
+@pytest.mark.parametrize("coupled", [False, True])
+def test_against_shooting(coupled):
     """μ = 0.3, preload 0.05 N, 0.18 Hz (λ up to 1.14 N, slip 87 % of the period). Shooting
     at 1024 and 2048 steps extrapolated (Δt², its remaining error bounded by the Richardson
     correction itself); MMS-HBM at H = 63, its truncation error bounded by its change from
-    H = 31. Measured: 4e-6 (x1) and 1.3e-5 (x2) relative."""
+    H = 31. Measured: 4e-6 (x1) and 1.3e-5 (x2) relative. ``coupled``: a spring of 1 N/m
+    between the node's normal and tangential DOFs (K_cc not diagonal, so y carries λ's
+    kinks): 5.6e-6 and 2.0e-5."""
     f, m = 0.18, model(0.05, 0.3, 0.05)
+    if coupled:
+        Kc = K.copy()
+        Kc[2, 2] += 1.0
+        Kc[3, 3] += 1.0
+        Kc[2, 3] = Kc[3, 2] = -1.0
+        base = mmshbm.Model.from_matrices(M, Kc, [2], [0.05], [+1], damping=C, amplitude_dof=0)
+        m = base.with_friction(3, 0.3, normal_contact=0, preload=0.05)
     ref = {}
     for n in (1024, 2048):
         _, ok, rec, _ = impact_friction_orbit(m, F, f, n)
