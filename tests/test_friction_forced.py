@@ -137,12 +137,14 @@ def test_what_is_not_yet_done_says_so():
     K = np.array([[3.0, -1, -1], [-1, 2, 0], [-1, 0, 2]])
     coupled = mmshbm.Model.from_matrices(M, K, 1, 1e-3, amplitude_dof=0).with_friction(
         2, 0.2, normal_contact=0)
-    with pytest.raises(NotImplementedError, match="not yet"):
-        mmshbm.frequency_response(coupled, [1.0, 0, 0], (0.1, 0.2))
+    with pytest.raises(NotImplementedError, match="not yet solved by the Jenkins"):
+        mmshbm.frequency_response(coupled, [1.0, 0, 0], (0.1, 0.2), method="penalty")
+    with pytest.raises(NotImplementedError, match="not yet solved by the EPMC"):
+        mmshbm.backbone(coupled, max_amplitude=1e-3)
     with pytest.raises(NotImplementedError, match="one friction contact and no unilateral"):
         mmshbm.frequency_response(coupled, [1.0, 0, 0], (0.1, 0.2), method="shooting")
-    with pytest.raises(NotImplementedError, match="not yet"):
-        FrictionForcedProblem(jenkins(0.2), [F_, 0.0], 3, stability=True)
+    with pytest.raises(NotImplementedError, match="play"):
+        FrictionForcedProblem(jenkins(0.2), [F_, 0.0], 3, stability=True, law="velocity")
     with pytest.raises(ValueError, match="law must be"):
         FrictionForcedProblem(jenkins(0.2), [F_, 0.0], 3, law="penalty")
 

@@ -72,4 +72,4 @@ def test_impact_with_friction_converges_in_the_step():
 
 def test_other_solvers_refuse_it():
     with pytest.raises(NotImplementedError, match="not yet"):
-        mmshbm.frequency_response(model(0.05, 0.3, 0.05), F, (0.1, 0.2))
+        mmshbm.frequency_response(model(0.05, 0.3, 0.05), F, (0.1, 0.2), method="penalty")

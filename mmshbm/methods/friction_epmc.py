@@ -79,7 +79,7 @@ class FrictionEPMCProblem(FrictionRows, DampedHBMBase):
 
     def __init__(self, model: Model, harmonics: int = 5, n_samples: int | None = None, r: float | None = None,
                  mode: int = 1, backend: str = "auto", projection: str = "exact", law: str = "play"):
-        check_friction_model(model)
+        check_friction_model(model, who="the EPMC (damped nonlinear modes)")
         check_law(law, projection)
         if model.contacts:
             raise NotImplementedError("EPMC with friction and unilateral contacts together is not yet "

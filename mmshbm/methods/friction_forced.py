@@ -42,8 +42,15 @@ symmetric position: mean friction force zero (the play form: u_t = mean(y) when 
 keeps |F_t| <= s; the velocity form replaces its mean row by F_t,0 = 0), the limit of the
 slipping orbits of a symmetric structure under a harmonic force as the slip vanishes.
 
-Not yet: friction coupled to a unilateral contact's force (``normal_contact=``) and the
-Floquet multipliers of friction orbits (both raise NotImplementedError).
+Impact with friction (``normal_contact=j``): the slip force s(τ) = μ (N0 + λ_j(τ)) with
+λ_j = r_j (side·p_j − gap)₊ the proximal contact force of unilateral contact j (a
+trigonometric polynomial on its closed arcs, 0 on the open ones, continuous); the play form
+with a time-varying half-width s/ρ (:mod:`mmshbm.contact.coulomb_coupled`), its Jacobian
+including ∂s/∂(the normal contact's coefficients). Play form only.
+
+Floquet multipliers (``stability=True``, :mod:`mmshbm.methods.friction_stability`), play
+form. Not yet: the velocity form with ``normal_contact=`` or with stability
+(NotImplementedError).
 """
 
 from __future__ import annotations
@@ -65,17 +72,18 @@ def check_law(law: str, projection: str) -> None:
         raise ValueError("law='play' is projected exactly only: pass projection='exact'")
 
 
-def check_friction_model(model: Model) -> None:
-    """Raise unless ``model`` has friction contacts this module solves (constant loads)."""
+def check_friction_model(model: Model, coupled_ok: bool = False, who: str = "this method") -> None:
+    """Raise unless ``model`` has friction contacts this module solves: constant loads, and
+    with ``coupled_ok`` also loads coupled to a unilateral contact (``normal_contact=``)."""
     if not isinstance(model, Model):
         raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
     if not model.friction:
         raise ValueError("the model has no friction contact")
     coupled = [fc.dof for fc in model.friction if fc.normal_contact is not None]
-    if coupled:
+    if coupled and not coupled_ok:
         raise NotImplementedError(f"friction coupled to a unilateral contact's force (normal_contact=, "
-                                  f"DOFs {coupled}) is not yet solved by MMS-HBM: give a constant "
-                                  "normal_load")
+                                  f"DOFs {coupled}) is not yet solved by {who}: give a constant "
+                                  "normal_load, or use the MMS-HBM forced response")
 
 
 class FrictionRows:
@@ -86,7 +94,15 @@ class FrictionRows:
     def _init_friction(self, model: Model, law: str, projection: str) -> None:
         c = model.c
         self.friction_rows = np.searchsorted(c, [fc.dof for fc in model.friction])
-        self.slip_force = np.array([fc.slip_force for fc in model.friction])
+        # constant loads: s = μN; coupled loads: μ·preload here, the contact's force added in
+        # the law (``coupling``: (contact row, side·stop position, μ, preload) or None)
+        self.slip_force = np.array([fc.mu * (fc.preload if fc.normal_contact is not None else fc.normal_load)
+                                    for fc in model.friction])
+        self.coupling = [None if fc.normal_contact is None else self._coupling(model, fc)
+                         for fc in model.friction]
+        if law != "play" and any(cp is not None for cp in self.coupling):
+            raise NotImplementedError("friction coupled to a unilateral contact (normal_contact=) is "
+                                      "solved in the play form only: pass law='play'")
         # the node's stiffness with the DOFs with mass held: then y = u − F_t/ρ = wᵀq_l is the
         # position the free node would take, as smooth as the motion of the DOFs with mass
         flex = np.linalg.inv(model.blocks["K_cc"])
@@ -94,6 +110,13 @@ class FrictionRows:
         self._Dt = derivative_matrix(self.H)
         self._exact = projection == "exact"
         self.law = law
+
+    def _coupling(self, model: Model, fc) -> tuple[int, int, float, float, float]:
+        """(index into ``contact_rows``, side, gap, μ, preload) of the unilateral contact that
+        presses friction contact ``fc``."""
+        ct = model.contacts[fc.normal_contact]
+        k = int(np.flatnonzero(self.contact_rows == np.searchsorted(model.c, ct.dof))[0])
+        return k, int(ct.side), float(ct.gap), float(fc.mu), float(fc.preload)
 
     def _rescale(self, length: float, extra_cols: int) -> None:
         """Unknowns in units of ``length`` (m) times the first mode's shape; ``extra_cols``
@@ -114,6 +137,8 @@ class FrictionRows:
         """(R (2H+1,), ∂R/∂F_t, ∂R/∂x_t (2H+1, 2H+1), slip fraction) of friction contact j
         (the play form without ``jacobian`` returns None for both derivatives)."""
         idx = self._coef_index[self.friction_rows[j]]
+        if self.coupling[j] is not None:
+            return self._coupled_law(x, F, j, idx, jacobian)
         if self.law == "play":
             rho = self.rho[j]
             g, Jg, slip = project_coulomb_play(x[idx] - F[idx] / rho, self.slip_force[j], rho,
@@ -127,6 +152,24 @@ class FrictionRows:
         # R = −Rc = F_t + proj[clip(−F_t + ρ u′)]
         return -Rc, A, -B @ self._Dt, slip
 
+    def _coupled_law(self, x, F, j, idx, jacobian):
+        """:meth:`friction_law` of a contact pressed by N0 + λ_n(τ): (R, (∂R/∂F_t, ∂R/∂F_n),
+        (∂R/∂x_t, ∂R/∂x_n), slip), λ_n = r_n (side·p_n − gap)₊ the proximal force of the
+        normal contact, p_n = x_n − F_n/r_n
+        (:func:`~mmshbm.contact.coulomb_coupled.project_coulomb_play_coupled`)."""
+        from ..contact.coulomb_coupled import project_coulomb_play_coupled
+
+        k, side, gap, mu, preload = self.coupling[j]
+        rho, r_n = self.rho[j], self.r[k]
+        idx_n = self._coef_index[self.contact_rows[k]]
+        z = side * (x[idx_n] - F[idx_n] / r_n)
+        g, Jy, Jz, slip = project_coulomb_play_coupled(x[idx] - F[idx] / rho, z, rho, mu, preload, r_n, gap,
+                                                       jacobian=jacobian)
+        if Jy is None:
+            return F[idx] - g, None, None, slip
+        eye = np.eye(len(idx))
+        return F[idx] - g, (eye + Jy / rho, side * Jz / r_n), (-Jy, -side * Jz), slip
+
     def fused_residual(self, D, x, load, dD=None, dload=None):
         """The residual with the friction rows (NumPy: the compiled fused kernel knows the
         unilateral rows only)."""
@@ -138,7 +181,14 @@ class FrictionRows:
             idx = self._coef_index[i]
             Rt, A, B, slip = self.friction_law(x, F, j, Jx is not None)
             R[idx] = Rt
-            if Jx is not None:
+            if Jx is not None and isinstance(A, tuple):  # coupled: the normal contact's columns too
+                idx_n = self._coef_index[self.contact_rows[self.coupling[j][0]]]
+                Jx[idx] = A[0] @ dF[idx] + A[1] @ dF[idx_n]
+                Jx[np.ix_(idx, idx)] += B[0]
+                Jx[np.ix_(idx, idx_n)] += B[1]
+                if Jp is not None:
+                    Jp[idx] = A[0] @ dFp[idx] + A[1] @ dFp[idx_n]
+            elif Jx is not None:
                 Jx[idx] = A @ dF[idx]
                 Jx[np.ix_(idx, idx)] += B
                 if Jp is not None:
@@ -185,8 +235,8 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         Proximal parameter of the unilateral contacts (N/m); the friction contacts use
         ρ = 1/(K_cc⁻¹)_tt, the node's stiffness with the DOFs with mass held.
     stability : bool or "auto"
-        Floquet multipliers are not yet available with friction: "auto" and False skip
-        them, True raises NotImplementedError.
+        True: Floquet multipliers at every point (:mod:`~mmshbm.methods.friction_stability`;
+        play form, NotImplementedError otherwise). "auto" and False skip them.
     law : {"play", "velocity"}
         The form of the friction rows (module docstring); "play" needs the exact projection.
 
@@ -205,15 +255,20 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
     def __init__(self, model: Model, force, harmonics: int = 5, n_samples: int | None = None,
                  r: float | None = None, backend: str = "auto", stability: bool | str = "auto",
                  projection: str = "exact", law: str = "play"):
-        check_friction_model(model)
+        check_friction_model(model, coupled_ok=True)
         check_law(law, projection)
-        if stability is True:
-            raise NotImplementedError("Floquet multipliers of orbits with friction are not yet available: "
-                                      "pass stability=False")
-        if not (stability is False or stability == "auto"):
+        if not (stability is True or stability is False or stability == "auto"):
             raise ValueError(f"stability must be True, False or 'auto', got {stability!r}")
+        if stability is True and law != "play":
+            raise NotImplementedError("Floquet multipliers with friction take the stick arcs of the play "
+                                      "form: pass law='play'")
         super().__init__(model, force, harmonics, n_samples, r, backend, False, projection)
         self._init_friction(model, law, projection)
+        if stability is True:
+            from .friction_stability import FrictionFloquet, ImpactFrictionFloquet
+
+            self._floquet = ImpactFrictionFloquet(model) if model.contacts else FrictionFloquet(model)
+            self.stability = True
         self._rescale(self._static_length(), 1)
         # harmonic 1 of the amplitude DOF (when it carries mass) as two more unknowns
         hit = np.flatnonzero(model.l == self.amplitude_dof)
@@ -377,15 +432,49 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
 
     def start_point(self, frequency: float, max_iter: int = 50) -> np.ndarray:
         """Converged unknowns at ``frequency`` (Hz) by Newton from the free-slip, then the
-        full-stick linear response (the first that converges); the stuck response when
-        neither does (the continuation's first corrector then tries)."""
-        for guess in (self.linear_point(frequency), self.stuck_point(frequency)):
-            u, ok = self.solve_at(frequency, guess, max_iter)
+        full-stick linear response, then (with unilateral contacts) the force ramped up from
+        a level that keeps the stops open (the first that converges); the stuck response when
+        none does (the continuation's first corrector then tries)."""
+        guesses = [self.linear_point, self.stuck_point]
+        if self.model.contacts:  # the force raised from a level that keeps the stops open
+            guesses.append(lambda f: ForcedResponseProblem.start_point(self, f))
+        for guess in guesses:
+            u, ok = self.solve_at(frequency, guess(frequency), max_iter)
             if ok:
                 return u
         return self.stuck_point(frequency)
 
     # ------------------------------------------------------------------ results
+    def _multipliers(self, Q: np.ndarray, omega: float) -> np.ndarray:
+        """Floquet multipliers (2 n_l + m,) of the orbit with coefficients Q (n_dof, 2H+1):
+        the phases from each node's stick arcs (:mod:`mmshbm.methods.friction_stability`)."""
+        from ..contact.coulomb import play_pieces
+        from ..contact.coulomb_coupled import coupled_play_pieces
+        from .friction_stability import merge_phases
+
+        x = np.ascontiguousarray(Q[self.model.c].T).ravel()
+        F = self._needed(x, omega, 1.0)
+        pieces = []
+        for j, i in enumerate(self.friction_rows):
+            idx = self._coef_index[i]
+            y = x[idx] - F[idx] / self.rho[j]
+            if self.coupling[j] is None:
+                pc = play_pieces(y, self.slip_force[j], self.rho[j])
+            else:
+                k, side, gap, mu, preload = self.coupling[j]
+                idx_n = self._coef_index[self.contact_rows[k]]
+                z = side * (x[idx_n] - F[idx_n] / self.r[k])
+                pc = coupled_play_pieces(y, z, mu * preload / self.rho[j], mu * self.r[k] / self.rho[j], gap)
+            pieces.append([(p[0], p[1], p[2]) for p in pc])
+        if not self.model.contacts:
+            return self._floquet.multipliers([[(a, b) for a, b, sg in pc if sg == 0] for pc in pieces], omega)
+        from .stability import FloquetSolver
+
+        if getattr(self, "_normal_floquet", None) is None:
+            self._normal_floquet = FloquetSolver(self.model)
+        normal = self._normal_floquet.phases(Q[self.model.l])
+        return self._floquet.multipliers(merge_phases(normal, pieces), omega)
+
     def _record(self, x: np.ndarray, omega: float, sigma: float) -> dict:
         rec = super()._record(x, omega, sigma)
         rec.update(self.friction_records(x, omega, sigma))

@@ -80,7 +80,7 @@ class JenkinsForcedProblem(PenaltyForcedProblem):
 
     def __init__(self, model: Model, force, harmonics: int = 5, tangential_stiffness=None,
                  n_samples: int | None = None, stability: bool = False):
-        check_friction_model(model)
+        check_friction_model(model, who="the Jenkins baseline (method=\"penalty\")")
         if model.contacts:
             raise NotImplementedError("the Jenkins baseline takes friction contacts alone "
                                       "(no unilateral contact)")
