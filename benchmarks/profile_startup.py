@@ -46,6 +46,43 @@ def whole_process(args: list[str], repeat: int, cold: bool, env: dict | None = N
     return times
 
 
+#: the LLVM phases of a Numba kernel's library: optimising its own functions; optimising the
+#: module once its callees are linked in (callees are optimised again, inlined, in every
+#: caller); emitting machine code for that linked module
+_LLVM_PHASES = ("_optimize_functions", "_optimize_final_module", "_finalize_final_module")
+
+
+def _time_llvm() -> dict:
+    """Time the LLVM phases of every kernel compiled from now on: {kernel name: {phase: s}}
+    (empty where this Numba's code library lacks those methods)."""
+    import collections
+
+    from numba.core import codegen
+
+    library = getattr(codegen, "CPUCodeLibrary", None)
+    times = collections.defaultdict(dict)
+    if library is None or not all(hasattr(library, m) for m in _LLVM_PHASES):
+        return times
+
+    def timer(phase):
+        orig = getattr(library, phase)
+
+        def timed(self, *a, **k):
+            t0 = time.perf_counter()
+            try:
+                return orig(self, *a, **k)
+            finally:
+                # a library is named after its function (Numba's own helpers: 'nrt', ...)
+                name = self.name.split("$")[0].split("[")[0].rsplit(".", 1)[-1]
+                times[name][phase] = times[name].get(phase, 0.0) + time.perf_counter() - t0
+
+        return timed
+
+    for phase in _LLVM_PHASES:
+        setattr(library, phase, timer(phase))
+    return times
+
+
 def _child(args: list[str], out: str) -> None:
     """One instrumented ``mmshbm backbone`` (the steps of cli/backbone.py), phases printed."""
     t_start = time.perf_counter()
@@ -90,6 +127,7 @@ def _child(args: list[str], out: str) -> None:
             kernels.append((name, inclusive - inner, inclusive))
 
     Dispatcher.compile = timed
+    llvm = _time_llvm()
     from mmshbm.results import diagnostics
 
     check_time = []
@@ -139,10 +177,20 @@ def _child(args: list[str], out: str) -> None:
           f"{1e3 * (t_backbone - compile_total - sum(check_time)):.1f} ms); metadata elapsed_s "
           f"{1e3 * continuation:.1f} ms (continuation incl. its kernel loads)")
     print(f"branch: {len(branch)} points, status {branch.status}")
-    print(f"\n{'kernel (exclusive of the kernels it calls)':70s} {'ms':>8s} {'incl.':>8s}")
+    print(f"\n{'kernel (exclusive of the kernels it calls)':56s} {'ms':>8s} {'incl.':>8s} "
+          f"{'LLVM opt':>9s} {'linked':>7s} {'emit':>7s}")
     for name, excl, incl in sorted(kernels, key=lambda k: -k[1]):
         if excl >= 0.5e-3:
-            print(f"{name:70s} {1e3 * excl:8.1f} {1e3 * incl:8.1f}")
+            parts = llvm.get(name.rsplit(".", 1)[-1], {})
+            widths = zip(_LLVM_PHASES, (9, 7, 7), strict=True)
+            cols = " ".join(f"{1e3 * parts.get(m, 0.0):{w}.1f}" for m, w in widths)
+            print(f"{name:56s} {1e3 * excl:8.1f} {1e3 * incl:8.1f} {cols}")
+    if llvm:
+        total = {m: sum(p.get(m, 0.0) for p in llvm.values()) for m in _LLVM_PHASES}
+        print(f"LLVM (part of the exclusive times): its own functions {1e3 * total[_LLVM_PHASES[0]]:.0f} ms, "
+              f"the module linked with its callees (which it optimises again) "
+              f"{1e3 * total[_LLVM_PHASES[1]]:.0f} ms, machine code {1e3 * total[_LLVM_PHASES[2]]:.0f} ms; "
+              "the rest is Numba's typing and lowering")
     small = [k for k in kernels if k[1] < 0.5e-3]
     if small:
         print(f"({len(small)} dispatches below 0.5 ms: type resolution of kernels already loaded)")
