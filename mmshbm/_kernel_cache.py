@@ -11,6 +11,14 @@ kernels of other files; editing any kernel file recompiles all of them at the ne
 Installed copies never change, so the fingerprint is computed once per process (a few ms,
 only when a kernel is first taken from the cache).
 
+A package installed from a wheel built by the package's build step (``setup.py``) carries
+its main job's kernels compiled, in Numba's in-tree cache (``__pycache__`` next to the
+kernel files). Where ``NUMBA_CACHE_DIR`` sets another cache, the first kernel of a folder
+that Numba looks up there copies that folder's carried kernels into it, each kernel whose
+index is not there yet (an index already there, and its data, are left as they are); Numba
+then loads them as any cached kernel, or compiles where they do not match its version, the
+CPU or the sources.
+
 The hook uses ``numba.core.caching.CacheImpl._locator_classes``, the extension point that
 Numba's own locators are registered in; where a Numba version lacks it, :func:`install`
 returns False and kernels cache by their own file, as Numba does by default.
@@ -20,6 +28,9 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import os
+import shutil
+import tempfile
 from pathlib import Path
 
 PACKAGE_DIR = Path(__file__).resolve().parent
@@ -45,6 +56,37 @@ def _in_package(py_file: str) -> bool:
         return False
 
 
+@functools.cache
+def seed(source_dir: str, cache_dir: str) -> int:
+    """Copy the kernels cached in ``source_dir/__pycache__`` (a wheel's, see the module's
+    text) into ``cache_dir``, each whose index ``cache_dir`` lacks: its data files, then its
+    index (written under another name and renamed, so that a concurrent process sees it
+    whole or not at all). Once per pair of folders and process; errors leave the rest to
+    Numba. Returns the number of kernels copied."""
+    carried = Path(source_dir, "__pycache__")
+    copied = 0
+    try:
+        indexes = sorted(carried.glob("*.nbi"))
+        if not indexes or Path(cache_dir).resolve() == carried.resolve():
+            return 0
+        os.makedirs(cache_dir, exist_ok=True)
+        for index in indexes:
+            target = Path(cache_dir, index.name)
+            if target.exists():
+                continue
+            for data in carried.glob(f"{index.stem}.*.nbc"):
+                if not Path(cache_dir, data.name).exists():
+                    shutil.copyfile(data, Path(cache_dir, data.name))
+            fd, tmp = tempfile.mkstemp(dir=cache_dir, suffix=".tmp")
+            os.close(fd)
+            shutil.copyfile(index, tmp)
+            os.replace(tmp, target)
+            copied += 1
+    except OSError:
+        pass
+    return copied
+
+
 def _locator(base):
     class PackageLocator(base):
         """``base`` for this package's files, stamped with the kernel fingerprint too."""
@@ -56,7 +98,10 @@ def _locator(base):
         def from_function(cls, py_func, py_file):
             if not _in_package(py_file):
                 return None
-            return super().from_function(py_func, py_file)
+            locator = super().from_function(py_func, py_file)
+            if locator is not None and base.__name__ == "UserProvidedCacheLocator":
+                seed(str(Path(py_file).resolve().parent), locator.get_cache_path())
+            return locator
 
     PackageLocator.__name__ = PackageLocator.__qualname__ = f"Package{base.__name__}"
     return PackageLocator
@@ -79,4 +124,4 @@ def install() -> bool:
     return True
 
 
-__all__ = ["install", "kernel_fingerprint"]
+__all__ = ["install", "kernel_fingerprint", "seed"]

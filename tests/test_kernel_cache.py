@@ -55,7 +55,8 @@ def test_editing_a_callee_in_another_file_recompiles_its_caller(tmp_path):
 
 def test_an_in_tree_cache_serves_a_copy_of_the_package(tmp_path):
     """The build step's premise (setup.py): the kernels compiled into the built copy's
-    ``__pycache__`` load, not compile, in the installed copy (other paths and mtimes)."""
+    ``__pycache__`` load, not compile, in the installed copy (other paths and mtimes), also
+    where NUMBA_CACHE_DIR names an empty cache."""
     built = tmp_path / "built"
     pkg = built / "probe"
     pkg.mkdir(parents=True)
@@ -75,9 +76,11 @@ def test_an_in_tree_cache_serves_a_copy_of_the_package(tmp_path):
     code = ("from probe.caller import f; print(f(), sum(f.stats.cache_misses.values()), "
             "sum(f.stats.cache_hits.values()))")
 
-    def run(root):
+    def run(root, cache=None):
         env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
         env["PYTHONPATH"] = str(root)
+        if cache is not None:
+            env["NUMBA_CACHE_DIR"] = str(cache)
         return subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
                               check=True, timeout=300).stdout.split()
 
@@ -85,6 +88,9 @@ def test_an_in_tree_cache_serves_a_copy_of_the_package(tmp_path):
     installed = tmp_path / "installed"
     shutil.copytree(built, installed, copy_function=shutil.copy)  # new mtimes
     assert run(installed) == ["3", "0", "1"]  # loaded
+    # another cache (NUMBA_CACHE_DIR) is seeded from the installed copy's
+    assert run(installed, tmp_path / "user_cache") == ["3", "0", "1"]
+    assert run(installed, tmp_path / "user_cache") == ["3", "0", "1"]
 
 
 def test_precompile_runs_the_main_job(capsys):
