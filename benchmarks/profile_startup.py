@@ -3,6 +3,7 @@ tracks the totals in ``bench_goals.py``; this script breaks them down).
 
     python benchmarks/profile_startup.py            # warm: Numba's on-disk cache in place
     python benchmarks/profile_startup.py --cold     # a fresh NUMBA_CACHE_DIR: every kernel compiles
+                                                    # (not seeded: MMSHBM_KERNEL_SEED=0)
     python benchmarks/profile_startup.py --repeat 5 --args -H 3 --elements 8
 
 It prints
@@ -38,6 +39,7 @@ def whole_process(args: list[str], repeat: int, cold: bool, env: dict | None = N
             run_env = dict(os.environ if env is None else env)
             if cold:
                 run_env["NUMBA_CACHE_DIR"] = os.path.join(tmp, f"numba{i}")
+                run_env["MMSHBM_KERNEL_SEED"] = "0"  # not from the tree's own compiled kernels
             t0 = time.perf_counter()
             command = [sys.executable, "-m", "mmshbm", "backbone", "--out", os.path.join(tmp, "out"), *args]
             subprocess.run(command, env=run_env, check=False, stdout=subprocess.DEVNULL,
@@ -217,6 +219,7 @@ def main(argv=None) -> int:
         child_env = dict(env)
         if ns.cold:
             child_env["NUMBA_CACHE_DIR"] = os.path.join(tmp, "numba")
+            child_env["MMSHBM_KERNEL_SEED"] = "0"
         command = [sys.executable, __file__, "--child", "--out", os.path.join(tmp, "out"), "--args", *ns.args]
         subprocess.run(command, env=child_env, check=True)
     return 0

@@ -17,7 +17,8 @@ kernel files). Where ``NUMBA_CACHE_DIR`` sets another cache, the first kernel of
 that Numba looks up there copies that folder's carried kernels into it, each kernel whose
 index is not there yet (an index already there, and its data, are left as they are); Numba
 then loads them as any cached kernel, or compiles where they do not match its version, the
-CPU or the sources.
+CPU or the sources. ``MMSHBM_KERNEL_SEED=0`` turns this off (to measure compilation with an
+empty ``NUMBA_CACHE_DIR`` in a tree whose folders hold compiled kernels).
 
 The hook uses ``numba.core.caching.CacheImpl._locator_classes``, the extension point that
 Numba's own locators are registered in; where a Numba version lacks it, :func:`install`
@@ -63,6 +64,8 @@ def seed(source_dir: str, cache_dir: str) -> int:
     index (written under another name and renamed, so that a concurrent process sees it
     whole or not at all). Once per pair of folders and process; errors leave the rest to
     Numba. Returns the number of kernels copied."""
+    if os.environ.get("MMSHBM_KERNEL_SEED", "").strip().lower() in ("0", "no", "false", "off"):
+        return 0
     carried = Path(source_dir, "__pycache__")
     copied = 0
     try:

@@ -76,9 +76,9 @@ def test_an_in_tree_cache_serves_a_copy_of_the_package(tmp_path):
     code = ("from probe.caller import f; print(f(), sum(f.stats.cache_misses.values()), "
             "sum(f.stats.cache_hits.values()))")
 
-    def run(root, cache=None):
-        env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
-        env["PYTHONPATH"] = str(root)
+    def run(root, cache=None, **extra):
+        env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "MMSHBM_KERNEL_SEED")}
+        env.update(extra, PYTHONPATH=str(root))
         if cache is not None:
             env["NUMBA_CACHE_DIR"] = str(cache)
         return subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
@@ -91,6 +91,7 @@ def test_an_in_tree_cache_serves_a_copy_of_the_package(tmp_path):
     # another cache (NUMBA_CACHE_DIR) is seeded from the installed copy's
     assert run(installed, tmp_path / "user_cache") == ["3", "0", "1"]
     assert run(installed, tmp_path / "user_cache") == ["3", "0", "1"]
+    assert run(installed, tmp_path / "unseeded", MMSHBM_KERNEL_SEED="0") == ["3", "1", "0"]
 
 
 def test_precompile_runs_the_main_job(capsys):
