@@ -61,8 +61,8 @@ def _in_package(py_file: str) -> bool:
 def seed(source_dir: str, cache_dir: str) -> int:
     """Copy the kernels cached in ``source_dir/__pycache__`` (a wheel's, see the module's
     text) into ``cache_dir``, each whose index ``cache_dir`` lacks: its data files, then its
-    index (written under another name and renamed, so that a concurrent process sees it
-    whole or not at all). Once per pair of folders and process; errors leave the rest to
+    index (each written under another name and renamed, so that a concurrent process sees
+    it whole or not at all). Once per pair of folders and process; errors leave the rest to
     Numba. Returns the number of kernels copied."""
     if os.environ.get("MMSHBM_KERNEL_SEED", "").strip().lower() in ("0", "no", "false", "off"):
         return 0
@@ -79,15 +79,24 @@ def seed(source_dir: str, cache_dir: str) -> int:
                 continue
             for data in carried.glob(f"{index.stem}.*.nbc"):
                 if not Path(cache_dir, data.name).exists():
-                    shutil.copyfile(data, Path(cache_dir, data.name))
-            fd, tmp = tempfile.mkstemp(dir=cache_dir, suffix=".tmp")
-            os.close(fd)
-            shutil.copyfile(index, tmp)
-            os.replace(tmp, target)
+                    _copy_whole(data, Path(cache_dir, data.name))
+            _copy_whole(index, target)
             copied += 1
     except OSError:
         pass
     return copied
+
+
+def _copy_whole(source: Path, target: Path) -> None:
+    """Copy under another name, then rename: a reader sees the whole file or none."""
+    fd, tmp = tempfile.mkstemp(dir=target.parent, suffix=".tmp")
+    os.close(fd)
+    try:
+        shutil.copyfile(source, tmp)
+        os.replace(tmp, target)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
 
 
 def _locator(base):
