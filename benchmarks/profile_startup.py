@@ -30,16 +30,19 @@ import tempfile
 import time
 
 
-def whole_process(args: list[str], repeat: int, cold: bool, env: dict | None = None) -> list[float]:
+def whole_process(args: list[str], repeat: int, cold: bool, env: dict | None = None,
+                  seed: bool = False) -> list[float]:
     """Wall times (s) of ``repeat`` runs of ``mmshbm backbone ARGS`` (each with a fresh
-    NUMBA_CACHE_DIR when ``cold``)."""
+    NUMBA_CACHE_DIR when ``cold``: every kernel compiles, or with ``seed`` it is seeded
+    from the kernels the package's folders hold compiled, as after an installation)."""
     times = []
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(repeat):
             run_env = dict(os.environ if env is None else env)
             if cold:
                 run_env["NUMBA_CACHE_DIR"] = os.path.join(tmp, f"numba{i}")
-                run_env["MMSHBM_KERNEL_SEED"] = "0"  # not from the tree's own compiled kernels
+                if not seed:  # not from the kernels the package's folders hold compiled
+                    run_env["MMSHBM_KERNEL_SEED"] = "0"
             t0 = time.perf_counter()
             command = [sys.executable, "-m", "mmshbm", "backbone", "--out", os.path.join(tmp, "out"), *args]
             subprocess.run(command, env=run_env, check=False, stdout=subprocess.DEVNULL,
