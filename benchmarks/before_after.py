@@ -11,7 +11,9 @@ Numba kernels are compiled (or loaded from each tree's cache) before any timed c
 Groups: ``forced`` (damped beam: 0.5 % on mode 1, 5 % on the modes above, or on modes
 2..N+1 only with ``--damped-modes N``; 5 N, 40–62 Hz, H = 5..40), ``epmc`` (H = 20, default
 budget), ``scale`` (whole backbone after the reduction, 21/1000/10 000 elements, 1.9 and 2
-gaps), ``main`` (the default backbone to 10 gaps, warm).
+gaps), ``main`` (the default backbone to 10 gaps, warm), ``process`` (the whole
+``python -m mmshbm backbone`` process, warm: wall and CPU time of the process and its
+children, the plot worker included).
 """
 
 from __future__ import annotations
@@ -64,6 +66,21 @@ mmshbm.backbone(m, harmonics=5, max_amplitude={gaps} * m.gap)
 (w, c), b = clock(lambda: mmshbm.backbone(m, harmonics=5, max_amplitude={gaps} * m.gap), 15)
 print(json.dumps({{"wall": w, "cpu": c, "points": len(b), "status": b.status}}))
 """,
+    "process": """
+import os, resource, subprocess, sys, tempfile
+out = tempfile.mkdtemp()
+cmd = [sys.executable, "-m", "mmshbm", "backbone", "--out", out]
+subprocess.run(cmd, check=True, capture_output=True)
+walls, cpus = [], []
+for _ in range({repeat}):
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t = time.perf_counter()
+    subprocess.run(cmd, check=True, capture_output=True)
+    walls.append(time.perf_counter() - t)
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpus.append(r1.ru_utime + r1.ru_stime - r0.ru_utime - r0.ru_stime)
+print(json.dumps({{"wall": min(walls), "cpu": min(cpus), "median_wall": sorted(walls)[len(walls) // 2]}}))
+""",
     "main": """
 m = mmshbm.default_beam().model(21)
 mmshbm.backbone(m, harmonics=5, max_amplitude=10 * m.gap)
@@ -82,6 +99,8 @@ def cases(only, harmonics=FORCED_H):
     out = []
     if only in (None, "main"):
         out.append(("main", "default backbone to 10 gaps", {}))
+    if only in (None, "process"):
+        out.append(("process", "whole mmshbm backbone process, warm", {"repeat": 5}))
     if only in (None, "scale"):
         for gaps in (1.9, 2.0):
             for elements in (21, 1000, 10000):

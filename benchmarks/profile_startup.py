@@ -3,6 +3,7 @@ tracks the totals in ``bench_goals.py``; this script breaks them down).
 
     python benchmarks/profile_startup.py            # warm: Numba's on-disk cache in place
     python benchmarks/profile_startup.py --cold     # a fresh NUMBA_CACHE_DIR: every kernel compiles
+                                                    # (not seeded: MMSHBM_KERNEL_SEED=0)
     python benchmarks/profile_startup.py --repeat 5 --args -H 3 --elements 8
 
 It prints
@@ -29,20 +30,61 @@ import tempfile
 import time
 
 
-def whole_process(args: list[str], repeat: int, cold: bool, env: dict | None = None) -> list[float]:
+def whole_process(args: list[str], repeat: int, cold: bool, env: dict | None = None,
+                  seed: bool = False) -> list[float]:
     """Wall times (s) of ``repeat`` runs of ``mmshbm backbone ARGS`` (each with a fresh
-    NUMBA_CACHE_DIR when ``cold``)."""
+    NUMBA_CACHE_DIR when ``cold``: every kernel compiles, or with ``seed`` it is seeded
+    from the kernels the package's folders hold compiled, as after an installation)."""
     times = []
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(repeat):
             run_env = dict(os.environ if env is None else env)
             if cold:
                 run_env["NUMBA_CACHE_DIR"] = os.path.join(tmp, f"numba{i}")
+                if not seed:  # not from the kernels the package's folders hold compiled
+                    run_env["MMSHBM_KERNEL_SEED"] = "0"
             t0 = time.perf_counter()
             command = [sys.executable, "-m", "mmshbm", "backbone", "--out", os.path.join(tmp, "out"), *args]
             subprocess.run(command, env=run_env, check=False, stdout=subprocess.DEVNULL,
                            stderr=subprocess.DEVNULL)
             times.append(time.perf_counter() - t0)
+    return times
+
+
+#: the LLVM phases of a Numba kernel's library: optimising its own functions; optimising the
+#: module once its callees are linked in (callees are optimised again, inlined, in every
+#: caller); emitting machine code for that linked module
+_LLVM_PHASES = ("_optimize_functions", "_optimize_final_module", "_finalize_final_module")
+
+
+def _time_llvm() -> dict:
+    """Time the LLVM phases of every kernel compiled from now on: {kernel name: {phase: s}}
+    (empty where this Numba's code library lacks those methods)."""
+    import collections
+
+    from numba.core import codegen
+
+    library = getattr(codegen, "CPUCodeLibrary", None)
+    times = collections.defaultdict(dict)
+    if library is None or not all(hasattr(library, m) for m in _LLVM_PHASES):
+        return times
+
+    def timer(phase):
+        orig = getattr(library, phase)
+
+        def timed(self, *a, **k):
+            t0 = time.perf_counter()
+            try:
+                return orig(self, *a, **k)
+            finally:
+                # a library is named after its function (Numba's own helpers: 'nrt', ...)
+                name = self.name.split("$")[0].split("[")[0].rsplit(".", 1)[-1]
+                times[name][phase] = times[name].get(phase, 0.0) + time.perf_counter() - t0
+
+        return timed
+
+    for phase in _LLVM_PHASES:
+        setattr(library, phase, timer(phase))
     return times
 
 
@@ -90,6 +132,7 @@ def _child(args: list[str], out: str) -> None:
             kernels.append((name, inclusive - inner, inclusive))
 
     Dispatcher.compile = timed
+    llvm = _time_llvm()
     from mmshbm.results import diagnostics
 
     check_time = []
@@ -139,10 +182,20 @@ def _child(args: list[str], out: str) -> None:
           f"{1e3 * (t_backbone - compile_total - sum(check_time)):.1f} ms); metadata elapsed_s "
           f"{1e3 * continuation:.1f} ms (continuation incl. its kernel loads)")
     print(f"branch: {len(branch)} points, status {branch.status}")
-    print(f"\n{'kernel (exclusive of the kernels it calls)':70s} {'ms':>8s} {'incl.':>8s}")
+    print(f"\n{'kernel (exclusive of the kernels it calls)':56s} {'ms':>8s} {'incl.':>8s} "
+          f"{'LLVM opt':>9s} {'linked':>7s} {'emit':>7s}")
     for name, excl, incl in sorted(kernels, key=lambda k: -k[1]):
         if excl >= 0.5e-3:
-            print(f"{name:70s} {1e3 * excl:8.1f} {1e3 * incl:8.1f}")
+            parts = llvm.get(name.rsplit(".", 1)[-1], {})
+            widths = zip(_LLVM_PHASES, (9, 7, 7), strict=True)
+            cols = " ".join(f"{1e3 * parts.get(m, 0.0):{w}.1f}" for m, w in widths)
+            print(f"{name:56s} {1e3 * excl:8.1f} {1e3 * incl:8.1f} {cols}")
+    if llvm:
+        total = {m: sum(p.get(m, 0.0) for p in llvm.values()) for m in _LLVM_PHASES}
+        print(f"LLVM (part of the exclusive times): its own functions {1e3 * total[_LLVM_PHASES[0]]:.0f} ms, "
+              f"the module linked with its callees (which it optimises again) "
+              f"{1e3 * total[_LLVM_PHASES[1]]:.0f} ms, machine code {1e3 * total[_LLVM_PHASES[2]]:.0f} ms; "
+              "the rest is Numba's typing and lowering")
     small = [k for k in kernels if k[1] < 0.5e-3]
     if small:
         print(f"({len(small)} dispatches below 0.5 ms: type resolution of kernels already loaded)")
@@ -169,6 +222,7 @@ def main(argv=None) -> int:
         child_env = dict(env)
         if ns.cold:
             child_env["NUMBA_CACHE_DIR"] = os.path.join(tmp, "numba")
+            child_env["MMSHBM_KERNEL_SEED"] = "0"
         command = [sys.executable, __file__, "--child", "--out", os.path.join(tmp, "out"), "--args", *ns.args]
         subprocess.run(command, env=child_env, check=True)
     return 0

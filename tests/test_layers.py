@@ -32,6 +32,7 @@ LAYERS = {
     "mmshbm.plotting": 7,
     "mmshbm.cli": 7,
     "mmshbm.__main__": 8,
+    "mmshbm._precompile": 8,
 }
 
 
