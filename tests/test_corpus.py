@@ -5,6 +5,7 @@ the first mode's family, none raises, none runs past its limit)."""
 import numpy as np
 import pytest
 
+import mmshbm
 from mmshbm.analysis import corpus
 from mmshbm.cli import main
 
@@ -89,3 +90,29 @@ def test_where_orbits_coexist_the_branch_is_the_first_modes():
     f = b.frequency_at(A)
     assert abs(f / continued.frequency[-1] - 1) < 1e-4
     assert abs(f / single.frequency - 1) > 3e-3
+
+
+def test_a_jump_lands_where_the_backbone_rises_steeply_past_a_tongue():
+    """Two jumps whose landings on the family were refused: a chain whose 3:1 tongue sits
+    25 % above the frequency of the point near grazing the predictor came from (the
+    family lands at 0.304 Hz, the predictor said 0.25 Hz: refused as "another branch"
+    although above the frontier's frequency), and a clearance whose frontier sits on a
+    fold at the tongue's foot (the last two family points saw no rise, so the family at
+    5.1 Hz, 2.6 gaps, lay outside a window capped at the frontier's 3.8 Hz). Both reach
+    10 gaps on the family and end where plain path following ends (same point at the
+    bound: the Newton tolerance bounds the difference)."""
+    cases = corpus.generate(138, seed=0)
+    for i in (137, 51):
+        case = cases[i]
+        model = case.model()
+        b = mmshbm.backbone(model, harmonics=case.harmonics, max_amplitude=10 * model.gap)
+        assert b.completed and b.status == "bound:amplitude", (i, b.status)
+        jumps = [s for s in b.special_points if s.kind == "jump"]
+        assert jumps
+        for s in jumps:  # every landing lies at or above the frontier's frequency
+            below = b.amplitude[: s.index] <= s.data["amplitude_frontier"] * (1 + 1e-9)
+            front = b.frequency[: s.index][below]
+            assert s.data["frequency_to"] >= 0.99 * front.max()
+        p = mmshbm.backbone(model, harmonics=case.harmonics, max_amplitude=10 * model.gap, follow="path")
+        assert p.status == "bound:amplitude"
+        assert abs(b.frequency[-1] / p.frequency[-1] - 1) < 1e-7

@@ -325,7 +325,13 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
         share = family_value(rec)
         if share is not None and share < guard.family_share:
             raise PinnedFailure(f"landed off the family (fundamental share {share:.3f}) at {target:.4g}")
-        if math.isfinite(f_pred) and not abs(f - f_pred) <= 0.15 * abs(f_pred):
+        # near the predicted frequency, or on the rising side of the frontier: a backbone
+        # with rigid stops only stiffens, so the family beyond the frontier lies at or
+        # above the frontier's frequency (a predictor taken from a point near grazing
+        # can be far below it on a steeply rising backbone)
+        near = math.isfinite(f_pred) and abs(f - f_pred) <= 0.15 * abs(f_pred)
+        rising = math.isfinite(f_frontier) and f >= f_frontier * (1.0 - 1e-6)
+        if math.isfinite(f_pred) and not (near or rising):
             raise PinnedFailure(f"landed on another branch ({f:.4g} instead of about {f_pred:.4g})")
         if math.isfinite(f_lo) and not 0.7 * f_lo <= f <= 1.3 * f_hi:
             raise PinnedFailure(f"landed on another branch ({f:.4g} Hz, the family was at "
@@ -374,21 +380,24 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
 
 def _frequency_window(recs, guard, amplitude_max: float) -> tuple[float, float]:
     """(f_lo, f_hi): the frontier's frequency, and the highest frequency the family can
-    have at the largest target of a jump, extrapolated linearly in the amplitude from the
-    last two family points (a backbone that rises steeply, as a massive DOF held by a
-    clearance, reaches far above the frontier's frequency within a small amplitude step);
-    the frontier's frequency both times where the slope is not positive."""
+    have at the largest target of a jump, extrapolated linearly in the amplitude with the
+    steepest secant from an earlier family point to the frontier (a backbone that rises
+    steeply, as a massive DOF held by a clearance, reaches far above the frontier's
+    frequency within a small amplitude step; the last two family points alone can sit on
+    a fold at the tongue's foot and see no rise at all); the frontier's frequency both
+    times where no secant rises."""
     f0 = float(recs[guard.frontier_index].get("frequency", math.nan))
     a0 = float(recs[guard.frontier_index]["amplitude"])
-    clean = [i for i in guard.clean if i != guard.frontier_index]
-    if not clean or not math.isfinite(f0):
+    if not math.isfinite(f0):
         return f0, f0
-    prev = clean[-1]
-    a1, f1 = float(recs[prev]["amplitude"]), float(recs[prev].get("frequency", math.nan))
-    if not (a0 > a1 and f0 > f1):
-        return f0, f0
+    slope = 0.0
+    for i in guard.clean:
+        a1, f1 = float(recs[i]["amplitude"]), float(recs[i].get("frequency", math.nan))
+        # secants over at least 2 % of the amplitude (shorter ones near a fold are noise)
+        if a1 <= a0 * (1.0 - 0.02) and math.isfinite(f1) and f0 > f1:
+            slope = max(slope, (f0 - f1) / (a0 - a1))
     top = min(a0 * (1.0 + 0.02 * 2.0**6), amplitude_max)
-    return f0, max(f0, f0 + (f0 - f1) / (a0 - a1) * (top - a0))
+    return f0, f0 + slope * max(top - a0, 0.0)
 
 
 def _predictors(problem, us, recs, guard, origin: int, target: float, amplitude_max: float):
