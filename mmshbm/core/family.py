@@ -123,7 +123,11 @@ class FamilyGuard:
         on = bool(share >= self.family_share)
         if self.pending:
             _, a_last, f_last, _ = self.pending[-1]
-            advancing = amplitude >= a_last * (1 - 1e-9) and not frequency < f_last * (1 - 1e-9)
+            # a fold turns the frequency back, or the amplitude with the frequency no
+            # longer rising (a tongue's tip); an amplitude that wavers while the frequency
+            # keeps rising is the backbone's own S-bend, not a tongue
+            advancing = not frequency < f_last * (1 - 1e-9) and (
+                amplitude >= a_last * (1 - 1e-9) or frequency > f_last * (1 + 1e-9))
             if advancing and not self._locked(amplitude, frequency):
                 if not on:
                     self.pending.append((index, amplitude, frequency, rec))
