@@ -116,3 +116,25 @@ def test_a_jump_lands_where_the_backbone_rises_steeply_past_a_tongue():
         p = mmshbm.backbone(model, harmonics=case.harmonics, max_amplitude=10 * model.gap, follow="path")
         assert p.status == "bound:amplitude"
         assert abs(b.frequency[-1] / p.frequency[-1] - 1) < 1e-7
+
+
+def test_a_jump_reaches_past_a_tongue_wider_than_its_near_targets():
+    """A 4-mass chain (H = 9) whose backbone hands most of its energy to harmonic 2 of
+    mode 2 from 2.8 gaps on, folds back at 9.2 gaps and turns up again at 5.2 gaps (an S
+    over 5.2-9.2 gaps). The stretch that folds is a tongue's climb by the family rule; the
+    family (fundamental majority) is back only near 10 gaps, beyond 2.28 times the
+    frontier that the jump's near targets reach, so the jump failed. The far search finds
+    it: the branch completes, says what it skipped (an interval that ends above 8 gaps),
+    and ends on the point plain path following ends on (the same orbit at the bound, to
+    the Newton tolerance)."""
+    case = corpus.generate(48, seed=1)[47]
+    assert (case.kind, case.contact, case.harmonics) == ("chain", "one-sided", 9)
+    model = case.model()
+    b = mmshbm.backbone(model, harmonics=9, max_amplitude=10 * model.gap)
+    assert b.completed, b.status
+    skips = [(s.data["amplitude_frontier"], s.data["amplitude_to"]) for s in b.special_points
+             if s.kind == "jump"]
+    assert any(hi > 8 * model.gap and lo < 3 * model.gap for lo, hi in skips), skips
+    p = mmshbm.backbone(model, harmonics=9, max_amplitude=10 * model.gap, follow="path")
+    assert p.status == "bound:amplitude"
+    assert abs(b.frequency[-1] / p.frequency[-1] - 1) < 1e-7

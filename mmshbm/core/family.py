@@ -209,6 +209,8 @@ class FamilyGuard:
 
 #: pinned solves a jump may try before it gives up (bounds the cost of a failing jump)
 _MAX_SOLVES = 40
+#: pinned solves of the far search beyond the near targets (from one origin)
+_MAX_FAR_SOLVES = 20
 
 
 class _Exhausted(PinnedFailure):
@@ -305,22 +307,24 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
         if not targets or target > targets[-1]:
             targets.append(target)
 
-    f_lo, f_hi = _frequency_window(recs, guard, amplitude_max)
+    f_lo, f_hi = _frequency_window(recs, guard, targets[-1])
+    window = {"hi": f_hi}  # the far search below widens it to its own targets
     frequency_of = getattr(problem, "frequency_of", None)
     admissible = None
     if frequency_of is not None and math.isfinite(f_lo) and f_lo > 0:
         # the trust region: a landing is accepted within 30 % of the family's frequencies,
         # so no iterate needs to leave [f_lo/2, 2 f_hi]
         def admissible(u):
-            return 0.5 * f_lo <= frequency_of(u) <= 2.0 * f_hi
+            return 0.5 * f_lo <= frequency_of(u) <= 2.0 * window["hi"]
 
-    solves = [0]
+    solves = [0, _MAX_SOLVES]  # solves made, solves allowed
 
     def accept(u0, target, f_pred):
+        f_hi = window["hi"]
         if admissible is not None and not admissible(u0):
             raise _Outside("the predictor lies outside the trust region")
-        if solves[0] >= _MAX_SOLVES:
-            raise _Exhausted(f"{_MAX_SOLVES} pinned solves tried")
+        if solves[0] >= solves[1]:
+            raise _Exhausted(f"{solves[1]} pinned solves tried")
         solves[0] += 1
         u, nit, hist, t = solve_at_amplitude(problem, u0, target, tol=newton_tol, max_iter=3 * max_newton,
                                              admissible=admissible)
@@ -358,7 +362,41 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
             except (PinnedFailure, ArithmeticError, ValueError, RuntimeError) as err:
                 last_error = f"filtered passage: {err}"
                 log.debug("jump from %d by filtering: %s", origin, last_error)
-    for origin in guard.origins(lambda i: float(recs[i]["amplitude"])):
+    origins = guard.origins(lambda i: float(recs[i]["amplitude"]))
+    try:
+        return _search(problem, us, recs, guard, origins, targets, amplitude_max, accept, frequency_of,
+                       monitor)
+    except _Exhausted as err:
+        reason = f"after {_MAX_SOLVES} pinned solves: "
+        last_error = str(err) if str(err) != "no attempt" else last_error
+    except PinnedFailure as err:
+        reason = ""
+        last_error = str(err) if str(err) != "no attempt" else last_error
+    # beyond the near targets: a tongue (or an S-shaped stretch of backbone that folds
+    # back) can span more amplitude than 2.28 times the frontier; the family is sought
+    # further out, up to the bound, from the frontier's best origin, with its own budget
+    far = []
+    for i in range(7, 13):
+        target = min(frontier * (1.0 + step * 2.0**i), amplitude_max)
+        if target > targets[-1] * (1 + 1e-12) and (not far or target > far[-1]):
+            far.append(target)
+    if far:
+        window["hi"] = _frequency_window(recs, guard, far[-1])[1]
+        solves[:] = [0, _MAX_FAR_SOLVES]
+        try:
+            return _search(problem, us, recs, guard, origins[:1], far, amplitude_max, accept, frequency_of,
+                           monitor)
+        except PinnedFailure as err:
+            log.debug("far jump from %.4g: %s", frontier, err)
+    raise PinnedFailure(f"jump from amplitude {frontier:.4g} failed {reason}{last_error}".replace("  ", " "))
+
+
+def _search(problem, us, recs, guard, origins, targets, amplitude_max, accept, frequency_of, monitor):
+    """Pinned solves from each origin at each target (increasing) from each predictor,
+    until one lands (returns the jump's tuple); raises _Exhausted when the budget runs
+    out, else PinnedFailure with the last solve's reason."""
+    last_error = "no attempt"
+    for origin in origins:
         A_o = float(recs[origin]["amplitude"])
         for target in targets:
             if target <= A_o * (1 + 1e-12):
@@ -370,8 +408,7 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
                     u, nit, hist, rec, t = accept(u0, target, f_pred)
                     return u, nit, hist, rec, t, target, origin
                 except _Exhausted:
-                    raise PinnedFailure(f"jump from amplitude {frontier:.4g} failed after {_MAX_SOLVES} "
-                                        f"pinned solves: {last_error}") from None
+                    raise _Exhausted(last_error) from None
                 except _Outside as err:  # no solve tried: keep the last solve's reason
                     if last_error == "no attempt":
                         last_error = str(err)
@@ -379,12 +416,12 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
                     last_error = str(err)
                 log.debug("jump attempt from %d (%.4g) to %.4g by the %s predictor: %s", origin, A_o, target,
                           name, last_error)
-    raise PinnedFailure(f"jump from amplitude {frontier:.4g} failed: {last_error}")
+    raise PinnedFailure(last_error)
 
 
-def _frequency_window(recs, guard, amplitude_max: float) -> tuple[float, float]:
+def _frequency_window(recs, guard, top: float) -> tuple[float, float]:
     """(f_lo, f_hi): the frontier's frequency, and the highest frequency the family can
-    have at the largest target of a jump, extrapolated linearly in the amplitude with the
+    have at amplitude ``top`` (the largest target of a jump), extrapolated linearly in the amplitude with the
     steepest secant from an earlier family point to the frontier (a backbone that rises
     steeply, as a massive DOF held by a clearance, reaches far above the frontier's
     frequency within a small amplitude step; the last two family points alone can sit on
@@ -400,7 +437,6 @@ def _frequency_window(recs, guard, amplitude_max: float) -> tuple[float, float]:
         # secants over at least 2 % of the amplitude (shorter ones near a fold are noise)
         if a1 <= a0 * (1.0 - 0.02) and math.isfinite(f1) and f0 > f1:
             slope = max(slope, (f0 - f1) / (a0 - a1))
-    top = min(a0 * (1.0 + 0.02 * 2.0**6), amplitude_max)
     return f0, f0 + slope * max(top - a0, 0.0)
 
 
