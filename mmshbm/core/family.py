@@ -29,7 +29,8 @@ from the problem's own landing (MMS-HBM: the resonant harmonic filtered out) or 
 three predictors in turn (``problem.family_predictor`` along an auxiliary branch, a
 quadratic through the last clean family points, the frontier point scaled to the
 target), and accepts the result only if it is on the family; otherwise it tries further
-out (amplitude steps 2, 4, 8, ... % beyond the frontier), at most 40 pinned solves. The
+out (amplitude steps 2, 4, 8, ... % beyond the frontier), at most 40 pinned solves, then
+in a far search up to the bound (20 more). The
 continuation goes on from there; the skipped interval is recorded as a ``"jump"``
 special point. Points of the excursion stay on the branch with
 ``record["on_family"] = 0``.
