@@ -138,3 +138,26 @@ def test_a_jump_reaches_past_a_tongue_wider_than_its_near_targets():
     p = mmshbm.backbone(model, harmonics=9, max_amplitude=10 * model.gap, follow="path")
     assert p.status == "bound:amplitude"
     assert abs(b.frequency[-1] / p.frequency[-1] - 1) < 1e-7
+
+
+def test_a_clearance_jump_lands_where_the_backbone_climbs_towards_the_held_frequency():
+    """A clamped beam with a clearance at its tip (H = 9): a 6:2 tongue at grazing, the
+    frontier at 1.15 gaps and 15.9 Hz; beyond it the backbone climbs steeply towards the
+    frequency with both stops held (62.9 Hz), so the family at 1.2 gaps (29.8 Hz) lies
+    above the window extrapolated from points near grazing (22 Hz) and every landing was
+    refused or left the trust region. The far search's window reaches the problem's
+    frequency limit: the branch completes, each landing point is on the family and none
+    is above the held frequency."""
+    from mmshbm.methods.mms_hbm import _held_frequency
+
+    case = corpus.generate(318, seed=0)[317]
+    assert (case.kind, case.contact, case.harmonics) == ("beam", "clearance", 9)
+    model = case.model()
+    b = mmshbm.backbone(model, harmonics=9, max_amplitude=10 * model.gap)
+    assert b.completed, b.status
+    held = _held_frequency(model, [c.dof for c in model.contacts], 1)
+    jumps = [s for s in b.special_points if s.kind == "jump"]
+    assert jumps and max(s.data["frequency_to"] for s in jumps) > 1.3 * 22.22
+    for s in jumps:
+        assert b.records["on_family"][s.index] == 1.0 and s.data["frequency_to"] < held
+    assert b.frequency.max() < held

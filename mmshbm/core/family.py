@@ -210,8 +210,8 @@ class FamilyGuard:
 
 #: pinned solves a jump may try before it gives up (bounds the cost of a failing jump)
 _MAX_SOLVES = 40
-#: pinned solves of the far search beyond the near targets (from one origin)
-_MAX_FAR_SOLVES = 20
+#: pinned solves of the far search (from one origin, up to the bound)
+_MAX_FAR_SOLVES = 30
 
 
 class _Exhausted(PinnedFailure):
@@ -373,22 +373,25 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     except PinnedFailure as err:
         reason = ""
         last_error = str(err) if str(err) != "no attempt" else last_error
-    # beyond the near targets: a tongue (or an S-shaped stretch of backbone that folds
-    # back) can span more amplitude than 2.28 times the frontier; the family is sought
-    # further out, up to the bound, from the frontier's best origin, with its own budget
-    far = []
+    # the far search: a tongue (or an S-shaped stretch of backbone that folds back) can
+    # span more amplitude than 2.28 times the frontier, and a backbone that rises steeply
+    # just past grazing (a clearance) can leave the window extrapolated from a frontier
+    # near grazing; the family is sought again from the frontier's best origin, up to the
+    # bound, in the window up to the highest frequency the family can reach (the
+    # problem's limit: rigid stops stiffen the structure at most to all contacts held)
+    far = list(targets)
     for i in range(7, 13):
         target = min(frontier * (1.0 + step * 2.0**i), amplitude_max)
-        if target > targets[-1] * (1 + 1e-12) and (not far or target > far[-1]):
+        if target > far[-1] * (1 + 1e-12):
             far.append(target)
-    if far:
-        window["hi"] = _frequency_window(recs, guard, far[-1])[1]
-        solves[:] = [0, _MAX_FAR_SOLVES]
-        try:
-            return _search(problem, us, recs, guard, origins[:1], far, amplitude_max, accept, frequency_of,
-                           monitor)
-        except PinnedFailure as err:
-            log.debug("far jump from %.4g: %s", frontier, err)
+    limit = getattr(problem, "family_frequency_limit", None)
+    window["hi"] = max(_frequency_window(recs, guard, far[-1])[1], limit() if limit is not None else 0.0)
+    solves[:] = [0, _MAX_FAR_SOLVES]
+    try:
+        return _search(problem, us, recs, guard, origins[:1], far, amplitude_max, accept, frequency_of,
+                       monitor)
+    except PinnedFailure as err:
+        log.debug("far jump from %.4g: %s", frontier, err)
     raise PinnedFailure(f"jump from amplitude {frontier:.4g} failed {reason}{last_error}".replace("  ", " "))
 
 
