@@ -282,9 +282,12 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     """Land on the family beyond the frontier.
 
     Tries the origins of :meth:`FamilyGuard.origins` and, from each, amplitudes
-    ``frontier·(1 + step·2^i)``, i = 0..6 (capped at ``amplitude_max``); a landing counts
-    when Newton converges, the point is on the family, and its frequency is within 15 %
-    of the predicted one (else it found another branch).
+    ``frontier·(1 + step·2^i)``, i = 0..6 (capped at ``amplitude_max``); then a far
+    search from the best origin, i = 0..12, in the window up to the problem's
+    ``family_frequency_limit``. A landing counts when Newton converges, the point is on
+    the family, and its frequency is within 15 % of the predicted one or at or above the
+    frontier's (a backbone with rigid stops only stiffens), inside the frequency window
+    (else it found another branch).
 
     Returns
     -------
