@@ -371,10 +371,10 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
         return _search(problem, us, recs, guard, origins, targets, amplitude_max, accept, frequency_of,
                        monitor)
     except _Exhausted as err:
-        reason = f"after {_MAX_SOLVES} pinned solves: "
+        reason = f" after {_MAX_SOLVES} pinned solves: "
         last_error = str(err) if str(err) != "no attempt" else last_error
     except PinnedFailure as err:
-        reason = ""
+        reason = ": "
         last_error = str(err) if str(err) != "no attempt" else last_error
     # the far search: a tongue (or an S-shaped stretch of backbone that folds back) can
     # span more amplitude than 2.28 times the frontier, and a backbone that rises steeply
@@ -394,8 +394,10 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
         return _search(problem, us, recs, guard, origins[:1], far, amplitude_max, accept, frequency_of,
                        monitor)
     except PinnedFailure as err:
-        log.debug("far jump from %.4g: %s", frontier, err)
-    raise PinnedFailure(f"jump from amplitude {frontier:.4g} failed {reason}{last_error}".replace("  ", " "))
+        far_error = str(err)
+        log.debug("far jump from %.4g: %s", frontier, far_error)
+    raise PinnedFailure(f"jump from amplitude {frontier:.4g} failed{reason}{last_error}; the far search "
+                        f"up to {far[-1]:.4g}: {far_error}")
 
 
 def _search(problem, us, recs, guard, origins, targets, amplitude_max, accept, frequency_of, monitor):
