@@ -30,7 +30,7 @@ three predictors in turn (``problem.family_predictor`` along an auxiliary branch
 quadratic through the last clean family points, the frontier point scaled to the
 target), and accepts the result only if it is on the family; otherwise it tries further
 out (amplitude steps 2, 4, 8, ... % beyond the frontier), at most 40 pinned solves, then
-in a far search up to the bound (20 more). The
+in a far search up to the bound (30 more). The
 continuation goes on from there; the skipped interval is recorded as a ``"jump"``
 special point. Points of the excursion stay on the branch with
 ``record["on_family"] = 0``.
