@@ -5,6 +5,7 @@ the first mode's family, none raises, none runs past its limit)."""
 import numpy as np
 import pytest
 
+import mmshbm
 from mmshbm.analysis import corpus
 from mmshbm.cli import main
 
@@ -89,3 +90,74 @@ def test_where_orbits_coexist_the_branch_is_the_first_modes():
     f = b.frequency_at(A)
     assert abs(f / continued.frequency[-1] - 1) < 1e-4
     assert abs(f / single.frequency - 1) > 3e-3
+
+
+def test_a_jump_lands_where_the_backbone_rises_steeply_past_a_tongue():
+    """Two jumps whose landings on the family were refused: a chain whose 3:1 tongue sits
+    25 % above the frequency of the point near grazing the predictor came from (the
+    family lands at 0.304 Hz, the predictor said 0.25 Hz: refused as "another branch"
+    although above the frontier's frequency), and a clearance whose frontier sits on a
+    fold at the tongue's foot (the last two family points saw no rise, so the family at
+    5.1 Hz, 2.6 gaps, lay outside a window capped at the frontier's 3.8 Hz). Both reach
+    10 gaps on the family and end where plain path following ends (same point at the
+    bound: the Newton tolerance bounds the difference)."""
+    cases = corpus.generate(138, seed=0)
+    for i in (137, 51):
+        case = cases[i]
+        model = case.model()
+        b = mmshbm.backbone(model, harmonics=case.harmonics, max_amplitude=10 * model.gap)
+        assert b.completed and b.status == "bound:amplitude", (i, b.status)
+        jumps = [s for s in b.special_points if s.kind == "jump"]
+        assert jumps
+        for s in jumps:  # every landing lies at or above the frontier's frequency
+            below = b.amplitude[: s.index] <= s.data["amplitude_frontier"] * (1 + 1e-9)
+            front = b.frequency[: s.index][below]
+            assert s.data["frequency_to"] >= 0.99 * front.max()
+        p = mmshbm.backbone(model, harmonics=case.harmonics, max_amplitude=10 * model.gap, follow="path")
+        assert p.status == "bound:amplitude"
+        assert abs(b.frequency[-1] / p.frequency[-1] - 1) < 1e-7
+
+
+def test_a_jump_reaches_past_a_tongue_wider_than_its_near_targets():
+    """A 4-mass chain (H = 9) whose backbone hands most of its energy to harmonic 2 of
+    mode 2 from 2.8 gaps on, folds back at 9.2 gaps and turns up again at 5.2 gaps (an S
+    over 5.2-9.2 gaps). The stretch that folds is a tongue's climb by the family rule; the
+    family (fundamental majority) is back only near 10 gaps, beyond 2.28 times the
+    frontier that the jump's near targets reach, so the jump failed. The far search finds
+    it: the branch completes, says what it skipped (an interval that ends above 8 gaps),
+    and ends on the point plain path following ends on (the same orbit at the bound, to
+    the Newton tolerance)."""
+    case = corpus.generate(48, seed=1)[47]
+    assert (case.kind, case.contact, case.harmonics) == ("chain", "one-sided", 9)
+    model = case.model()
+    b = mmshbm.backbone(model, harmonics=9, max_amplitude=10 * model.gap)
+    assert b.completed, b.status
+    skips = [(s.data["amplitude_frontier"], s.data["amplitude_to"]) for s in b.special_points
+             if s.kind == "jump"]
+    assert any(hi > 8 * model.gap and lo < 3 * model.gap for lo, hi in skips), skips
+    p = mmshbm.backbone(model, harmonics=9, max_amplitude=10 * model.gap, follow="path")
+    assert p.status == "bound:amplitude"
+    assert abs(b.frequency[-1] / p.frequency[-1] - 1) < 1e-7
+
+
+def test_a_clearance_jump_lands_where_the_backbone_climbs_towards_the_held_frequency():
+    """A clamped beam with a clearance at its tip (H = 9): a 6:2 tongue at grazing, the
+    frontier at 1.15 gaps and 15.9 Hz; beyond it the backbone climbs steeply towards the
+    frequency with both stops held (62.9 Hz), so the family at 1.2 gaps (29.8 Hz) lies
+    above the window extrapolated from points near grazing (22 Hz) and every landing was
+    refused or left the trust region. The far search's window reaches the problem's
+    frequency limit: the branch completes, each landing point is on the family and none
+    is above the held frequency."""
+    from mmshbm.methods.mms_hbm import _held_frequency
+
+    case = corpus.generate(318, seed=0)[317]
+    assert (case.kind, case.contact, case.harmonics) == ("beam", "clearance", 9)
+    model = case.model()
+    b = mmshbm.backbone(model, harmonics=9, max_amplitude=10 * model.gap)
+    assert b.completed, b.status
+    held = _held_frequency(model, [c.dof for c in model.contacts], 1)
+    jumps = [s for s in b.special_points if s.kind == "jump"]
+    assert jumps and max(s.data["frequency_to"] for s in jumps) > 1.3 * 22.22
+    for s in jumps:
+        assert b.records["on_family"][s.index] == 1.0 and s.data["frequency_to"] < held
+    assert b.frequency.max() < held

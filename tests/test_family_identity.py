@@ -173,3 +173,23 @@ def test_the_first_point_has_every_contact_open():
     for row, ct in zip(q, model.contacts, strict=True):
         assert ct.side * row.max() < ct.gap  # open at the start
     assert b.amplitude[0] < 0.5 * model.gap
+
+
+def test_an_s_bend_of_the_amplitude_with_the_frequency_rising_is_not_a_tongue():
+    """A 3-mass chain (H = 9) whose backbone hands most of its kinetic energy to harmonic 2
+    of mode 2 while both keep rising, with an S-bend at 4.06 gaps where the amplitude goes
+    back by 0.08 % while the frequency keeps rising: a pending stretch that was reverted
+    there as a tongue's fold ended in a failed jump at 2.78 gaps. It is one continuous
+    branch to 10 gaps, the one plain path following gives (same point at the bound to the
+    Newton tolerance), with no jump."""
+    from mmshbm.analysis import corpus
+
+    case = corpus.generate(92, seed=0)[91]
+    assert (case.kind, case.contact, case.harmonics) == ("chain", "one-sided", 9)
+    model = case.model()
+    fam = mmshbm.backbone(model, harmonics=9, max_amplitude=10 * model.gap)
+    path = mmshbm.backbone(model, harmonics=9, max_amplitude=10 * model.gap, follow="path")
+    assert fam.completed and path.status == "bound:amplitude"
+    assert not [s for s in fam.special_points if s.kind == "jump"]
+    assert abs(fam.frequency[-1] / path.frequency[-1] - 1) < 1e-8
+    assert np.all(fam.records["on_family"] == 1.0)

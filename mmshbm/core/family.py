@@ -29,7 +29,8 @@ from the problem's own landing (MMS-HBM: the resonant harmonic filtered out) or 
 three predictors in turn (``problem.family_predictor`` along an auxiliary branch, a
 quadratic through the last clean family points, the frontier point scaled to the
 target), and accepts the result only if it is on the family; otherwise it tries further
-out (amplitude steps 2, 4, 8, ... % beyond the frontier), at most 40 pinned solves. The
+out (amplitude steps 2, 4, 8, ... % beyond the frontier), at most 40 pinned solves, then
+in a far search up to the bound (30 more). The
 continuation goes on from there; the skipped interval is recorded as a ``"jump"``
 special point. Points of the excursion stay on the branch with
 ``record["on_family"] = 0``.
@@ -123,7 +124,11 @@ class FamilyGuard:
         on = bool(share >= self.family_share)
         if self.pending:
             _, a_last, f_last, _ = self.pending[-1]
-            advancing = amplitude >= a_last * (1 - 1e-9) and not frequency < f_last * (1 - 1e-9)
+            # a fold turns the frequency back, or the amplitude with the frequency no
+            # longer rising (a tongue's tip); an amplitude that wavers while the frequency
+            # keeps rising is the backbone's own S-bend, not a tongue
+            advancing = not frequency < f_last * (1 - 1e-9) and (
+                amplitude >= a_last * (1 - 1e-9) or frequency > f_last * (1 + 1e-9))
             if advancing and not self._locked(amplitude, frequency):
                 if not on:
                     self.pending.append((index, amplitude, frequency, rec))
@@ -205,6 +210,8 @@ class FamilyGuard:
 
 #: pinned solves a jump may try before it gives up (bounds the cost of a failing jump)
 _MAX_SOLVES = 40
+#: pinned solves of the far search (from one origin, up to the bound)
+_MAX_FAR_SOLVES = 30
 
 
 class _Exhausted(PinnedFailure):
@@ -275,9 +282,12 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     """Land on the family beyond the frontier.
 
     Tries the origins of :meth:`FamilyGuard.origins` and, from each, amplitudes
-    ``frontier·(1 + step·2^i)``, i = 0..6 (capped at ``amplitude_max``); a landing counts
-    when Newton converges, the point is on the family, and its frequency is within 15 %
-    of the predicted one (else it found another branch).
+    ``frontier·(1 + step·2^i)``, i = 0..6 (capped at ``amplitude_max``); then a far
+    search from the best origin, i = 0..12, in the window up to the problem's
+    ``family_frequency_limit``. A landing counts when Newton converges, the point is on
+    the family, and its frequency is within 15 % of the predicted one or at or above the
+    frontier's (a backbone with rigid stops only stiffens), inside the frequency window
+    (else it found another branch).
 
     Returns
     -------
@@ -301,22 +311,24 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
         if not targets or target > targets[-1]:
             targets.append(target)
 
-    f_lo, f_hi = _frequency_window(recs, guard, amplitude_max)
+    f_lo, f_hi = _frequency_window(recs, guard, targets[-1])
+    window = {"hi": f_hi}  # the far search below widens it to its own targets
     frequency_of = getattr(problem, "frequency_of", None)
     admissible = None
     if frequency_of is not None and math.isfinite(f_lo) and f_lo > 0:
         # the trust region: a landing is accepted within 30 % of the family's frequencies,
         # so no iterate needs to leave [f_lo/2, 2 f_hi]
         def admissible(u):
-            return 0.5 * f_lo <= frequency_of(u) <= 2.0 * f_hi
+            return 0.5 * f_lo <= frequency_of(u) <= 2.0 * window["hi"]
 
-    solves = [0]
+    solves = [0, _MAX_SOLVES]  # solves made, solves allowed
 
     def accept(u0, target, f_pred):
+        f_hi = window["hi"]
         if admissible is not None and not admissible(u0):
             raise _Outside("the predictor lies outside the trust region")
-        if solves[0] >= _MAX_SOLVES:
-            raise _Exhausted(f"{_MAX_SOLVES} pinned solves tried")
+        if solves[0] >= solves[1]:
+            raise _Exhausted(f"{solves[1]} pinned solves tried")
         solves[0] += 1
         u, nit, hist, t = solve_at_amplitude(problem, u0, target, tol=newton_tol, max_iter=3 * max_newton,
                                              admissible=admissible)
@@ -325,7 +337,13 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
         share = family_value(rec)
         if share is not None and share < guard.family_share:
             raise PinnedFailure(f"landed off the family (fundamental share {share:.3f}) at {target:.4g}")
-        if math.isfinite(f_pred) and not abs(f - f_pred) <= 0.15 * abs(f_pred):
+        # near the predicted frequency, or on the rising side of the frontier: a backbone
+        # with rigid stops only stiffens, so the family beyond the frontier lies at or
+        # above the frontier's frequency (a predictor taken from a point near grazing
+        # can be far below it on a steeply rising backbone)
+        near = math.isfinite(f_pred) and abs(f - f_pred) <= 0.15 * abs(f_pred)
+        rising = math.isfinite(f_frontier) and f >= f_frontier * (1.0 - 1e-6)
+        if math.isfinite(f_pred) and not (near or rising):
             raise PinnedFailure(f"landed on another branch ({f:.4g} instead of about {f_pred:.4g})")
         if math.isfinite(f_lo) and not 0.7 * f_lo <= f <= 1.3 * f_hi:
             raise PinnedFailure(f"landed on another branch ({f:.4g} Hz, the family was at "
@@ -348,7 +366,46 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
             except (PinnedFailure, ArithmeticError, ValueError, RuntimeError) as err:
                 last_error = f"filtered passage: {err}"
                 log.debug("jump from %d by filtering: %s", origin, last_error)
-    for origin in guard.origins(lambda i: float(recs[i]["amplitude"])):
+    origins = guard.origins(lambda i: float(recs[i]["amplitude"]))
+    try:
+        return _search(problem, us, recs, guard, origins, targets, amplitude_max, accept, frequency_of,
+                       monitor)
+    except _Exhausted as err:
+        reason = f" after {_MAX_SOLVES} pinned solves: "
+        last_error = str(err) if str(err) != "no attempt" else last_error
+    except PinnedFailure as err:
+        reason = ": "
+        last_error = str(err) if str(err) != "no attempt" else last_error
+    # the far search: a tongue (or an S-shaped stretch of backbone that folds back) can
+    # span more amplitude than 2.28 times the frontier, and a backbone that rises steeply
+    # just past grazing (a clearance) can leave the window extrapolated from a frontier
+    # near grazing; the family is sought again from the frontier's best origin, up to the
+    # bound, in the window up to the highest frequency the family can reach (the
+    # problem's limit: rigid stops stiffen the structure at most to all contacts held)
+    far = list(targets)
+    for i in range(7, 13):
+        target = min(frontier * (1.0 + step * 2.0**i), amplitude_max)
+        if target > far[-1] * (1 + 1e-12):
+            far.append(target)
+    limit = getattr(problem, "family_frequency_limit", None)
+    window["hi"] = max(_frequency_window(recs, guard, far[-1])[1], limit() if limit is not None else 0.0)
+    solves[:] = [0, _MAX_FAR_SOLVES]
+    try:
+        return _search(problem, us, recs, guard, origins[:1], far, amplitude_max, accept, frequency_of,
+                       monitor)
+    except PinnedFailure as err:
+        far_error = str(err)
+        log.debug("far jump from %.4g: %s", frontier, far_error)
+    raise PinnedFailure(f"jump from amplitude {frontier:.4g} failed{reason}{last_error}; the far search "
+                        f"up to {far[-1]:.4g}: {far_error}")
+
+
+def _search(problem, us, recs, guard, origins, targets, amplitude_max, accept, frequency_of, monitor):
+    """Pinned solves from each origin at each target (increasing) from each predictor,
+    until one lands (returns the jump's tuple); raises _Exhausted when the budget runs
+    out, else PinnedFailure with the last solve's reason."""
+    last_error = "no attempt"
+    for origin in origins:
         A_o = float(recs[origin]["amplitude"])
         for target in targets:
             if target <= A_o * (1 + 1e-12):
@@ -360,8 +417,7 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
                     u, nit, hist, rec, t = accept(u0, target, f_pred)
                     return u, nit, hist, rec, t, target, origin
                 except _Exhausted:
-                    raise PinnedFailure(f"jump from amplitude {frontier:.4g} failed after {_MAX_SOLVES} "
-                                        f"pinned solves: {last_error}") from None
+                    raise _Exhausted(last_error) from None
                 except _Outside as err:  # no solve tried: keep the last solve's reason
                     if last_error == "no attempt":
                         last_error = str(err)
@@ -369,26 +425,28 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
                     last_error = str(err)
                 log.debug("jump attempt from %d (%.4g) to %.4g by the %s predictor: %s", origin, A_o, target,
                           name, last_error)
-    raise PinnedFailure(f"jump from amplitude {frontier:.4g} failed: {last_error}")
+    raise PinnedFailure(last_error)
 
 
-def _frequency_window(recs, guard, amplitude_max: float) -> tuple[float, float]:
+def _frequency_window(recs, guard, top: float) -> tuple[float, float]:
     """(f_lo, f_hi): the frontier's frequency, and the highest frequency the family can
-    have at the largest target of a jump, extrapolated linearly in the amplitude from the
-    last two family points (a backbone that rises steeply, as a massive DOF held by a
-    clearance, reaches far above the frontier's frequency within a small amplitude step);
-    the frontier's frequency both times where the slope is not positive."""
+    have at amplitude ``top`` (the largest target of a jump), extrapolated linearly in the amplitude with the
+    steepest secant from an earlier family point to the frontier (a backbone that rises
+    steeply, as a massive DOF held by a clearance, reaches far above the frontier's
+    frequency within a small amplitude step; the last two family points alone can sit on
+    a fold at the tongue's foot and see no rise at all); the frontier's frequency both
+    times where no secant rises."""
     f0 = float(recs[guard.frontier_index].get("frequency", math.nan))
     a0 = float(recs[guard.frontier_index]["amplitude"])
-    clean = [i for i in guard.clean if i != guard.frontier_index]
-    if not clean or not math.isfinite(f0):
+    if not math.isfinite(f0):
         return f0, f0
-    prev = clean[-1]
-    a1, f1 = float(recs[prev]["amplitude"]), float(recs[prev].get("frequency", math.nan))
-    if not (a0 > a1 and f0 > f1):
-        return f0, f0
-    top = min(a0 * (1.0 + 0.02 * 2.0**6), amplitude_max)
-    return f0, max(f0, f0 + (f0 - f1) / (a0 - a1) * (top - a0))
+    slope = 0.0
+    for i in guard.clean:
+        a1, f1 = float(recs[i]["amplitude"]), float(recs[i].get("frequency", math.nan))
+        # secants over at least 2 % of the amplitude (shorter ones near a fold are noise)
+        if a1 <= a0 * (1.0 - 0.02) and math.isfinite(f1) and f0 > f1:
+            slope = max(slope, (f0 - f1) / (a0 - a1))
+    return f0, f0 + slope * max(top - a0, 0.0)
 
 
 def _predictors(problem, us, recs, guard, origin: int, target: float, amplitude_max: float):

@@ -25,6 +25,12 @@ class FamilyMixin:
         jumps' Newton iterates)."""
         return float(u[-1] * self.colscale[-1] / (2 * np.pi))
 
+    def family_frequency_limit(self) -> float:
+        """The highest frequency (Hz) the starting mode's backbone can reach: the zero-gap
+        limit of a single one-sided contact, else the frequency with every contact DOF
+        held at its stop (rigid stops stiffen the structure at most that far)."""
+        return float(self._omega_range()[1] / (2 * np.pi))
+
     def open_amplitude(self) -> float:
         """The amplitude (m) of the linear mode at which its first contact reaches its stop
         (above it the linear mode is no solution): min over the contacts of gap / |φ_c|,

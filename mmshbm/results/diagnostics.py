@@ -26,6 +26,12 @@ study summaries):
     :attr:`CheckThresholds.force_floor` (default 1e-9) times the larger of the branch's
     largest contact force and k_c·gap (the static contact stiffness times the gap) are
     round-off (Newton's tolerance leaves ~1e-9 N on the default beam) and not reported.
+``"coexisting_orbits"``
+    Points of the branch off its family front (a tongue, a loop's way down, a jump that
+    landed at the frontier's amplitude at another frequency) share amplitudes with the
+    front: the backbone is not the only orbit there (:mod:`mmshbm.results.coexisting`;
+    the message names the intervals in gaps, ``first``/``last`` the off-front points,
+    ``value`` the summed width of the intervals in gaps, or m without a gap).
 ``"incomplete"``
     The branch ended short of its bounds (its status is not ``"bound:<name>"``: a step
     budget ``max_steps``, a step size below ``ds_min``, a failed start, ...).
@@ -42,6 +48,7 @@ of its time signals, with the model's open-contact linear modes.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import warnings
 from dataclasses import asdict, dataclass
@@ -98,7 +105,8 @@ class Finding:
     Attributes
     ----------
     kind : str
-        "left_family", "penetration", "negative_force" or "incomplete".
+        "left_family", "coexisting_orbits", "penetration", "negative_force" or
+        "incomplete".
     message : str
         One line for a person.
     first, last : int
@@ -181,6 +189,7 @@ def check_branch(branch, thresholds: CheckThresholds | None = None, *, warn: boo
                            fundamental=True)
         elif shares is not None:
             out += _family(branch, np.asarray(shares, dtype=float), th)
+        out += _coexisting(branch)
         out += _contact(branch, solver, th)
     if not branch.status.startswith("bound:"):
         out.append(_incomplete(branch))
@@ -192,10 +201,35 @@ def check_branch(branch, thresholds: CheckThresholds | None = None, *, warn: boo
     return out
 
 
+def _coexisting(branch) -> list[Finding]:
+    from .coexisting import coexisting_intervals
+
+    found = coexisting_intervals(branch)
+    if not found:
+        return []
+    gap = branch.gap or 1.0
+    unit = " gaps" if branch.gap else " m"
+    spans = ", ".join((f"{c.lo / gap:.4g}" if c.lo == c.hi else f"{c.lo / gap:.4g}-{c.hi / gap:.4g}")
+                      + f"{unit} ({c.frequency_other[0]:.4g}-{c.frequency_other[1]:.4g} Hz besides the "
+                      f"backbone's {c.frequency_family[0]:.4g}-{c.frequency_family[1]:.4g} Hz)"
+                      for c in found[:4]) + (", ..." if len(found) > 4 else "")
+    points = [i for c in found for i in c.points]
+    message = (f"{branch.method} branch: other orbits coexist with the backbone at {spans}; "
+               "frequency_at gives the backbone's")
+    return [Finding("coexisting_orbits", message, min(points), max(points),
+                    float(sum(c.hi - c.lo for c in found) / gap))]
+
+
 def _warnings(branch, found: list[Finding]) -> list[str]:
     """One warning per finding, except that the two truncation effects of harmonic
-    balance (penetration and a pulling force) make one."""
+    balance (penetration and a pulling force) make one, and orbits coexisting with a
+    family that left into tongues are said in the family's warning."""
     kinds = {f.kind: f for f in found}
+    if "coexisting_orbits" in kinds and "left_family" in kinds:
+        both = kinds["coexisting_orbits"].message.split(": ", 1)[1]
+        found = [dataclasses.replace(f, message=f"{f.message}; {both}") if f.kind == "left_family" else f
+                 for f in found if f.kind != "coexisting_orbits"]
+        kinds = {f.kind: f for f in found}
     if not ("penetration" in kinds and "negative_force" in kinds and branch.harmonics):
         return [f.message for f in found]
     pen, neg = kinds["penetration"], kinds["negative_force"]
