@@ -27,7 +27,7 @@ import numpy as np
 import scipy.linalg as la
 
 from .. import _validate as check
-from .exact.friction import FrictionSystem
+from .exact.friction import FrictionSystem, periodic_state
 
 __all__ = ["FrictionShooting", "friction_shooting_orbit", "ShootingOrbit"]
 
@@ -142,29 +142,7 @@ def friction_shooting_orbit(model, force, frequency: float, steps_per_period: in
     for _ in range(settle_periods):
         z = sh.march(z)
 
-    def scales(z):
-        q = max(float(np.abs(z[:n]).max()), abs(z[-1]), 1e-300)
-        v = max(float(np.abs(z[n:2 * n]).max()), q * sh.omega)
-        return np.concatenate([np.full(n, q), np.full(n, v), [q]])
-
-    converged, res, it = False, np.inf, 0
-    for it in range(1, max_iter + 1):  # noqa: B007 - the count is reported
-        sc = scales(z)
-        r = sh.march(z) - z
-        res = float(np.abs(r / sc).max())
-        if res <= tol:
-            converged = True
-            break
-        J = np.empty((2 * n + 1, 2 * n + 1))
-        base = r + z
-        for j in range(2 * n + 1):
-            e = z.copy()
-            e[j] += 1e-7 * sc[j]
-            J[:, j] = (sh.march(e) - base) / (1e-7 * sc[j])
-        J -= np.eye(2 * n + 1)
-        dz = np.linalg.lstsq(J, -r, rcond=None)[0]
-        big = float(np.abs(dz / sc).max())
-        z = z + (dz / big if big > 1.0 else dz)
+    z, converged, it, res = periodic_state(sh.march, z, n, sh.omega, tol, max_iter)
     return ShootingOrbit(sh, z, converged, res, it)
 
 

@@ -387,6 +387,17 @@ def friction_orbit(model, force, frequency: float, guess=None, *, tol: float = 1
     for _ in range(settle_periods):
         y = sysm.period_map(y)
 
+    y, converged, it, res = periodic_state(sysm.period_map, y, n, omega, tol, max_iter)
+    segments, _, _ = sysm.integrate(y[:-1], y[-1])
+    return FrictionOrbit(omega / (2 * np.pi), y, converged, it, res, sysm, segments)
+
+
+def periodic_state(period_map, y, n: int, omega: float, tol: float, max_iter: int):
+    """Newton on period_map(y) − y = 0 for a friction orbit's state y = (q (n,), q′ (n,), u)
+    (displacements scaled by their largest entry, velocities by that times Ω, ``omega``
+    rad/s). The Jacobian by forward differences of the period map (step 1e-7 of each
+    scale), least-squares steps clipped to one scale. Returns (y, converged, iterations,
+    the last scaled residual)."""
     def scales(y):
         q = max(float(np.abs(y[:n]).max()), abs(y[-1]), 1e-300)
         v = max(float(np.abs(y[n:2 * n]).max()), q * omega)
@@ -395,7 +406,7 @@ def friction_orbit(model, force, frequency: float, guess=None, *, tol: float = 1
     converged, res, it = False, np.inf, 0
     for it in range(1, max_iter + 1):  # noqa: B007 - the count is reported
         sc = scales(y)
-        r = sysm.period_map(y) - y
+        r = period_map(y) - y
         res = float(np.abs(r / sc).max())
         if res <= tol:
             converged = True
@@ -406,12 +417,11 @@ def friction_orbit(model, force, frequency: float, guess=None, *, tol: float = 1
             h = 1e-7 * sc[j]
             e = y.copy()
             e[j] += h
-            J[:, j] = (sysm.period_map(e) - base) / h
+            J[:, j] = (period_map(e) - base) / h
         J -= np.eye(2 * n + 1)
         dy = np.linalg.lstsq(J, -r, rcond=None)[0]
         big = float(np.abs(dy / sc).max())
         if big > 1.0:
             dy /= big
         y = y + dy
-    segments, _, _ = sysm.integrate(y[:-1], y[-1])
-    return FrictionOrbit(omega / (2 * np.pi), y, converged, it, res, sysm, segments)
+    return y, converged, it, res
