@@ -159,14 +159,7 @@ class DampedHBMBase:
         if not ref > 0:
             ref = np.max(np.abs(modes[:, 0]))
         self.mode_shape_c = phi_c / ref
-        length = model.gap if model.gap > 0 else 1.0
-        shape = np.abs(self.mode_shape_c)
-        self.xscale_c = length * np.maximum(shape, 1e-3 * max(shape.max(), 1e-300))
-        self.xscale = np.tile(self.xscale_c, self.n_coef)
-        fscale = np.abs(self.cond.D0) @ self.xscale_c
-        self.rowscale = np.tile(fscale, self.n_coef)
-        for j, i in enumerate(self.contact_rows):
-            self.rowscale[self._coef_index[i]] = self.r[j] * length
+        self.scale_unknowns(model.gap if model.gap > 0 else 1.0)
         k = np.arange(1, self.H + 1)
         self._n_fine = max(512, 2 ** int(np.ceil(np.log2(16 * (2 * self.H + 1)))))
         self._k = k
@@ -195,6 +188,18 @@ class DampedHBMBase:
         ch = self.cond.evaluate(omega, self.H, xi, derivative, xi_derivative, recover)
         self._cache = (key, ch)
         return ch
+
+    def scale_unknowns(self, length: float) -> None:
+        """Unknowns in units of ``length`` (m) times the first mode's shape (xscale), rows in
+        the forces that moves (rowscale; a contact row in its proximal parameter r times
+        ``length``)."""
+        shape = np.abs(self.mode_shape_c)
+        self.xscale_c = length * np.maximum(shape, 1e-3 * max(shape.max(), 1e-300))
+        self.xscale = np.tile(self.xscale_c, self.n_coef)
+        fscale = np.abs(self.cond.D0) @ self.xscale_c
+        self.rowscale = np.tile(fscale, self.n_coef)
+        for j, i in enumerate(self.contact_rows):
+            self.rowscale[self._coef_index[i]] = self.r[j] * length
 
     def real_blocks(self, D: np.ndarray) -> np.ndarray:
         """The real (n_x, n_x) matrix 𝔇 of the complex D_k (H+1, n_c, n_c)."""

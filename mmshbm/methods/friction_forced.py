@@ -122,13 +122,7 @@ class FrictionRows:
         """Unknowns in units of ``length`` (m) times the first mode's shape; ``extra_cols``
         parameters (scaled by ω_ref) after them."""
         self.length = length
-        shape = np.abs(self.mode_shape_c)
-        self.xscale_c = length * np.maximum(shape, 1e-3 * max(shape.max(), 1e-300))
-        self.xscale = np.tile(self.xscale_c, self.n_coef)
-        fscale = np.abs(self.cond.D0) @ self.xscale_c
-        self.rowscale = np.tile(fscale, self.n_coef)
-        for j, i in enumerate(self.contact_rows):
-            self.rowscale[self._coef_index[i]] = self.r[j] * length
+        self.scale_unknowns(length)
         for j, i in enumerate(self.friction_rows):
             self.rowscale[self._coef_index[i]] = self.rho[j] * length
         self.colscale = np.concatenate([self.xscale, np.full(extra_cols, self.omega_ref)])
