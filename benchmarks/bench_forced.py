@@ -65,7 +65,7 @@ def exact_amplitude() -> float:
     import mmshbm
     from mmshbm.core.continuation import newton
     from mmshbm.methods.exact.forced import forced_orbit
-    from mmshbm.methods.forced import ForcedResponseProblem
+    from mmshbm.methods.mms.forced import ForcedResponseProblem
 
     osc = oscillator()
     resp = mmshbm.frequency_response(osc, F_OSC, (0.1, 0.2), harmonics=20, stability=False)

@@ -35,7 +35,7 @@ def tip_model():
 
 @functools.cache
 def tip_reference() -> float:
-    from mmshbm.methods.friction_forced import FrictionForcedProblem
+    from mmshbm.methods.mms.friction_forced import FrictionForcedProblem
 
     m = tip_model()
     p = FrictionForcedProblem(m, _tip_force(), 45)
@@ -49,8 +49,8 @@ def _tip_force():
 
 
 def tip_problem(method: str):
-    from mmshbm.methods.friction_forced import FrictionForcedProblem
-    from mmshbm.methods.friction_penalty import JenkinsForcedProblem
+    from mmshbm.methods.mms.friction_forced import FrictionForcedProblem
+    from mmshbm.methods.penalty.jenkins import JenkinsForcedProblem
 
     kw = TIP_SETTINGS[method]
     if method == "mmshbm":
@@ -111,8 +111,8 @@ class JenkinsOscillator:
     timeout = 300
 
     def setup(self, method, H):
-        from mmshbm.methods.friction_forced import FrictionForcedProblem
-        from mmshbm.methods.friction_penalty import JenkinsForcedProblem
+        from mmshbm.methods.mms.friction_forced import FrictionForcedProblem
+        from mmshbm.methods.penalty.jenkins import JenkinsForcedProblem
 
         model = jenkins_oscillator()
         if method == "mmshbm":

@@ -44,7 +44,7 @@ def count_evaluations(run):
     """(branch, residual evaluations) of ``run()``: the count the problem keeps
     (``solver.evaluations``, the compiled corrector's included) when it has one, else
     the calls of the problem's ``evaluate`` (residual, with or without the Jacobian)."""
-    from mmshbm.methods.mms_hbm import MMSHBMProblem
+    from mmshbm.methods.mms.conservative import MMSHBMProblem
 
     original = MMSHBMProblem.evaluate
     calls = [0]

@@ -16,8 +16,8 @@ import pytest
 import mmshbm
 from mmshbm import Model, OneDofOscillator
 from mmshbm.methods._contacts import static_contact_stiffness
-from mmshbm.methods.penalty_hbm import PenaltyHBMProblem
-from mmshbm.methods.shooting import ShootingProblem
+from mmshbm.methods.penalty.hbm import PenaltyHBMProblem
+from mmshbm.methods.shooting.conservative import ShootingProblem
 
 KP = 40.0
 REF = OneDofOscillator(m=1.0, k1=1.0, k2=KP, gap=1.0)

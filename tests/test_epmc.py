@@ -9,7 +9,7 @@ from finite_differences import assert_jacobian
 
 import mmshbm
 from mmshbm.core.continuation import newton
-from mmshbm.methods.epmc import EPMCProblem
+from mmshbm.methods.mms.epmc import EPMCProblem
 from mmshbm.results.branch import Branch
 
 

@@ -11,7 +11,7 @@ from scipy.integrate import solve_ivp
 import mmshbm
 from mmshbm.core.continuation import newton
 from mmshbm.methods.exact.forced import forced_orbit
-from mmshbm.methods.forced import ForcedResponseProblem, base_excitation
+from mmshbm.methods.mms.forced import ForcedResponseProblem, base_excitation
 from mmshbm.results.response import FrequencyResponse
 
 OSC = dict(m=1.0, k1=1.0, k2=4.0, gap=1.0)

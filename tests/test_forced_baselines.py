@@ -11,9 +11,9 @@ import mmshbm
 from mmshbm.core.bordered import bordered_solve
 from mmshbm.core.continuation import newton
 from mmshbm.methods.exact.forced import forced_orbit
-from mmshbm.methods.forced import ForcedResponseProblem
-from mmshbm.methods.penalty_forced import PenaltyForcedProblem
-from mmshbm.methods.shooting_forced import ShootingForcedProblem
+from mmshbm.methods.mms.forced import ForcedResponseProblem
+from mmshbm.methods.penalty.forced import PenaltyForcedProblem
+from mmshbm.methods.shooting.forced import ShootingForcedProblem
 
 F = np.array([0.1, 0.0])
 FREQ = 0.185  # Hz: on the upper branch, one contact per period

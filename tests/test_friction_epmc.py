@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import mmshbm
-from mmshbm.methods.friction_epmc import FrictionEPMCProblem
+from mmshbm.methods.mms.friction_epmc import FrictionEPMCProblem
 
 M_, K1, K2, C_ = 1.0, 1.0, 2.0, 0.05
 S = 0.1  # slip force μN (N); the stuck mode slips from k2·A = s, A = 0.05 m

@@ -8,7 +8,7 @@ import pytest
 
 import mmshbm
 from mmshbm.methods.exact.friction import friction_orbit
-from mmshbm.methods.friction_forced import FrictionForcedProblem
+from mmshbm.methods.mms.friction_forced import FrictionForcedProblem
 
 M_, K1, K2, C_, F_ = 1.0, 1.0, 2.0, 0.05, 0.1
 EPS = np.finfo(float).eps

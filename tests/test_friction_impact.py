@@ -7,8 +7,8 @@ import pytest
 
 import mmshbm
 from mmshbm.methods.exact.forced import forced_orbit
-from mmshbm.methods.friction_impact import impact_friction_orbit
-from mmshbm.methods.friction_shooting import friction_shooting_orbit
+from mmshbm.methods.shooting.friction import friction_shooting_orbit
+from mmshbm.methods.shooting.friction_impact import impact_friction_orbit
 
 # two masses: x1 drives the node's normal DOF (stop), x2 its tangential DOF (friction)
 M = np.diag([1.0, 1.0, 0.0, 0.0])

@@ -9,9 +9,9 @@ import pytest
 
 import mmshbm
 from mmshbm.contact.coulomb_coupled import coupled_play_pieces, project_coulomb_play_coupled
-from mmshbm.methods.forced import ForcedResponseProblem
-from mmshbm.methods.friction_forced import FrictionForcedProblem
-from mmshbm.methods.friction_impact import impact_friction_orbit
+from mmshbm.methods.mms.forced import ForcedResponseProblem
+from mmshbm.methods.mms.friction_forced import FrictionForcedProblem
+from mmshbm.methods.shooting.friction_impact import impact_friction_orbit
 
 EPS = np.finfo(float).eps
 RHO, MU, PRE, RN = 2.0, 0.3, 0.5, 4.0

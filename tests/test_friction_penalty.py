@@ -10,8 +10,8 @@ import pytest
 import mmshbm
 from mmshbm.contact.coulomb import jenkins_hysteresis
 from mmshbm.methods.exact.friction import friction_orbit
-from mmshbm.methods.friction_forced import FrictionForcedProblem
-from mmshbm.methods.friction_penalty import JenkinsForcedProblem
+from mmshbm.methods.mms.friction_forced import FrictionForcedProblem
+from mmshbm.methods.penalty.jenkins import JenkinsForcedProblem
 
 M_, K1, K2, C_, F_ = 1.0, 1.0, 2.0, 0.05, 0.1
 

@@ -6,7 +6,7 @@ import pytest
 
 import mmshbm
 from mmshbm.methods.exact.friction import friction_orbit
-from mmshbm.methods.friction_shooting import friction_shooting_orbit
+from mmshbm.methods.shooting.friction import friction_shooting_orbit
 
 M_, K1, K2, C_, F_ = 1.0, 1.0, 2.0, 0.05, 0.1
 

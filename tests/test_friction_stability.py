@@ -7,7 +7,7 @@ import pytest
 
 import mmshbm
 from mmshbm.methods.exact.friction import friction_orbit
-from mmshbm.methods.friction_forced import FrictionForcedProblem
+from mmshbm.methods.mms.friction_forced import FrictionForcedProblem
 
 # Jenkins oscillator: mass on k1 to ground and k2 to a massless node with Coulomb friction
 M_, K1, K2, C_, F_ = 1.0, 1.0, 2.0, 0.05, 0.1
@@ -97,7 +97,7 @@ def impact_model(mu, preload=0.05):
 def test_coupled_without_friction_is_the_impact_floquet():
     """μ = 0: the multipliers are those of the impact-only orbit's piecewise-linear flow
     (methods/stability.py) and one 0 (the tangential node slips throughout)."""
-    from mmshbm.methods.forced import ForcedResponseProblem
+    from mmshbm.methods.mms.forced import ForcedResponseProblem
 
     p = FrictionForcedProblem(impact_model(0.0), F2, 15, stability=True)
     u = p.start_point(0.18)
@@ -115,7 +115,7 @@ def test_coupled_against_shooting():
     at the orbit's q_l(τ), the stick arcs the play pieces' (read on the truncated normal
     signal): measured 2.3e-3 (H = 31) and 4.9e-3 (H = 63) off, with a change of 5.8e-3
     from H = 31 to 63; asserted within twice that change plus the shooting's own change."""
-    from mmshbm.methods.friction_impact import impact_friction_orbit
+    from mmshbm.methods.shooting.friction_impact import impact_friction_orbit
 
     m = impact_model(0.3)
     ref = {}

@@ -7,7 +7,7 @@ from finite_differences import assert_jacobian
 
 import mmshbm
 from mmshbm.core.continuation import newton
-from mmshbm.methods.mms_hbm import MMSHBMProblem
+from mmshbm.methods.mms.conservative import MMSHBMProblem
 
 OSC = mmshbm.OneDofOscillator(m=1.0, k1=1.0, k2=4.0, gap=1.0)
 AMPLITUDES = (1.5, 2.0, 3.0, 5.0, 10.0)  # gaps

@@ -77,3 +77,23 @@ def test_dir_lists_the_lazy_names():
     names = dir(mmshbm)
     assert {"backbone", "Branch", "default_beam", "exact", "studies"} <= set(names)
     assert names == sorted(names)
+
+
+#: 0.2 method module -> a public class it defined (the methods stood side by side in 0.2)
+METHOD_PATHS_02 = {
+    "mmshbm.methods.mms_hbm": ("mmshbm.methods.mms.conservative", "MMSHBMProblem"),
+    "mmshbm.methods.forced": ("mmshbm.methods.mms.forced", "ForcedResponseProblem"),
+    "mmshbm.methods.epmc": ("mmshbm.methods.mms.epmc", "EPMCProblem"),
+    "mmshbm.methods.penalty_hbm": ("mmshbm.methods.penalty.hbm", "PenaltyHBMProblem"),
+    "mmshbm.methods.penalty_forced": ("mmshbm.methods.penalty.forced", "PenaltyForcedProblem"),
+    "mmshbm.methods.shooting": ("mmshbm.methods.shooting.conservative", "ShootingProblem"),
+    "mmshbm.methods.shooting_forced": ("mmshbm.methods.shooting.forced", "ShootingForcedProblem"),
+    "mmshbm.methods.friction_forced": ("mmshbm.methods.mms.friction_forced", "FrictionForcedProblem"),
+    "mmshbm.methods.friction_penalty": ("mmshbm.methods.penalty.jenkins", "JenkinsForcedProblem"),
+}
+
+
+@pytest.mark.parametrize("old", sorted(METHOD_PATHS_02))
+def test_method_paths_of_0_2_give_the_same_classes(old):
+    new, name = METHOD_PATHS_02[old]
+    assert getattr(importlib.import_module(old), name) is getattr(importlib.import_module(new), name)

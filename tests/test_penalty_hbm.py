@@ -12,8 +12,8 @@ from finite_differences import assert_jacobian
 
 import mmshbm
 from mmshbm.core.harmonics import default_n_samples
-from mmshbm.methods._penalty_kernels import _penalty_contacts
-from mmshbm.methods.penalty_hbm import (
+from mmshbm.methods.penalty._kernels import _penalty_contacts
+from mmshbm.methods.penalty.hbm import (
     DEFAULT_PENALTY_FACTOR,
     PenaltyHBMProblem,
     _condensed_contact_stiffness,

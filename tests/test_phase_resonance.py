@@ -10,7 +10,7 @@ from finite_differences import assert_jacobian
 import mmshbm
 from mmshbm.analysis.phase_resonance import compare_backbones, phase_resonance_backbone
 from mmshbm.cli import main
-from mmshbm.methods.phase_resonance import PhaseResonanceProblem
+from mmshbm.methods.mms.phase_resonance import PhaseResonanceProblem
 from mmshbm.plotting.response import (
     plot_damping_ratio,
     plot_frequency_response,

@@ -7,7 +7,7 @@ import pytest
 
 import mmshbm
 from mmshbm.core.continuation import newton
-from mmshbm.methods.mms_hbm import MMSHBMProblem
+from mmshbm.methods.mms.conservative import MMSHBMProblem
 
 OSC = mmshbm.OneDofOscillator(1.0, 1.0, 4.0, 1.0)  # node clamped: ω₂ = √5; 2Ω = ω₂ at Ω = √5/2
 

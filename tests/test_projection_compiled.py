@@ -11,7 +11,7 @@ import pytest
 
 import mmshbm
 from mmshbm.core.projection import contact_spectrum, project_contact, sample_tables
-from mmshbm.methods.forced import ForcedResponseProblem
+from mmshbm.methods.mms.forced import ForcedResponseProblem
 
 CASES = [(1, -np.inf, 0.3), (3, -0.5, 0.2), (5, -0.2, np.inf), (8, -0.4, 0.4), (20, -np.inf, 0.1),
          (30, -0.3, 0.3), (40, -np.inf, 0.05)]

@@ -27,7 +27,7 @@ from mmshbm.core.harmonics import HarmonicTransform
 from mmshbm.core.kernels import proximal_contact
 from mmshbm.fe import assembly, element
 from mmshbm.fe.oscillator import OneDofOscillator
-from mmshbm.methods.mms_hbm import MMSHBMProblem
+from mmshbm.methods.mms.conservative import MMSHBMProblem
 
 seeds = st.integers(0, 2**32 - 1)
 

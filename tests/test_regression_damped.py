@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import mmshbm
-from mmshbm.methods.forced import ForcedResponseProblem
+from mmshbm.methods.mms.forced import ForcedResponseProblem
 
 #: amplitude (m) at frequency (Hz) of the forced response, per H, computed at 8719e8d
 FORCED = {5: {45.0: 0.001153027556667583, 50.0: 0.001388189011135052, 55.0: 0.0017822987353867843},

@@ -22,9 +22,9 @@ import mmshbm
 from mmshbm import ClearanceOscillator, Model, OneDofOscillator
 from mmshbm.core.continuation import ContinuationOptions, continue_branch
 from mmshbm.methods import exact
-from mmshbm.methods._shooting_contact_kernels import lcp_solve
-from mmshbm.methods.penalty_hbm import PenaltyHBMProblem
-from mmshbm.methods.shooting import ShootingProblem
+from mmshbm.methods.penalty.hbm import PenaltyHBMProblem
+from mmshbm.methods.shooting._contact_kernels import lcp_solve
+from mmshbm.methods.shooting.conservative import ShootingProblem
 
 CO = ClearanceOscillator(m=1.0, k1=1.0, k2=4.0, gap=1.0)
 OSC = OneDofOscillator(m=1.0, k1=1.0, k2=4.0, gap=1.0)

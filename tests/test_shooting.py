@@ -13,8 +13,8 @@ from scipy.optimize import brentq
 
 import mmshbm
 from mmshbm.fe.oscillator import OneDofOscillator
-from mmshbm.methods._shooting_kernels import band_cholesky, band_solve, band_symv
-from mmshbm.methods.shooting import ShootingProblem
+from mmshbm.methods.shooting._kernels import band_cholesky, band_solve, band_symv
+from mmshbm.methods.shooting.conservative import ShootingProblem
 
 OSC = OneDofOscillator(m=1.0, k1=1.0, k2=4.0, gap=1.0)
 

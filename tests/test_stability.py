@@ -9,7 +9,7 @@ import scipy.linalg as la
 from test_exact import chain
 
 import mmshbm
-from mmshbm.methods.stability import FloquetSolver, classify, conservative_multipliers
+from mmshbm.methods.mms.stability import FloquetSolver, classify, conservative_multipliers
 
 
 def test_phase_transitions_are_matrix_exponentials():
@@ -79,7 +79,7 @@ def test_branch_stability_of_a_damped_mode():
     """Below the gap the EPMC cancels mode 1's damping (its pair sits at +1: one trivial, one
     neutral) and every other mode decays; the conservative backbone's two trivial multipliers
     are left out."""
-    from mmshbm.methods.stability import branch_stability
+    from mmshbm.methods.mms.stability import branch_stability
 
     beam = mmshbm.default_beam().model(4)
     b = mmshbm.backbone(beam.with_damping(modal_ratio=0.02), harmonics=3, max_amplitude=2e-3)

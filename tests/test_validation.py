@@ -21,7 +21,7 @@ from mmshbm import Model, TimoshenkoBeam, default_beam
 from mmshbm.core.condense import Condensation
 from mmshbm.fe import assembly, element
 from mmshbm.fe.oscillator import OneDofOscillator
-from mmshbm.methods.mms_hbm import MMSHBMProblem
+from mmshbm.methods.mms.conservative import MMSHBMProblem
 
 M2 = np.diag([1.0, 0.0])
 K2 = np.array([[5.0, -4.0], [-4.0, 4.0]])  # the one-DOF oscillator, m = k1 = 1, k2 = 4

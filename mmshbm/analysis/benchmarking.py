@@ -120,7 +120,7 @@ def _backbone(model, method: str, amplitude: float, options: dict):
     harmonics = opts.pop("harmonics", 5)
     factor = opts.pop("penalty_factor", None)
     if factor is not None:
-        from ..methods.penalty_hbm import _condensed_contact_stiffness
+        from ..methods.penalty.hbm import _condensed_contact_stiffness
 
         opts["penalty_stiffness"] = factor * _condensed_contact_stiffness(model)
     return mmshbm.backbone(model, harmonics=harmonics, method=method, max_amplitude=amplitude, **opts)

@@ -300,9 +300,9 @@ def fit_contact_stiffness(model, measured, harmonics: int = 5, *, method: str = 
         A model with a massless or more than one contact, fewer than one usable point, a
         measured amplitude the model's backbone does not reach, a bad ``initial`` or range.
     """
-    from ..analysis.measured import MeasuredBackbone, load_measured
     from ..model.model import Model
     from ..model.transforms import static_contact_stiffness
+    from .measured import MeasuredBackbone, load_measured
 
     if not isinstance(model, Model):
         raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")

@@ -8,7 +8,7 @@ sweep's largest point. No arclength continuation is involved: a friction respons
 constant normal load has one amplitude per frequency on the band (no fold was seen on the
 beam's tip damper), and the peak is what the curve needs. Where a sweep point does not
 converge from its neighbour it is restarted from the free-slip and stuck linear responses
-(:meth:`~mmshbm.methods.friction_forced.FrictionForcedProblem.start_point`).
+(:meth:`~mmshbm.methods.mms.friction_forced.FrictionForcedProblem.start_point`).
 
 The loads run in ascending order in chunks, one chunk per worker process (``workers``),
 so each sweep is warm-started from the previous load's sweep at the same frequencies.
@@ -166,7 +166,7 @@ def _amplitude(problem, u) -> float:
 
 
 def _chunk(make_model: Callable, loads, force, grid, harmonics, tol):
-    from ..methods.friction_forced import FrictionForcedProblem
+    from ..methods.mms.friction_forced import FrictionForcedProblem
 
     out, guesses = [], None
     for N in loads:

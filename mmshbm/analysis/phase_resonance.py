@@ -2,7 +2,7 @@
 the damped (EPMC) and conservative nonlinear modes.
 
 :func:`phase_resonance_backbone` continues the forced responses whose fundamental lags
-the force by 90° (:mod:`mmshbm.methods.phase_resonance`) as the force level grows, and
+the force by 90° (:mod:`mmshbm.methods.mms.phase_resonance`) as the force level grows, and
 returns a :class:`~mmshbm.results.branch.Branch` (method ``"phase_resonance"``) whose
 ``records`` hold the force amplitude (N) and phase along it. :func:`compare_backbones`
 computes the three curves on one model for a plot (:func:`mmshbm.plotting.response.
@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..methods.backbone import backbone
-from ..methods.forced import Excitation, harmonic_force
+from ..methods.mms.forced import Excitation, harmonic_force
 from ..model.model import Model
 
 __all__ = ["phase_resonance_backbone", "compare_backbones"]

@@ -41,8 +41,8 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from ..methods.forced import base_excitation
     from ..methods.frequency_response import frequency_response
+    from ..methods.mms.forced import base_excitation
     from ..plotting.response import plot_frequency_response, plot_phase_resonance
 
     measured = common.measured(args)

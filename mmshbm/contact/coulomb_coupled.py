@@ -3,7 +3,7 @@ projection with a slip force that varies in time.
 
 A friction node t whose normal force is N(τ) = N0 + λ(τ), λ the force of a unilateral
 contact on a massless DOF n (impact with friction). In the proximal form of the unilateral
-law (:mod:`mmshbm.methods._damped_hbm`) the contact force is
+law (:mod:`mmshbm.methods.mms.damped`) the contact force is
 
     λ(τ) = r_n (z(τ) − gap)₊,     z = side·p_n,   p_n = q_n − F_n/r_n,
 

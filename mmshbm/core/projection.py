@@ -152,7 +152,7 @@ def _project(p, lo, hi, exact, cos_t, sin_t, tau, r, G):
 
 @njit(**JIT_OPTIONS)
 def _contact_rows(x, F, rows, n_c, lo, hi, rr, exact, cos_t, sin_t, tau, R, G):
-    """The contact rows of the damped MMS-HBM residual (:mod:`mmshbm.methods._damped_hbm`), in
+    """The contact rows of the damped MMS-HBM residual (:mod:`mmshbm.methods.mms.damped`), in
     place: for contact j at massless DOF i = rows[j] with coefficients idx = m·n_c + i,
     R[idx] = F[idx] + r_j φ(p), p = x[idx] − F[idx]/r_j, and G[j] = ∂φ/∂p (2H+1, 2H+1)."""
     n = G.shape[1]
@@ -196,7 +196,7 @@ def _block_times(D, x, out):
 
 @njit(**JIT_OPTIONS)
 def _damped_residual(D, dD, x, load, dload, rows, lo, hi, rr, exact, cos_t, sin_t, tau, jacobian, R, Jx, Jp):
-    """The damped MMS-HBM contact residual (:mod:`mmshbm.methods._damped_hbm`) with F = 𝔇 x − load
+    """The damped MMS-HBM contact residual (:mod:`mmshbm.methods.mms.damped`) with F = 𝔇 x − load
     the force the structure needs, in place.
 
     D      : (H+1, n_c, n_c) complex D_k; dD : (n_p, H+1, n_c, n_c) their derivatives in the

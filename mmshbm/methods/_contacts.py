@@ -230,7 +230,7 @@ def refined_peak(q: np.ndarray, sign: int) -> float:
     """The amplitude of the periodic samples ``q`` (shape (n,)) by the convention of
     :func:`amplitude_sign`: the largest ``−sign·q`` (sign ±1) or |q| (sign 0), refined by a
     parabola through the sampled peak."""
-    from .mms_hbm import _refined_max
+    from .mms.conservative import _refined_max
 
     y = np.abs(q) if sign == 0 else -sign * q
     return _refined_max(y)

@@ -39,7 +39,7 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
         Highest harmonic H of the Fourier ansatz (harmonic-balance methods).
     method : {"mmshbm", "penalty", "shooting", "epmc"}
         MMS-HBM, or one of the baselines. A model with damping (``model.damping``) gets
-        its damped nonlinear mode with "mmshbm" ("epmc", :mod:`mmshbm.methods.epmc`; the
+        its damped nonlinear mode with "mmshbm" ("epmc", :mod:`mmshbm.methods.mms.epmc`; the
         branch's ``damping_ratio`` is ξ/(2Ω)).
     max_amplitude : float, optional
         Stop at this amplitude (m) of the contact DOF; default 10 gaps.
@@ -103,7 +103,7 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     if start_amplitude is None:
         start_amplitude = 0.5 * gap if gap > 0 else 0.01 * max_amplitude
         if model.friction and gap == 0:  # start stuck: below the amplitude where slip begins
-            from .friction_epmc import stuck_mode
+            from .mms.friction_epmc import stuck_mode
 
             start_amplitude = min(start_amplitude, 0.5 * stuck_mode(model, options.get("mode", 1))[2])
     start_amplitude = check.positive("start_amplitude", start_amplitude)

@@ -4,7 +4,7 @@ The response is continued in the excitation frequency from the low end of the ra
 (started on the linear response there) by the pseudo-arclength driver of
 :mod:`mmshbm.core.continuation`, through the folds of the resonance peak, until the
 frequency leaves the range. Floquet multipliers at every point give the stability
-(:mod:`mmshbm.methods.stability`), and the bifurcations along the response are named.
+(:mod:`mmshbm.methods.mms.stability`), and the bifurcations along the response are named.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from ..core.special_points import SpecialPoint
 from ..model.damping import model_has_damping
 from ..model.model import Model
 from ..results.response import FrequencyResponse
-from .forced import Excitation, harmonic_force
+from .mms.forced import Excitation, harmonic_force
 
 __all__ = ["frequency_response", "FORCED_METHODS", "make_forced_problem"]
 
@@ -34,9 +34,9 @@ log = logging.getLogger(__name__)
 
 #: method name -> "module:class" of its forced-response problem
 FORCED_METHODS = {
-    "mmshbm": "mmshbm.methods.forced:ForcedResponseProblem",
-    "penalty": "mmshbm.methods.penalty_forced:PenaltyForcedProblem",
-    "shooting": "mmshbm.methods.shooting_forced:ShootingForcedProblem",
+    "mmshbm": "mmshbm.methods.mms.forced:ForcedResponseProblem",
+    "penalty": "mmshbm.methods.penalty.forced:PenaltyForcedProblem",
+    "shooting": "mmshbm.methods.shooting.forced:ShootingForcedProblem",
 }
 
 _CONTINUATION_FIELDS = {f.name for f in dataclasses.fields(ContinuationOptions)}
@@ -47,7 +47,7 @@ _DEFAULTS = {"ds": 0.02, "ds_max": 0.3, "max_steps": 3000, "max_newton": 12}
 def make_forced_problem(model: Model, force, method: str = "mmshbm", harmonics: int = 5,
                         options: dict | None = None):
     """The forced-response problem of ``method`` on ``model`` (``force``: a vector, an
-    :class:`~mmshbm.methods.forced.Excitation` or its JSON form).
+    :class:`~mmshbm.methods.mms.forced.Excitation` or its JSON form).
 
     Raises
     ------
@@ -60,9 +60,9 @@ def make_forced_problem(model: Model, force, method: str = "mmshbm", harmonics: 
         force = Excitation.from_json(force)
     module, cls = FORCED_METHODS[method].split(":")
     if getattr(model, "friction", ()):
-        module, cls = {"mmshbm": ("mmshbm.methods.friction_forced", "FrictionForcedProblem"),
-                       "penalty": ("mmshbm.methods.friction_penalty", "JenkinsForcedProblem"),
-                       "shooting": ("mmshbm.methods.friction_shooting", "FrictionShootingProblem")}[method]
+        module, cls = {"mmshbm": ("mmshbm.methods.mms.friction_forced", "FrictionForcedProblem"),
+                       "penalty": ("mmshbm.methods.penalty.jenkins", "JenkinsForcedProblem"),
+                       "shooting": ("mmshbm.methods.shooting.friction", "FrictionShootingProblem")}[method]
     problem_class = getattr(importlib.import_module(module), cls)
     options = dict(options or {})
     params = list(inspect.signature(problem_class).parameters.values())[2:]
@@ -92,8 +92,8 @@ def frequency_response(model: Model, force, frequency_range, harmonics: int = 5,
         The structure, usually damped (``model.with_damping(...)``), massless contact DOFs.
     force : array_like (n_dof,) or Excitation
         Complex amplitude F̂ of the harmonic force Re(F̂ e^{iΩt}) (N) on DOFs with mass, or
-        an :class:`~mmshbm.methods.forced.Excitation` (e.g.
-        :func:`~mmshbm.methods.forced.base_excitation`).
+        an :class:`~mmshbm.methods.mms.forced.Excitation` (e.g.
+        :func:`~mmshbm.methods.mms.forced.base_excitation`).
     frequency_range : (float, float)
         (f_start, f_end) in Hz, 0 < f_start < f_end; the response starts on the linear
         response at f_start and ends where the frequency leaves the range.
@@ -177,7 +177,7 @@ def _frequency_range(frequency_range) -> tuple[float, float]:
 
 
 def _assemble(model, excitation, problem, res, method, frange, options, copts, elapsed) -> FrequencyResponse:
-    from .stability import classify
+    from .mms.stability import classify
 
     rec = res.records
     n = len(res.u)

@@ -88,7 +88,7 @@ def estimate_memory(model, method: str, harmonics: int = 5, n_samples: int | Non
     """
     n, n_c, n_l = _sizes(model)
     if method == "shooting":
-        from .shooting import DEFAULT_STEPS_PER_PERIOD
+        from .shooting.conservative import DEFAULT_STEPS_PER_PERIOD
 
         N = int(steps_per_period or DEFAULT_STEPS_PER_PERIOD)
         return _DOUBLE * (2 * N * n_l + 3 * n_l * n_l)
@@ -97,7 +97,7 @@ def estimate_memory(model, method: str, harmonics: int = 5, n_samples: int | Non
     H = int(harmonics)
     if n_samples is None:
         if method == "penalty":
-            from .penalty_hbm import DEFAULT_PENALTY_FACTOR, penalty_n_samples
+            from .penalty.hbm import DEFAULT_PENALTY_FACTOR, penalty_n_samples
 
             n_samples = penalty_n_samples(H, penalty_factor or DEFAULT_PENALTY_FACTOR)
         else:

@@ -19,13 +19,13 @@ __all__ = ["METHODS", "make_problem", "method_options"]
 
 #: method name -> "module:class" of its continuation problem
 METHODS = {
-    "mmshbm": "mmshbm.methods.mms_hbm:MMSHBMProblem",
-    "penalty": "mmshbm.methods.penalty_hbm:PenaltyHBMProblem",
-    "penalty-reduced": "mmshbm.methods.penalty_reduced:ReducedPenaltyHBMProblem",
-    "shooting": "mmshbm.methods.shooting:ShootingProblem",
+    "mmshbm": "mmshbm.methods.mms.conservative:MMSHBMProblem",
+    "penalty": "mmshbm.methods.penalty.hbm:PenaltyHBMProblem",
+    "penalty-reduced": "mmshbm.methods.penalty.reduced:ReducedPenaltyHBMProblem",
+    "shooting": "mmshbm.methods.shooting.conservative:ShootingProblem",
     # damped nonlinear modes: mmshbm.backbone(damped_model) dispatches here
-    "epmc": "mmshbm.methods.epmc:EPMCProblem",
-    "phase_resonance": "mmshbm.methods.phase_resonance:PhaseResonanceProblem",
+    "epmc": "mmshbm.methods.mms.epmc:EPMCProblem",
+    "phase_resonance": "mmshbm.methods.mms.phase_resonance:PhaseResonanceProblem",
 }
 
 _CONTINUATION_FIELDS = {f.name for f in dataclasses.fields(ContinuationOptions)}
@@ -49,7 +49,7 @@ def make_problem(model: Model, method: str = "mmshbm", **options):
     if getattr(model, "friction", ()):
         if method != "epmc":
             raise NotImplementedError(f"method {method!r} does not yet take friction contacts: use 'mmshbm'")
-        module, cls = "mmshbm.methods.friction_epmc", "FrictionEPMCProblem"
+        module, cls = "mmshbm.methods.mms.friction_epmc", "FrictionEPMCProblem"
     try:
         problem_class = getattr(importlib.import_module(module), cls)
     except ImportError as err:  # pragma: no cover - a baseline not installed

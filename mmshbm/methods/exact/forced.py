@@ -109,7 +109,7 @@ class ForcedSystem:
     """
 
     def __init__(self, model, force, omega: float):
-        from ..forced import Excitation, harmonic_force
+        from ..mms.forced import Excitation, harmonic_force
 
         self.base = PiecewiseLinearSystem.of(model)
         exc = force if isinstance(force, Excitation) else harmonic_force(model, force)

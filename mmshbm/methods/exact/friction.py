@@ -70,7 +70,7 @@ class FrictionSystem:
     """
 
     def __init__(self, model, force, omega: float, samples_per_period: int = 32):
-        from ..forced import Excitation, harmonic_force
+        from ..mms.forced import Excitation, harmonic_force
 
         if len(model.friction) != 1 or model.contacts:
             raise NotImplementedError("the exact friction reference handles one friction contact and no "

@@ -9,7 +9,7 @@ has periodic responses of the excitation's period 2π/Ω (subharmonic and quasi-
 responses are outside the ansatz; Floquet multipliers say when the periodic one loses
 stability). Unknowns: the cosine *and* sine coefficients of the massless DOFs up to
 harmonic H (n_c (2H+1) numbers) and Ω, the continuation parameter; the equations are
-the projected contact residual of :mod:`mmshbm.methods._damped_hbm` with the force
+the projected contact residual of :mod:`mmshbm.methods.mms.damped` with the force
 condensed per harmonic onto the massless DOFs (:mod:`mmshbm.core.damped_condense`):
 
     F = 𝔇(Ω) x − σ(Ω) P(Ω),    P̂_1 = −Z_1ᵀ F̂_l,     ∂F/∂Ω = (∂𝔇/∂Ω) x − σ ∂P/∂Ω − σ' P,
@@ -35,10 +35,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import _validate as check
-from ..model.model import Model
-from ._damped_hbm import DampedHBMBase, synthesis_matrix
-from .mms_hbm import _mean_energy
+from ... import _validate as check
+from ...model.model import Model
+from .conservative import _mean_energy
+from .damped import DampedHBMBase, synthesis_matrix
 
 __all__ = ["Excitation", "harmonic_force", "base_excitation", "ForcedResponseProblem"]
 
@@ -183,9 +183,9 @@ class ForcedResponseProblem(DampedHBMBase):
     harmonics : int
         H >= 1.
     n_samples, r, backend, projection
-        As in :class:`~mmshbm.methods._damped_hbm.DampedHBMBase`.
+        As in :class:`~mmshbm.methods.mms.damped.DampedHBMBase`.
     stability : bool or "auto"
-        Floquet multipliers at every point (:mod:`mmshbm.methods.stability`); "auto": when
+        Floquet multipliers at every point (:mod:`mmshbm.methods.mms.stability`); "auto": when
         the model has at most 200 DOFs with mass.
 
     Notes
@@ -410,6 +410,6 @@ class ForcedResponseProblem(DampedHBMBase):
 
     def floquet_multipliers(self, u: np.ndarray) -> np.ndarray:
         """Floquet multipliers of the orbit at ``u`` (monodromy of the piecewise-linear
-        flow along it, :mod:`mmshbm.methods.stability`), sorted by decreasing modulus."""
+        flow along it, :mod:`mmshbm.methods.mms.stability`), sorted by decreasing modulus."""
         x, omega, sigma = self._state(u)
         return self._multipliers(self._coefficients(x, omega, sigma), omega)

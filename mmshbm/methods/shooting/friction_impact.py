@@ -27,8 +27,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as la
 
-from .. import _validate as check
-from .forced import Excitation, harmonic_force
+from ... import _validate as check
+from ..mms.forced import Excitation, harmonic_force
 
 __all__ = ["ImpactFrictionShooting", "impact_friction_orbit"]
 

@@ -1,6 +1,6 @@
 """The signals of a shooting orbit: the discrete trajectory over a period (mirrored from
 the integrated half), the massless DOFs and contact forces that follow statically, Hermite
-resampling, harmonic content. A mixin of :class:`~mmshbm.methods.shooting.ShootingProblem`
+resampling, harmonic content. A mixin of :class:`~mmshbm.methods.shooting.conservative.ShootingProblem`
 (it uses the problem's ``unpack``, ``_integrate``, contact data and permutation).
 """
 
@@ -8,14 +8,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import _validate as check
-from ._shooting_contact_kernels import lcp_solve
+from ... import _validate as check
+from ._contact_kernels import lcp_solve
 
 __all__ = ["ShootingSignals"]
 
 
 class ShootingSignals:
-    """Trajectory and signal methods of :class:`~mmshbm.methods.shooting.ShootingProblem`."""
+    """Trajectory and signal methods of :class:`~mmshbm.methods.shooting.conservative.ShootingProblem`."""
 
     def trajectory(self, u: np.ndarray):
         """The discrete orbit over one period at the N step instants.

@@ -7,7 +7,7 @@ continuation parameter), and the 2 n_l equations are z(T; z₀, Ω) − z₀ = 0
 follows statically (λ = k_c max(0, −h), free gap h = gap + a·q_l, one contact).
 
 Time stepping: the energy-consistent trapezoidal rule with the contact force averaged
-along each step (AVF) of :mod:`mmshbm.methods.shooting`, extended by the damping and the
+along each step (AVF) of :mod:`mmshbm.methods.shooting.conservative`, extended by the damping and the
 harmonic force (trapezoidal average of the force samples f(t_k) = Re(σ F̂ e^{2πik/N})),
 in the modal coordinates of the open-contact structure, where M = I, K = Λ and, for
 modal or Rayleigh damping, C = Γ is diagonal too, so every step costs O(n_l) plus
@@ -24,12 +24,12 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as la
 
-from .. import _validate as check
-from ..model.model import Model
-from ._damped_hbm import refined_max
-from ._forced_shooting_kernels import _forced_integrate
-from .forced import Excitation, harmonic_force
-from .mms_hbm import _mean_energy
+from ... import _validate as check
+from ...model.model import Model
+from ..mms.conservative import _mean_energy
+from ..mms.damped import refined_max
+from ..mms.forced import Excitation, harmonic_force
+from ._forced_kernels import _forced_integrate
 
 __all__ = ["ShootingForcedProblem"]
 

@@ -14,7 +14,7 @@ it gives ξ = 0 and the conservative backbone (tests check both).
 Here the massless DOFs carry the full cosine and sine series (the damped mode is not
 time-symmetric), the linear structure is condensed per harmonic with
 S_k = K_ll + ikΩ(C_ll − ξM_ll) − (kΩ)²M_ll (:mod:`mmshbm.core.damped_condense`), and the
-contact residual is that of :mod:`mmshbm.methods._damped_hbm`. Unknowns
+contact residual is that of :mod:`mmshbm.methods.mms.damped`. Unknowns
 u = [x, ξ, Ω] (scaled): n_c(2H+1) + 2 numbers. Equations: the n_c(2H+1) projected
 residuals and a *phase anchor*, the sine coefficient of the anchor DOF's fundamental set
 to zero (the amplitude DOF, or the first contact DOF when that one carries mass), since
@@ -31,10 +31,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import _validate as check
-from ..model.model import Model
-from ._damped_hbm import DampedHBMBase, synthesis_matrix
-from .mms_hbm import _mean_energy
+from ... import _validate as check
+from ...model.model import Model
+from .conservative import _mean_energy
+from .damped import DampedHBMBase, synthesis_matrix
 
 __all__ = ["EPMCProblem"]
 
@@ -49,7 +49,7 @@ class EPMCProblem(DampedHBMBase):
     harmonics : int
         H >= 1.
     n_samples, r, backend, projection
-        As in :class:`~mmshbm.methods._damped_hbm.DampedHBMBase`.
+        As in :class:`~mmshbm.methods.mms.damped.DampedHBMBase`.
     mode : int
         The linear mode (1-based) the branch starts from.
 
@@ -189,7 +189,7 @@ class EPMCProblem(DampedHBMBase):
 
     def floquet_multipliers(self, u: np.ndarray) -> np.ndarray:
         """Floquet multipliers of the EPMC orbit (the flow with C − ξM; one trivial +1),
-        sorted by decreasing modulus (:mod:`mmshbm.methods.stability`)."""
+        sorted by decreasing modulus (:mod:`mmshbm.methods.mms.stability`)."""
         from .stability import FloquetSolver
 
         if getattr(self, "_floquet", None) is None:

@@ -1,5 +1,5 @@
 """Numba kernel of penalty harmonic balance on the condensed contact DOFs
-(:mod:`mmshbm.methods.penalty_reduced`).
+(:mod:`mmshbm.methods.penalty.reduced`).
 
 One kernel, no callees in other files (numba's on-disk cache does not see edits to a callee
 elsewhere); it shares :data:`~mmshbm.core.kernels.JIT_OPTIONS`.
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from numba import njit
 
-from ..core.kernels import JIT_OPTIONS
+from ...core.kernels import JIT_OPTIONS
 
 __all__: list[str] = []
 

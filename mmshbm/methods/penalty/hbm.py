@@ -22,7 +22,7 @@ contact, 1/(e_dᵀ K⁻¹ e_d) by a sparse factorisation of K (the same number a
 condensed (w_cᵀ D_0⁻¹ w_c)⁻¹ of a massless contact, which is what 0.1 used and still
 uses there). The amplitude is measured at ``model.amplitude_dof``.
 
-Conventions follow :mod:`mmshbm.methods.mms_hbm`:
+Conventions follow :mod:`mmshbm.methods.mms.conservative`:
 
 * Cosine-only (time-symmetric) ansatz q(τ) = Σ_k Q_k cos kτ on every DOF. It anchors the
   phase at a turning point and removes the energy-balance identity of the conservative
@@ -84,11 +84,11 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from .. import _validate as check
-from ..core.harmonics import check_harmonics, default_n_samples, transform
-from ..core.kernels import _cosine_product_matrix
-from ..model.model import Model
-from ._contacts import (
+from ... import _validate as check
+from ...core.harmonics import check_harmonics, default_n_samples, transform
+from ...core.kernels import _cosine_product_matrix
+from ...model.model import Model
+from .._contacts import (
     DEFAULT_PENALTY_FACTOR,
     amplitude_sign,
     contact_table,
@@ -97,8 +97,8 @@ from ._contacts import (
     start_mode,
     static_contact_stiffness,
 )
-from ._penalty_kernels import _penalty_contacts, _penalty_hbm_jacobian
-from .mms_hbm import _mean_energy, _refined_max
+from ..mms.conservative import _mean_energy, _refined_max
+from ._kernels import _penalty_contacts, _penalty_hbm_jacobian
 
 __all__ = ["PenaltyHBMProblem", "DEFAULT_PENALTY_FACTOR", "penalty_n_samples"]
 

@@ -2,7 +2,7 @@
 AFT), as general harmonic-balance tools compute them.
 
 Every DOF carries the full cosine/sine series up to H, the linear part assembled as in
-:class:`~mmshbm.methods.penalty_forced.PenaltyForcedProblem` (L(Ω) = L_K + Ω L_C + Ω² L_M),
+:class:`~mmshbm.methods.penalty.forced.PenaltyForcedProblem` (L(Ω) = L_K + Ω L_C + Ω² L_M),
 and each friction contact is a Jenkins element: a tangential spring k_t in series with a
 Coulomb slider of slip force s = μN, evaluated by alternating frequency-time on N samples
 per period with the hysteresis made periodic by two passes
@@ -28,14 +28,14 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .. import _validate as check
-from ..contact.coulomb import jenkins_hysteresis
-from ..core.harmonics import check_harmonics
-from ..model.model import Model
-from ._damped_hbm import fine_samples, refined_max
-from .forced import Excitation, harmonic_force
-from .friction_forced import check_friction_model
-from .penalty_forced import PenaltyForcedProblem
+from ... import _validate as check
+from ...contact.coulomb import jenkins_hysteresis
+from ...core.harmonics import check_harmonics
+from ...model.model import Model
+from ..mms.damped import fine_samples, refined_max
+from ..mms.forced import Excitation, harmonic_force
+from ..mms.friction_forced import check_friction_model
+from .forced import PenaltyForcedProblem
 
 __all__ = ["JenkinsForcedProblem", "DEFAULT_TANGENTIAL_FACTOR"]
 

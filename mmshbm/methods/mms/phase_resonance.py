@@ -4,7 +4,7 @@ The phase-locked-loop test of experimental nonlinear modal analysis drives the s
 excitation frequency until the response's fundamental lags the force by π/2; raising the
 force level traces the *phase-resonance backbone*, which for light damping approximates
 the nonlinear mode (Peeters et al. 2011). Here it is the one-parameter family of forced
-responses (:class:`~mmshbm.methods.forced.ForcedResponseProblem`) with the force scaled
+responses (:class:`~mmshbm.methods.mms.forced.ForcedResponseProblem`) with the force scaled
 by an unknown σ and one more equation, the phase condition on the amplitude DOF's
 fundamental q̂_1 = a_1 − i b_1 against the force reference ρ e^{iθ},
 
@@ -22,8 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import _validate as check
-from ..model.model import Model
+from ... import _validate as check
+from ...model.model import Model
 from .forced import Excitation, ForcedResponseProblem, harmonic_force
 
 __all__ = ["PhaseResonanceProblem"]
@@ -39,7 +39,7 @@ class PhaseResonanceProblem(ForcedResponseProblem):
     force : Excitation, its JSON dict, or array_like (n_dof,)
         The force pattern F̂ (its level is the unknown σ).
     harmonics, n_samples, r, backend, projection
-        As for :class:`~mmshbm.methods.forced.ForcedResponseProblem`.
+        As for :class:`~mmshbm.methods.mms.forced.ForcedResponseProblem`.
     """
 
     method = "phase_resonance"

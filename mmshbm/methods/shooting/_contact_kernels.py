@@ -1,6 +1,6 @@
 """Numba kernels of the shooting baseline with several contacts (or contacts on DOFs
 with mass): the contact LCP followed along a step, the step's force sum and its
-derivatives, the time step and its sensitivities (:mod:`mmshbm.methods.shooting`).
+derivatives, the time step and its sensitivities (:mod:`mmshbm.methods.shooting.conservative`).
 
 The contact forces λ (m,) at fixed free gaps h = gap + A q solve the LCP
 
@@ -13,7 +13,7 @@ followed exactly by principal pivoting (:func:`_lcp_path`): on each piece λ and
 affine in s, and the piece ends where an active λ_j or an inactive g_i reaches zero.
 
 Band storage, the band kernels and the tangent layout are those of
-:mod:`mmshbm.methods._shooting_kernels`.
+:mod:`mmshbm.methods.shooting._kernels`.
 """
 
 from __future__ import annotations
@@ -21,8 +21,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..core.kernels import JIT_OPTIONS
-from ._shooting_kernels import (
+from ...core.kernels import JIT_OPTIONS
+from ._kernels import (
     _band_solve,
     _band_symv,
     _block_band_solve,

@@ -1,6 +1,6 @@
 """Baseline 1b: penalty harmonic balance on the contact DOFs, the rest condensed per harmonic.
 
-The fair version of :mod:`mmshbm.methods.penalty_hbm` at scale. Like pyHarm's reduction to
+The fair version of :mod:`mmshbm.methods.penalty.hbm` at scale. Like pyHarm's reduction to
 the nonlinear DOFs, the linear structure is condensed exactly, harmonic by harmonic, onto
 the massless DOFs ``c`` (which hold every contact DOF), with the *same* condensation
 MMS-HBM uses (:func:`~mmshbm.core.condense.make_condensation`: banded/sparse LU or the
@@ -16,16 +16,16 @@ contacts). Because eliminating the DOFs with mass from (K − (kΩ)²M) Q_k + f_
 full-DOF penalty HBM with the same k_p, H and N and vice versa (tested to round-off on
 the beam and the oscillator): the reduction changes the cost, not the answer.
 
-Conventions follow :mod:`mmshbm.methods.mms_hbm`: cosine-only ansatz (phase anchored at a
+Conventions follow :mod:`mmshbm.methods.mms.conservative`: cosine-only ansatz (phase anchored at a
 turning point, energy identity removed), unknowns ``u = [a_0/s, ..., a_H/s, Ω/ω_ref]`` with
 a_k ∈ R^{n_c} in ``model.c`` order and the same scales, so the arclength means the same in
 both. AFT by a cosine table inside one Numba kernel
-(:mod:`mmshbm.methods._penalty_reduced_kernels`); dense Jacobian ((H+1) n_c rows).
+(:mod:`mmshbm.methods.penalty._reduced_kernels`); dense Jacobian ((H+1) n_c rows).
 
 The default k_p is ``DEFAULT_PENALTY_FACTOR`` (10³) times the stiffest condensed static
 contact stiffness k_c,i = 1/(D_0⁻¹)_ii, so that every contact's penetration error is at most
 that of the single-contact baseline; N defaults to
-:func:`~mmshbm.methods.penalty_hbm.penalty_n_samples`.
+:func:`~mmshbm.methods.penalty.hbm.penalty_n_samples`.
 """
 
 from __future__ import annotations
@@ -34,14 +34,14 @@ import logging
 
 import numpy as np
 
-from .. import _validate as check
-from ..core.condense import make_condensation
-from ..core.harmonics import check_harmonics
-from ..model.contact import admissible_intervals
-from ..model.model import Model
-from ._penalty_reduced_kernels import _penalty_reduced_residual
-from .mms_hbm import _condensed_energy, _refined_max
-from .penalty_hbm import DEFAULT_PENALTY_FACTOR, penalty_n_samples
+from ... import _validate as check
+from ...core.condense import make_condensation
+from ...core.harmonics import check_harmonics
+from ...model.contact import admissible_intervals
+from ...model.model import Model
+from ..mms.conservative import _condensed_energy, _refined_max
+from ._reduced_kernels import _penalty_reduced_residual
+from .hbm import DEFAULT_PENALTY_FACTOR, penalty_n_samples
 
 __all__ = ["ReducedPenaltyHBMProblem"]
 
@@ -59,7 +59,7 @@ class ReducedPenaltyHBMProblem:
         Highest harmonic H >= 1.
     n_samples : int, optional
         Time samples per period N >= 2H+1 (default
-        :func:`~mmshbm.methods.penalty_hbm.penalty_n_samples`).
+        :func:`~mmshbm.methods.penalty.hbm.penalty_n_samples`).
     penalty_stiffness : float, optional
         k_p (N/m), > 0; default 10³ × the stiffest condensed contact stiffness.
     mode : int

@@ -18,9 +18,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.continuation import ContinuationOptions, continue_branch
-from ..core.family import FAMILY_RECORD, family_value
-from ..core.pinned import PinnedFailure, amplitude_and_gradient, solve_at_amplitude
+from ...core.continuation import ContinuationOptions, continue_branch
+from ...core.family import FAMILY_RECORD, family_value
+from ...core.pinned import PinnedFailure, amplitude_and_gradient, solve_at_amplitude
 
 __all__ = ["FilteredProblem", "pass_resonance"]
 

@@ -36,12 +36,12 @@ import functools
 
 import numpy as np
 
-from .. import _validate as check
-from ..core.damped_condense import CondensedHarmonics, DampedCondensation
-from ..core.harmonics import check_harmonics
-from ..core.projection import _contact_rows, _damped_residual, sample_tables
-from ..model.contact import admissible_intervals
-from ..model.model import Model
+from ... import _validate as check
+from ...core.damped_condense import CondensedHarmonics, DampedCondensation
+from ...core.harmonics import check_harmonics
+from ...core.projection import _contact_rows, _damped_residual, sample_tables
+from ...model.contact import admissible_intervals
+from ...model.model import Model
 
 __all__: list[str] = []
 
@@ -50,7 +50,7 @@ def contact_projection(projection: str, H: int, N: int):
     """``project(p, lo, hi) -> (r, G)``: :func:`mmshbm.core.projection.project_contact`,
     exact (``"exact"``: switching instants located, pieces integrated in closed form, C¹)
     or sampled on N points (``"sampled"``, AFT)."""
-    from ..core.projection import project_contact
+    from ...core.projection import project_contact
 
     if projection == "exact":
         return project_contact

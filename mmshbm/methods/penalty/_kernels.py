@@ -1,4 +1,4 @@
-"""Numba kernels of the penalty harmonic-balance baseline (:mod:`mmshbm.methods.penalty_hbm`).
+"""Numba kernels of the penalty harmonic-balance baseline (:mod:`mmshbm.methods.penalty.hbm`).
 
 They take plain contiguous float64/int64 arrays and know nothing of models. Neither calls
 another kernel, so they can live apart from :mod:`mmshbm.core.kernels` without defeating
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from numba import njit
 
-from ..core.kernels import JIT_OPTIONS
+from ...core.kernels import JIT_OPTIONS
 
 __all__: list[str] = []
 

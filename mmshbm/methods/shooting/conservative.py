@@ -48,7 +48,7 @@ resolve stay bounded but mistimed. Why "avf" is the default:
 mass when it narrows the band); ``S`` is factored once per step size, i.e. per Newton
 iterate, in O(n p²).
 
-Several contacts (details: docs/shooting.md, :mod:`mmshbm.methods._shooting_contact_kernels`).
+Several contacts (details: docs/shooting.md, :mod:`mmshbm.methods.shooting._contact_kernels`).
 With free gaps h = gap + A q_l the contact forces at fixed q_l solve the LCP
 g = h + G λ >= 0, λ >= 0, gᵀλ = 0 (G = Wᵀ K_cc⁻¹ W), whose solution is continuous and
 piecewise linear in h. The step keeps its form with Aᵀ F(h0, h1) for the force, and the
@@ -102,13 +102,13 @@ import scipy.linalg as la
 import scipy.sparse as sp
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-from .. import _validate as check
-from ..model.model import Model
-from ._contacts import amplitude_sign, contact_law, contact_table, penalty_values, refined_peak, start_mode
-from ._shooting_contact_kernels import _integrate_multi, lcp_solve
-from ._shooting_kernels import _band_cholesky, _band_solve, _band_solve_rows, _integrate
-from ._shooting_signals import ShootingSignals
-from .mms_hbm import _refined_max
+from ... import _validate as check
+from ...model.model import Model
+from .._contacts import amplitude_sign, contact_law, contact_table, penalty_values, refined_peak, start_mode
+from ..mms.conservative import _refined_max
+from ._contact_kernels import _integrate_multi, lcp_solve
+from ._kernels import _band_cholesky, _band_solve, _band_solve_rows, _integrate
+from .signals import ShootingSignals
 
 __all__ = ["ShootingProblem", "DEFAULT_STEPS_PER_PERIOD", "FLOQUET_AUTO_LIMIT"]
 

@@ -1,6 +1,6 @@
 """What MMS-HBM gives beyond its residual: the motion of every DOF, contact forces,
 harmonic content and the amplitude with its gradient (a mixin of
-:class:`~mmshbm.methods.mms_hbm.MMSHBMProblem`)."""
+:class:`~mmshbm.methods.mms.conservative.MMSHBMProblem`)."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import math
 import numpy as np
 from numba import njit
 
-from .. import _validate as check
-from ..core.kernels import JIT_OPTIONS
+from ... import _validate as check
+from ...core.kernels import JIT_OPTIONS
 
 __all__ = ["SignalsMixin"]
 
@@ -71,8 +71,8 @@ class SignalsMixin:
         dD = np.empty(shape) if derivative else None
         fast = self._fast_setup() if hasattr(self, "_fast_setup") else False
         if fast:  # the modal kernel straight into the slices (as _condensed, without its cache)
-            from ..core._modal_kernels import _modal_dynamic_stiffness
-            from ..core.condense import SingularDynamicStiffness
+            from ...core._modal_kernels import _modal_dynamic_stiffness
+            from ...core.condense import SingularDynamicStiffness
 
             D0, B, w2, Rs, keep, static, rtol = fast["cond"]
             for i, omega in enumerate(omegas):

@@ -1,10 +1,10 @@
 """Damped nonlinear modes (EPMC) of structures with Coulomb friction at massless DOFs.
 
-Krack's extended periodic motion concept (:mod:`mmshbm.methods.epmc`): the periodic
+Krack's extended periodic motion concept (:mod:`mmshbm.methods.mms.epmc`): the periodic
 solutions of M q'' + (C − ξM) q' + K q = −Σ e_t f_t, with ξ (1/s) an unknown that
 compensates viscous and friction dissipation, ξ ∮ q̇ᵀMq̇ dt = ∮ q̇ᵀCq̇ dt + ∮ f_t u̇_t dt;
 the modal damping ratio is D = ξ/(2Ω). The friction rows are those of
-:class:`~mmshbm.methods.friction_forced.FrictionRows` (default the displacement-level
+:class:`~mmshbm.methods.mms.friction_forced.FrictionRows` (default the displacement-level
 play form).
 
 Why the first harmonic of the DOFs with mass is kept as an unknown. At small amplitude
@@ -25,11 +25,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import _validate as check
-from ..model.model import Model
-from ._damped_hbm import DampedHBMBase
+from ... import _validate as check
+from ...model.model import Model
+from .conservative import _mean_energy
+from .damped import DampedHBMBase
 from .friction_forced import FrictionRows, check_friction_model, check_law
-from .mms_hbm import _mean_energy
 
 __all__ = ["FrictionEPMCProblem", "stuck_mode"]
 
@@ -62,11 +62,11 @@ class FrictionEPMCProblem(FrictionRows, DampedHBMBase):
     harmonics : int
         H >= 1.
     n_samples, r, backend, projection
-        As :class:`~mmshbm.methods._damped_hbm.DampedHBMBase`.
+        As :class:`~mmshbm.methods.mms.damped.DampedHBMBase`.
     mode : int
         The linear mode (1-based) of the stuck structure the branch starts from.
     law : {"play", "velocity"}
-        The friction rows (:mod:`mmshbm.methods.friction_forced`).
+        The friction rows (:mod:`mmshbm.methods.mms.friction_forced`).
 
     Notes
     -----

@@ -26,8 +26,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as la
 
-from .. import _validate as check
-from .exact.friction import FrictionSystem, periodic_state
+from ... import _validate as check
+from ..exact.friction import FrictionSystem, periodic_state
 
 __all__ = ["FrictionShooting", "friction_shooting_orbit", "ShootingOrbit"]
 

@@ -7,7 +7,7 @@ is
     [K − (kΩ)²M     kΩ C      ] [Q_ck]   [F_c δ_k1]
     [  −kΩ C     K − (kΩ)²M   ] [Q_sk] − [F_s δ_k1] σ(Ω) + proj_k(f_p) = 0
 
-(F̂ = F_c − i F_s the excitation, σ(Ω) as in :class:`~mmshbm.methods.forced.Excitation`),
+(F̂ = F_c − i F_s the excitation, σ(Ω) as in :class:`~mmshbm.methods.mms.forced.Excitation`),
 and each stop is a penalty spring: with the DOF's admissible interval [lo, hi],
 f_p = k_p [(q − hi)₊ − (lo − q)₊], projected with the projection of MMS-HBM
 (:func:`mmshbm.core.projection.project_contact`: by default exact, the switching instants
@@ -29,13 +29,13 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .. import _validate as check
-from ..core.harmonics import check_harmonics
-from ..model.contact import admissible_intervals
-from ..model.model import Model
-from ._damped_hbm import contact_projection, fine_samples, refined_max
-from .forced import Excitation, harmonic_force
-from .mms_hbm import _mean_energy
+from ... import _validate as check
+from ...core.harmonics import check_harmonics
+from ...model.contact import admissible_intervals
+from ...model.model import Model
+from ..mms.conservative import _mean_energy
+from ..mms.damped import contact_projection, fine_samples, refined_max
+from ..mms.forced import Excitation, harmonic_force
 
 __all__ = ["PenaltyForcedProblem", "DEFAULT_PENALTY_FACTOR"]
 

@@ -1,7 +1,7 @@
-"""Numba kernel of the forced shooting baseline (:mod:`mmshbm.methods.shooting_forced`).
+"""Numba kernel of the forced shooting baseline (:mod:`mmshbm.methods.shooting.forced`).
 
 The step is the trapezoidal rule with the contact force averaged along the step (AVF) of
-:mod:`mmshbm.methods._shooting_kernels`, extended by damping and a harmonic force, in the
+:mod:`mmshbm.methods.shooting._kernels`, extended by damping and a harmonic force, in the
 modal coordinates of the open-contact structure (M = I, K_open = Λ):
 
     S η₁ = P η₀ + (4/h) ν₀ + F(h₀, h₁) â + g_k,      ν₁ = (2/h)(η₁ − η₀) − ν₀,
@@ -18,8 +18,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..core.kernels import JIT_OPTIONS
-from ._shooting_kernels import _contact_root, _force_sum
+from ...core.kernels import JIT_OPTIONS
+from ._kernels import _contact_root, _force_sum
 
 __all__: list[str] = []
 

@@ -1,6 +1,6 @@
 """How an MMS-HBM branch stays on its family: modal energy shares per point, and the
 landings of the jumps over internal-resonance tongues (a mixin of
-:class:`~mmshbm.methods.mms_hbm.MMSHBMProblem`, used by :mod:`mmshbm.core.family`)."""
+:class:`~mmshbm.methods.mms.conservative.MMSHBMProblem`, used by :mod:`mmshbm.core.family`)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import weakref
 
 import numpy as np
 
-from ..core.modal_energy import kinetic_energy_shares
+from ...core.modal_energy import kinetic_energy_shares
 
 __all__ = ["FamilyMixin"]
 
@@ -82,7 +82,7 @@ class FamilyMixin:
         point ``u_from`` (record ``rec_from``): the resonant pair (harmonic k, mode j) is
         the one whose energy share peaked over the ``excursion`` states; the branch is
         continued with harmonic k filtered out past kΩ = ω_j and released there
-        (:func:`mmshbm.methods.filtered.pass_resonance`). Returns (u, amplitude). Used by
+        (:func:`mmshbm.methods.mms.filtered.pass_resonance`). Returns (u, amplitude). Used by
         the jumps of :mod:`mmshbm.core.family`; the landing lies above ``amplitude_min``."""
         from .filtered import pass_resonance
 
@@ -110,7 +110,7 @@ class FamilyMixin:
         cached = getattr(self, "_reference", None)
         if cached is not None and cached[1][-1] >= amplitude_max * (1 - 1e-9):
             return cached
-        from ..core.continuation import ContinuationOptions, continue_branch
+        from ...core.continuation import ContinuationOptions, continue_branch
 
         H_ref = 3 if self.H > 3 else 1
         if H_ref >= self.H:
@@ -198,7 +198,7 @@ class FamilyMixin:
         fast = self._fast_setup() if hasattr(self, "_fast_setup") else False
         if not fast:
             return float(self.modal_shares(u)[self.mode - 1, 1])
-        from ..core.corrector_kernels import _start_mode_share
+        from ...core.corrector_kernels import _start_mode_share
 
         row, s0, s, sv, pole_j = self._share_setup()
         a, omega = self.unpack(u)

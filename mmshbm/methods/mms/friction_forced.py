@@ -8,7 +8,7 @@ friction contacts with constant normal load on massless DOFs,
     f_t = clip(f_t + r u̇_t, −s_t, s_t),   s_t = μ_t N_t,   u_t = q[dof_t],
 
 f_t the force node t exerts on its support (:mod:`mmshbm.contact.coulomb`). The ansatz,
-unknowns and condensation are those of :class:`~mmshbm.methods.forced.ForcedResponseProblem`
+unknowns and condensation are those of :class:`~mmshbm.methods.mms.forced.ForcedResponseProblem`
 (the full cosine/sine series of the massless DOFs, F = 𝔇(Ω) x − P the force the structure
 needs there, so f_t = −F_t; the support's force on node t is F_t). Each friction DOF's
 2H+1 rows are the Coulomb law projected exactly on harmonics 0..H, in one of two
@@ -48,7 +48,7 @@ trigonometric polynomial on its closed arcs, 0 on the open ones, continuous); th
 with a time-varying half-width s/ρ (:mod:`mmshbm.contact.coulomb_coupled`), its Jacobian
 including ∂s/∂(the normal contact's coefficients). Play form only.
 
-Floquet multipliers (``stability=True``, :mod:`mmshbm.methods.friction_stability`), play
+Floquet multipliers (``stability=True``, :mod:`mmshbm.methods.mms.friction_stability`), play
 form. Not yet: the velocity form with ``normal_contact=`` or with stability
 (NotImplementedError).
 """
@@ -57,8 +57,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..contact.coulomb import derivative_matrix, project_coulomb, project_coulomb_play
-from ..model.model import Model
+from ...contact.coulomb import derivative_matrix, project_coulomb, project_coulomb_play
+from ...model.model import Model
 from .forced import ForcedResponseProblem
 
 __all__ = ["FrictionRows", "FrictionForcedProblem", "check_friction_model", "check_law"]
@@ -88,7 +88,7 @@ def check_friction_model(model: Model, coupled_ok: bool = False, who: str = "thi
 
 class FrictionRows:
     """The friction rows shared by the forced-response and EPMC problems with friction
-    (mixed in before a :class:`~mmshbm.methods._damped_hbm.DampedHBMBase` subclass): the
+    (mixed in before a :class:`~mmshbm.methods.mms.damped.DampedHBMBase` subclass): the
     law of every friction contact replaces the rows F_t = 0 of its massless DOF."""
 
     def _init_friction(self, model: Model, law: str, projection: str) -> None:
@@ -151,7 +151,7 @@ class FrictionRows:
         (∂R/∂x_t, ∂R/∂x_n), slip), λ_n = r_n (side·p_n − gap)₊ the proximal force of the
         normal contact, p_n = x_n − F_n/r_n
         (:func:`~mmshbm.contact.coulomb_coupled.project_coulomb_play_coupled`)."""
-        from ..contact.coulomb_coupled import project_coulomb_play_coupled
+        from ...contact.coulomb_coupled import project_coulomb_play_coupled
 
         k, side, gap, mu, preload = self.coupling[j]
         rho, r_n = self.rho[j], self.r[k]
@@ -224,12 +224,12 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         With at least one friction contact (``model.with_friction``, constant normal load);
         unilateral contacts and viscous damping optional.
     force, harmonics, n_samples, backend, projection
-        As :class:`~mmshbm.methods.forced.ForcedResponseProblem`.
+        As :class:`~mmshbm.methods.mms.forced.ForcedResponseProblem`.
     r : float, optional
         Proximal parameter of the unilateral contacts (N/m); the friction contacts use
         ρ = 1/(K_cc⁻¹)_tt, the node's stiffness with the DOFs with mass held.
     stability : bool or "auto"
-        True: Floquet multipliers at every point (:mod:`~mmshbm.methods.friction_stability`;
+        True: Floquet multipliers at every point (:mod:`~mmshbm.methods.mms.friction_stability`;
         play form, NotImplementedError otherwise). "auto" and False skip them.
     law : {"play", "velocity"}
         The form of the friction rows (module docstring); "play" needs the exact projection.
@@ -388,7 +388,7 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         and a Newton step <= ``step_tol`` (or one that no longer lowers the merit). Returns
         (u, iterations, residual history, Jacobian at u); raises RuntimeError when it does
         not converge."""
-        from ..core.bordered import bordered_solve
+        from ...core.bordered import bordered_solve
 
         def merit(u):
             R = self.evaluate(u, jacobian=False)
@@ -441,9 +441,9 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
     # ------------------------------------------------------------------ results
     def _multipliers(self, Q: np.ndarray, omega: float) -> np.ndarray:
         """Floquet multipliers (2 n_l + m,) of the orbit with coefficients Q (n_dof, 2H+1):
-        the phases from each node's stick arcs (:mod:`mmshbm.methods.friction_stability`)."""
-        from ..contact.coulomb import play_pieces
-        from ..contact.coulomb_coupled import coupled_play_pieces
+        the phases from each node's stick arcs (:mod:`mmshbm.methods.mms.friction_stability`)."""
+        from ...contact.coulomb import play_pieces
+        from ...contact.coulomb_coupled import coupled_play_pieces
         from .friction_stability import merge_phases
 
         x = np.ascontiguousarray(Q[self.model.c].T).ravel()

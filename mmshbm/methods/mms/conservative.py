@@ -45,14 +45,14 @@ import weakref
 
 import numpy as np
 
-from .. import _validate as check
-from ..core.condense import make_condensation
-from ..core.contact_kernels import _mmshbm_eval, _mmshbm_monitor_multi
-from ..core.harmonics import check_harmonics
-from ..model.contact import admissible_intervals
-from ..model.model import Model
-from .mms_hbm_family import FamilyMixin
-from .mms_hbm_signals import SignalsMixin
+from ... import _validate as check
+from ...core.condense import make_condensation
+from ...core.contact_kernels import _mmshbm_eval, _mmshbm_monitor_multi
+from ...core.harmonics import check_harmonics
+from ...model.contact import admissible_intervals
+from ...model.model import Model
+from .family import FamilyMixin
+from .signals import SignalsMixin
 
 __all__ = ["MMSHBMProblem"]
 
@@ -159,7 +159,7 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin):
 
         self.pole_set = None
         if poles:
-            from ..core.poles import PoleSet
+            from ...core.poles import PoleSet
 
             self.pole_set = PoleSet(self.cond, model, self.H, self._omega_range())
         n_p = self.pole_set.n if self.pole_set is not None else 0
@@ -264,7 +264,7 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin):
         if getattr(cond, "backend", None) != "modal":
             self._fast = False
             return False
-        from ..core.modal import _POLE_RTOL
+        from ...core.modal import _POLE_RTOL
 
         H, n_c, m = self.H, self.n_c, cond.n_modes
         keep = np.ones((H + 1, m), dtype=np.uint8)
@@ -290,7 +290,7 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin):
 
         Returns (u, iterations, residual history, Jacobian at u), or raises ArithmeticError
         with the reason (the continuation's failure)."""
-        from ..core import corrector_kernels as ck
+        from ...core import corrector_kernels as ck
 
         fast = self._fast_setup()
         if not fast:
@@ -327,8 +327,8 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin):
             return D, dD
         fast = self._fast_setup()
         if fast:  # the modal kernel with the poles' terms left out and their static part added
-            from ..core._modal_kernels import _modal_dynamic_stiffness
-            from ..core.condense import SingularDynamicStiffness
+            from ...core._modal_kernels import _modal_dynamic_stiffness
+            from ...core.condense import SingularDynamicStiffness
 
             D0, B, w2, Rs, keep, static, rtol = fast["cond"]
             D = np.empty((self.H + 1, self.n_c, self.n_c))
@@ -416,7 +416,7 @@ def _held_frequency_solve(model: Model, dofs, mode: int) -> float:
     import scipy.sparse as sp
     import scipy.sparse.linalg as spla
 
-    from ..model.linear_modes import _DENSE_EIG_LIMIT
+    from ...model.linear_modes import _DENSE_EIG_LIMIT
 
     keep = np.setdiff1d(np.arange(model.n_dof), np.asarray(dofs))
     M = sp.csr_matrix(model.M)[keep][:, keep]

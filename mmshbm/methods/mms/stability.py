@@ -42,10 +42,10 @@ import numpy as np
 import scipy.linalg as la
 from scipy.optimize import brentq
 
-from ..core.special_points import SpecialPoint
-from ..model.contact import admissible_intervals
-from ..model.model import Model
-from ._damped_hbm import fine_samples
+from ...core.special_points import SpecialPoint
+from ...model.contact import admissible_intervals
+from ...model.model import Model
+from .damped import fine_samples
 
 __all__ = ["FloquetSolver", "classify", "conservative_multipliers", "branch_stability"]
 
@@ -298,7 +298,7 @@ def _real_eigenbasis(A: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]
 
 def conservative_multipliers(problem, u: np.ndarray) -> np.ndarray:
     """Floquet multipliers of a point ``u`` of the conservative MMS-HBM
-    (:class:`~mmshbm.methods.mms_hbm.MMSHBMProblem`), sorted by decreasing modulus; the
+    (:class:`~mmshbm.methods.mms.conservative.MMSHBMProblem`), sorted by decreasing modulus; the
     model's damping is ignored (the orbit is that of the undamped structure)."""
     _, omega = problem.unpack(u)
     Q = problem.coefficients(u)
