@@ -29,6 +29,7 @@ from .bordered import bordered_solve as _bordered_solve  # noqa: F401 (the bench
 from .family import FAMILY_RECORD, FamilyGuard, family_value, jump
 from .options import ContinuationOptions, ContinuationProblem, ContinuationResult, ContinuationState
 from .pinned import PinnedFailure
+from .problem import as_problem
 from .special_points import SpecialPoint
 from .steps import (
     SKIP_MIN_TOL,  # noqa: F401 (imported from here before the split)
@@ -94,9 +95,10 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
         Never raises for a failing branch: the status says why it stopped. Raises
         ValueError if ``options.bounds`` names a quantity the problem does not monitor.
     """
+    problem = as_problem(problem)
     opt = options or ContinuationOptions()
     if opt.step_control == "auto":
-        opt = dataclasses.replace(opt, step_control=getattr(problem, "step_control", "effort"))
+        opt = dataclasses.replace(opt, step_control=problem.step_control)
     if resume is None:
         us, recs, nits, dss, hists, special = [], [], [], [], [], [SpecialPoint("start", 0)]
     else:

@@ -5,25 +5,13 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Protocol
 
 import numpy as np
 
 from .. import _validate as check
+from .problem import ContinuationProblem
 
 __all__ = ["ContinuationOptions", "ContinuationProblem", "ContinuationResult", "ContinuationState"]
-
-
-class ContinuationProblem(Protocol):
-    """What the driver needs from a problem (all vectors in scaled units)."""
-
-    n_unknowns: int
-
-    def evaluate(self, u: np.ndarray, jacobian: bool = True):
-        """Residual (n−1,) and, if ``jacobian``, the Jacobian (n−1, n), dense or sparse."""
-
-    def monitor(self, u: np.ndarray) -> dict:
-        """Scalar quantities recorded per point (e.g. frequency, amplitude, energy)."""
 
 
 @dataclass(frozen=True)

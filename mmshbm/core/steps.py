@@ -35,7 +35,7 @@ def newton(problem: ContinuationProblem, u: np.ndarray, tangent: np.ndarray, u_p
     <= ``step_tol`` with the residual <= √tol. Returns (u, iterations, residual
     history, Jacobian at u). Raises ``_Failure``.
     """
-    fast = getattr(problem, "fast_newton", None)
+    fast = problem.fast_newton
     if fast is not None:  # a compiled loop for small dense problems (MMS-HBM, modal back end)
         try:
             out = fast(u, u_pred, tangent, tol, max_iter, step_tol)

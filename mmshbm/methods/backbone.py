@@ -124,7 +124,7 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     resume = _path_argument("resume", resume)
     check_resources(model, method, options)  # before any allocation: a clear error, not a MemoryError
     problem = make_problem(model, method, **options)
-    if default_start and gap > 0 and hasattr(problem, "open_amplitude"):
+    if default_start and gap > 0 and problem.open_amplitude is not None:
         # the linear mode is a solution only while every contact is open
         start_amplitude = min(start_amplitude, 0.5 * problem.open_amplitude())
     header = _checkpoint_header(model, method, problem, options)
@@ -155,7 +155,7 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
             res = _finished_result(state, previous.terminal)
         else:
             with blas_limit():  # small dense solves: one BLAS thread unless the user chose (mmshbm._threads)
-                res = continue_branch(problem, None if state else problem.linear_point(start_amplitude),
+                res = continue_branch(problem, None if state else problem.linear_mode_point(start_amplitude),
                                       None if state else problem.initial_tangent(), copts, callback=callback,
                                       progress=None, resume=state,
                                       on_point=writer.point if writer is not None else None)
@@ -179,16 +179,16 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
         above = np.flatnonzero(amp > gap * (1 + 1e-9))
         if len(above) and above[0] > 0:
             special.insert(1, SpecialPoint("grazing", int(above[0])))
-    if hasattr(problem, "branch_records") and n:  # records computed once for the whole branch
+    if problem.branch_records is not None and n:  # records computed once for the whole branch
         rec.update(problem.branch_records(res.u))
-    if "modal_shares" in rec and hasattr(problem, "tracked_frequencies"):
+    if "modal_shares" in rec and problem.tracked_frequencies is not None:
         named = internal_resonances(rec["frequency"], rec["modal_shares"], problem.tracked_frequencies,
-                                    getattr(problem, "mode", 1))
+                                    problem.mode)
         special = sorted(special + named, key=lambda s: (s[1], s[0] == "endpoint"))
     log.info("%s backbone: %d points, status %s, %.3f s", method, n, res.status, elapsed)
     metadata = {
-        "model": model.description, "method": method, "harmonics": int(getattr(problem, "H", 0)),
-        "n_samples": int(getattr(problem, "N", 0)), "max_amplitude": max_amplitude,
+        "model": model.description, "method": method, "harmonics": int(problem.H),
+        "n_samples": int(problem.N), "max_amplitude": max_amplitude,
         "start_amplitude": start_amplitude, "method_options": _jsonable(options),
         "continuation": _jsonable(dataclasses.asdict(copts)), "elapsed_s": elapsed,
         "python": platform.python_version(), "numpy": np.__version__,
@@ -205,7 +205,7 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
         frequency=column("frequency"), amplitude=amp, energy=column("energy"),
         contact_force_max=column("contact_force_max"), newton_iterations=res.newton_iterations,
         step_size=res.step_size, states=res.u, status=res.status, method=method,
-        harmonics=int(getattr(problem, "H", 0)), special_points=special, metadata=metadata,
+        harmonics=int(problem.H), special_points=special, metadata=metadata,
         solver=problem, residual_histories=res.residual_histories, **extra)
     branch.check()  # records mode_share, warns (BranchWarning) when the branch is not what it seems
     return branch
@@ -251,11 +251,7 @@ def _checkpoint_header(model: Model, method: str, problem, options: dict) -> dic
     """What fixes the branch: a resumed run must agree on all of it."""
     from ..core.checkpoint import model_fingerprint
 
-    resolved = {}
-    for attr in ("H", "N", "r", "mode", "penalty_stiffness", "steps_per_period"):
-        value = getattr(problem, attr, None)
-        if isinstance(value, int | float | np.number) and not isinstance(value, bool):
-            resolved[attr] = value.item() if isinstance(value, np.generic) else value
+    resolved = problem.solver_settings()
     return {"method": method, "n_unknowns": int(problem.n_unknowns), "model": model_fingerprint(model),
             "model_description": model.description, "solver": resolved,
             "method_options": _jsonable({k: v for k, v in options.items()
