@@ -199,3 +199,16 @@ def _corrector(problem, u, t, ds, opt, start=None, curvature=None):
     if np.linalg.norm(u_new - u_pred) > 2.0 * ds + 10 * opt.newton_tol:
         raise _Failure("corrector left the predictor cone")
     return u_new, nit, hist, J
+
+
+def _outside(rec: dict, bounds) -> tuple | None:
+    """(name, bound value) of the first bound that ``rec`` violates, else None."""
+    for name, (lo, hi) in dict(bounds).items():
+        v = rec.get(name)
+        if v is None:
+            continue
+        if v > hi:
+            return (name, float(hi))
+        if v < lo:
+            return (name, float(lo))
+    return None
