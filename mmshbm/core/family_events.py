@@ -125,17 +125,27 @@ def _outside(rec: dict, bounds) -> bool:
     return False
 
 
+#: the backfill's target residual of the residual step rule (ContinuationOptions' default)
+_BACKFILL_TARGET_RESIDUAL = 1e-3
+
+
 def _backfill(problem, u, t, frontier: float, landing: float, opt: ContinuationOptions,
               family: FamilyOptions) -> list:
     """The family below a jump's landing point: continued backwards from it (plain path
-    following, the run's options otherwise) until it leaves the family (its family measure
-    refined onto ``family_share``) or reaches the frontier. Returns the points in
-    increasing amplitude, as tuples (u, iterations, history, record, tangent oriented to
-    growing amplitude), without the landing point."""
+    following) until it leaves the family (its family measure refined onto
+    ``family_share``) or reaches the frontier. Returns the points in increasing amplitude,
+    as tuples (u, iterations, history, record, tangent oriented to growing amplitude),
+    without the landing point.
+
+    The run's options carry over, except the step rule: the backfill takes the problem's
+    own (``step_control="auto"``) with the default ``target_residual``, as it always has
+    (a run's explicit step rule or target would change the filled points, and with them
+    the branch)."""
     from .continuation import continue_branch
 
     back = dataclasses.replace(
-        opt, max_steps=family.max_excursion, follow="path",
+        opt, max_steps=family.max_excursion, follow="path", step_control="auto",
+        target_residual=_BACKFILL_TARGET_RESIDUAL,
         bounds={"amplitude": (frontier, landing * (1 + 1e-6)), FAMILY_RECORD: (family.family_share, 2.0)})
     res = continue_branch(problem, u, -t, back, catch_interrupt=False)
     out = []
