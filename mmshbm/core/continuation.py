@@ -31,6 +31,7 @@ import numpy as np
 
 from .bordered import bordered_solve as _bordered_solve  # noqa: F401 (the benchmarks' name)
 from .events import BranchEvents, RelocationFailed
+from .family_events import default_events
 from .options import ContinuationOptions, ContinuationProblem, ContinuationResult, ContinuationState
 from .problem import as_problem
 from .special_points import SpecialPoint
@@ -95,8 +96,9 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
         False lets it propagate: continuations nested inside another run's step (a
         jump's backfill, an auxiliary branch) must not swallow the user's Ctrl-C.
     events : BranchEvents, optional
-        The event plug-in (:mod:`mmshbm.core.events`); default ``options.events()``
-        (the family following for ``follow="family"``).
+        The event plug-in (:mod:`mmshbm.core.events`); default the one ``options`` ask
+        for (the family following for ``follow="family"``,
+        :func:`mmshbm.core.family_events.default_events`).
 
     Returns
     -------
@@ -108,7 +110,7 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
     opt = options or ContinuationOptions()
     if opt.step_control == "auto":
         opt = dataclasses.replace(opt, step_control=problem.step_control)
-    events = opt.events() if events is None else events
+    events = default_events(opt, continue_branch) if events is None else events
     pts = _Points(resume, opt.ds, on_point, callback, progress, problem.progress_records)
     events.replay(pts.recs, pts.special)
     u = t = None

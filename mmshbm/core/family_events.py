@@ -17,10 +17,11 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
+from collections.abc import Callable
 
 import numpy as np
 
-from .events import Relocation, RelocationFailed
+from .events import NoEvents, Relocation, RelocationFailed
 from .family import FAMILY_RECORD, FamilyGuard, family_value, jump
 from .options import ContinuationOptions, FamilyOptions
 from .pinned import PinnedFailure
@@ -28,7 +29,7 @@ from .special_points import SpecialPoint
 from .status import Status
 from .steps import _orientation_safe, _pinned_monitor  # noqa: F401 (_orientation_safe: the old home)
 
-__all__ = ["FamilyFollower"]
+__all__ = ["FamilyFollower", "default_events"]
 
 log = logging.getLogger(__name__)
 
@@ -43,11 +44,14 @@ class FamilyFollower:
     options : ContinuationOptions
         The run's options (step control resolved): the jumps' Newton settings, the
         amplitude bound and the options of the backfill.
+    follow : callable
+        The path follower of the backfill (:func:`mmshbm.core.continuation.continue_branch`).
     """
 
-    def __init__(self, family: FamilyOptions, options: ContinuationOptions):
+    def __init__(self, family: FamilyOptions, options: ContinuationOptions, follow: Callable):
         self.family = family
         self.options = options
+        self.follow = follow
         self.guard = FamilyGuard(family.family_share, family.max_excursion)
         self.jumps = 0
         self.amplitude_max = float(dict(options.bounds).get("amplitude", (0.0, math.inf))[1])
@@ -99,7 +103,7 @@ class FamilyFollower:
             raise RelocationFailed(str(err)) from None
         A_from = float(records[i_from]["amplitude"])
         frontier = float(records[guard.frontier_index]["amplitude"])
-        filled = (_backfill(problem, u_j, t_j, frontier, target, opt, self.family)
+        filled = (_backfill(self.follow, problem, u_j, t_j, frontier, target, opt, self.family)
                   if target > frontier * (1 + 1e-9) else [])
         found = filled + [(u_j, nit_j, hist_j, rec_j, t_j)]
         first = found[0][3]
@@ -117,6 +121,13 @@ class FamilyFollower:
         return Relocation(found, special, terminal)
 
 
+def default_events(options: ContinuationOptions, follow: Callable):
+    """The event plug-in ``options`` ask for: a :class:`FamilyFollower` for
+    ``follow="family"``, else :class:`~mmshbm.core.events.NoEvents` (plain path following)."""
+    family = options.family
+    return NoEvents() if family is None else FamilyFollower(family, options, follow)
+
+
 def _outside(rec: dict, bounds) -> bool:
     for name, (lo, hi) in dict(bounds).items():
         v = rec.get(name)
@@ -129,7 +140,7 @@ def _outside(rec: dict, bounds) -> bool:
 _BACKFILL_TARGET_RESIDUAL = 1e-3
 
 
-def _backfill(problem, u, t, frontier: float, landing: float, opt: ContinuationOptions,
+def _backfill(follow: Callable, problem, u, t, frontier: float, landing: float, opt: ContinuationOptions,
               family: FamilyOptions) -> list:
     """The family below a jump's landing point: continued backwards from it (plain path
     following) until it leaves the family (its family measure refined onto
@@ -141,13 +152,11 @@ def _backfill(problem, u, t, frontier: float, landing: float, opt: ContinuationO
     own (``step_control="auto"``) with the default ``target_residual``, as it always has
     (a run's explicit step rule or target would change the filled points, and with them
     the branch)."""
-    from .continuation import continue_branch
-
     back = dataclasses.replace(
         opt, max_steps=family.max_excursion, follow="path", step_control="auto",
         target_residual=_BACKFILL_TARGET_RESIDUAL,
         bounds={"amplitude": (frontier, landing * (1 + 1e-6)), FAMILY_RECORD: (family.family_share, 2.0)})
-    res = continue_branch(problem, u, -t, back, catch_interrupt=False)
+    res = follow(problem, u, -t, back, catch_interrupt=False)
     out = []
     for i in range(len(res.u) - 1, 0, -1):
         rec = {k: v[i] for k, v in res.records.items()}

@@ -161,19 +161,6 @@ class ContinuationOptions:
         """The family following's options (None for ``follow="path"``)."""
         return self._family_options() if self.follow == "family" else None
 
-    def events(self):
-        """The driver's event plug-in these options ask for: a
-        :class:`~mmshbm.core.family_events.FamilyFollower` for ``follow="family"``, else
-        :class:`~mmshbm.core.events.NoEvents`."""
-        from .events import NoEvents
-
-        family = self.family
-        if family is None:
-            return NoEvents()
-        from .family_events import FamilyFollower
-
-        return FamilyFollower(family, self)
-
 
 @dataclass
 class ContinuationResult:

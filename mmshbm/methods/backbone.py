@@ -17,6 +17,7 @@ from .._threads import blas_limit
 from ..core.continuation import ContinuationOptions, continue_branch
 from ..core.resonances import internal_resonances
 from ..core.special_points import SpecialPoint
+from ..core.status import Status
 from ..model.model import Model
 from ..results.branch import Branch
 from .limits import check_resources
@@ -268,10 +269,12 @@ def _check_resumable(stored: dict, current: dict, path) -> None:
 
 def _finished(previous, copts: ContinuationOptions) -> bool:
     """True when the file's branch ended on a bound that still applies."""
-    terminal = previous.terminal
-    if not terminal or not terminal.startswith("bound:"):
-        return terminal == "start outside bounds"
-    name = terminal.split(":", 1)[1]
+    if not previous.terminal:
+        return False
+    terminal = Status.parse(previous.terminal)
+    if terminal.kind != Status.BOUND:
+        return terminal.kind == Status.START_OUTSIDE
+    name = terminal.detail
     stored = previous.header.get("continuation", {}).get("bounds", {}).get(name)
     now = dict(copts.bounds).get(name)
     return stored is not None and now is not None and [float(b) for b in stored] == [float(b) for b in now]
@@ -286,7 +289,7 @@ def _finished_result(state, status):
         newton_iterations=np.array(state.newton_iterations, dtype=int),
         step_size=np.array(state.step_size, dtype=float), residual_histories=state.residual_histories,
         special_points=list(state.special_points) + [SpecialPoint("endpoint", len(state.u) - 1)],
-        status=status,
+        status=Status.parse(status),
         tangent=state.tangent, next_ds=state.ds, steps=state.steps)
 
 
