@@ -7,8 +7,8 @@ of n−1 equations in n unknowns. It needs only the small required protocol
 offered" (``None``, or the plain rule), so that the driver, the family events and the
 runners call them directly and never probe a problem for attributes.
 
-Required (:class:`ContinuationProblem`)
----------------------------------------
+**Required** (:class:`ContinuationProblem`):
+
 ``n_unknowns : int``
     n, the number of scaled unknowns u (the last one is usually the frequency).
 ``evaluate(u, jacobian=True)``
@@ -20,8 +20,8 @@ Required (:class:`ContinuationProblem`)
     The recorded quantities of a converged point (name -> float or array): what bounds
     act on and what the branch stores.
 
-Capabilities (declared on :class:`ContinuationProblemBase`)
------------------------------------------------------------
+**Capabilities** (declared on :class:`ContinuationProblemBase`):
+
 :class:`StepControl`
     ``step_control`` (``"effort"`` or ``"residual"``: the step rule that
     ``ContinuationOptions(step_control="auto")`` picks); ``fast_newton(u0, u_pred,

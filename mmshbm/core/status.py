@@ -10,17 +10,17 @@ plain string (a status read back from a file).
 
 Kinds the driver produces:
 
-========================  ====================================  ===========================
-kind                      text                                  detail
-========================  ====================================  ===========================
-``"max_steps"``           ``max_steps``                         —
-``"bound"``               ``bound:<name>``                      the bounded record's name
-``"ds_min"``              ``ds_min: <message>``                 why the last step failed
-``"jump failed"``         ``jump failed: <message>``            why the relocation failed
-``"start failed"``        ``start failed: <message>``           why the first point failed
-``"start outside bounds"``  ``start outside bounds``            —
-``"interrupted"``         ``interrupted``                       —
-========================  ====================================  ===========================
+==========================  ===================================  ==========================
+kind                        text                                 detail
+==========================  ===================================  ==========================
+``"max_steps"``             ``max_steps``                        —
+``"bound"``                 ``bound:<name>``                     the bounded record's name
+``"ds_min"``                ``ds_min: <message>``                why the last step failed
+``"jump failed"``           ``jump failed: <message>``           why the relocation failed
+``"start failed"``          ``start failed: <message>``          why the first point failed
+``"start outside bounds"``  ``start outside bounds``             —
+``"interrupted"``           ``interrupted``                      —
+==========================  ===================================  ==========================
 """
 
 from __future__ import annotations
