@@ -179,7 +179,7 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
                 if stop:
                     status = stop
                     break
-                continue  # (the status stays the ds_min one, as it always has)
+                continue  # the ds_min status stands until another replaces it
             step += 1
             crossed = _outside(rec, opt.bounds)
             if crossed:
