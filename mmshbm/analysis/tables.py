@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.status import Status
 from ..results.diagnostics import incomplete_reason
 
 __all__ = ["FrequencyTable", "format_cells", "summarize", "coords_text", "series_note"]
@@ -379,5 +380,5 @@ def run_details(runs: Sequence[dict], branches: Sequence) -> str:
 
 
 def _short_status(branch) -> str:
-    key = branch.status.split(":", 1)[0]
+    key = Status.parse(branch.status).kind
     return "step budget" if key == "max_steps" else key.replace("_", " ")

@@ -302,8 +302,8 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
         raise PinnedFailure("the branch has no family point to jump from")
     frontier = float(recs[guard.frontier_index]["amplitude"])
     f_frontier = float(recs[guard.frontier_index].get("frequency", math.nan))
-    predictor = getattr(problem, "family_predictor", None)
-    landing = getattr(problem, "family_landing", None)
+    predictor = problem.family_predictor
+    landing = problem.family_landing
     last_error = "no attempt"
     targets = []
     for attempt in range(7):
@@ -313,7 +313,7 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
 
     f_lo, f_hi = _frequency_window(recs, guard, targets[-1])
     window = {"hi": f_hi}  # the far search below widens it to its own targets
-    frequency_of = getattr(problem, "frequency_of", None)
+    frequency_of = problem.frequency_of
     admissible = None
     if frequency_of is not None and math.isfinite(f_lo) and f_lo > 0:
         # the trust region: a landing is accepted within 30 % of the family's frequencies,
@@ -387,7 +387,7 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
         target = min(frontier * (1.0 + step * 2.0**i), amplitude_max)
         if target > far[-1] * (1 + 1e-12):
             far.append(target)
-    limit = getattr(problem, "family_frequency_limit", None)
+    limit = problem.family_frequency_limit
     window["hi"] = max(_frequency_window(recs, guard, far[-1])[1], limit() if limit is not None else 0.0)
     solves[:] = [0, _MAX_FAR_SOLVES]
     try:
@@ -457,7 +457,7 @@ def _predictors(problem, us, recs, guard, origin: int, target: float, amplitude_
     gap). Yields (name, u0); each is tried until one lands."""
     A_o = float(recs[origin]["amplitude"])
     u_o = us[origin]
-    predictor = getattr(problem, "family_predictor", None)
+    predictor = problem.family_predictor
     if predictor is not None:
         try:
             yield "family", predictor(u_o, A_o, target, amplitude_max)
@@ -466,6 +466,6 @@ def _predictors(problem, us, recs, guard, origin: int, target: float, amplitude_
     clean = [i for i in guard.clean if i <= origin]
     if clean:
         yield "extrapolated", _extrapolated(us, recs, clean, target)
-    scaled = getattr(problem, "scaled_state", None)
+    scaled = problem.scaled_state
     if scaled is not None and A_o > 0:
         yield "scaled", scaled(u_o, target / A_o)

@@ -5,25 +5,49 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Protocol
 
 import numpy as np
 
 from .. import _validate as check
+from .problem import ContinuationProblem
+from .status import Status
 
-__all__ = ["ContinuationOptions", "ContinuationProblem", "ContinuationResult", "ContinuationState"]
+__all__ = ["ContinuationOptions", "ContinuationProblem", "ContinuationResult", "ContinuationState",
+           "FamilyOptions"]
 
 
-class ContinuationProblem(Protocol):
-    """What the driver needs from a problem (all vectors in scaled units)."""
+@dataclass(frozen=True)
+class FamilyOptions:
+    """Options of the family following (:mod:`mmshbm.core.family_events`). Validated on
+    creation; ``ContinuationOptions(follow="family", family_share=..., ...)`` builds them
+    (:attr:`ContinuationOptions.family`).
 
-    n_unknowns: int
+    Attributes
+    ----------
+    family_share : float
+        Share (0..1) of the kinetic energy in the fundamental harmonic above which a point
+        is on the starting mode's family (below it, a point that continues the family
+        without a fold or a locked frequency still is; docs/resonances.md).
+    max_excursion : int
+        Steps the branch may spend off the family (or below its frontier) before a jump.
+    jump_step : float
+        First relative amplitude step of a jump beyond the frontier (doubled per retry).
+    max_jumps : int
+        Jumps allowed per branch.
+    """
 
-    def evaluate(self, u: np.ndarray, jacobian: bool = True):
-        """Residual (n−1,) and, if ``jacobian``, the Jacobian (n−1, n), dense or sparse."""
+    family_share: float = 0.5
+    max_excursion: int = 60
+    jump_step: float = 0.02
+    max_jumps: int = 50
 
-    def monitor(self, u: np.ndarray) -> dict:
-        """Scalar quantities recorded per point (e.g. frequency, amplitude, energy)."""
+    def __post_init__(self):
+        share = check.real_number("family_share", self.family_share)
+        if not 0.0 < share < 1.0:
+            raise ValueError(f"family_share must be in (0, 1), got {self.family_share!r}")
+        check.integer("max_excursion", self.max_excursion, minimum=1)
+        check.positive("jump_step", self.jump_step)
+        check.integer("max_jumps", self.max_jumps, minimum=0)
 
 
 @dataclass(frozen=True)
@@ -72,18 +96,11 @@ class ContinuationOptions:
     follow : {"family", "path"}
         ``"family"`` (default): stay on the starting mode's family, jumping over
         internal-resonance tongues the path follower cannot come back from
-        (:mod:`mmshbm.core.family`; needs a problem that records ``mode_share``).
-        ``"path"``: plain path following (to study a tongue).
-    family_share : float
-        Share (0..1) of the kinetic energy in the fundamental harmonic above which a point
-        is on the starting mode's family (below it, a point that continues the family
-        without a fold or a locked frequency still is; docs/resonances.md).
-    max_excursion : int
-        Steps the branch may spend off the family (or below its frontier) before a jump.
-    jump_step : float
-        First relative amplitude step of a jump beyond the frontier (doubled per retry).
-    max_jumps : int
-        Jumps allowed per branch.
+        (:mod:`mmshbm.core.family_events`; acts on problems that record the fundamental
+        harmonic's share). ``"path"``: plain path following (to study a tongue).
+    family_share, max_excursion, jump_step, max_jumps
+        The family following's options, forwarded to :class:`FamilyOptions`
+        (:attr:`family`).
     """
 
     ds: float = 0.1
@@ -123,12 +140,7 @@ class ContinuationOptions:
         check.positive("target_residual", self.target_residual)
         if self.follow not in ("family", "path"):
             raise ValueError(f"follow must be 'family' or 'path', got {self.follow!r}")
-        share = check.real_number("family_share", self.family_share)
-        if not 0.0 < share < 1.0:
-            raise ValueError(f"family_share must be in (0, 1), got {self.family_share!r}")
-        check.integer("max_excursion", self.max_excursion, minimum=1)
-        check.positive("jump_step", self.jump_step)
-        check.integer("max_jumps", self.max_jumps, minimum=0)
+        self._family_options()
         angle = check.positive("max_angle", self.max_angle)
         if angle > math.pi:
             raise ValueError(f"max_angle must be <= pi, got {angle}")
@@ -139,6 +151,15 @@ class ContinuationOptions:
                 raise ValueError(f"bounds[{name!r}] must be a pair (lo, hi), got {bound!r}") from None
             if not lo < hi:
                 raise ValueError(f"bounds[{name!r}] must satisfy lo < hi, got {bound!r}")
+
+    def _family_options(self) -> FamilyOptions:
+        return FamilyOptions(family_share=self.family_share, max_excursion=self.max_excursion,
+                             jump_step=self.jump_step, max_jumps=self.max_jumps)
+
+    @property
+    def family(self) -> FamilyOptions | None:
+        """The family following's options (None for ``follow="path"``)."""
+        return self._family_options() if self.follow == "family" else None
 
 
 @dataclass
@@ -158,9 +179,10 @@ class ContinuationResult:
         Corrector residual norms per Newton iteration, per point.
     special_points : list of (str, int)
         ("start", 0), ("fold", i), bound hits, and ("endpoint", last).
-    status : str
-        Why the branch stopped: "max_steps", "bound:<name>", "ds_min: ...",
-        "interrupted", "start failed: ...".
+    status : Status
+        Why the branch stopped (:class:`~mmshbm.core.status.Status`, a str):
+        "max_steps", "bound:<name>", "ds_min: ...", "jump failed: ...", "interrupted",
+        "start failed: ...", "start outside bounds".
     tangent : ndarray, shape (n,) or None
         Unit tangent at the last point (None if no point converged).
     next_ds : float
@@ -175,7 +197,7 @@ class ContinuationResult:
     step_size: np.ndarray
     residual_histories: list
     special_points: list
-    status: str
+    status: Status
     tangent: np.ndarray | None = None
     next_ds: float = math.nan
     steps: int = 0

@@ -20,6 +20,7 @@ import math
 import numpy as np
 
 from .bordered import bordered_solve
+from .problem import as_problem
 
 __all__ = ["amplitude_and_gradient", "solve_at_amplitude", "PinnedFailure"]
 
@@ -30,7 +31,8 @@ class PinnedFailure(ArithmeticError):
 
 def amplitude_and_gradient(problem, u: np.ndarray, h: float = 1e-7) -> tuple[float, np.ndarray]:
     """(A(u), ∇A(u)) from the problem, or by central differences of its monitor."""
-    if hasattr(problem, "amplitude_and_gradient"):
+    problem = as_problem(problem)
+    if problem.amplitude_and_gradient is not None:
         return problem.amplitude_and_gradient(u)
     value = float(problem.monitor(u)["amplitude"])
     grad = np.empty(len(u))
@@ -81,6 +83,7 @@ def solve_at_amplitude(problem, u0: np.ndarray, amplitude: float, *, tol: float 
     """
     if not amplitude > 0:
         raise ValueError(f"amplitude must be positive, got {amplitude!r}")
+    problem = as_problem(problem)
     solve = solve or bordered_solve
     u = np.array(u0, dtype=float)
     if admissible is not None and not admissible(u):
@@ -127,7 +130,7 @@ def solve_at_amplitude(problem, u0: np.ndarray, amplitude: float, *, tol: float 
                 continue
             try:
                 R_t = problem.evaluate(trial, jacobian=False)
-                A_t = (problem.amplitude_value(trial) if hasattr(problem, "amplitude_value")
+                A_t = (problem.amplitude_value(trial) if problem.amplitude_value is not None
                        else amplitude_and_gradient(problem, trial)[0])
                 n_t = max(float(np.abs(R_t).max()), abs(A_t / amplitude - 1.0))
             except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError):

@@ -35,7 +35,7 @@ def newton(problem: ContinuationProblem, u: np.ndarray, tangent: np.ndarray, u_p
     <= ``step_tol`` with the residual <= √tol. Returns (u, iterations, residual
     history, Jacobian at u). Raises ``_Failure``.
     """
-    fast = getattr(problem, "fast_newton", None)
+    fast = problem.fast_newton
     if fast is not None:  # a compiled loop for small dense problems (MMS-HBM, modal back end)
         try:
             out = fast(u, u_pred, tangent, tol, max_iter, step_tol)
@@ -199,3 +199,16 @@ def _corrector(problem, u, t, ds, opt, start=None, curvature=None):
     if np.linalg.norm(u_new - u_pred) > 2.0 * ds + 10 * opt.newton_tol:
         raise _Failure("corrector left the predictor cone")
     return u_new, nit, hist, J
+
+
+def _outside(rec: dict, bounds) -> tuple | None:
+    """(name, bound value) of the first bound that ``rec`` violates, else None."""
+    for name, (lo, hi) in dict(bounds).items():
+        v = rec.get(name)
+        if v is None:
+            continue
+        if v > hi:
+            return (name, float(hi))
+        if v < lo:
+            return (name, float(lo))
+    return None

@@ -17,6 +17,7 @@ from .._threads import blas_limit
 from ..core.continuation import ContinuationOptions, continue_branch
 from ..core.resonances import internal_resonances
 from ..core.special_points import SpecialPoint
+from ..core.status import Status
 from ..model.model import Model
 from ..results.branch import Branch
 from .limits import check_resources
@@ -124,7 +125,7 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     resume = _path_argument("resume", resume)
     check_resources(model, method, options)  # before any allocation: a clear error, not a MemoryError
     problem = make_problem(model, method, **options)
-    if default_start and gap > 0 and hasattr(problem, "open_amplitude"):
+    if default_start and gap > 0 and problem.open_amplitude is not None:
         # the linear mode is a solution only while every contact is open
         start_amplitude = min(start_amplitude, 0.5 * problem.open_amplitude())
     header = _checkpoint_header(model, method, problem, options)
@@ -155,7 +156,7 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
             res = _finished_result(state, previous.terminal)
         else:
             with blas_limit():  # small dense solves: one BLAS thread unless the user chose (mmshbm._threads)
-                res = continue_branch(problem, None if state else problem.linear_point(start_amplitude),
+                res = continue_branch(problem, None if state else problem.linear_mode_point(start_amplitude),
                                       None if state else problem.initial_tangent(), copts, callback=callback,
                                       progress=None, resume=state,
                                       on_point=writer.point if writer is not None else None)
@@ -179,16 +180,16 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
         above = np.flatnonzero(amp > gap * (1 + 1e-9))
         if len(above) and above[0] > 0:
             special.insert(1, SpecialPoint("grazing", int(above[0])))
-    if hasattr(problem, "branch_records") and n:  # records computed once for the whole branch
+    if problem.branch_records is not None and n:  # records computed once for the whole branch
         rec.update(problem.branch_records(res.u))
-    if "modal_shares" in rec and hasattr(problem, "tracked_frequencies"):
+    if "modal_shares" in rec and problem.tracked_frequencies is not None:
         named = internal_resonances(rec["frequency"], rec["modal_shares"], problem.tracked_frequencies,
-                                    getattr(problem, "mode", 1))
+                                    problem.mode)
         special = sorted(special + named, key=lambda s: (s[1], s[0] == "endpoint"))
     log.info("%s backbone: %d points, status %s, %.3f s", method, n, res.status, elapsed)
     metadata = {
-        "model": model.description, "method": method, "harmonics": int(getattr(problem, "H", 0)),
-        "n_samples": int(getattr(problem, "N", 0)), "max_amplitude": max_amplitude,
+        "model": model.description, "method": method, "harmonics": int(problem.H),
+        "n_samples": int(problem.N), "max_amplitude": max_amplitude,
         "start_amplitude": start_amplitude, "method_options": _jsonable(options),
         "continuation": _jsonable(dataclasses.asdict(copts)), "elapsed_s": elapsed,
         "python": platform.python_version(), "numpy": np.__version__,
@@ -205,7 +206,7 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
         frequency=column("frequency"), amplitude=amp, energy=column("energy"),
         contact_force_max=column("contact_force_max"), newton_iterations=res.newton_iterations,
         step_size=res.step_size, states=res.u, status=res.status, method=method,
-        harmonics=int(getattr(problem, "H", 0)), special_points=special, metadata=metadata,
+        harmonics=int(problem.H), special_points=special, metadata=metadata,
         solver=problem, residual_histories=res.residual_histories, **extra)
     branch.check()  # records mode_share, warns (BranchWarning) when the branch is not what it seems
     return branch
@@ -251,11 +252,7 @@ def _checkpoint_header(model: Model, method: str, problem, options: dict) -> dic
     """What fixes the branch: a resumed run must agree on all of it."""
     from ..core.checkpoint import model_fingerprint
 
-    resolved = {}
-    for attr in ("H", "N", "r", "mode", "penalty_stiffness", "steps_per_period"):
-        value = getattr(problem, attr, None)
-        if isinstance(value, int | float | np.number) and not isinstance(value, bool):
-            resolved[attr] = value.item() if isinstance(value, np.generic) else value
+    resolved = problem.solver_settings()
     return {"method": method, "n_unknowns": int(problem.n_unknowns), "model": model_fingerprint(model),
             "model_description": model.description, "solver": resolved,
             "method_options": _jsonable({k: v for k, v in options.items()
@@ -272,10 +269,12 @@ def _check_resumable(stored: dict, current: dict, path) -> None:
 
 def _finished(previous, copts: ContinuationOptions) -> bool:
     """True when the file's branch ended on a bound that still applies."""
-    terminal = previous.terminal
-    if not terminal or not terminal.startswith("bound:"):
-        return terminal == "start outside bounds"
-    name = terminal.split(":", 1)[1]
+    if not previous.terminal:
+        return False
+    terminal = Status.parse(previous.terminal)
+    if terminal.kind != Status.BOUND:
+        return terminal.kind == Status.START_OUTSIDE
+    name = terminal.detail
     stored = previous.header.get("continuation", {}).get("bounds", {}).get(name)
     now = dict(copts.bounds).get(name)
     return stored is not None and now is not None and [float(b) for b in stored] == [float(b) for b in now]
@@ -290,7 +289,7 @@ def _finished_result(state, status):
         newton_iterations=np.array(state.newton_iterations, dtype=int),
         step_size=np.array(state.step_size, dtype=float), residual_histories=state.residual_histories,
         special_points=list(state.special_points) + [SpecialPoint("endpoint", len(state.u) - 1)],
-        status=status,
+        status=Status.parse(status),
         tangent=state.tangent, next_ds=state.ds, steps=state.steps)
 
 

@@ -151,7 +151,7 @@ def frequency_response(model: Model, force, frequency_range, harmonics: int = 5,
     t0 = time.perf_counter()
     try:
         with blas_limit():  # small dense solves: one BLAS thread unless the user chose (mmshbm._threads)
-            start = problem.start_point(f0) if hasattr(problem, "start_point") else problem.linear_point(f0)
+            start = problem.start_point(f0)
             res = continue_branch(problem, start, problem.initial_tangent(), copts,
                                   callback=callback, progress=progress)
     finally:
@@ -199,15 +199,15 @@ def _assemble(model, excitation, problem, res, method, frange, options, copts, e
         special = special[:-1] + bifurcations + special[-1:]
         special.sort(key=lambda p: (p.index, p.kind == "endpoint"))
     meta = {"model": model.description, "model_gap": float(model.gap), "excitation": excitation.to_json(),
-            "frequency_range": list(frange), "method": method, "harmonics": int(getattr(problem, "H", 0)),
-            "n_samples": int(getattr(problem, "N", 0)), "method_options": _jsonable(options),
+            "frequency_range": list(frange), "method": method, "harmonics": int(problem.H),
+            "n_samples": int(problem.N), "method_options": _jsonable(options),
             "continuation": _jsonable(dataclasses.asdict(copts)), "amplitude_dof": int(model.amplitude_dof),
             "elapsed_s": elapsed, "python": platform.python_version(), "numpy": np.__version__}
     return FrequencyResponse(
         frequency=column("frequency"), amplitude=amp, phase=column("phase"), energy=column("energy"),
         contact_force_max=force_max, stable=stable, floquet_max=column("floquet_max"),
         newton_iterations=res.newton_iterations, step_size=res.step_size, states=res.u, status=res.status,
-        method=method, harmonics=int(getattr(problem, "H", 0)), special_points=special, metadata=meta,
+        method=method, harmonics=int(problem.H), special_points=special, metadata=meta,
         solver=problem, residual_histories=res.residual_histories, model=model, records=extra)
 
 

@@ -7,6 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 from matplotlib.figure import Figure
 
+from ..core.status import Status
 from .common import (
     _POINT_COLORS,
     _as_list,
@@ -284,10 +285,11 @@ def _special_points(ax, branch, scale: float, color) -> None:
             if lo is not None and hi is not None and hi > lo * 1.01:
                 ax.annotate(f"skipped {lo / scale:.3g}–{hi / scale:.3g}", (f[i], a[i]),
                             xytext=(4, 4), textcoords="offset points", fontsize=7, color=color)
-    if n and not branch.status.startswith("bound:"):
+    status = Status.parse(branch.status)
+    if n and status.kind != Status.BOUND:
         ax.plot(f[-1], a[-1], "x", color=color, ms=8, mew=2, zorder=6,
                 label=None if "_stopped" in seen else "stopped short of its bounds")
-        ax.annotate(branch.status.split(":")[0].split(" (")[0], (f[-1], a[-1]), xytext=(5, 2),
+        ax.annotate(status.kind.split(" (")[0], (f[-1], a[-1]), xytext=(5, 2),
                     textcoords="offset points", fontsize=7, color=color)
 
 

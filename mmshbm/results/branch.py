@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.special_points import special_from_json, special_to_json
+from ..core.status import Status
 from .archive import read_archive, write_archive
 from .family_points import amplitude_in_m, family_front, frequency_at, solve_at, warn_outside_front
 from .models import _model_arrays, _model_from_arrays, rebuild_model  # noqa: F401 - rebuild_model is public here
@@ -116,7 +117,7 @@ class Branch:
     def completed(self) -> bool:
         """True when the branch reached its bounds (status ``"bound:<name>"``); a run that
         ran out of steps (``"max_steps"``), of step size or failed is not completed."""
-        return self.status.startswith("bound:")
+        return Status.parse(self.status).kind == Status.BOUND
 
     def check(self, thresholds=None, *, warn: bool = True) -> list:
         """Check what this branch is (family of its starting mode, contact admissibility,

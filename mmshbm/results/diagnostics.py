@@ -56,6 +56,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from .._warnings import BranchWarning
+from ..core.status import Status
 
 __all__ = ["CheckThresholds", "Finding", "check_branch", "mode_shares", "findings", "incomplete_reason"]
 
@@ -191,7 +192,7 @@ def check_branch(branch, thresholds: CheckThresholds | None = None, *, warn: boo
             out += _family(branch, np.asarray(shares, dtype=float), th)
         out += _coexisting(branch)
         out += _contact(branch, solver, th)
-    if not branch.status.startswith("bound:"):
+    if Status.parse(branch.status).kind != Status.BOUND:
         out.append(_incomplete(branch))
     branch.metadata["checks"] = [f.to_dict() for f in out]
     branch.metadata["check_thresholds"] = asdict(th)
@@ -471,7 +472,8 @@ _WHY = {
 
 def incomplete_reason(status: str, metadata: dict | None = None) -> str:
     """A short phrase saying why a branch with ``status`` ended short of its bounds."""
-    key = "start" if status.startswith("start") else status.split(":", 1)[0]
+    kind = Status.parse(status).kind
+    key = "start" if kind in (Status.START_FAILED, Status.START_OUTSIDE) else kind
     why = _WHY.get(key, status)
     steps = dict(dict(metadata or {}).get("continuation", {})).get("max_steps")
     if key == "max_steps" and steps is not None:

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.special_points import special_from_json, special_to_json
+from ..core.status import Status
 from .branch import read_archive, versions, write_archive
 from .models import _model_arrays, _model_from_arrays, rebuild_model
 
@@ -97,7 +98,7 @@ class FrequencyResponse:
     @property
     def completed(self) -> bool:
         """True when the response reached a bound of its frequency range."""
-        return self.status.startswith("bound:")
+        return Status.parse(self.status).kind == Status.BOUND
 
     @property
     def gap(self) -> float | None:

@@ -49,6 +49,7 @@ from ... import _validate as check
 from ...core.condense import make_condensation
 from ...core.contact_kernels import _mmshbm_eval, _mmshbm_monitor_multi
 from ...core.harmonics import check_harmonics
+from ...core.problem import BackboneProblemBase
 from ...model.contact import admissible_intervals
 from ...model.model import Model
 from .family import FamilyMixin
@@ -61,7 +62,7 @@ _PROJECTIONS = ("exact", "sampled")
 _HELD: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-class MMSHBMProblem(SignalsMixin, FamilyMixin):
+class MMSHBMProblem(SignalsMixin, FamilyMixin, BackboneProblemBase):
     """MMS-HBM on a :class:`Model`, as a continuation problem.
 
     Parameters
@@ -230,7 +231,7 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin):
         poles = n_a + np.flatnonzero(self._pole_k == k)
         return np.concatenate([own, poles]).astype(int)
 
-    def linear_point(self, amplitude: float) -> np.ndarray:
+    def linear_mode_point(self, amplitude: float) -> np.ndarray:
         """Scaled unknowns of the linear mode whose amplitude DOF swings ``amplitude``."""
         a = np.zeros((self.H + 1, self.n_c))
         a[1] = amplitude * self.mode_shape_c
@@ -238,7 +239,7 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin):
 
     def initial_tangent(self) -> np.ndarray:
         """Unit tangent of the linear branch (growing amplitude, constant Ω)."""
-        t = self.linear_point(1.0)
+        t = self.linear_mode_point(1.0)
         t[-1] = 0.0
         return t / np.linalg.norm(t)
 

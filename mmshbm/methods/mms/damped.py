@@ -39,6 +39,7 @@ import numpy as np
 from ... import _validate as check
 from ...core.damped_condense import CondensedHarmonics, DampedCondensation
 from ...core.harmonics import check_harmonics
+from ...core.problem import ContinuationProblemBase
 from ...core.projection import _contact_rows, _damped_residual, sample_tables
 from ...model.contact import admissible_intervals
 from ...model.model import Model
@@ -98,7 +99,7 @@ def refined_max(y: np.ndarray) -> float:
     return float(y0)
 
 
-class DampedHBMBase:
+class DampedHBMBase(ContinuationProblemBase):
     """Condensation, contact data, scaling and the contact residual of the damped problems.
 
     Parameters

@@ -32,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from ... import _validate as check
+from ...core.problem import BackboneProblemBase
 from ...model.model import Model
 from .conservative import _mean_energy
 from .damped import DampedHBMBase, synthesis_matrix
@@ -39,7 +40,7 @@ from .damped import DampedHBMBase, synthesis_matrix
 __all__ = ["EPMCProblem"]
 
 
-class EPMCProblem(DampedHBMBase):
+class EPMCProblem(DampedHBMBase, BackboneProblemBase):
     """Damped nonlinear mode (EPMC) by MMS-HBM, as a continuation problem.
 
     Parameters
@@ -103,7 +104,7 @@ class EPMCProblem(DampedHBMBase):
     def pack(self, x: np.ndarray, xi: float, omega: float) -> np.ndarray:
         return np.concatenate([np.asarray(x, dtype=float), [xi, omega]]) / self.colscale
 
-    def linear_point(self, amplitude: float) -> np.ndarray:
+    def linear_mode_point(self, amplitude: float) -> np.ndarray:
         """Scaled unknowns of the linear mode with amplitude ``amplitude`` (m) at the
         amplitude DOF (cosine, toward the stop at τ = 0), ξ = φᵀCφ, Ω = ω_mode."""
         amplitude = check.positive("amplitude", amplitude)
@@ -113,7 +114,7 @@ class EPMCProblem(DampedHBMBase):
 
     def initial_tangent(self) -> np.ndarray:
         """Growing amplitude at constant ξ and Ω."""
-        t = self.linear_point(1.0)
+        t = self.linear_mode_point(1.0)
         t[-2:] = 0.0
         return t / np.linalg.norm(t)
 

@@ -119,7 +119,7 @@ class FamilyMixin:
                             projection=self.projection)
         aux._modal = self._modal
         start = 0.5 * self.gap if self.gap > 0 else 0.01 * amplitude_max
-        res = continue_branch(aux, aux.linear_point(start), aux.initial_tangent(),
+        res = continue_branch(aux, aux.linear_mode_point(start), aux.initial_tangent(),
                               ContinuationOptions(bounds={"amplitude": (0.0, amplitude_max)}, follow="path",
                                                   max_steps=400), catch_interrupt=False)
         A = res.records.get("amplitude", np.empty(0))

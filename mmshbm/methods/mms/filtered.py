@@ -21,11 +21,13 @@ import numpy as np
 from ...core.continuation import ContinuationOptions, continue_branch
 from ...core.family import FAMILY_RECORD, family_value
 from ...core.pinned import PinnedFailure, amplitude_and_gradient, solve_at_amplitude
+from ...core.problem import ContinuationProblemBase, as_problem
+from ...core.status import Status
 
 __all__ = ["FilteredProblem", "pass_resonance"]
 
 
-class FilteredProblem:
+class FilteredProblem(ContinuationProblemBase):
     """``problem`` with the coefficients of the harmonics ``filtered`` held at zero.
 
     Parameters
@@ -36,7 +38,7 @@ class FilteredProblem:
     """
 
     def __init__(self, problem, filtered):
-        self.problem = problem
+        self.problem = as_problem(problem)
         self.n_unknowns = problem.n_unknowns
         if hasattr(problem, "harmonic_columns"):
             cols = np.concatenate([problem.harmonic_columns(k) for k in filtered])
@@ -64,7 +66,7 @@ class FilteredProblem:
         return amplitude_and_gradient(self.problem, u)
 
     def amplitude_value(self, u: np.ndarray) -> float:
-        if hasattr(self.problem, "amplitude_value"):
+        if self.problem.amplitude_value is not None:
             return self.problem.amplitude_value(u)
         return amplitude_and_gradient(self.problem, u)[0]
 
@@ -122,13 +124,13 @@ def pass_resonance(problem, u_from: np.ndarray, amplitude_from: float, harmonic:
             follow="path", max_steps=300, newton_tol=newton_tol,
             bounds={"amplitude": (0.0, amplitude_max), "frequency": (0.0, f_stop),
                     FAMILY_RECORD: (family_share, 2.0)}), catch_interrupt=False)
-        if not res.status.startswith("bound:") and len(res.u) < 2:
+        if res.status.kind != Status.BOUND and len(res.u) < 2:
             raise PinnedFailure(f"the filtered branch stopped: {res.status}")
         A, f = res.records["amplitude"], res.records["frequency"]
         for i in range(1, len(res.u)):
             if f[i] > f_resonance * 1.01 and A[i] > amplitude_min * (1 + 1e-6):
                 candidates.append((res.u[i], float(A[i]), float(f[i])))
-        if res.status != f"bound:{FAMILY_RECORD}":
+        if res.status != Status.bound(FAMILY_RECORD):
             break
         # another resonance: filter its harmonic too and go on from the last family point
         k2 = _resonant_harmonic(problem, res.u[-1], mode, filtered)
@@ -146,7 +148,8 @@ def pass_resonance(problem, u_from: np.ndarray, amplitude_from: float, harmonic:
             break
     if not candidates:
         raise PinnedFailure(f"the filtered branch did not pass the resonance of harmonic {harmonic}")
-    f_modes = np.asarray(getattr(problem, "tracked_frequencies", []), dtype=float)
+    tracked = problem.tracked_frequencies
+    f_modes = np.asarray([] if tracked is None else tracked, dtype=float)
     others = np.delete(f_modes, mode - 1) if len(f_modes) >= mode else f_modes
     k = np.arange(1, problem.H + 1)
 

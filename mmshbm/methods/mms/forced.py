@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ... import _validate as check
+from ...core.problem import ForcedProblemBase
 from ...model.model import Model
 from .conservative import _mean_energy
 from .damped import DampedHBMBase, synthesis_matrix
@@ -170,7 +171,7 @@ def base_excitation(model: Model, direction, acceleration: float | None = None,
                       {"kind": "base_displacement", "displacement": d, "direction": r.tolist()})
 
 
-class ForcedResponseProblem(DampedHBMBase):
+class ForcedResponseProblem(DampedHBMBase, ForcedProblemBase):
     """MMS-HBM forced response as a continuation problem in (x, Ω).
 
     Parameters
@@ -229,7 +230,7 @@ class ForcedResponseProblem(DampedHBMBase):
     def pack(self, x: np.ndarray, omega: float) -> np.ndarray:
         return np.concatenate([np.asarray(x, dtype=float), [omega]]) / self.colscale
 
-    def linear_point(self, frequency: float) -> np.ndarray:
+    def linear_response_point(self, frequency: float) -> np.ndarray:
         """Scaled unknowns of the linear response (contacts ignored) at ``frequency`` (Hz)."""
         omega = 2 * np.pi * check.positive("frequency", frequency)
         ch = self._condensed(omega)
@@ -246,7 +247,7 @@ class ForcedResponseProblem(DampedHBMBase):
         when it stays off the stops, otherwise continued from a force level that does (σ from
         below the gap up to 1 in steps, Newton at fixed Ω, the step halved on failure).
         Falls back to the linear response (the continuation's first corrector then tries)."""
-        u_lin = self.linear_point(frequency)
+        u_lin = self.linear_response_point(frequency)
         x_lin, omega = self.unpack(u_lin)
         peak = max(abs(x_lin[self.n_c + i]) + abs(x_lin[2 * self.n_c + i]) for i in self.contact_rows)
         length = self.model.gap if self.model.gap > 0 else np.inf

@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from ... import _validate as check
+from ...core.problem import BackboneProblemBase
 from ...model.model import Model
 from .conservative import _mean_energy
 from .damped import DampedHBMBase
@@ -50,7 +51,7 @@ def stuck_mode(model: Model, mode: int = 1) -> tuple[float, np.ndarray, float]:
     return float(freqs[-1]), shape, (min(onset) if onset else np.inf)
 
 
-class FrictionEPMCProblem(FrictionRows, DampedHBMBase):
+class FrictionEPMCProblem(FrictionRows, DampedHBMBase, BackboneProblemBase):
     """EPMC of a model with friction contacts (constant normal loads), as a continuation
     problem.
 
@@ -127,7 +128,7 @@ class FrictionEPMCProblem(FrictionRows, DampedHBMBase):
     def pack(self, x, a1, b1, xi: float, omega: float) -> np.ndarray:
         return np.concatenate([x, a1, b1, [xi, omega]]) / self.colscale
 
-    def linear_point(self, amplitude: float) -> np.ndarray:
+    def linear_mode_point(self, amplitude: float) -> np.ndarray:
         """The stuck linear mode with ``amplitude`` (m) at the amplitude DOF (cosine)."""
         amplitude = check.positive("amplitude", amplitude)
         x = np.zeros(self.n_x)
@@ -137,7 +138,7 @@ class FrictionEPMCProblem(FrictionRows, DampedHBMBase):
 
     def initial_tangent(self) -> np.ndarray:
         """Growing amplitude at constant ξ and Ω."""
-        t = self.linear_point(1.0)
+        t = self.linear_mode_point(1.0)
         t[-2:] = 0.0
         return t / np.linalg.norm(t)
 

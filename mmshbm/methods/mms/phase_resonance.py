@@ -23,13 +23,14 @@ from __future__ import annotations
 import numpy as np
 
 from ... import _validate as check
+from ...core.problem import BackboneProblemBase
 from ...model.model import Model
 from .forced import Excitation, ForcedResponseProblem, harmonic_force
 
 __all__ = ["PhaseResonanceProblem"]
 
 
-class PhaseResonanceProblem(ForcedResponseProblem):
+class PhaseResonanceProblem(ForcedResponseProblem, BackboneProblemBase):
     """Phase-resonance backbone as a continuation problem in (x, σ, Ω).
 
     Parameters
@@ -68,7 +69,7 @@ class PhaseResonanceProblem(ForcedResponseProblem):
         # σ scale: the force level that drives the linear resonance to one gap
         lin = ForcedResponseProblem(model, force, harmonics, n_samples, r, backend, stability=False,
                                     projection=projection)
-        x1, _ = lin.unpack(lin.linear_point(self.linear_frequency))
+        x1, _ = lin.unpack(lin.linear_response_point(self.linear_frequency))
         q1 = np.hypot(x1[self.n_c + i], x1[2 * self.n_c + i])
         length = model.gap if model.gap > 0 else 1.0
         self.sigma_ref = length / q1
@@ -91,7 +92,7 @@ class PhaseResonanceProblem(ForcedResponseProblem):
     def pack3(self, x, sigma, omega):
         return np.concatenate([np.asarray(x, dtype=float), [sigma, omega]]) / self.colscale
 
-    def linear_point(self, amplitude: float) -> np.ndarray:
+    def linear_mode_point(self, amplitude: float) -> np.ndarray:
         """The linear response at ω_1 scaled to ``amplitude`` (m) at the amplitude DOF (the
         phase condition is met by the first Newton correction)."""
         amplitude = check.positive("amplitude", amplitude)
@@ -105,9 +106,13 @@ class PhaseResonanceProblem(ForcedResponseProblem):
         x[2 * self.n_c:3 * self.n_c] = -sigma * Qc.imag
         return self.pack3(x, sigma, omega)
 
+    def linear_point(self, amplitude: float) -> np.ndarray:
+        """Alias of :meth:`linear_mode_point` (the start of a backbone, not a frequency)."""
+        return self.linear_mode_point(amplitude)
+
     def initial_tangent(self):
         """Growing force level and response at fixed Ω."""
-        t = self.linear_point(1.0)
+        t = self.linear_mode_point(1.0)
         t[-1] = 0.0
         return t / np.linalg.norm(t)
 

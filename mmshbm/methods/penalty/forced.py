@@ -31,6 +31,7 @@ import scipy.sparse as sp
 
 from ... import _validate as check
 from ...core.harmonics import check_harmonics
+from ...core.problem import ForcedProblemBase
 from ...model.contact import admissible_intervals
 from ...model.model import Model
 from ..mms.conservative import _mean_energy
@@ -43,7 +44,7 @@ __all__ = ["PenaltyForcedProblem", "DEFAULT_PENALTY_FACTOR"]
 DEFAULT_PENALTY_FACTOR = 1e3
 
 
-class PenaltyForcedProblem:
+class PenaltyForcedProblem(ForcedProblemBase):
     """Penalty harmonic balance on all DOFs, forced, as a continuation problem in (Q, Ω).
 
     Parameters
@@ -146,7 +147,7 @@ class PenaltyForcedProblem:
     def pack(self, Q, omega):
         return np.concatenate([np.asarray(Q, dtype=float), [omega]]) / self.colscale
 
-    def linear_point(self, frequency: float) -> np.ndarray:
+    def linear_response_point(self, frequency: float) -> np.ndarray:
         """The linear response (stops ignored) at ``frequency`` (Hz), scaled."""
         omega = 2 * np.pi * check.positive("frequency", frequency)
         n = self.n

@@ -87,6 +87,7 @@ import scipy.sparse as sp
 from ... import _validate as check
 from ...core.harmonics import check_harmonics, default_n_samples, transform
 from ...core.kernels import _cosine_product_matrix
+from ...core.problem import BackboneProblemBase
 from ...model.model import Model
 from .._contacts import (
     DEFAULT_PENALTY_FACTOR,
@@ -202,7 +203,7 @@ def _jacobian_pattern(K: sp.csr_matrix, M: sp.csr_matrix, harmonics: int, contac
                     omega_rows=mass_dofs, omega_pos=np.ascontiguousarray(omega_pos))
 
 
-class PenaltyHBMProblem:
+class PenaltyHBMProblem(BackboneProblemBase):
     """Penalty harmonic balance on all DOFs of a :class:`Model`, as a continuation problem.
 
     Parameters
@@ -346,7 +347,7 @@ class PenaltyHBMProblem:
         """(Q (H+1, n_dof), Ω) -> scaled unknowns, shape (n_unknowns,)."""
         return np.concatenate([np.asarray(Q, dtype=float).ravel(), [omega]]) / self.colscale
 
-    def linear_point(self, amplitude: float) -> np.ndarray:
+    def linear_mode_point(self, amplitude: float) -> np.ndarray:
         """Scaled unknowns of the linear mode whose amplitude DOF swings ``amplitude`` (m),
         the contact DOF moving toward the stop at τ = 0, at Ω = ω of that mode."""
         Q = np.zeros((self.H + 1, self.n))
@@ -355,7 +356,7 @@ class PenaltyHBMProblem:
 
     def initial_tangent(self) -> np.ndarray:
         """Unit tangent of the linear branch (growing amplitude, constant Ω)."""
-        t = self.linear_point(1.0)
+        t = self.linear_mode_point(1.0)
         t[-1] = 0.0
         return t / np.linalg.norm(t)
 

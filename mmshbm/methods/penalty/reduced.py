@@ -37,6 +37,7 @@ import numpy as np
 from ... import _validate as check
 from ...core.condense import make_condensation
 from ...core.harmonics import check_harmonics
+from ...core.problem import BackboneProblemBase
 from ...model.contact import admissible_intervals
 from ...model.model import Model
 from ..mms.conservative import _condensed_energy, _refined_max
@@ -48,7 +49,7 @@ __all__ = ["ReducedPenaltyHBMProblem"]
 log = logging.getLogger(__name__)
 
 
-class ReducedPenaltyHBMProblem:
+class ReducedPenaltyHBMProblem(BackboneProblemBase):
     """Penalty HBM condensed onto the massless (contact) DOFs, as a continuation problem.
 
     Parameters
@@ -153,7 +154,7 @@ class ReducedPenaltyHBMProblem:
         """(a (H+1, n_c), Ω) -> scaled unknowns."""
         return np.concatenate([np.asarray(a, dtype=float).ravel(), [omega]]) / self.colscale
 
-    def linear_point(self, amplitude: float) -> np.ndarray:
+    def linear_mode_point(self, amplitude: float) -> np.ndarray:
         """Scaled unknowns of the linear mode whose amplitude DOF swings ``amplitude`` (m)."""
         a = np.zeros((self.H + 1, self.n_c))
         a[1] = amplitude * self.mode_shape_c
@@ -161,7 +162,7 @@ class ReducedPenaltyHBMProblem:
 
     def initial_tangent(self) -> np.ndarray:
         """Unit tangent of the linear branch (growing amplitude, constant Ω)."""
-        t = self.linear_point(1.0)
+        t = self.linear_mode_point(1.0)
         t[-1] = 0.0
         return t / np.linalg.norm(t)
 

@@ -103,6 +103,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from ... import _validate as check
+from ...core.problem import BackboneProblemBase
 from ...model.model import Model
 from .._contacts import amplitude_sign, contact_law, contact_table, penalty_values, refined_peak, start_mode
 from ..mms.conservative import _refined_max
@@ -131,7 +132,7 @@ def _lower_band(A: sp.spmatrix, p: int) -> np.ndarray:
     return ab
 
 
-class ShootingProblem(ShootingSignals):
+class ShootingProblem(ShootingSignals, BackboneProblemBase):
     """Symmetric-orbit shooting with the trapezoidal rule, as a continuation problem.
 
     Parameters
@@ -305,7 +306,7 @@ class ShootingProblem(ShootingSignals):
         x = np.asarray(x, dtype=float)
         return np.concatenate([x[self.perm], [float(omega)]]) / self.colscale
 
-    def linear_point(self, amplitude: float) -> np.ndarray:
+    def linear_mode_point(self, amplitude: float) -> np.ndarray:
         """Scaled unknowns of the linear mode whose contact DOF swings ``amplitude`` (m);
         t = 0 is the turning point farthest from the stop."""
         y = np.concatenate([-amplitude * self.mode_shape_l, [self.omega_ref]])
@@ -313,7 +314,7 @@ class ShootingProblem(ShootingSignals):
 
     def initial_tangent(self) -> np.ndarray:
         """Unit tangent of the linear branch (growing amplitude, constant Ω)."""
-        t = self.linear_point(1.0)
+        t = self.linear_mode_point(1.0)
         t[-1] = 0.0
         return t / np.linalg.norm(t)
 
@@ -406,7 +407,7 @@ class ShootingProblem(ShootingSignals):
         from the solution the Ω update is limited to 20 %. Returns the scaled unknowns;
         raises RuntimeError without convergence."""
         amplitude = check.positive("amplitude", amplitude)
-        u = self.linear_point(amplitude) if guess is None else np.array(guess, dtype=float)
+        u = self.linear_mode_point(amplitude) if guess is None else np.array(guess, dtype=float)
         # amplitude at t = 0, a linear row in u: -stop_side * (B x)[contact] for one contact on
         # the amplitude DOF (open there), else the amplitude DOF's value (a massless one by
         # the open-contact recovery B) signed as the start of the family

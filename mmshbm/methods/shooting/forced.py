@@ -25,6 +25,7 @@ import numpy as np
 import scipy.linalg as la
 
 from ... import _validate as check
+from ...core.problem import ForcedProblemBase
 from ...model.model import Model
 from ..mms.conservative import _mean_energy
 from ..mms.damped import refined_max
@@ -34,7 +35,7 @@ from ._forced_kernels import _forced_integrate
 __all__ = ["ShootingForcedProblem"]
 
 
-class ShootingForcedProblem:
+class ShootingForcedProblem(ForcedProblemBase):
     """Forced shooting (trapezoidal AVF rule) as a continuation problem in (z₀, Ω).
 
     Parameters
@@ -104,7 +105,7 @@ class ShootingForcedProblem:
     def pack(self, z, omega):
         return np.concatenate([np.asarray(z, dtype=float), [omega]]) / self.colscale
 
-    def linear_point(self, frequency: float) -> np.ndarray:
+    def linear_response_point(self, frequency: float) -> np.ndarray:
         """The linear steady state (stop ignored) of the discrete map at ``frequency`` (Hz)."""
         omega = 2 * np.pi * check.positive("frequency", frequency)
         z = np.zeros(2 * self.n_l)

@@ -27,6 +27,7 @@ import numpy as np
 import scipy.linalg as la
 
 from ... import _validate as check
+from ...core.problem import ForcedProblemBase
 from ..exact.friction import FrictionSystem, periodic_state
 
 __all__ = ["FrictionShooting", "friction_shooting_orbit", "ShootingOrbit"]
@@ -146,7 +147,7 @@ def friction_shooting_orbit(model, force, frequency: float, steps_per_period: in
     return ShootingOrbit(sh, z, converged, res, it)
 
 
-class FrictionShootingProblem:
+class FrictionShootingProblem(ForcedProblemBase):
     """Shooting with friction as a continuation problem in (z, Ω) for
     :func:`mmshbm.frequency_response` (``method="shooting"``): unknowns the state
     z = (q_l, q_l', u) at t = 0 and Ω, scaled; residual z(T) − z; Jacobian by forward
@@ -205,7 +206,7 @@ class FrictionShootingProblem:
         orbit = friction_shooting_orbit(self.model, self.force, frequency, self.steps)
         return self.pack(orbit.state, 2 * np.pi * frequency)
 
-    def linear_point(self, frequency: float) -> np.ndarray:
+    def linear_response_point(self, frequency: float) -> np.ndarray:
         return self.start_point(frequency)
 
     def _residual(self, u):

@@ -1,0 +1,258 @@
+"""The continuation problem protocol: what the path follower asks of a problem.
+
+The driver (:func:`mmshbm.core.continuation.continue_branch`) follows the solution curve
+of n−1 equations in n unknowns. It needs only the small required protocol
+:class:`ContinuationProblem`; everything else a problem can offer is a named
+*capability*, declared on :class:`ContinuationProblemBase` with a default that means "not
+offered" (``None``, or the plain rule), so that the driver, the family events and the
+runners call them directly and never probe a problem for attributes.
+
+**Required** (:class:`ContinuationProblem`):
+
+``n_unknowns : int``
+    n, the number of scaled unknowns u (the last one is usually the frequency).
+``evaluate(u, jacobian=True)``
+    The scaled residual R(u), shape (n−1,); with ``jacobian`` the pair (R, J), J of
+    shape (n−1, n), a dense ndarray or a scipy.sparse matrix. Numerical failures raise
+    ArithmeticError, ValueError, RuntimeError or LinAlgError (the step then fails and is
+    retried smaller; never the run).
+``monitor(u) -> dict``
+    The recorded quantities of a converged point (name -> float or array): what bounds
+    act on and what the branch stores.
+
+**Capabilities** (declared on :class:`ContinuationProblemBase`):
+
+:class:`StepControl`
+    ``step_control`` (``"effort"`` or ``"residual"``: the step rule that
+    ``ContinuationOptions(step_control="auto")`` picks); ``fast_newton(u0, u_pred,
+    tangent, tol, max_iter, step_tol)``, a compiled corrector returning (u, iterations,
+    history, J) or None to let the Python loop run; ``measure``, the record whose relative
+    change caps the arclength step (None: only ``ds_max``); ``progress_records``, the
+    records a progress bar shows.
+:class:`PinnedSolves`
+    ``amplitude_and_gradient(u) -> (A, ∇A)`` and ``amplitude_value(u) -> A`` for Newton
+    with the amplitude pinned (:mod:`mmshbm.core.pinned`); None: the amplitude is
+    differenced from ``monitor(u)["amplitude"]``.
+:class:`FamilyEvents`
+    What the jumps over internal-resonance tongues use (:mod:`mmshbm.core.family`):
+    ``frequency_of(u)`` (Hz, no evaluation), ``family_frequency_limit()`` (Hz),
+    ``scaled_state(u, factor)``, ``family_predictor(u_from, A_from, A_to, A_max)``,
+    ``family_landing(u_from, rec_from, excursion, A_max, A_min)``. Each is None when not
+    offered.
+:class:`AmplitudeStart` (backbones, :class:`BackboneProblemBase`)
+    ``linear_mode_point(amplitude)`` (the linear mode at that amplitude, m),
+    ``initial_tangent()``, ``open_amplitude()`` (the amplitude at which the linear mode
+    first reaches a stop; None when not offered).
+:class:`FrequencyStart` (forced responses, :class:`ForcedProblemBase`)
+    ``linear_response_point(frequency)`` (the linear response at that frequency, Hz),
+    ``start_point(frequency)`` (a converged first point; default the linear response),
+    ``initial_tangent()``.
+:class:`BranchRecords`
+    ``branch_records(states) -> dict`` (records computed once for a whole branch; None
+    when not offered), ``tracked_frequencies`` (Hz of the modes whose energy shares are
+    recorded; None), ``H`` and ``N`` (harmonics and samples; 0 where they do not apply),
+    ``solver_settings()`` (the numbers that fix the discretisation, for checkpoints).
+
+A problem that only has the required protocol (a test problem, a user's) goes through
+:func:`as_problem`, which wraps it in a :class:`ContinuationProblemBase` with every
+capability at its default; capabilities are offered by subclassing the base.
+
+``linear_point`` is the name both starts had before they were told apart: it stays as a
+thin alias, of ``linear_mode_point`` on backbone problems and of
+``linear_response_point`` on forced ones.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+
+__all__ = ["AmplitudeStart", "BackboneProblemBase", "BranchRecords", "ContinuationProblem",
+           "ContinuationProblemBase", "FamilyEvents", "ForcedProblemBase", "FrequencyStart", "PinnedSolves",
+           "StepControl", "as_problem"]
+
+
+@runtime_checkable
+class ContinuationProblem(Protocol):
+    """What the driver needs from every problem (all vectors in scaled units)."""
+
+    n_unknowns: int
+
+    def evaluate(self, u: np.ndarray, jacobian: bool = True):
+        """Residual (n−1,) and, if ``jacobian``, the Jacobian (n−1, n), dense or sparse."""
+
+    def monitor(self, u: np.ndarray) -> dict:
+        """Scalar quantities recorded per point (e.g. frequency, amplitude, energy)."""
+
+
+@runtime_checkable
+class StepControl(Protocol):
+    """The step rule and corrector a problem asks for."""
+
+    step_control: str
+    fast_newton: Callable[..., tuple | None] | None
+    measure: str | None
+    progress_records: tuple[str, ...]
+
+
+@runtime_checkable
+class PinnedSolves(Protocol):
+    """The amplitude A(u) and its gradient, for solves with the amplitude pinned."""
+
+    amplitude_and_gradient: Callable[[np.ndarray], tuple[float, np.ndarray]] | None
+    amplitude_value: Callable[[np.ndarray], float] | None
+
+
+@runtime_checkable
+class FamilyEvents(Protocol):
+    """Predictors, landings and the frequency trust region of the family's jumps."""
+
+    frequency_of: Callable[[np.ndarray], float] | None
+    family_frequency_limit: Callable[[], float] | None
+    scaled_state: Callable[[np.ndarray, float], np.ndarray] | None
+    family_predictor: Callable[[np.ndarray, float, float, float], np.ndarray] | None
+    family_landing: Callable[..., tuple[np.ndarray, float]] | None
+
+
+@runtime_checkable
+class AmplitudeStart(Protocol):
+    """A backbone's start: the linear mode at a given amplitude."""
+
+    open_amplitude: Callable[[], float] | None
+
+    def linear_mode_point(self, amplitude: float) -> np.ndarray: ...
+
+    def initial_tangent(self) -> np.ndarray: ...
+
+
+@runtime_checkable
+class FrequencyStart(Protocol):
+    """A forced response's start: a point at a given excitation frequency."""
+
+    def linear_response_point(self, frequency: float) -> np.ndarray: ...
+
+    def start_point(self, frequency: float) -> np.ndarray: ...
+
+    def initial_tangent(self) -> np.ndarray: ...
+
+
+@runtime_checkable
+class BranchRecords(Protocol):
+    """What the runners read after the continuation."""
+
+    branch_records: Callable[[np.ndarray], dict] | None
+    tracked_frequencies: Any
+    H: int
+    N: int
+
+    def solver_settings(self) -> dict: ...
+
+
+#: the problem attributes a checkpoint header records (a resumed run must agree on them)
+_SETTINGS = ("H", "N", "r", "mode", "penalty_stiffness", "steps_per_period")
+
+
+class ContinuationProblemBase:
+    """Defaults of every capability (see the module docstring): a subclass implements
+    ``n_unknowns``, ``evaluate`` and ``monitor`` and overrides what it offers."""
+
+    n_unknowns: int
+
+    # StepControl
+    step_control: str = "effort"
+    fast_newton: Callable[..., tuple | None] | None = None
+    measure: str | None = "amplitude"
+    progress_records: tuple[str, ...] = ("frequency", "amplitude")
+    # PinnedSolves
+    amplitude_and_gradient: Callable[[np.ndarray], tuple[float, np.ndarray]] | None = None
+    amplitude_value: Callable[[np.ndarray], float] | None = None
+    # FamilyEvents
+    frequency_of: Callable[[np.ndarray], float] | None = None
+    family_frequency_limit: Callable[[], float] | None = None
+    scaled_state: Callable[[np.ndarray, float], np.ndarray] | None = None
+    family_predictor: Callable[[np.ndarray, float, float, float], np.ndarray] | None = None
+    family_landing: Callable[..., tuple[np.ndarray, float]] | None = None
+    # AmplitudeStart
+    open_amplitude: Callable[[], float] | None = None
+    # BranchRecords
+    branch_records: Callable[[np.ndarray], dict] | None = None
+    tracked_frequencies: Any = None
+    H: int = 0
+    N: int = 0
+
+    def initial_tangent(self) -> np.ndarray:
+        """Unit tangent at the start of the branch."""
+        raise NotImplementedError(f"{type(self).__name__} has no initial tangent")
+
+    def solver_settings(self) -> dict:
+        """The numbers among H, N, r, mode, penalty_stiffness and steps_per_period that
+        this problem holds (a checkpoint's ``solver`` entry: a resumed run must match)."""
+        own = vars(self)
+        out = {}
+        for name in _SETTINGS:
+            value = own.get(name)
+            if isinstance(value, int | float | np.number) and not isinstance(value, bool):
+                out[name] = value.item() if isinstance(value, np.generic) else value
+        return out
+
+
+class BackboneProblemBase(ContinuationProblemBase):
+    """A problem continued from the linear mode at a small amplitude (:class:`AmplitudeStart`)."""
+
+    def linear_mode_point(self, amplitude: float) -> np.ndarray:
+        """Scaled unknowns of the linear mode whose amplitude DOF swings ``amplitude`` (m)."""
+        raise NotImplementedError(f"{type(self).__name__} has no linear mode start")
+
+    def linear_point(self, amplitude: float) -> np.ndarray:
+        """Alias of :meth:`linear_mode_point` (the name of mmshbm 0.2)."""
+        return self.linear_mode_point(amplitude)
+
+
+class ForcedProblemBase(ContinuationProblemBase):
+    """A problem continued in the excitation frequency (:class:`FrequencyStart`)."""
+
+    def linear_response_point(self, frequency: float) -> np.ndarray:
+        """Scaled unknowns of the linear response at ``frequency`` (Hz)."""
+        raise NotImplementedError(f"{type(self).__name__} has no linear response start")
+
+    def start_point(self, frequency: float) -> np.ndarray:
+        """Scaled unknowns of the first point at ``frequency`` (Hz): the linear response
+        unless the problem converges a better one."""
+        return self.linear_response_point(frequency)
+
+    def linear_point(self, frequency: float) -> np.ndarray:
+        """Alias of :meth:`linear_response_point` (the name of mmshbm 0.2)."""
+        return self.linear_response_point(frequency)
+
+
+class _Plain(ContinuationProblemBase):
+    """A problem with only the required protocol, every capability at its default."""
+
+    def __init__(self, problem):
+        self.problem = problem
+        self.n_unknowns = problem.n_unknowns
+
+    def evaluate(self, u, jacobian: bool = True):
+        return self.problem.evaluate(u, jacobian=jacobian)
+
+    def monitor(self, u) -> dict:
+        return self.problem.monitor(u)
+
+
+def as_problem(problem) -> ContinuationProblemBase:
+    """``problem`` itself when it derives from :class:`ContinuationProblemBase`, else
+    wrapped in one (every capability at its default).
+
+    Raises
+    ------
+    TypeError
+        When ``problem`` lacks ``n_unknowns``, ``evaluate`` or ``monitor``.
+    """
+    if isinstance(problem, ContinuationProblemBase):
+        return problem
+    if not isinstance(problem, ContinuationProblem):
+        raise TypeError(f"a continuation problem needs n_unknowns, evaluate(u, jacobian) and monitor(u); "
+                        f"got {type(problem).__name__}")
+    return _Plain(problem)
