@@ -32,7 +32,6 @@ FORCED_METHODS = {
     "shooting": "mmshbm.methods.shooting.forced:ShootingForcedProblem",
 }
 
-_CONTINUATION_FIELDS = runner.CONTINUATION_FIELDS
 #: continuation defaults of a frequency response (scaled units: coefficients in gaps, Ω in ω_1)
 _DEFAULTS = {"ds": 0.02, "ds_max": 0.3, "max_steps": 3000, "max_newton": 12}
 

@@ -261,14 +261,19 @@ def mark_grazing(special: list, contact_force_max, amplitude, gap: float) -> lis
     """``special`` with a "grazing" point after "start": the first point, past the first,
     where a stop carries force (``contact_force_max`` > 0). Where the force is not
     recorded (all NaN), the first point whose amplitude passes the gap (> gap·(1 + 1e-9)).
+    None on a model whose smallest gap is 0 (a stop touched from the start).
+
+    The force, not the amplitude, says where a stop is first touched: the amplitude is
+    that of ``model.amplitude_dof``, which with several contacts, a clearance or a forced
+    response need not be the contact DOF whose gap is ``gap``.
     """
     force = np.asarray(contact_force_max, dtype=float)
-    if np.isfinite(force).any():
-        hits = np.flatnonzero(force > 0)
-    elif gap > 0:
-        hits = np.flatnonzero(np.asarray(amplitude, dtype=float) > gap * (1 + 1e-9))
-    else:
+    if not gap > 0:
         hits = np.zeros(0, dtype=int)
+    elif np.isfinite(force).any():
+        hits = np.flatnonzero(force > 0)
+    else:
+        hits = np.flatnonzero(np.asarray(amplitude, dtype=float) > gap * (1 + 1e-9))
     special = list(special)
     if len(hits) and hits[0] > 0:
         special.insert(1, SpecialPoint("grazing", int(hits[0])))
