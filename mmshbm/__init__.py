@@ -17,9 +17,12 @@ from __future__ import annotations
 
 import importlib
 
-from . import _aliases
+from . import _aliases, _entry_points
 
 _aliases.install()
+# the results call functions of the methods layer above them (to rebuild a solver, redo a
+# run), which the methods package registers when imported: import it when one is missing
+_entry_points.add_loader(lambda: importlib.import_module("mmshbm.methods"))
 
 __version__ = "0.2.0"
 

@@ -3,7 +3,10 @@ module imports itself back through others.
 
 Layers, bottom to top: the model, the FE builders, the numerical core, results, the
 methods, the analyses, and on top io, plots and the command line. Function-level (lazy)
-imports count as much as module-level ones.
+imports count as much as module-level ones, and so do imports by name:
+``importlib.import_module("mmshbm...")`` and ``__import__`` with a constant (or
+``f"{__name__}..."``) name, and ``"mmshbm.module:attr"`` strings (entry points resolved at
+run time).
 """
 
 import ast
@@ -21,6 +24,7 @@ LAYERS = {
     "mmshbm._threads": 0,
     "mmshbm._aliases": 0,
     "mmshbm._kernel_cache": 0,
+    "mmshbm._entry_points": 0,
     "mmshbm.model": 1,
     "mmshbm.fe": 2,
     "mmshbm.core": 3,
@@ -55,11 +59,13 @@ def _modules() -> dict[str, pathlib.Path]:
 
 
 def _imports(module: str, path: pathlib.Path) -> set[str]:
-    """Dotted mmshbm modules that ``module`` imports, anywhere in its body."""
+    """Dotted mmshbm modules that ``module`` imports, anywhere in its body: import
+    statements, and imports by name (:func:`_named_imports`)."""
     is_package = path.name == "__init__.py"
     package = module if is_package else module.rpartition(".")[0]
     found = set()
-    for node in ast.walk(ast.parse(path.read_text())):
+    tree = ast.parse(path.read_text())
+    for node in ast.walk(tree):
         if isinstance(node, ast.Import):
             found.update(a.name for a in node.names if a.name.startswith("mmshbm"))
         elif isinstance(node, ast.ImportFrom):
@@ -75,10 +81,68 @@ def _imports(module: str, path: pathlib.Path) -> set[str]:
             for alias in node.names:  # `from pkg import submodule`
                 sub = f"{target}.{alias.name}"
                 found.add(sub if sub in modules else target)
+    found |= _named_imports(module, tree)
     return {m for m in found if m != "mmshbm"}
 
 
+def _constant_name(node: ast.AST, module: str) -> str | None:
+    """The text of a constant string, or of ``f"{__name__}.rest"`` in ``module``; else None."""
+    if isinstance(node, ast.Constant) and isinstance(node.value, str):
+        return node.value
+    if isinstance(node, ast.JoinedStr):
+        parts = []
+        for value in node.values:
+            if isinstance(value, ast.Constant):
+                parts.append(str(value.value))
+            elif isinstance(value.value, ast.Name) and value.value.id == "__name__":
+                parts.append(module)
+            else:
+                return None
+        return "".join(parts)
+    return None
+
+
+def _owning_module(dotted: str) -> str | None:
+    """The longest package module that ``dotted`` names (or lies in: "pkg.mod.attr")."""
+    parts = dotted.split(".")
+    for n in range(len(parts), 0, -1):
+        candidate = ".".join(parts[:n])
+        if candidate in MODULE_NAMES:
+            return candidate
+    return None
+
+
+def _named_imports(module: str, tree: ast.AST) -> set[str]:
+    """Modules imported by name: ``importlib.import_module(name)`` / ``__import__(name)``
+    with a constant name (a relative one with its ``package`` argument ``__name__`` or
+    ``__package__``), and constant ``"mmshbm.module:attr"`` strings anywhere."""
+    found = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Call) and node.args:
+            func = node.func
+            name = func.attr if isinstance(func, ast.Attribute) else getattr(func, "id", None)
+            if name in ("import_module", "__import__"):
+                target = _constant_name(node.args[0], module)
+                if target and target.startswith("."):
+                    package = module if MODULES[module].name == "__init__.py" else module.rpartition(".")[0]
+                    level = len(target) - len(target.lstrip("."))
+                    base = package.split(".")[: len(package.split(".")) - (level - 1)]
+                    target = ".".join(base + [target.lstrip(".")])
+                if target and target.startswith("mmshbm"):
+                    owner = _owning_module(target)
+                    if owner:
+                        found.add(owner)
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+            text = node.value
+            if text.startswith("mmshbm.") and text.count(":") == 1 and " " not in text:
+                owner = _owning_module(text.partition(":")[0])
+                if owner:
+                    found.add(owner)
+    return found
+
+
 MODULES = _modules()
+MODULE_NAMES = set(MODULES)
 GRAPH = {m: _imports(m, p) for m, p in MODULES.items() if m != "mmshbm"}
 
 
@@ -117,3 +181,16 @@ def test_modules_are_small():
     """One concern per module: none grows past ~500 lines (kernels excepted up to 600)."""
     too_long = {m: n for m, p in MODULES.items() if (n := len(p.read_text().splitlines())) > 600}
     assert not too_long, f"split these modules: {too_long}"
+
+
+@pytest.mark.parametrize("source", [
+    'import importlib\ndef f():\n    return importlib.import_module("mmshbm.methods.registry").make_problem',
+    'ENTRY = {"backbone": "mmshbm.methods.backbone:backbone"}',
+    'def f():\n    return __import__("mmshbm.analysis.studies")',
+])
+def test_imports_by_name_are_seen(source, tmp_path):
+    """A results module that reaches the methods or analyses by a name string is caught."""
+    path = tmp_path / "probe.py"
+    path.write_text(source)
+    found = _imports("mmshbm.results.probe", path)
+    assert found and all(_layer(t) > _layer("mmshbm.results.probe") for t in found), found

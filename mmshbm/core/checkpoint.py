@@ -53,15 +53,30 @@ def model_fingerprint(model) -> str:
 
 
 def _plain(x):
-    """JSON-ready copy of ``x``: arrays to lists, NumPy scalars to Python numbers."""
+    """JSON-ready copy of ``x``: arrays to lists, NumPy scalars to Python numbers; a complex
+    number or array (a forced response's Floquet multipliers) to ``{"complex": [re, im]}``,
+    which :func:`_restore` reads back."""
     if isinstance(x, dict):
         return {str(k): _plain(v) for k, v in x.items()}
     if isinstance(x, list | tuple):
         return [_plain(v) for v in x]
+    if isinstance(x, np.ndarray | complex | np.complexfloating) and np.iscomplexobj(x):
+        return {"complex": [np.real(x).tolist(), np.imag(x).tolist()]}
     if isinstance(x, np.ndarray):
         return x.tolist()
     if isinstance(x, np.generic):
         return x.item()
+    return x
+
+
+def _restore(x):
+    """Inverse of :func:`_plain` for a record's value: ``{"complex": [re, im]}`` to a complex
+    array (bit for bit), anything else as read."""
+    if isinstance(x, dict) and set(x) == {"complex"}:
+        re, im = (np.asarray(v, dtype=float) for v in x["complex"])
+        out = np.empty(re.shape, dtype=complex)
+        out.real, out.imag = re, im
+        return out
     return x
 
 
@@ -102,7 +117,7 @@ class Checkpoint:
         special = special_from_json([s for q in p for s in q.get("special", ())])
         return ContinuationState(
             u=[np.array(q["u"], dtype=float) for q in p],
-            records=[dict(q["record"]) for q in p],
+            records=[{k: _restore(v) for k, v in q["record"].items()} for q in p],
             newton_iterations=[int(q["newton"]) for q in p],
             step_size=[float(q["ds"]) for q in p],
             residual_histories=[np.array(q["history"], dtype=float) for q in p],

@@ -18,6 +18,7 @@ Caching: this kernel calls kernels of three other files; the package's cache pol
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 from numba import njit
 
@@ -25,32 +26,57 @@ from ._modal_kernels import _modal_dynamic_stiffness
 from .contact_kernels import _mmshbm_eval
 from .kernels import JIT_OPTIONS, _dense_solve
 
-__all__ = []
+__all__ = ["ModalCondensation", "PoleTerms", "ContactLaw", "Sampling", "Scaling", "NewtonWork", "EvalWork",
+           "newton_modal_entry"]
 
 #: status codes of :func:`_newton_modal`
 CONVERGED, NO_CONVERGENCE, NON_FINITE, SINGULAR, POLE, SKIPPED = 0, 1, 2, 3, 4, 5
 
 
+#: The arguments of :func:`_newton_modal`, grouped (numba takes named tuples of arrays and
+#: scalars as arguments; :meth:`MMSHBMProblem._fast_setup` builds them, once per problem).
+#: The modal condensation: D0 (n_c, n_c), B (m, n_c) the b_j, w2 (m,) the ω_j², Rs (P, n_c, n_c)
+#: the residual-inertia terms, keep (H+1, m) uint8 (0: the mode's term is carried by a pole
+#: unknown), static (H+1, n_c, n_c) the static part b_j b_jᵀ/ω_j² of those terms, pole_rtol
+#: the relative distance to a fixed-interface eigenfrequency that counts as a pole.
+ModalCondensation = namedtuple("ModalCondensation", "D0 B w2 Rs keep static pole_rtol")
+#: The pole unknowns η_jk (:mod:`mmshbm.core.poles`): harmonic k (n_p,) int64, b (n_p, n_c), w2 (n_p,).
+PoleTerms = namedtuple("PoleTerms", "k b w2")
+#: The contact law: cdof (n_contacts,) int64 rows of the contact DOFs, lo/hi their admissible
+#: intervals (m), r (n_contacts,) the proximal parameters (N/m), exact the closed-form projection.
+ContactLaw = namedtuple("ContactLaw", "cdof lo hi r exact")
+#: Alternating frequency-time tables: cos (2H+1, N), sin (H+1, N), tau (N,) (rad).
+Sampling = namedtuple("Sampling", "cos sin tau")
+#: Scaling of the unknowns (n,) and of the residual rows (n-1,).
+Scaling = namedtuple("Scaling", "colscale rowscale")
+#: Work arrays of the corrector: D, dD (H+1, n_c, n_c), R (n-1,), J (n-1, n), A (n, n), rhs (n,),
+#: LU (n, n), du (n,), a (H+1, n_c), eta (n_p,), sign (1,).
+NewtonWork = namedtuple("NewtonWork", "D dD R J A rhs LU du a eta sign")
+#: Work arrays of :func:`~mmshbm.core.contact_kernels._mmshbm_eval` (its last twelve arguments).
+EvalWork = namedtuple("EvalWork", "F dF pc ps gc g_t dg_t roots C_hi C_lo S_w P")
+
+
 @njit(**JIT_OPTIONS)
-def _newton_modal(u, u_pred, t, tol, step_tol, max_iter, n_c, H, colscale, rowscale,
-                  D0, B, w2, Rs, keep, static, pole_rtol,
-                  pole_k, pole_b, pole_w2, cdof, lo, hi, r, exact, cos_table, sin_table, tau_t,
-                  hist, D, dD, R, J, A, rhs, LU, du, a, eta, sign,
-                  F, dF, pc, ps, gc, g_t, dg_t, roots, C_hi, C_lo, S_w, P):
+def _newton_modal(u, u_pred, t, tol, step_tol, max_iter, n_c, H, hist, scale, cond, poles, law, samples,
+                  work, ework):
     """Newton on [R(u); t·(u − u_pred)] = 0 from ``u`` (updated in place).
 
     Converged when max(|R|∞, |t·(u − u_pred)|) <= tol, or when the last update's ∞-norm is
     <= step_tol with the residual <= √tol. ``hist`` (max_iter+1,) receives the residual
-    norms; on return J (n−1, n) is the Jacobian at the last evaluated iterate and D, dD the
-    condensed stiffness there. Returns (status, iterations) with the status codes of this
-    module: SKIPPED is a convergence whose last update was not evaluated again, because
-    quadratic convergence predicted its residual below tol/10 (``hist[it]`` holds that
-    prediction; J, D and dD are those of the iterate before).
+    norms; on return work.J (n−1, n) is the Jacobian at the last evaluated iterate and
+    work.D, work.dD the condensed stiffness there. Returns (status, iterations) with the
+    status codes of this module: SKIPPED is a convergence whose last update was not
+    evaluated again, because quadratic convergence predicted its residual below tol/10
+    (``hist[it]`` holds that prediction; J, D and dD are those of the iterate before).
 
-    Condensation data: D0 (n_c, n_c), B (m, n_c), w2 (m,), Rs (P, n_c, n_c), keep (H+1, m)
-    uint8 (0: the mode's term is carried by a pole unknown), static (H+1, n_c, n_c) the
-    static part b_j b_jᵀ/ω_j² of those terms; the rest as :func:`_mmshbm_eval`.
+    ``scale`` (:data:`Scaling`), ``cond`` (:data:`ModalCondensation`), ``poles``
+    (:data:`PoleTerms`), ``law`` (:data:`ContactLaw`), ``samples`` (:data:`Sampling`),
+    ``work`` (:data:`NewtonWork`) and ``ework`` (:data:`EvalWork`) group the data of
+    :func:`_mmshbm_eval` and of the bordered solve.
     """
+    colscale, rowscale = scale.colscale, scale.rowscale
+    D, dD, R, J, A, rhs, LU, du, a, eta = (work.D, work.dD, work.R, work.J, work.A, work.rhs, work.LU,
+                                           work.du, work.a, work.eta)
     n = u.shape[0]
     n_a = (H + 1) * n_c
     with_derivative = n > 0  # a run-time bool: a literal True would compile the callee twice
@@ -63,15 +89,18 @@ def _newton_modal(u, u_pred, t, tol, step_tol, max_iter, n_c, H, colscale, rowsc
         for p in range(n_p):
             eta[p] = u[n_a + p] * colscale[n_a + p]
         omega = u[n - 1] * colscale[n - 1]
-        if _modal_dynamic_stiffness(D0, B, w2, Rs, omega, H, keep, pole_rtol, D, dD, with_derivative) != 0:
+        if _modal_dynamic_stiffness(cond.D0, cond.B, cond.w2, cond.Rs, omega, H, cond.keep, cond.pole_rtol,
+                                    D, dD, with_derivative) != 0:
             return POLE, it
+        static = cond.static
         for k in range(H + 1):
             for i in range(n_c):
                 for j in range(n_c):
                     D[k, i, j] += static[k, i, j]
-        _mmshbm_eval(D, dD, a, eta, omega, pole_k, pole_b, pole_w2, cdof, lo, hi, r, exact, cos_table,
-                     sin_table, tau_t, rowscale, colscale, True, R, J, F, dF, pc, ps, gc, g_t, dg_t, roots,
-                     C_hi, C_lo, S_w, P)
+        _mmshbm_eval(D, dD, a, eta, omega, poles.k, poles.b, poles.w2, law.cdof, law.lo, law.hi, law.r,
+                     law.exact, samples.cos, samples.sin, samples.tau, rowscale, colscale, True, R, J,
+                     ework.F, ework.dF, ework.pc, ework.ps, ework.gc, ework.g_t, ework.dg_t, ework.roots,
+                     ework.C_hi, ework.C_lo, ework.S_w, ework.P)
         arc = 0.0
         for i in range(n):
             arc += t[i] * (u[i] - u_pred[i])
@@ -94,7 +123,7 @@ def _newton_modal(u, u_pred, t, tol, step_tol, max_iter, n_c, H, colscale, rowsc
         for j in range(n):
             A[n - 1, j] = t[j]
         rhs[n - 1] = arc
-        if _dense_solve(A, rhs, LU, du, sign) != 0:
+        if _dense_solve(A, rhs, LU, du, work.sign) != 0:
             return SINGULAR, it
         du_norm = 0.0
         for i in range(n):
@@ -115,6 +144,22 @@ def _newton_modal(u, u_pred, t, tol, step_tol, max_iter, n_c, H, colscale, rowsc
                     hist[it + 1] = predicted
                     return SKIPPED, it + 1
     return NO_CONVERGENCE, max_iter
+
+
+def newton_modal_entry(args: tuple):
+    """The compiled :func:`_newton_modal` for the types of ``args`` (its full argument
+    tuple), as a plain callable: compiled, or taken from the disk cache, on first use.
+
+    Numba's dispatcher resolves the type of every argument on each call, and for named
+    tuples that takes its slow path (≈ 1 µs a tuple: a third of a warm corrector on a small
+    problem). A problem resolves the types once and keeps the entry point; every later call
+    must pass arguments of the same types (the problem's arrays are fixed; u, u_pred, t and
+    hist are C-contiguous float64 vectors, the scalars Python floats and ints). Under
+    ``NUMBA_DISABLE_JIT=1`` the Python function itself.
+    """
+    if not hasattr(_newton_modal, "compile"):
+        return _newton_modal
+    return _newton_modal.compile(tuple(_newton_modal.typeof_pyval(a) for a in args))
 
 
 @njit(**JIT_OPTIONS)

@@ -11,7 +11,8 @@ Kinds used by the package:
 ``"start"``, ``"endpoint"``
     First and last point.
 ``"grazing"``
-    First point whose amplitude exceeds the gap.
+    First point where a stop carries force (``contact_force_max`` > 0; where the force
+    is not recorded, whose amplitude exceeds the gap): :func:`mmshbm.methods.runner.mark_grazing`.
 ``"fold"``
     The frequency turns back (the tangent's Ω-component changes sign).
 ``"branch_point"``

@@ -3,27 +3,19 @@
 
 from __future__ import annotations
 
-import dataclasses
 import logging
-import platform
-import time
 from collections.abc import Mapping
-from pathlib import Path
 
 import numpy as np
 
 from .. import _validate as check
-from .._threads import blas_limit
-from ..core.continuation import ContinuationOptions, continue_branch
-from ..core.resonances import internal_resonances
-from ..core.special_points import SpecialPoint
-from ..core.status import Status
 from ..model.model import Model
 from ..results.branch import Branch
+from . import runner
 from .limits import check_resources
 from .registry import _CONTINUATION_FIELDS, METHODS, make_problem, method_options  # noqa: F401 - public here since 0.1
 
-__all__ = ["backbone"]
+__all__ = ["backbone", "backbone_method"]
 
 log = logging.getLogger(__name__)
 
@@ -39,9 +31,11 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     harmonics : int
         Highest harmonic H of the Fourier ansatz (harmonic-balance methods).
     method : {"mmshbm", "penalty", "shooting", "epmc"}
-        MMS-HBM, or one of the baselines. A model with damping (``model.damping``) gets
-        its damped nonlinear mode with "mmshbm" ("epmc", :mod:`mmshbm.methods.mms.epmc`; the
-        branch's ``damping_ratio`` is ξ/(2Ω)).
+        MMS-HBM, or one of the baselines. A model with damping (``model.damping``, or
+        friction contacts) gets its damped nonlinear mode with "mmshbm": the method becomes
+        "epmc" (:mod:`mmshbm.methods.mms.epmc`, :func:`backbone_method`), which the branch's
+        ``method`` says, with ``metadata["requested_method"] = "mmshbm"`` and a log record
+        (INFO); the branch's ``damping_ratio`` is ξ/(2Ω).
     max_amplitude : float, optional
         Stop at this amplitude (m) of the contact DOF; default 10 gaps.
     start_amplitude : float, optional
@@ -82,17 +76,15 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     TypeError, ValueError
         For bad input, naming the offending argument and value.
     """
-    if not isinstance(model, Model):
-        raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
-    if not isinstance(method, str) or method not in METHODS:
-        raise ValueError(f"unknown method {method!r}; choose one of {sorted(METHODS)}")
-    # the backbone of a damped model (viscous or friction) is its damped nonlinear mode (EPMC)
-    if method == "mmshbm" and (model.damping is not None or model.friction):
-        method = "epmc"
-    if method != "shooting":
-        check.integer("harmonics", harmonics, minimum=1)
-    if callback is not None and not callable(callback):
-        raise TypeError(f"callback must be callable, got {type(callback).__name__} {callback!r}")
+    runner.check_model(model)
+    runner.check_method(method, METHODS)
+    requested = method
+    method = backbone_method(model, method)
+    if method != requested:
+        log.info("the model is damped: its backbone is the damped nonlinear mode (method %r, asked %r)",
+                 method, requested)
+    runner.check_harmonics(method, harmonics)
+    runner.check_callback(callback)
     gap = model.gap
     if max_amplitude is None:
         if gap == 0:
@@ -113,103 +105,63 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
                          f"({max_amplitude:g} m)")
     if bounds is not None and not isinstance(bounds, Mapping):
         raise TypeError(f"bounds must be a dict name -> (lo, hi), got {type(bounds).__name__} {bounds!r}")
-    cont = {k: options.pop(k) for k in list(options) if k in _CONTINUATION_FIELDS}
-    all_bounds = {"amplitude": (0.0, max_amplitude)}
-    for name, bound in dict(bounds or {}).items():
-        all_bounds[name] = bound
-    cont["bounds"] = {**all_bounds, **dict(cont.get("bounds", {}))}
-    copts = ContinuationOptions(**cont)
+    copts = runner.continuation_options(options, {"amplitude": (0.0, max_amplitude), **dict(bounds or {})})
     if method != "shooting":
         options["harmonics"] = harmonics
-    checkpoint = _path_argument("checkpoint", checkpoint)
-    resume = _path_argument("resume", resume)
+    checkpoint = runner.path_argument("checkpoint", checkpoint)
+    resume = runner.path_argument("resume", resume)
     check_resources(model, method, options)  # before any allocation: a clear error, not a MemoryError
     problem = make_problem(model, method, **options)
     if default_start and gap > 0 and problem.open_amplitude is not None:
         # the linear mode is a solution only while every contact is open
         start_amplitude = min(start_amplitude, 0.5 * problem.open_amplitude())
-    header = _checkpoint_header(model, method, problem, options)
-
-    state, restored, previous = None, [], None
-    if resume is not None:
-        from ..core.checkpoint import read_checkpoint
-
-        previous = read_checkpoint(resume)
-        _check_resumable(previous.header, header, resume)
-        state = previous.state()
-        restored = previous.points
-        log.info("resuming %s from point %d of %s", method, len(restored) - 1, resume)
-    writer = None
-    if checkpoint is not None:
-        from ..core.checkpoint import CheckpointWriter
-
-        writer = CheckpointWriter(checkpoint, {**header, "continuation": _jsonable(dataclasses.asdict(copts)),
-                                               "start_amplitude": start_amplitude,
-                                               "max_amplitude": max_amplitude}, restored)
+    header = runner.checkpoint_header(model, method, problem, options)
 
     progress = None
     if verbose:
         progress, callback = _amplitude_progress(method, max_amplitude, gap, callback)
-    t0 = time.perf_counter()
-    try:
-        if previous is not None and _finished(previous, copts):
-            res = _finished_result(state, previous.terminal)
-        else:
-            with blas_limit():  # small dense solves: one BLAS thread unless the user chose (mmshbm._threads)
-                res = continue_branch(problem, None if state else problem.linear_mode_point(start_amplitude),
-                                      None if state else problem.initial_tangent(), copts, callback=callback,
-                                      progress=None, resume=state,
-                                      on_point=writer.point if writer is not None else None)
-        if writer is not None:
-            writer.end(res.status)
-    finally:
-        if progress is not None:
-            progress.close()
-        if writer is not None:
-            writer.close()
-    elapsed = time.perf_counter() - t0
+
+    def start():
+        return problem.linear_mode_point(start_amplitude), problem.initial_tangent()
+
+    done = runner.run(problem, copts, start, callback=callback, checkpoint=checkpoint, resume=resume,
+                      header=header, close=(progress,),
+                      header_extra={"start_amplitude": start_amplitude, "max_amplitude": max_amplitude})
+    res = done.result
     rec = res.records
     n = len(res.u)
 
     def column(name):
         return rec[name] if name in rec else np.full(n, np.nan)
 
-    special = list(res.special_points)
     amp = column("amplitude")
-    if gap > 0:
-        above = np.flatnonzero(amp > gap * (1 + 1e-9))
-        if len(above) and above[0] > 0:
-            special.insert(1, SpecialPoint("grazing", int(above[0])))
+    special = runner.mark_grazing(res.special_points, column("contact_force_max"), amp, gap)
     if problem.branch_records is not None and n:  # records computed once for the whole branch
         rec.update(problem.branch_records(res.u))
-    if "modal_shares" in rec and problem.tracked_frequencies is not None:
-        named = internal_resonances(rec["frequency"], rec["modal_shares"], problem.tracked_frequencies,
-                                    problem.mode)
-        special = sorted(special + named, key=lambda s: (s[1], s[0] == "endpoint"))
-    log.info("%s backbone: %d points, status %s, %.3f s", method, n, res.status, elapsed)
-    metadata = {
-        "model": model.description, "method": method, "harmonics": int(problem.H),
-        "n_samples": int(problem.N), "max_amplitude": max_amplitude,
-        "start_amplitude": start_amplitude, "method_options": _jsonable(options),
-        "continuation": _jsonable(dataclasses.asdict(copts)), "elapsed_s": elapsed,
-        "python": platform.python_version(), "numpy": np.__version__,
-    }
-    if checkpoint is not None:
-        metadata["checkpoint"] = str(checkpoint)
-    if resume is not None:
-        metadata["resumed_from"] = str(resume)
-        metadata["resumed_points"] = len(restored)
-    extra = {}
-    if _BRANCH_HAS_RECORDS:
-        extra["records"] = {k: v for k, v in rec.items() if k not in _BRANCH_COLUMNS}
+    special = runner.name_internal_resonances(problem, rec, special)
+    log.info("%s backbone: %d points, status %s, %.3f s", method, n, res.status, done.elapsed_s)
+    metadata = runner.run_metadata(model, method, problem, options, copts, done, max_amplitude=max_amplitude,
+                                   start_amplitude=start_amplitude)
+    if method != requested:
+        metadata["requested_method"] = requested
     branch = Branch(
         frequency=column("frequency"), amplitude=amp, energy=column("energy"),
         contact_force_max=column("contact_force_max"), newton_iterations=res.newton_iterations,
         step_size=res.step_size, states=res.u, status=res.status, method=method,
         harmonics=int(problem.H), special_points=special, metadata=metadata,
-        solver=problem, residual_histories=res.residual_histories, **extra)
+        solver=problem, residual_histories=res.residual_histories,
+        records={k: v for k, v in rec.items() if k not in _BRANCH_COLUMNS})
     branch.check()  # records mode_share, warns (BranchWarning) when the branch is not what it seems
     return branch
+
+
+def backbone_method(model: Model, method: str) -> str:
+    """The method that computes the backbone asked of ``method``: "mmshbm" on a model with
+    damping (viscous, ``model.damping``, or friction contacts) is its damped nonlinear mode,
+    "epmc" (:mod:`mmshbm.methods.mms.epmc`); any other name is itself."""
+    if method == "mmshbm" and (model.damping is not None or model.friction):
+        return "epmc"
+    return method
 
 
 def _amplitude_progress(method: str, max_amplitude: float, gap: float, callback):
@@ -237,71 +189,3 @@ def _amplitude_progress(method: str, max_amplitude: float, gap: float, callback)
 
 
 _BRANCH_COLUMNS = ("frequency", "amplitude", "energy", "contact_force_max")
-_BRANCH_HAS_RECORDS = "records" in {f.name for f in dataclasses.fields(Branch)}
-
-
-def _path_argument(name: str, value) -> Path | None:
-    if value is None:
-        return None
-    if not isinstance(value, str | Path) or str(value) == "":
-        raise TypeError(f"{name} must be a file path (str or Path), got {type(value).__name__} {value!r}")
-    return Path(value)
-
-
-def _checkpoint_header(model: Model, method: str, problem, options: dict) -> dict:
-    """What fixes the branch: a resumed run must agree on all of it."""
-    from ..core.checkpoint import model_fingerprint
-
-    resolved = problem.solver_settings()
-    return {"method": method, "n_unknowns": int(problem.n_unknowns), "model": model_fingerprint(model),
-            "model_description": model.description, "solver": resolved,
-            "method_options": _jsonable({k: v for k, v in options.items()
-                                         if k not in ("harmonics", "n_samples", "r", "mode")})}
-
-
-def _check_resumable(stored: dict, current: dict, path) -> None:
-    for key in ("method", "n_unknowns", "model", "solver", "method_options"):
-        if stored.get(key) != current[key]:
-            what = "the model's matrices, contact DOF, gap or stop side" if key == "model" else key
-            raise ValueError(f"cannot resume from {str(path)!r}: {what} differ(s) from this run "
-                             f"(file: {stored.get(key)!r}, now: {current[key]!r})")
-
-
-def _finished(previous, copts: ContinuationOptions) -> bool:
-    """True when the file's branch ended on a bound that still applies."""
-    if not previous.terminal:
-        return False
-    terminal = Status.parse(previous.terminal)
-    if terminal.kind != Status.BOUND:
-        return terminal.kind == Status.START_OUTSIDE
-    name = terminal.detail
-    stored = previous.header.get("continuation", {}).get("bounds", {}).get(name)
-    now = dict(copts.bounds).get(name)
-    return stored is not None and now is not None and [float(b) for b in stored] == [float(b) for b in now]
-
-
-def _finished_result(state, status):
-    from ..core.continuation import ContinuationResult
-
-    recs = state.records
-    return ContinuationResult(
-        u=np.array(state.u), records={k: np.array([r[k] for r in recs]) for k in recs[0]},
-        newton_iterations=np.array(state.newton_iterations, dtype=int),
-        step_size=np.array(state.step_size, dtype=float), residual_histories=state.residual_histories,
-        special_points=list(state.special_points) + [SpecialPoint("endpoint", len(state.u) - 1)],
-        status=Status.parse(status),
-        tangent=state.tangent, next_ds=state.ds, steps=state.steps)
-
-
-def _jsonable(d: dict) -> dict:
-    out = {}
-    for k, v in d.items():
-        if isinstance(v, dict):
-            out[k] = _jsonable(v)
-        elif isinstance(v, tuple | list):
-            out[k] = [float(x) if isinstance(x, int | float | np.number) else x for x in v]
-        elif isinstance(v, np.generic):
-            out[k] = v.item()
-        else:
-            out[k] = v
-    return out

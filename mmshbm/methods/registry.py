@@ -7,13 +7,11 @@ option names against the class's constructor.
 
 from __future__ import annotations
 
-import dataclasses
-import difflib
 import importlib
 import inspect
 
-from ..core.continuation import ContinuationOptions
 from ..model.model import Model
+from .runner import CONTINUATION_FIELDS, check_option_names
 
 __all__ = ["METHODS", "make_problem", "method_options"]
 
@@ -28,7 +26,7 @@ METHODS = {
     "phase_resonance": "mmshbm.methods.mms.phase_resonance:PhaseResonanceProblem",
 }
 
-_CONTINUATION_FIELDS = {f.name for f in dataclasses.fields(ContinuationOptions)}
+_CONTINUATION_FIELDS = CONTINUATION_FIELDS
 
 
 def make_problem(model: Model, method: str = "mmshbm", **options):
@@ -67,23 +65,8 @@ def method_options(method: str) -> list[str]:
 
 
 def _check_option_names(method: str, problem_class, options: dict) -> None:
-    params = list(inspect.signature(problem_class).parameters.values())[1:]
-    if any(p.kind == p.VAR_KEYWORD for p in params):
-        return
-    valid = [p.name for p in params if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
-    unknown = [k for k in options if k not in valid]
-    if unknown:
-        everything = sorted(set(valid) | _CONTINUATION_FIELDS | set(_BACKBONE_ARGUMENTS))
-        hints = []
-        for name in unknown:
-            close = difflib.get_close_matches(name, everything, n=1)
-            hints.append(f"{name!r}" + (f" (did you mean {close[0]!r}?)" if close else ""))
-        raise TypeError(f"unknown option{'s' if len(unknown) > 1 else ''} {', '.join(hints)} for method "
-                        f"{method!r}; method options: {valid}; continuation options: "
-                        f"{sorted(_CONTINUATION_FIELDS)}")
+    check_option_names(problem_class, options, what=f"method {method!r}", extra_names=_BACKBONE_ARGUMENTS)
 
 
 _BACKBONE_ARGUMENTS = ("harmonics", "method", "max_amplitude", "start_amplitude", "bounds", "verbose",
                        "callback", "checkpoint", "resume")
-
-

@@ -1,4 +1,6 @@
-"""What the methods produce: :class:`~mmshbm.results.branch.Branch` and its file format."""
+"""What the methods produce: :class:`~mmshbm.results.branch.Branch` (a backbone) and
+:class:`~mmshbm.results.response.FrequencyResponse` (a forced response), both
+:class:`~mmshbm.results.base.ResultBase`, and their file format."""
 
 import importlib
 
@@ -7,6 +9,7 @@ _NAMES = {
     "Branch": "branch", "versions": "branch", "branch_payload": "branch",
     "branch_from_payload": "branch", "rebuild_model": "models",
     "write_archive": "archive", "read_archive": "archive",
+    "FrequencyResponse": "response", "ResultBase": "base",
 }
 
 

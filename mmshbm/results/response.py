@@ -13,28 +13,24 @@ cannot rebuild it); :meth:`FrequencyResponse.to_csv` the per-point table.
 
 from __future__ import annotations
 
-import importlib
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 
-from ..core.special_points import special_from_json, special_to_json
-from ..core.status import Status
-from .branch import read_archive, versions, write_archive
-from .models import _model_arrays, _model_from_arrays, rebuild_model
+from .base import FORMAT_VERSION, ResultBase, SolverSlot, entry_point
 
-__all__ = ["FrequencyResponse"]
+__all__ = ["FrequencyResponse", "FORMAT_VERSION"]
 
 RESPONSE_FORMAT = "mmshbm.FrequencyResponse"
-FORMAT_VERSION = 1
 #: per-point arrays, in file order
 ARRAY_FIELDS = ("frequency", "amplitude", "phase", "energy", "contact_force_max", "stable", "floquet_max",
                 "newton_iterations", "step_size", "states")
 
 
 @dataclass(eq=False)
-class FrequencyResponse:
+class FrequencyResponse(ResultBase):
     """A computed frequency response (forced, damped, with impact).
 
     Attributes
@@ -68,6 +64,9 @@ class FrequencyResponse:
     metadata : dict
         Model description, excitation, frequency range, method and continuation options,
         versions, timing.
+    solver : object
+        The forced-response problem that computed it (not saved): held when computed,
+        else rebuilt on first access from the model and the excitation in the metadata.
     records : dict of str to ndarray
         Further per-point quantities (e.g. ``floquet``: all multipliers, complex).
     """
@@ -87,83 +86,24 @@ class FrequencyResponse:
     harmonics: int
     special_points: list = field(default_factory=list)
     metadata: dict = field(default_factory=dict)
-    solver: object = field(default=None, repr=False)
+    solver: object = SolverSlot()
     residual_histories: list = field(default_factory=list, repr=False)
     model: object = field(default=None, repr=False)
     records: dict = field(default_factory=dict, repr=False)
 
-    def __len__(self) -> int:
-        return len(self.frequency)
-
-    @property
-    def completed(self) -> bool:
-        """True when the response reached a bound of its frequency range."""
-        return Status.parse(self.status).kind == Status.BOUND
-
-    @property
-    def gap(self) -> float | None:
-        """The model's (smallest) gap (m), when known."""
-        model = self.model if self.model is not None else getattr(self.solver, "model", None)
-        if model is not None:
-            return float(model.gap)
-        gap = dict(self.metadata.get("model", {})).get("gap")
-        return None if gap is None else float(gap)
+    FORMAT: ClassVar[str] = RESPONSE_FORMAT
+    ARRAY_FIELDS: ClassVar[tuple] = ARRAY_FIELDS
+    _NOUN: ClassVar[str] = "response"
 
     def peak(self) -> tuple[float, float]:
         """(frequency (Hz), amplitude (m)) of the largest amplitude on the response."""
         i = int(np.argmax(self.amplitude))
         return float(self.frequency[i]), float(self.amplitude[i])
 
-    # ------------------------------------------------------------------ model and solver
-    def get_model(self):
-        """The model: attached, the solver's, or rebuilt from the metadata's description."""
-        if self.model is None and self.solver is not None:
-            self.model = self.solver.model
-        if self.model is None:
-            self.model = rebuild_model(self.metadata.get("model", {}), self.metadata.get("model_gap"))
-        return self.model
-
-    def attach_solver(self):
-        """Rebuild the solver that computed this response (model, excitation, method and
-        options from the metadata) and attach it."""
-        make = _entry_point("mmshbm.methods.frequency_response:make_forced_problem")
-        meta = self.metadata
-        solver = make(self.get_model(), meta["excitation"], self.method, self.harmonics,
-                      dict(meta.get("method_options", {})))
-        if len(self) and self.states.shape[1] != solver.n_unknowns:
-            raise ValueError(f"the rebuilt {self.method} solver has {solver.n_unknowns} unknowns but the "
-                             f"states have {self.states.shape[1]}: the options do not match the run")
-        self.solver = solver
-        return solver
-
-    def _require_solver(self):
-        if self.solver is None:
-            try:
-                self.attach_solver()
-            except (ValueError, KeyError) as err:
-                raise RuntimeError(f"this response has no solver attached and none can be rebuilt: {err}") \
-                    from None
-        return self.solver
-
-    def _index(self, point: int) -> int:
-        n = len(self)
-        if isinstance(point, bool) or not isinstance(point, int | np.integer):
-            raise TypeError(f"point must be an integer index, got {point!r}")
-        if not -n <= point < n:
-            raise IndexError(f"point {point} out of range for a response of {n} points")
-        return int(point) % n
-
-    def time_signals(self, point: int, dofs=None, n_samples: int = 256):
-        """(t (n_samples,) s, q (n_dofs, n_samples)) over one period at ``point``."""
-        return self._require_solver().time_signals(self.states[self._index(point)], dofs, n_samples)
-
-    def contact_force(self, point: int, n_samples: int = 256):
-        """(t, λ (n_contacts, n_samples) N) over one period at ``point``."""
-        return self._require_solver().contact_force(self.states[self._index(point)], n_samples)
-
-    def harmonic_content(self, point: int, dof: int | None = None) -> np.ndarray:
-        """|Q̂_k|, k = 0..H, of ``dof`` (default the amplitude DOF) at ``point``."""
-        return self._require_solver().harmonic_content(self.states[self._index(point)], dof)
+    # ------------------------------------------------------------------ solver
+    def _build_solver(self, model, options: dict):
+        make = entry_point("make_forced_problem")
+        return make(model, self.metadata["excitation"], self.method, self.harmonics, options)
 
     def floquet_multipliers(self, point: int) -> np.ndarray:
         """All Floquet multipliers at ``point`` (stored, or computed by the solver)."""
@@ -172,62 +112,6 @@ class FrequencyResponse:
         return self._require_solver().floquet_multipliers(self.states[self._index(point)])
 
     # ------------------------------------------------------------------ files
-    def save(self, path) -> Path:
-        """Write the response to ``path`` (``.npz``); returns the path."""
-        arrays = {name: np.asarray(getattr(self, name)) for name in ARRAY_FIELDS}
-        hist = [np.asarray(h, dtype=float).ravel() for h in self.residual_histories]
-        arrays["residual_histories"] = np.concatenate(hist) if hist else np.empty(0)
-        arrays["residual_history_lengths"] = np.array([len(h) for h in hist], dtype=np.int64)
-        for name, value in self.records.items():
-            arrays[f"record__{name}"] = np.asarray(value)
-        model = self.model if self.model is not None else getattr(self.solver, "model", None)
-        info = {"matrices": False}
-        if model is not None:
-            info.update(description=dict(model.description),
-                        contacts=[[int(c.dof), float(c.gap), int(c.side)] for c in model.contacts],
-                        amplitude_dof=model._amplitude_dof)
-            try:
-                store = not rebuild_model(model.description, [c.gap for c in model.contacts]).same_as(model)
-            except ValueError:
-                store = True
-            if store:
-                arrays.update(_model_arrays(model))
-                info["matrices"] = True
-        meta = {"format": RESPONSE_FORMAT, "format_version": FORMAT_VERSION, "status": self.status,
-                "method": self.method, "harmonics": int(self.harmonics),
-                "special_points": special_to_json(self.special_points), "metadata": self.metadata,
-                "model": info, "records": list(self.records), "saved_with": versions()}
-        return write_archive(path, arrays, meta)
-
-    @classmethod
-    def load(cls, path) -> FrequencyResponse:
-        """Read a response written by :meth:`save`.
-
-        Raises
-        ------
-        ValueError
-            For a missing, unreadable or foreign file.
-        """
-        arrays, meta = read_archive(path)
-        if meta.get("format") != RESPONSE_FORMAT:
-            raise ValueError(f"{str(path)!r} is not a saved mmshbm FrequencyResponse "
-                             f"(format {meta.get('format')!r})")
-        try:
-            fields_ = {name: arrays[name] for name in ARRAY_FIELDS}
-            lengths = arrays["residual_history_lengths"]
-            flat = arrays["residual_histories"]
-            records = {str(n): arrays[f"record__{n}"] for n in meta.get("records", [])}
-            info = meta["model"]
-            model = _model_from_arrays(arrays, info) if info.get("matrices") else None
-            histories = list(np.split(flat, np.cumsum(lengths)[:-1])) if len(lengths) else []
-            special = special_from_json(meta["special_points"])
-            return cls(**fields_, status=meta["status"], method=meta["method"],
-                       harmonics=int(meta["harmonics"]), special_points=special,
-                       metadata=dict(meta["metadata"]), residual_histories=histories, model=model,
-                       records=records)
-        except (KeyError, TypeError, ValueError) as err:
-            raise ValueError(f"malformed frequency response in {str(path)!r}: {err}") from None
-
     def to_csv(self, path) -> Path:
         """Per-point table: frequency_hz, amplitude_m, phase_rad, energy_j,
         contact_force_max_n, stable, floquet_max, newton_iterations, step_size (12
@@ -251,7 +135,3 @@ class FrequencyResponse:
                 f"frequency={self.frequency.min():.4g}..{self.frequency.max():.4g} Hz, peak {a:.3g} m at "
                 f"{f:.4g} Hz, unstable points={int((~self.stable).sum())}, status={self.status!r})")
 
-
-def _entry_point(spec: str):
-    module, _, attr = spec.partition(":")
-    return getattr(importlib.import_module(module), attr)

@@ -265,6 +265,7 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin, BackboneProblemBase):
         if getattr(cond, "backend", None) != "modal":
             self._fast = False
             return False
+        from ...core import corrector_kernels as ck
         from ...core.modal import _POLE_RTOL
 
         H, n_c, m = self.H, self.n_c, cond.n_modes
@@ -275,13 +276,19 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin, BackboneProblemBase):
                 keep[k, j] = 0
                 static[k] += np.outer(self.pole_set.b[p], self.pole_set.b[p]) / self.pole_set.omega2[p]
         n = self.n_unknowns
+        # the arguments of the compiled corrector, grouped as its named tuples (built here only)
         self._fast = {
-            "cond": (np.ascontiguousarray(cond.D0), np.ascontiguousarray(cond.b_j),
-                     np.ascontiguousarray(cond._w2), np.ascontiguousarray(cond.Rs), keep, static,
-                     float(_POLE_RTOL)),
-            "work": (np.empty((H + 1, n_c, n_c)), np.empty((H + 1, n_c, n_c)), np.empty(n - 1),
-                     np.empty((n - 1, n)), np.empty((n, n)), np.empty(n), np.empty((n, n)), np.empty(n),
-                     np.empty((H + 1, n_c)), np.empty(self.n_poles)),
+            "cond": ck.ModalCondensation(np.ascontiguousarray(cond.D0), np.ascontiguousarray(cond.b_j),
+                                         np.ascontiguousarray(cond._w2), np.ascontiguousarray(cond.Rs), keep,
+                                         static, float(_POLE_RTOL)),
+            "scale": ck.Scaling(self.colscale, self.rowscale),
+            "poles": ck.PoleTerms(self._pole_k, self._pole_b, self._pole_w2),
+            "law": ck.ContactLaw(self.cdof, self.lo, self.hi, self.r_each, self.projection == "exact"),
+            "samples": ck.Sampling(self._cos_table, self._sin_table, self._tau),
+            "work": ck.NewtonWork(np.empty((H + 1, n_c, n_c)), np.empty((H + 1, n_c, n_c)), np.empty(n - 1),
+                                  np.empty((n - 1, n)), np.empty((n, n)), np.empty(n), np.empty((n, n)),
+                                  np.empty(n), np.empty((H + 1, n_c)), np.empty(self.n_poles), np.zeros(1)),
+            "ework": ck.EvalWork(*self._work),
         }
         return self._fast
 
@@ -298,14 +305,16 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin, BackboneProblemBase):
             return None
         u = np.array(u0, dtype=float)
         hist = np.empty(max_iter + 1)
-        D, dD, R, J, A, rhs, LU, du, a, eta = fast["work"]
+        work = fast["work"]
+        D, dD, J = work.D, work.dD, work.J
         u_pred = np.ascontiguousarray(u_pred, dtype=float)
         tangent = np.ascontiguousarray(tangent, dtype=float)
-        status, it = ck._newton_modal(
-            u, u_pred, tangent, float(tol), float(step_tol), int(max_iter), self.n_c, self.H, self.colscale,
-            self.rowscale, *fast["cond"], self._pole_k, self._pole_b, self._pole_w2, self.cdof, self.lo,
-            self.hi, self.r_each, self.projection == "exact", self._cos_table, self._sin_table, self._tau,
-            hist, D, dD, R, J, A, rhs, LU, du, a, eta, np.zeros(1), *self._work)
+        args = (u, u_pred, tangent, float(tol), float(step_tol), int(max_iter), int(self.n_c), int(self.H),
+                hist, fast["scale"], fast["cond"], fast["poles"], fast["law"], fast["samples"], work,
+                fast["ework"])
+        if "call" not in fast:  # the compiled overload, without the dispatcher's per-call typing
+            fast["call"] = ck.newton_modal_entry(args)
+        status, it = fast["call"](*args)
         self.evaluations += it if status == ck.SKIPPED else it + 1
         if status == ck.CONVERGED:
             self._cached = (float(u[-1] * self.colscale[-1]), D.copy(), dD.copy())
