@@ -324,7 +324,7 @@ class Branch:
             False (default): the method's own signals (for harmonic balance the truncated
             Fourier series of every DOF, which may pass through the stop). True: the
             massless DOFs from the exact static contact problem driven by the Fourier
-            motion of the DOFs with mass (no penetration; :mod:`mmshbm.methods.signals`);
+            motion of the DOFs with mass (no penetration; :mod:`mmshbm.contact.static`);
             the DOFs with mass are unchanged.
 
         Returns
@@ -441,7 +441,7 @@ class Branch:
 #: like pickle, a branch finds them by their recorded names.
 _ENTRY_POINTS = {"make_problem": "mmshbm.methods.registry:make_problem",
                  "backbone": "mmshbm.methods.backbone:backbone",
-                 "admissible_signals": "mmshbm.methods.signals:branch_signals"}
+                 "admissible_signals": "mmshbm.contact.static:branch_signals"}
 
 
 def _entry_point(name: str):

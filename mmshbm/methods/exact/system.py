@@ -201,7 +201,7 @@ class PiecewiseLinearSystem:
         amplitude DOF is taken in the open phase.
         """
         if self._amplitude is None:
-            from .._contacts import amplitude_sign, start_mode
+            from ...contact.table import amplitude_sign, start_mode
 
             m = self.model
             sign = amplitude_sign(m)

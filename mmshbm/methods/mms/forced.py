@@ -36,8 +36,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ... import _validate as check
+from ...core.measures import check_dof, harmonic_content, mean_energy
 from ...model.model import Model
-from .conservative import _mean_energy
 from .damped import DampedHBMBase, synthesis_matrix
 
 __all__ = ["Excitation", "harmonic_force", "base_excitation", "ForcedResponseProblem"]
@@ -369,11 +369,8 @@ class ForcedResponseProblem(DampedHBMBase):
 
     def harmonic_content(self, u: np.ndarray, dof: int | None = None) -> np.ndarray:
         """|Q̂_k| for k = 0..H of ``dof`` (default the amplitude DOF); shape (H+1,)."""
-        dof = self.amplitude_dof if dof is None else check.integer("dof", dof)
-        if not 0 <= dof < self.model.n_dof:
-            raise ValueError(f"dof must be in [0, {self.model.n_dof - 1}], got {dof}")
-        Q = self.coefficients(u)[dof]
-        return np.concatenate([[abs(Q[0])], np.hypot(Q[1::2], Q[2::2])])
+        dof = check_dof(dof, self.model.n_dof, self.amplitude_dof)
+        return harmonic_content(self.coefficients(u)[dof])
 
     def phase(self, q_coeffs: np.ndarray) -> float:
         """Lag (rad) of the fundamental of ``q_coeffs`` behind the excitation, in [−π/2, 3π/2)."""
@@ -392,7 +389,7 @@ class ForcedResponseProblem(DampedHBMBase):
         q = Q[self.amplitude_dof]
         F = self._needed(x, omega, sigma)
         rec = {"frequency": omega / (2 * np.pi), "amplitude": self.amplitude(q), "phase": self.phase(q),
-               "energy": _mean_energy(self.model, Q, omega),
+               "energy": mean_energy(self.model, Q, omega),
                "contact_force_max": self.contact_force_max(x, F)}
         if self.stability:
             mu = self._multipliers(Q, omega)
