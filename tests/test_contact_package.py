@@ -66,7 +66,8 @@ MOVED = {
         "_refined_max": ("mmshbm.core.measures", "refined_max"),
     },
     "mmshbm.mms_hbm": {"_mean_energy": ("mmshbm.core.measures", "mean_energy")},
-    "mmshbm.methods.mms.damped": {"refined_max": ("mmshbm.core.measures", "refined_max")},
+    "mmshbm.methods.mms.damped": {"refined_max": ("mmshbm.core.measures", "refined_max"),
+                                  "contact_projection": ("mmshbm.contact.unilateral", "contact_projection")},
     "mmshbm.methods.mms.signals": {"_cosine_peak": ("mmshbm.core.measures", "_cosine_peak")},
 }
 

@@ -30,6 +30,7 @@ is :mod:`mmshbm.contact.lcp` / :mod:`mmshbm.contact.static`.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -39,7 +40,7 @@ from .._kernel_cache import JIT_OPTIONS
 from .._kernel_cache import install as _install_cache_policy
 from .projection import _add_product_matrix, _check_samples, _spectrum, sample_tables
 
-__all__ = ["proximal_contact", "project_contact"]
+__all__ = ["proximal_contact", "project_contact", "contact_projection"]
 
 _install_cache_policy()
 
@@ -174,3 +175,14 @@ def project_contact(p: np.ndarray, lo: float, hi: float, exact: bool = True,
     G = np.empty((2 * H + 1, 2 * H + 1))
     _project(p, lo, hi, bool(exact), cos_t, sin_t, tau, r, G)
     return r, G
+
+
+def contact_projection(projection: str, H: int, N: int):
+    """``project(p, lo, hi) -> (r, G)``: :func:`project_contact`,
+    exact (``"exact"``: switching instants located, pieces integrated in closed form, C¹)
+    or sampled on N points (``"sampled"``, AFT)."""
+    if projection == "exact":
+        return project_contact
+    if projection == "sampled":
+        return functools.partial(project_contact, exact=False, n_samples=N)
+    raise ValueError(f"projection must be 'exact' or 'sampled', got {projection!r}")

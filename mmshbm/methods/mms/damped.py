@@ -32,12 +32,11 @@ sample switching state is a kink of the residual).
 
 from __future__ import annotations
 
-import functools
-
 import numpy as np
 
 from ... import _validate as check
 from ...contact.projection import sample_tables
+from ...contact.unilateral import contact_projection
 from ...core.contact_kernels import _contact_rows, _damped_residual
 from ...core.damped_condense import CondensedHarmonics, DampedCondensation
 from ...core.harmonics import check_harmonics
@@ -46,19 +45,6 @@ from ...model.contact import admissible_intervals
 from ...model.model import Model
 
 __all__: list[str] = []
-
-
-def contact_projection(projection: str, H: int, N: int):
-    """``project(p, lo, hi) -> (r, G)``: :func:`mmshbm.contact.unilateral.project_contact`,
-    exact (``"exact"``: switching instants located, pieces integrated in closed form, C¹)
-    or sampled on N points (``"sampled"``, AFT)."""
-    from ...contact.unilateral import project_contact
-
-    if projection == "exact":
-        return project_contact
-    if projection == "sampled":
-        return functools.partial(project_contact, exact=False, n_samples=N)
-    raise ValueError(f"projection must be 'exact' or 'sampled', got {projection!r}")
 
 
 def _projection_grid(projection: str, H: int, N: int) -> tuple[bool, int]:

@@ -30,11 +30,12 @@ import numpy as np
 import scipy.sparse as sp
 
 from ... import _validate as check
+from ...contact.unilateral import contact_projection
 from ...core.harmonics import check_harmonics
 from ...core.measures import check_dof, harmonic_content, mean_energy, refined_max
 from ...model.contact import admissible_intervals
 from ...model.model import Model
-from ..mms.damped import contact_projection, fine_samples
+from ..mms.damped import fine_samples
 from ..mms.forced import Excitation, harmonic_force
 
 __all__ = ["PenaltyForcedProblem", "DEFAULT_PENALTY_FACTOR"]
