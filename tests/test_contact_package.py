@@ -56,6 +56,7 @@ MOVED = {
         "amplitude_sign": ("mmshbm.core.measures", "amplitude_sign"),
         "refined_peak": ("mmshbm.core.measures", "amplitude_peak"),
     },
+    "mmshbm.methods.exact.system": {"_lcp_active_sets": ("mmshbm.contact.lcp", "lcp_active_sets")},
     "mmshbm.methods.signals": {
         name: ("mmshbm.contact.static", name)
         for name in ("StaticContact", "admissible_signals", "branch_signals", "MAX_ENUMERATED_CONTACTS")
@@ -186,6 +187,30 @@ def test_mean_energy_of_a_linear_mode():
     Q[1, 1] = A  # the massless DOF moving with the mass: its spring (1e3) unstretched
     omega = np.sqrt(k / m)
     np.testing.assert_allclose(measures.mean_energy(model, Q, omega), 0.5 * k * A**2, rtol=1e-14)
+
+
+def test_the_lcp_solvers_agree():
+    """Principal pivoting (compiled), the least-squares enumeration and the active-set
+    enumeration solve the same LCPs: random positive definite G (4 contacts), free gaps of
+    both signs. λ agrees to the round-off of the solves (cond(G) <= 1e3 here: 1e-12 of
+    |h|/λ_min(G) bounds it), the active sets exactly."""
+    from mmshbm.contact.lcp import lcp_active_sets, lcp_enumerated, lcp_solve
+
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        B = rng.standard_normal((4, 4))
+        G = B @ B.T + 0.5 * np.eye(4)
+        assert np.linalg.cond(G) < 1e3
+        H = rng.standard_normal((4, 6))
+        lam, act = lcp_solve(G, H)
+        sets = lcp_active_sets(G, H, np.arange(4))
+        for j in range(H.shape[1]):
+            ref = lcp_enumerated(G, H[:, j])
+            scale = np.abs(H[:, j]).max() / np.linalg.eigvalsh(G)[0]
+            np.testing.assert_allclose(lam[:, j], ref, rtol=0, atol=1e-12 * scale)
+            assert tuple(np.flatnonzero(act[:, j])) == tuple(sets[j]) == tuple(np.flatnonzero(ref > 0))
+            g = H[:, j] + G @ ref
+            assert g.min() >= -1e-12 * scale * np.abs(G).max() and abs(g @ ref) <= 1e-10 * scale**2
 
 
 def test_check_dof():

@@ -13,11 +13,18 @@ principal pivoting (:func:`_lcp_path`): on each piece λ and g are affine in s, 
 piece ends where an active λ_j or an inactive g_i reaches zero. The solution at one h
 follows the path from a point where every gap is open (:func:`_lcp_point`,
 :func:`lcp_solve`). The shooting integrator follows λ along each time step with the same
-kernels (:mod:`mmshbm.methods.shooting._contact_kernels`); the admissible signals of
-harmonic balance solve the same problem per sample (:mod:`mmshbm.contact.static`).
+kernels (:mod:`mmshbm.methods.shooting._contact_kernels`).
+
+Two enumerations of the active sets serve the few contacts of the other users:
+:func:`lcp_enumerated` (λ at one h, least squares on each G_JJ: the admissible signals of
+:mod:`mmshbm.contact.static`) and :func:`lcp_active_sets` (the closed set per column, the
+least violated one at round-off boundaries, skipping both stops of one DOF: the phases of
+the exact reference, :mod:`mmshbm.methods.exact.system`).
 """
 
 from __future__ import annotations
+
+import itertools
 
 import numpy as np
 from numba import njit
@@ -25,7 +32,7 @@ from numba import njit
 from .._kernel_cache import JIT_OPTIONS
 from .._kernel_cache import install as _install_cache_policy
 
-__all__ = ["lcp_solve"]
+__all__ = ["lcp_solve", "lcp_enumerated", "lcp_active_sets"]
 
 _install_cache_policy()
 
@@ -224,3 +231,70 @@ def lcp_solve(G: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             raise RuntimeError(f"the contact LCP has no unique solution at h = {Hc[:, j]}")
         lam[:, j], act[:, j] = lk, a
     return lam.reshape(H.shape), act.reshape(H.shape)
+
+
+def lcp_enumerated(G: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """λ (m,) >= 0 with g = h + Gλ >= 0 and g·λ = 0 for one h (m,): exact, by active sets
+    (least squares on each G_JJ, so a singular G_JJ is no obstacle), the set of the
+    negative free gaps first, then every set in order of size (2^m sets at most; the
+    admissible signals of :mod:`mmshbm.contact.static`)."""
+    n = len(h)
+    if np.all(h >= 0):
+        return np.zeros(n)
+    tol = 1e-10 * max(float(np.max(np.abs(h))), 1e-300)
+    guess = tuple(np.flatnonzero(h < 0))
+    subsets = (s for k in range(1, n + 1) for s in itertools.combinations(range(n), k))
+    sets = itertools.chain([guess], (s for s in subsets if s != guess))
+    for active in sets:
+        idx = list(active)
+        lam = np.zeros(n)
+        sol = np.linalg.lstsq(G[np.ix_(idx, idx)], -h[idx], rcond=None)[0]
+        if np.any(sol < -1e-10 * max(float(np.max(np.abs(sol))), 1e-300)):
+            continue
+        lam[idx] = np.maximum(sol, 0.0)
+        g = h + G @ lam
+        if np.all(g >= -tol):
+            return lam
+    raise ValueError("the static contact problem has no solution (conflicting stops?)")
+
+
+def lcp_active_sets(G: np.ndarray, h: np.ndarray, dofs: np.ndarray) -> list:
+    """The closed contacts of the LCP ``g = h + G λ >= 0, λ >= 0, gᵀλ = 0`` for each column
+    of ``h`` (n_contacts, n_t), by enumeration of the active sets in order of size (the
+    first feasible one; sets closing both stops of one DOF are skipped). A column no set
+    solves exactly (round-off at a boundary) gets the set of least violation.
+    Enumeration is meant for the few contacts of the exact reference (2^n sets)."""
+    n, n_t = h.shape
+    if n > 16:
+        raise ValueError(f"the exact reference enumerates contact states: {n} contacts are too many (<= 16)")
+    best = [None] * n_t
+    violation = np.full(n_t, np.inf)
+    todo = np.ones(n_t, dtype=bool)
+    for size in range(n + 1):
+        for J in itertools.combinations(range(n), size):
+            if len({int(dofs[i]) for i in J}) < size:
+                continue
+            cols = np.flatnonzero(todo)
+            if not len(cols):
+                return best
+            Jl = list(J)
+            N = [i for i in range(n) if i not in J]
+            H = h[:, cols]
+            if size:
+                try:
+                    lam = -np.linalg.solve(G[np.ix_(Jl, Jl)], H[Jl])
+                except np.linalg.LinAlgError:
+                    continue
+                g = H[N] + G[np.ix_(N, Jl)] @ lam if N else np.zeros((0, len(cols)))
+            else:
+                lam = np.zeros((0, len(cols)))
+                g = H
+            viol = np.maximum(0.0, -np.concatenate([lam, g])).max(axis=0) if n else np.zeros(len(cols))
+            for k, col in enumerate(cols):
+                if viol[k] == 0.0:
+                    best[col] = J
+                    todo[col] = False
+                elif viol[k] < violation[col]:
+                    violation[col] = viol[k]
+                    best[col] = J
+    return best
