@@ -19,7 +19,11 @@ the coefficients of the samples first (:func:`sample_coefficients`).
 
 Energy: the period average of kinetic + potential energy by Parseval, from the
 coefficients of every DOF (:func:`mean_energy`) or from the massless DOFs and the
-condensed dynamic stiffness alone (:func:`condensed_energy`; the same number).
+condensed dynamic stiffness alone (:func:`condensed_energy`; the same number). The
+MMS-HBM monitor kernel sums the terms of :func:`condensed_energy` in its own loop, with the
+pole unknowns' share. Shooting and the exact reference report the energy of a state
+instead (conserved by their motion, so it equals the period average): each evaluates
+½ vᵀMv + ½ qᵀKq at its state, the exact reference in extended precision.
 """
 
 from __future__ import annotations
