@@ -55,6 +55,9 @@ MODULE_ALIASES = {
     "mmshbm.methods._shooting_signals": "mmshbm.methods.shooting.signals",
     "mmshbm.methods.friction_shooting": "mmshbm.methods.shooting.friction",
     "mmshbm.methods.friction_impact": "mmshbm.methods.shooting.friction_impact",
+    # the contact laws' data and static problem live with the laws
+    "mmshbm.methods._contacts": "mmshbm.contact.table",
+    "mmshbm.methods.signals": "mmshbm.contact.static",
 }
 
 

@@ -36,6 +36,11 @@ from pathlib import Path
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 
+#: One place for the compilation flags of every kernel: cached, no GIL, fast math
+#: without the flags that assume no NaN/inf (a NaN must propagate to Newton's checks).
+#: A module that compiles kernels calls :func:`install` before its first ``njit``.
+JIT_OPTIONS = dict(cache=True, nogil=True, fastmath={"nsz", "arcp", "contract", "afn"})
+
 
 @functools.lru_cache(maxsize=1)
 def kernel_fingerprint() -> bytes:
@@ -136,4 +141,4 @@ def install() -> bool:
     return True
 
 
-__all__ = ["install", "kernel_fingerprint", "seed"]
+__all__ = ["JIT_OPTIONS", "install", "kernel_fingerprint", "seed"]

@@ -8,7 +8,7 @@ import scipy.sparse as sp
 
 import mmshbm
 from mmshbm import BranchWarning
-from mmshbm.methods.signals import StaticContact, admissible_signals
+from mmshbm.contact.static import StaticContact, admissible_signals
 
 
 @pytest.fixture(scope="module")

@@ -15,7 +15,7 @@ import pytest
 
 import mmshbm
 from mmshbm import Model, OneDofOscillator
-from mmshbm.methods._contacts import static_contact_stiffness
+from mmshbm.contact.table import static_contact_stiffness
 from mmshbm.methods.penalty.hbm import PenaltyHBMProblem
 from mmshbm.methods.shooting.conservative import ShootingProblem
 

@@ -1,8 +1,10 @@
 """The package's layers: every import points down (or sideways inside a layer), and no
 module imports itself back through others.
 
-Layers, bottom to top: the model, the FE builders, the numerical core, results, the
-methods, the analyses, and on top io, plots and the command line. Function-level (lazy)
+Layers, bottom to top: the model, the FE builders, the numerical core beside the contact
+laws (core's fused residuals call the laws' kernels, the laws' data use core's
+condensation: one layer, kept acyclic by the cycle test), results, the methods, the
+analyses, and on top io, plots and the command line. Function-level (lazy)
 imports count as much as module-level ones, and so do imports by name:
 ``importlib.import_module("mmshbm...")`` and ``__import__`` with a constant (or
 ``f"{__name__}..."``) name, and ``"mmshbm.module:attr"`` strings (entry points resolved at
@@ -28,7 +30,7 @@ LAYERS = {
     "mmshbm.model": 1,
     "mmshbm.fe": 2,
     "mmshbm.core": 3,
-    "mmshbm.contact": 3,
+    "mmshbm.contact": 3,  # beside core: used by core and methods, uses core's condensation
     "mmshbm.results": 4,
     "mmshbm.methods": 5,
     "mmshbm.analysis": 6,

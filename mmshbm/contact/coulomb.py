@@ -21,13 +21,13 @@ Harmonic projection. On the Fourier ansatz p(τ) is a trigonometric polynomial, 
     clip(p, −s, s) = p − [(p − s)₊ − (−s − p)₊],
 
 the bracket being exactly the unilateral law's projection on the admissible interval
-[lo, hi] = [−s, s] (:func:`mmshbm.core.projection.project_contact`): the instants where
+[lo, hi] = [−s, s] (:func:`mmshbm.contact.unilateral.project_contact`): the instants where
 p = ±s are the zeros of the trigonometric polynomials p ∓ s, located by its root finder,
 the pieces are integrated in closed form, and its Jacobian G (the projection of the
 indicator of |p| > s) gives ∂proj[clip]/∂p = I − G exactly. This module calls that
 projection and does not copy it; the pointwise kernels below are self-contained (Numba
 caches a kernel per file). The displacement-level projection (:func:`project_coulomb_play`)
-uses the root-finding kernels of :mod:`mmshbm.core.contact_kernels` (``_zeros`` from
+uses the root-finding kernels of :mod:`mmshbm.contact.trig` (``_zeros`` from
 Python, ``_refine`` from the compiled walk over the extrema, ``_play_walk``: the package's
 cache policy, :mod:`mmshbm._kernel_cache`, recompiles a caller when a callee's file
 changes).
@@ -45,11 +45,14 @@ import functools
 import numpy as np
 from numba import njit
 
-from ..core.contact_kernels import _TWO_PI, _refine, _zeros
-from ..core.kernels import JIT_OPTIONS
+from .._kernel_cache import JIT_OPTIONS
+from .._kernel_cache import install as _install_cache_policy
+from .trig import _TWO_PI, _refine, _zeros
 
 __all__ = ["coulomb_residual", "coulomb_derivative", "project_coulomb", "project_coulomb_play", "play_pieces",
            "derivative_matrix", "jenkins_hysteresis"]
+
+_install_cache_policy()
 
 
 @njit(**JIT_OPTIONS)
@@ -163,7 +166,7 @@ def project_coulomb(f: np.ndarray, v: np.ndarray, s: float, r: float, exact: boo
     slip : float
         Fraction of the period in slip, G[0, 0] (0: the node sticks throughout).
     """
-    from ..core.projection import project_contact
+    from .unilateral import project_contact
 
     f = np.asarray(f, dtype=float)
     v = np.asarray(v, dtype=float)
@@ -308,7 +311,7 @@ def project_coulomb_play(y: np.ndarray, s: float, r: float, n_samples: int | Non
     throughout and its position is history: the symmetric position (mean force zero) is
     taken. Extrema of y are the zeros of the trigonometric polynomial y′ and stick-to-slip
     instants the zeros of y − level, located by the unilateral projection's root finder
-    (:mod:`mmshbm.core.contact_kernels`); g is r (u − y) or −σ s on the pieces, integrated
+    (:mod:`mmshbm.contact.trig`); g is r (u − y) or −σ s on the pieces, integrated
     in closed form. g is continuous at every switch and u's dependence on the extremum's
     time vanishes there (y′ = 0), so the Jacobian has no boundary terms:
 
@@ -335,7 +338,7 @@ def project_coulomb_play(y: np.ndarray, s: float, r: float, n_samples: int | Non
     slip : float
         Fraction of the period in slip.
     """
-    from ..core.projection import _product_matrix
+    from .projection import _product_matrix
 
     y = np.asarray(y, dtype=float)
     if y.ndim != 1 or y.shape[0] % 2 != 1:

@@ -45,8 +45,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.contact_kernels import _TWO_PI, _refine, _zeros
 from .coulomb import _phi, _sample_basis
+from .trig import _TWO_PI, _refine, _zeros
 
 __all__ = ["project_coulomb_play_coupled", "coupled_play_pieces"]
 
@@ -248,7 +248,7 @@ def project_coulomb_play_coupled(y, z, rho: float, mu: float, preload: float, r_
     slip : float
         Fraction of the period in slip.
     """
-    from ..core.projection import _product_matrix
+    from .projection import _product_matrix
 
     y = np.asarray(y, dtype=float)
     z = np.asarray(z, dtype=float)

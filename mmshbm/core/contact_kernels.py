@@ -1,226 +1,34 @@
-"""Harmonic projections of the proximal contact law, sampled or exact (C¹), and the fused
-MMS-HBM residual built on them.
+"""The MMS-HBM residuals with the unilateral contact law fused in: the conservative
+(cosine) residual with its Jacobian and monitor, and the contact rows of the damped
+residual. The law and its projection are :mod:`mmshbm.contact.unilateral` and
+:mod:`mmshbm.contact.projection`; these kernels call their kernels on each contact DOF.
 
-Contact law per DOF. A contact DOF with admissible positions [lo, hi]
-(:func:`~mmshbm.model.contact.admissible_intervals`; ±inf without a stop on a side), the
-force f(τ) the structure needs there and its displacement q(τ) satisfy the Signorini
-law exactly when, for any r > 0 and p = q − f/r,
+Per contact DOF with admissible positions [lo, hi], needed force f and displacement q,
+the residual rows are the harmonic projection of f + r [(p − hi)₊ − (lo − p)₊],
+p = q − f/r (:mod:`mmshbm.contact.unilateral`); with the spectra C of the active sets
+{p > hi} and {p < lo} (:mod:`mmshbm.contact.projection`) the projection of s·p is the
+matrix G_mk = ε_m/2 (C_|m−k| + C_m+k) times the coefficients of p, the exact Jacobian
+when the switching instants are located (docs/design.md §2, §8).
 
-    R(τ) = f + r [(p − hi)₊ − (lo − p)₊] = 0.
-
-(At the upper stop the structure needs f = −λ ≤ 0 and q = hi; in between f = 0.) With
-the indicator s(τ) of the active set {p > hi} ∪ {p < lo}, R = f + r s (p − θ), θ = hi or
-lo, and the harmonic projection of s·p is a matrix times the coefficients of p:
-
-    proj_m[s · cos kτ] = G_mk = ε_m/2 (C_|m−k| + C_m+k),   C_n = (1/2π) ∫_{s=1} cos nτ dτ,
-
-ε_0 = 1, ε_m = 2 (and the analogous sine terms for a general trigonometric polynomial).
-Only the spectrum C_n (n = 0..2H) of the active set depends on how the projection is done:
-
-* **sampled** (AFT): C_n = (1/N) Σ_j s(τ_j) cos nτ_j on N samples; a sample changing its
-  active set is a kink of the residual.
-* **exact** (C¹): the zeros of the trigonometric polynomial p − θ are bracketed on the N
-  samples, refined by safeguarded Newton to round-off, and C_n is integrated in closed
-  form over the arcs; s·(p − θ) vanishes at the moving arc ends, so the same G is the
-  exact Jacobian (docs/design.md §2, §8).
-
-The kernels take plain arrays and know nothing of models. Numba's cache keys a kernel on
-its own file only: after editing a kernel here, the cached callers in other files
-(``corrector_kernels``) are stale until their file changes or the cache is cleared
-(``find mmshbm -name '*.nb[ic]' -delete``).
+The kernels take plain arrays and know nothing of models. They call kernels of other
+files; the package's cache policy (:mod:`mmshbm._kernel_cache`) recompiles them when any
+kernel file changes.
 """
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numba import njit
 
+# the trigonometric-polynomial, spectrum and peak kernels that earlier releases defined
+# here are these objects (their homes: contact.trig, contact.projection, core.measures)
+from ..contact.projection import _arc_spectrum, _sampled_spectrum, _spectrum  # noqa: F401
+from ..contact.trig import _TWO_PI, _refine, _trig_eval, _zeros  # noqa: F401
+from ..contact.unilateral import _project
 from .kernels import JIT_OPTIONS
+from .measures import _series_peak
 
-__all__: list[str] = []  # kernels only; the projections as functions: mmshbm.core.projection
-
-_TWO_PI = 2.0 * math.pi
-
-
-# ---------------------------------------------------------------------- trigonometric polynomials
-@njit(**JIT_OPTIONS)
-def _trig_eval(c, s, tau):
-    """g(τ), g′(τ), g″(τ) of g = c_0 + Σ_k (c_k cos kτ + s_k sin kτ); c, s shape (H+1,)."""
-    H = c.shape[0] - 1
-    c1 = math.cos(tau)
-    s1 = math.sin(tau)
-    ck = 1.0
-    sk = 0.0
-    g = c[0]
-    g1 = 0.0
-    g2 = 0.0
-    for k in range(1, H + 1):
-        ck, sk = ck * c1 - sk * s1, sk * c1 + ck * s1
-        a = c[k] * ck + s[k] * sk
-        b = -c[k] * sk + s[k] * ck
-        g += a
-        g1 += k * b
-        g2 -= k * k * a
-    return g, g1, g2
-
-
-@njit(**JIT_OPTIONS)
-def _refine(c, s, a, b, fa, order):
-    """Zero of g (order 0) or of g′ (order 1) in the bracket [a, b], where the function has
-    the sign of ``fa`` at a and the opposite sign at b: safeguarded Newton (bisection
-    whenever a step leaves the bracket), to round-off in τ: it stops where the function
-    value is below the round-off of its evaluation (Newton's steps there only hop between
-    neighbouring doubles; an end of the bracket with such a value is the zero), or where
-    the step or the bracket is at round-off in τ."""
-    H = c.shape[0] - 1
-    noise = abs(c[0]) if order == 0 else 0.0
-    for k in range(1, H + 1):
-        noise += (abs(c[k]) + abs(s[k])) * (1.0 if order == 0 else k)
-    noise *= 8e-16
-    if abs(fa) <= noise:  # a zero on a sample: Newton would bisect towards it to round-off
-        return a
-    gb, gb1, _ = _trig_eval(c, s, b)
-    if abs(gb if order == 0 else gb1) <= noise:
-        return b
-    x = 0.5 * (a + b)
-    for _ in range(100):
-        g, g1, g2 = _trig_eval(c, s, x)
-        f = g if order == 0 else g1
-        df = g1 if order == 0 else g2
-        if abs(f) <= noise:
-            return x
-        if (f > 0.0) == (fa > 0.0):
-            a = x
-        else:
-            b = x
-        step_ok = df != 0.0
-        xn = x - f / df if step_ok else 0.5 * (a + b)
-        if not (a < xn < b):
-            xn = 0.5 * (a + b)
-        if abs(xn - x) <= 2e-16 * (1.0 + abs(x)) or b - a <= 4e-16 * (1.0 + abs(a)):
-            return xn
-        x = xn
-    return x
-
-
-@njit(**JIT_OPTIONS)
-def _zeros(c, s, g_t, dg_t, tau_t, roots):
-    """Zeros of g on [0, 2π), bracketed on the samples g_t = g(τ_j), dg_t = g′(τ_j) at
-    τ_j = tau_t[j] (equispaced, τ_0 = 0); returns their count (stored sorted in ``roots``)."""
-    N = g_t.shape[0]
-    n = 0
-    # the order as run-time integers: literal arguments would compile _refine twice
-    root, extremum = np.int64(0), np.int64(1)
-    # |g″| <= M2 everywhere, so between two samples of one sign g stays beyond
-    # min(|g_a|, |g_b|) − M2 h²/8: a hidden pair of zeros needs a sample within that margin
-    m2 = 0.0
-    for k in range(1, c.shape[0]):
-        m2 += k * k * (abs(c[k]) + abs(s[k]))
-    h = _TWO_PI / N
-    margin = 1.01 * m2 * h * h / 8.0 + 1e-300
-    for j in range(N):
-        jn = j + 1 if j + 1 < N else 0
-        a = tau_t[j]
-        b = tau_t[jn] if jn > 0 else _TWO_PI
-        ga = g_t[j]
-        gb = g_t[jn]
-        if ga == 0.0:
-            if n < roots.shape[0]:
-                roots[n] = a
-                n += 1
-            continue
-        if (ga > 0.0) != (gb > 0.0):
-            if gb == 0.0:
-                continue  # the next interval records it
-            if n < roots.shape[0]:
-                roots[n] = _refine(c, s, a, b, ga, root)
-                n += 1
-        elif dg_t[j] * dg_t[jn] < 0.0 and min(abs(ga), abs(gb)) <= margin:
-            # an extremum inside: a pair of close zeros hides if it lies on the other side
-            t_ext = _refine(c, s, a, b, dg_t[j], extremum)
-            g_ext, _, _ = _trig_eval(c, s, t_ext)
-            if g_ext != 0.0 and (g_ext > 0.0) != (ga > 0.0) and n + 1 < roots.shape[0]:
-                roots[n] = _refine(c, s, a, t_ext, ga, root)
-                roots[n + 1] = _refine(c, s, t_ext, b, g_ext, root)
-                n += 2
-    return n
-
-
-@njit(**JIT_OPTIONS)
-def _arc_spectrum(c, s, g_t, dg_t, tau_t, roots, C, S):
-    """Exact spectrum of the indicator of {g > 0}: C_n = (1/2π)∫ cos nτ, S_n = (1/2π)∫ sin nτ
-    over that set, n = 0..len(C)−1 (in place)."""
-    n_spec = C.shape[0]
-    for p in range(n_spec):
-        C[p] = 0.0
-        S[p] = 0.0
-    nr = _zeros(c, s, g_t, dg_t, tau_t, roots)
-    if nr == 0:
-        if g_t[0] > 0.0:
-            C[0] = 1.0
-        return
-    for i in range(nr):
-        a = roots[i]
-        b = roots[i + 1] if i + 1 < nr else roots[0] + _TWO_PI
-        if b <= a:
-            continue
-        g_mid, _, _ = _trig_eval(c, s, 0.5 * (a + b))
-        if g_mid <= 0.0:
-            continue
-        C[0] += b - a
-        ca, sa = math.cos(a), math.sin(a)
-        cb, sb = math.cos(b), math.sin(b)
-        cna, sna, cnb, snb = 1.0, 0.0, 1.0, 0.0
-        for p in range(1, n_spec):
-            cna, sna = cna * ca - sna * sa, sna * ca + cna * sa
-            cnb, snb = cnb * cb - snb * sb, snb * cb + cnb * sb
-            C[p] += (snb - sna) / p
-            S[p] += (cna - cnb) / p
-    for p in range(n_spec):
-        C[p] /= _TWO_PI
-        S[p] /= _TWO_PI
-
-
-@njit(**JIT_OPTIONS)
-def _sampled_spectrum(g_t, cos_table, sin_table, C, S):
-    """Sampled spectrum of the indicator of {g > 0}: C_n = (1/N) Σ_j s_j cos nτ_j (and S_n
-    with sines; sin_table may have fewer rows, the rest of S is zero)."""
-    N = g_t.shape[0]
-    for p in range(C.shape[0]):
-        acc = 0.0
-        acc_s = 0.0
-        for j in range(N):
-            if g_t[j] > 0.0:
-                acc += cos_table[p, j]
-                if p < sin_table.shape[0]:
-                    acc_s += sin_table[p, j]
-        C[p] = acc / N
-        S[p] = acc_s / N
-
-
-@njit(**JIT_OPTIONS)
-def _spectrum(c, s, cos_table, sin_table, tau_t, exact, g_t, dg_t, roots, C, S):
-    """Spectrum of {g > 0} for g with coefficients (c, s) of degree H = len(c) − 1: samples
-    g_t (and g′ for the exact route) from the tables, then the sampled or exact spectrum."""
-    N = g_t.shape[0]
-    H = c.shape[0] - 1
-    # harmonic by harmonic along the table rows (contiguous), each sample summed in k order
-    for j in range(N):
-        g_t[j] = c[0]
-        dg_t[j] = 0.0
-    for k in range(1, H + 1):
-        ck = c[k]
-        sk = s[k]
-        for j in range(N):
-            g_t[j] += ck * cos_table[k, j] + sk * sin_table[k, j]
-            dg_t[j] += k * (sk * cos_table[k, j] - ck * sin_table[k, j])
-    if exact:
-        _arc_spectrum(c, s, g_t, dg_t, tau_t, roots, C, S)
-    else:
-        _sampled_spectrum(g_t, cos_table, sin_table, C, S)
-
+__all__: list[str] = []  # kernels only; the projections as functions: mmshbm.contact.unilateral
 
 # ---------------------------------------------------------------------- fused MMS-HBM
 @njit(**JIT_OPTIONS)
@@ -358,45 +166,6 @@ def _mmshbm_eval(D, dD, a, eta, omega, pole_k, pole_b, pole_w2, cdof, lo, hi, r,
 
 
 @njit(**JIT_OPTIONS)
-def _series_peak(c, s, cos_table, sin_table, y):
-    """Largest value of g = c_0 + Σ_k (c_k cos kτ + s_k sin kτ) over the period: the largest of
-    the samples ``y`` (= g on the table's grid, filled here), refined by safeguarded Newton
-    on g′ = 0 between its neighbours (to round-off)."""
-    N = y.shape[0]
-    H = c.shape[0] - 1
-    j = 0
-    for i in range(N):
-        v = c[0]
-        for k in range(1, H + 1):
-            v += c[k] * cos_table[k, i] + s[k] * sin_table[k, i]
-        y[i] = v
-        if v > y[j]:
-            j = i
-    best = y[j]
-    h = _TWO_PI / N
-    lo = (j - 1) * h
-    hi = (j + 1) * h
-    tau = j * h
-    for _ in range(12):
-        g, g1, g2 = _trig_eval(c, s, tau)
-        if g > best:
-            best = g
-        if g2 >= 0.0:
-            break
-        step = g1 / g2
-        tau_new = tau - step
-        if tau_new <= lo or tau_new >= hi:
-            break
-        tau = tau_new
-        if abs(step) <= 1e-15:
-            g, g1, g2 = _trig_eval(c, s, tau)
-            if g > best:
-                best = g
-            break
-    return best
-
-
-@njit(**JIT_OPTIONS)
 def _mmshbm_monitor_multi(D, dD, a, eta, pole_k, pole_b, cdof, lo, hi, r, omega, amp_row, amp_sign, cos_table,
                           sin_table, c_w, s_w, y_t, out):
     """Amplitude, mean energy and peak contact force of a cosine MMS-HBM point.
@@ -496,3 +265,128 @@ def _mmshbm_monitor_multi(D, dD, a, eta, pole_k, pole_b, cdof, lo, hi, r, omega,
             if v > peak:
                 peak = v
     out[2] = peak
+
+
+# ---------------------------------------------------------------------- damped MMS-HBM
+@njit(**JIT_OPTIONS)
+def _contact_rows(x, F, rows, n_c, lo, hi, rr, exact, cos_t, sin_t, tau, R, G):
+    """The contact rows of the damped MMS-HBM residual (:mod:`mmshbm.methods.mms.damped`), in
+    place: for contact j at massless DOF i = rows[j] with coefficients idx = m·n_c + i,
+    R[idx] = F[idx] + r_j φ(p), p = x[idx] − F[idx]/r_j, and G[j] = ∂φ/∂p (2H+1, 2H+1)."""
+    n = G.shape[1]
+    p = np.empty(n)
+    phi = np.empty(n)
+    for j in range(rows.shape[0]):
+        i = rows[j]
+        rj = rr[j]
+        for m in range(n):
+            p[m] = x[m * n_c + i] - F[m * n_c + i] / rj
+        _project(p, lo[j], hi[j], exact, cos_t, sin_t, tau, phi, G[j])
+        for m in range(n):
+            R[m * n_c + i] = F[m * n_c + i] + rj * phi[m]
+
+
+@njit(**JIT_OPTIONS)
+def _block_times(D, x, out):
+    """out (n_x,) = 𝔇 x for the real block matrix 𝔇 of the complex D_k (H+1, n_c, n_c) in NLvib
+    order: D_0 on the mean, [[Re, Im], [−Im, Re]] D_k on (cos k, sin k)."""
+    H1 = D.shape[0]
+    n_c = D.shape[1]
+    for i in range(n_c):
+        acc = 0.0
+        for j in range(n_c):
+            acc += D[0, i, j].real * x[j]
+        out[i] = acc
+    for k in range(1, H1):
+        c = (2 * k - 1) * n_c
+        s = 2 * k * n_c
+        for i in range(n_c):
+            acc_c = 0.0
+            acc_s = 0.0
+            for j in range(n_c):
+                dr = D[k, i, j].real
+                di = D[k, i, j].imag
+                acc_c += dr * x[c + j] + di * x[s + j]
+                acc_s += dr * x[s + j] - di * x[c + j]
+            out[c + i] = acc_c
+            out[s + i] = acc_s
+
+
+@njit(**JIT_OPTIONS)
+def _damped_residual(D, dD, x, load, dload, rows, lo, hi, rr, exact, cos_t, sin_t, tau, jacobian, R, Jx, Jp):
+    """The damped MMS-HBM contact residual (:mod:`mmshbm.methods.mms.damped`) with F = 𝔇 x − load
+    the force the structure needs, in place.
+
+    D      : (H+1, n_c, n_c) complex D_k; dD : (n_p, H+1, n_c, n_c) their derivatives in the
+             parameters (read if ``jacobian``)
+    x      : (n_x,) NLvib-ordered coefficients of the massless DOFs, n_x = (2H+1) n_c
+    load   : (n_x,) the condensed load; dload : (n_x, n_p) its derivatives
+    rows, lo, hi, rr : per contact its massless DOF, interval and proximal parameter
+    R      : (n_x,) <- F, and on contact rows F + r φ(x − F/r)
+    Jx, Jp : (n_x, n_x), (n_x, n_p) <- ∂R/∂x, ∂R/∂params (if ``jacobian``)
+    """
+    n_c = D.shape[1]
+    n = 2 * D.shape[0] - 1
+    n_x = n * n_c
+    n_p = dD.shape[0]
+    n_k = rows.shape[0]
+    _block_times(D, x, R)
+    for a in range(n_x):
+        R[a] -= load[a]
+    F = R.copy()
+    G = np.empty((n_k, n, n))
+    _contact_rows(x, F, rows, n_c, lo, hi, rr, exact, cos_t, sin_t, tau, R, G)
+    if not jacobian:
+        return
+    dF = np.empty(n_x)
+    for p in range(n_p):
+        _block_times(dD[p], x, dF)
+        for a in range(n_x):
+            Jp[a, p] = dF[a] - dload[a, p]
+    for a in range(n_x):
+        for b in range(n_x):
+            Jx[a, b] = 0.0
+    for i in range(n_c):
+        for j in range(n_c):
+            Jx[i, j] = D[0, i, j].real
+    for k in range(1, D.shape[0]):
+        c = (2 * k - 1) * n_c
+        s = 2 * k * n_c
+        for i in range(n_c):
+            for j in range(n_c):
+                dr = D[k, i, j].real
+                di = D[k, i, j].imag
+                Jx[c + i, c + j] = dr
+                Jx[c + i, s + j] = di
+                Jx[s + i, c + j] = -di
+                Jx[s + i, s + j] = dr
+    # contact rows: ∂R/∂x = (I − G) 𝔇 + r G on the DOF's own columns, ∂R/∂params = (I − G) ∂F
+    dFi = np.empty((n, n_p))
+    for jc in range(n_k):
+        i = rows[jc]
+        Gj = G[jc]
+        for m in range(n):
+            for p in range(n_p):
+                dFi[m, p] = Jp[m * n_c + i, p]
+        for m in range(n):
+            row = m * n_c + i
+            w0 = (1.0 if m == 0 else 0.0) - Gj[m, 0]
+            for j in range(n_c):
+                Jx[row, j] = w0 * D[0, i, j].real
+            for k in range(1, D.shape[0]):
+                c = 2 * k - 1
+                s = 2 * k
+                wc = (1.0 if m == c else 0.0) - Gj[m, c]
+                ws = (1.0 if m == s else 0.0) - Gj[m, s]
+                for j in range(n_c):
+                    dr = D[k, i, j].real
+                    di = D[k, i, j].imag
+                    Jx[row, c * n_c + j] = wc * dr - ws * di
+                    Jx[row, s * n_c + j] = wc * di + ws * dr
+            for b in range(n):
+                Jx[row, b * n_c + i] += rr[jc] * Gj[m, b]
+            for p in range(n_p):
+                v = 0.0
+                for mm in range(n):
+                    v += ((1.0 if mm == m else 0.0) - Gj[m, mm]) * dFi[mm, p]
+                Jp[row, p] = v

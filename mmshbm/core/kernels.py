@@ -1,103 +1,32 @@
-"""Numba kernels of the alternating frequency-time evaluation.
+"""Numba kernels of the alternating frequency-time evaluation and of the condensation:
+banded LU of K − (kΩ)²M, the condensed dynamic stiffness, a small dense solve.
 
 Kernels take plain contiguous float64 arrays and know nothing of models; the public
 functions validate shapes and call the private ``_kernel`` versions, which the solvers
 call directly in their inner loops. Caching: every kernel module takes its flags from
-:data:`JIT_OPTIONS` here, and importing this module installs the package's cache policy
-(:mod:`mmshbm._kernel_cache`: a cached kernel is stale when any kernel file changes), so
-kernels may call kernels of other files.
+:data:`JIT_OPTIONS` (defined with the cache policy in :mod:`mmshbm._kernel_cache`,
+re-exported here), and importing this module installs that policy (a cached kernel is
+stale when any kernel file changes), so kernels may call kernels of other files.
 
-Proximal contact law (Signorini, λ >= 0 the contact force, g the gap, r > 0):
-
-    λ = prox_{R+}(λ − r g)  ⇔  R = λ − max(0, λ − r g) = 0,
-
-whose zeros are exactly the pairs with 0 <= g ⊥ λ >= 0, whatever r. The active set
-s = [λ − r g > 0] gives the semismooth derivative ∂R/∂λ = 1 − s, ∂R/∂g = r s.
+The proximal contact law and the cosine product matrix that earlier releases kept here
+live with the contact laws (:mod:`mmshbm.contact.unilateral`,
+:mod:`mmshbm.contact.projection`); their names here are the same objects.
 """
 
 from __future__ import annotations
 
-import numpy as np
 from numba import njit
 
+from .._kernel_cache import JIT_OPTIONS
 from .._kernel_cache import install as _install_cache_policy
+
+# the contact kernels of earlier releases, at their old path (the same objects)
+from ..contact.projection import _cosine_product_matrix, cosine_product_matrix  # noqa: F401
+from ..contact.unilateral import _proximal_contact, proximal_contact  # noqa: F401
 
 __all__ = ["proximal_contact", "cosine_product_matrix", "JIT_OPTIONS"]
 
 _install_cache_policy()
-
-#: One place for the compilation flags of every kernel: cached, no GIL, fast math
-#: without the flags that assume no NaN/inf (a NaN must propagate to Newton's checks).
-JIT_OPTIONS = dict(cache=True, nogil=True, fastmath={"nsz", "arcp", "contract", "afn"})
-
-
-@njit(**JIT_OPTIONS)
-def _proximal_contact(lam, g, r, R, active):
-    """In place: R_j = λ_j − max(0, λ_j − r g_j), active_j = (λ_j − r g_j > 0)."""
-    for j in range(lam.shape[0]):
-        trial = lam[j] - r * g[j]
-        if trial > 0.0:
-            R[j] = r * g[j]
-            active[j] = 1.0
-        else:
-            R[j] = lam[j]
-            active[j] = 0.0
-
-
-def proximal_contact(lam: np.ndarray, g: np.ndarray, r: float) -> tuple[np.ndarray, np.ndarray]:
-    """Residual of the proximal contact law on a time grid.
-
-    Parameters
-    ----------
-    lam : ndarray, shape (N,)
-        Contact force samples λ(τ_j) (N), positive pushing away from the stop.
-    g : ndarray, shape (N,)
-        Gap samples g_N(τ_j) (m).
-    r : float
-        Proximal parameter (N/m), > 0.
-
-    Returns
-    -------
-    R : ndarray, shape (N,)
-        λ − max(0, λ − r g) (N); zero exactly where 0 <= g ⊥ λ >= 0.
-    active : ndarray, shape (N,)
-        1.0 where λ − r g > 0 (contact closed), else 0.0.
-    """
-    lam = np.ascontiguousarray(lam, dtype=np.float64)
-    g = np.ascontiguousarray(g, dtype=np.float64)
-    if lam.ndim != 1 or lam.shape != g.shape:
-        raise ValueError(f"lam and g must be 1-D of equal length, got {lam.shape} and {g.shape}")
-    if not r > 0:
-        raise ValueError(f"r must be positive, got {r!r}")
-    R = np.empty_like(lam)
-    active = np.empty_like(lam)
-    _proximal_contact(lam, g, float(r), R, active)
-    return R, active
-
-
-@njit(**JIT_OPTIONS)
-def _cosine_product_matrix(S, H, P):
-    """P[m, k] = c_m/2 (S[|m−k| mod N] + S[(m+k) mod N]), c_0 = 1, c_m = 2.
-
-    With S_p = (1/N) Σ_j s_j cos pτ_j this is the cosine coefficient m of s(τ)·cos kτ.
-    """
-    N = S.shape[0]
-    for m in range(H + 1):
-        cm = 0.5 if m == 0 else 1.0
-        for k in range(H + 1):
-            d = m - k if m >= k else k - m
-            P[m, k] = cm * (S[d % N] + S[(m + k) % N])
-
-
-def cosine_product_matrix(S: np.ndarray, harmonics: int) -> np.ndarray:
-    """Matrix (H+1, H+1) of the cosine projection of s(τ)·cos kτ from the aliased cosine
-    spectrum ``S`` (shape (N,), see :meth:`HarmonicTransform.cosine_spectrum`)."""
-    S = np.ascontiguousarray(S, dtype=np.float64)
-    if S.ndim != 1 or S.shape[0] < 2 * harmonics + 1:
-        raise ValueError(f"S must be 1-D with at least 2H+1 = {2 * harmonics + 1} samples, got {S.shape}")
-    P = np.empty((harmonics + 1, harmonics + 1))
-    _cosine_product_matrix(S, int(harmonics), P)
-    return P
 
 
 # ---------------------------------------------------------------------------- banded LU

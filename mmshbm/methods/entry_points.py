@@ -26,7 +26,7 @@ def _backbone(*args, **kwargs):
 
 
 def _admissible_signals(*args, **kwargs):
-    from .signals import branch_signals
+    from ..contact.static import branch_signals
 
     return branch_signals(*args, **kwargs)
 

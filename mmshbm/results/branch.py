@@ -232,7 +232,7 @@ class Branch(ResultBase):
             False (default): the method's own signals (for harmonic balance the truncated
             Fourier series of every DOF, which may pass through the stop). True: the
             massless DOFs from the exact static contact problem driven by the Fourier
-            motion of the DOFs with mass (no penetration; :mod:`mmshbm.methods.signals`);
+            motion of the DOFs with mass (no penetration; :mod:`mmshbm.contact.static`);
             the DOFs with mass are unchanged.
 
         Returns

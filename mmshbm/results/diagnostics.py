@@ -38,7 +38,7 @@ study summaries):
 
 For harmonic balance the last two are truncation effects of the Fourier series (more
 harmonics reduce them); ``branch.time_signals(i, admissible=True)`` gives signals of the
-massless DOFs that satisfy the contact law exactly (:mod:`mmshbm.methods.signals`).
+massless DOFs that satisfy the contact law exactly (:mod:`mmshbm.contact.static`).
 
 The mode shares come from ``records["mode_share"]`` when the method recorded them,
 otherwise they are computed here from the solver's coefficients of all DOFs

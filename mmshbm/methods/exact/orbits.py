@@ -116,7 +116,7 @@ def _guess(system: PiecewiseLinearSystem, amplitude: float) -> tuple[np.ndarray,
 
 
 def _guess_several(system: PiecewiseLinearSystem, amplitude: float) -> tuple[np.ndarray, float]:
-    from .._contacts import start_mode
+    from ...contact.table import start_mode
 
     _, phi = start_mode(system.model, 1)
     phi = phi[system.model.l]

@@ -4,13 +4,13 @@ contacts), each solved in closed form by its own modal decomposition (see
 
 from __future__ import annotations
 
-import itertools
 import logging
 import weakref
 
 import numpy as np
 import scipy.linalg as la
 
+from ...contact.lcp import lcp_active_sets as _lcp_active_sets
 from ...model.model import Model
 from .phase import _GRAZE_REL, Phase
 
@@ -201,7 +201,7 @@ class PiecewiseLinearSystem:
         amplitude DOF is taken in the open phase.
         """
         if self._amplitude is None:
-            from .._contacts import amplitude_sign, start_mode
+            from ...contact.table import amplitude_sign, start_mode
 
             m = self.model
             sign = amplitude_sign(m)
@@ -386,48 +386,6 @@ class PiecewiseLinearSystem:
                     f"f_closed={f_c:.6g} Hz, k_c={self.contact_stiffness:.6g} N/m)")
         return (f"PiecewiseLinearSystem(n_l={self.n_l}, n_c={self.n_c}, contacts={self.n_contacts}, "
                 f"f_open={f_o:.6g} Hz, phases built={len(self._phases)})")
-
-
-def _lcp_active_sets(G: np.ndarray, h: np.ndarray, dofs: np.ndarray) -> list:
-    """The closed contacts of the LCP ``g = h + G λ >= 0, λ >= 0, gᵀλ = 0`` for each column
-    of ``h`` (n_contacts, n_t), by enumeration of the active sets in order of size (the
-    first feasible one; sets closing both stops of one DOF are skipped). A column no set
-    solves exactly (round-off at a boundary) gets the set of least violation.
-    Enumeration is meant for the few contacts of the exact reference (2^n sets)."""
-    n, n_t = h.shape
-    if n > 16:
-        raise ValueError(f"the exact reference enumerates contact states: {n} contacts are too many (<= 16)")
-    best = [None] * n_t
-    violation = np.full(n_t, np.inf)
-    todo = np.ones(n_t, dtype=bool)
-    for size in range(n + 1):
-        for J in itertools.combinations(range(n), size):
-            if len({int(dofs[i]) for i in J}) < size:
-                continue
-            cols = np.flatnonzero(todo)
-            if not len(cols):
-                return best
-            Jl = list(J)
-            N = [i for i in range(n) if i not in J]
-            H = h[:, cols]
-            if size:
-                try:
-                    lam = -np.linalg.solve(G[np.ix_(Jl, Jl)], H[Jl])
-                except np.linalg.LinAlgError:
-                    continue
-                g = H[N] + G[np.ix_(N, Jl)] @ lam if N else np.zeros((0, len(cols)))
-            else:
-                lam = np.zeros((0, len(cols)))
-                g = H
-            viol = np.maximum(0.0, -np.concatenate([lam, g])).max(axis=0) if n else np.zeros(len(cols))
-            for k, col in enumerate(cols):
-                if viol[k] == 0.0:
-                    best[col] = J
-                    todo[col] = False
-                elif viol[k] < violation[col]:
-                    violation[col] = viol[k]
-                    best[col] = J
-    return best
 
 
 def _accurate_solve(K: np.ndarray, B: np.ndarray) -> np.ndarray:

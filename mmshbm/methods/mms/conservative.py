@@ -49,6 +49,9 @@ from ... import _validate as check
 from ...core.condense import make_condensation
 from ...core.contact_kernels import _mmshbm_eval, _mmshbm_monitor_multi
 from ...core.harmonics import check_harmonics
+from ...core.measures import condensed_energy as _condensed_energy  # noqa: F401  (earlier private names)
+from ...core.measures import mean_energy as _mean_energy  # noqa: F401
+from ...core.measures import refined_max as _refined_max  # noqa: F401
 from ...core.problem import BackboneProblemBase
 from ...model.contact import admissible_intervals
 from ...model.model import Model
@@ -451,41 +454,3 @@ def _held_frequency_solve(model: Model, dofs, mode: int) -> float:
     w2 = spla.eigsh(K_red, k=mode, M=M[l][:, l].tocsc(), sigma=0.0, which="LM", v0=np.ones(len(l)), OPinv=op,
                     return_eigenvectors=False)
     return float(np.sqrt(max(np.sort(w2)[mode - 1], 0.0)) / (2 * np.pi))
-
-
-def _condensed_energy(D: np.ndarray, dD: np.ndarray, a: np.ndarray, omega: float) -> float:
-    """Period average of kinetic + potential energy (J) from the massless DOFs alone.
-
-    With q_l,k = −Z_k a_k the mass-carrying DOFs satisfy their equations exactly, so
-    q_kᵀ(K − (kΩ)²M)q_k = a_kᵀ D_k a_k and q_kᵀ M q_k = a_kᵀ Z_kᵀ M Z_k a_k
-    = −a_kᵀ ∂D_k/∂Ω a_k / (2k²Ω). Parseval on the cosine motion then gives
-    E = ½ a_0ᵀD_0 a_0 + ¼ Σ_{k>=1} (a_kᵀ D_k a_k − Ω a_kᵀ ∂D_k/∂Ω a_k), the same number as
-    :func:`_mean_energy` on the recovered coefficients (up to round-off) without
-    recovering any DOF with mass. D, dD: (H+1, n_c, n_c); a: (H+1, n_c).
-    """
-    quad = np.einsum("ki,kij,kj->k", a, D, a)
-    quad_m = np.einsum("ki,kij,kj->k", a[1:], dD[1:], a[1:])
-    return float(0.5 * quad[0] + 0.25 * (quad[1:].sum() - omega * quad_m.sum()))
-
-
-def _refined_max(y: np.ndarray) -> float:
-    """Largest value of a periodic sampled signal, refined by a parabola through the peak."""
-    j = int(np.argmax(y))
-    ym, y0, yp = y[j - 1], y[j], y[(j + 1) % len(y)]
-    denom = ym - 2 * y0 + yp
-    if denom < 0:
-        return float(y0 - 0.125 * (yp - ym) ** 2 / denom)
-    return float(y0)
-
-
-def _mean_energy(model: Model, Q: np.ndarray, omega: float) -> float:
-    """Period average of kinetic + potential energy (J) of the motion with NLvib-ordered
-    coefficients Q (n_dof, 2H+1) at Ω (Parseval). A harmonic-balance solution conserves
-    energy only up to truncation; its period average is the natural single number."""
-    H = (Q.shape[1] - 1) // 2
-    KQ = np.einsum("ij,ij->j", Q, model.K @ Q)  # qᵀKq per column
-    MQ = np.einsum("ij,ij->j", Q, model.M @ Q)
-    k = np.repeat(np.arange(1, H + 1), 2)
-    V = 0.5 * KQ[0] + 0.25 * KQ[1:].sum()
-    T = 0.25 * omega**2 * (k**2 * MQ[1:]).sum()
-    return float(V + T)

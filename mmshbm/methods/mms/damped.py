@@ -24,7 +24,7 @@ The other massless DOFs: R = f. R is projected on harmonics 0..H; with
 
     R = F + r φ(x_i − F/r),    ∂R/∂x_i = r G,    ∂R/∂F = I − G.
 
-The projection is :func:`mmshbm.core.projection.project_contact`: by default
+The projection is :func:`mmshbm.contact.unilateral.project_contact`: by default
 exact (the switching instants, roots of p − hi and p − lo, located and the pieces integrated
 in closed form, so R is C¹ in x), or sampled by AFT on N samples (``projection="sampled"``; a
 sample switching state is a kink of the residual).
@@ -32,37 +32,25 @@ sample switching state is a kink of the residual).
 
 from __future__ import annotations
 
-import functools
-
 import numpy as np
 
 from ... import _validate as check
+from ...contact.projection import sample_tables
+from ...contact.unilateral import contact_projection
+from ...core.contact_kernels import _contact_rows, _damped_residual
 from ...core.damped_condense import CondensedHarmonics, DampedCondensation
 from ...core.harmonics import check_harmonics
+from ...core.measures import refined_max
 from ...core.problem import ContinuationProblemBase
-from ...core.projection import _contact_rows, _damped_residual, sample_tables
 from ...model.contact import admissible_intervals
 from ...model.model import Model
 
 __all__: list[str] = []
 
 
-def contact_projection(projection: str, H: int, N: int):
-    """``project(p, lo, hi) -> (r, G)``: :func:`mmshbm.core.projection.project_contact`,
-    exact (``"exact"``: switching instants located, pieces integrated in closed form, C¹)
-    or sampled on N points (``"sampled"``, AFT)."""
-    from ...core.projection import project_contact
-
-    if projection == "exact":
-        return project_contact
-    if projection == "sampled":
-        return functools.partial(project_contact, exact=False, n_samples=N)
-    raise ValueError(f"projection must be 'exact' or 'sampled', got {projection!r}")
-
-
 def _projection_grid(projection: str, H: int, N: int) -> tuple[bool, int]:
     """(exact, samples per period) of the contact projection: 16·(2H+1) for the exact one
-    (its bracketing grid, as :func:`~mmshbm.core.projection.project_contact`), N sampled."""
+    (its bracketing grid, as :func:`~mmshbm.contact.unilateral.project_contact`), N sampled."""
     return projection == "exact", (16 * (2 * H + 1) if projection == "exact" else N)
 
 
@@ -87,16 +75,6 @@ def fine_samples(coeffs: np.ndarray, n: int) -> np.ndarray:
     spec[..., 0] = coeffs[..., 0]
     spec[..., 1:H + 1] = 0.5 * (coeffs[..., 1::2] - 1j * coeffs[..., 2::2])
     return np.fft.irfft(spec, n=n, axis=-1) * n
-
-
-def refined_max(y: np.ndarray) -> float:
-    """Largest value of a periodic sampled signal, refined by a parabola through the peak."""
-    j = int(np.argmax(y))
-    ym, y0, yp = y[j - 1], y[j], y[(j + 1) % len(y)]
-    denom = ym - 2 * y0 + yp
-    if denom < 0:
-        return float(y0 - 0.125 * (yp - ym) ** 2 / denom)
-    return float(y0)
 
 
 class DampedHBMBase(ContinuationProblemBase):

@@ -32,9 +32,9 @@ from __future__ import annotations
 import numpy as np
 
 from ... import _validate as check
+from ...core.measures import check_dof, harmonic_content, mean_energy
 from ...core.problem import BackboneProblemBase
 from ...model.model import Model
-from .conservative import _mean_energy
 from .damped import DampedHBMBase, synthesis_matrix
 
 __all__ = ["EPMCProblem"]
@@ -170,11 +170,8 @@ class EPMCProblem(DampedHBMBase, BackboneProblemBase):
 
     def harmonic_content(self, u: np.ndarray, dof: int | None = None) -> np.ndarray:
         """|Q̂_k|, k = 0..H, of ``dof`` (default the amplitude DOF); shape (H+1,)."""
-        dof = self.amplitude_dof if dof is None else check.integer("dof", dof)
-        if not 0 <= dof < self.model.n_dof:
-            raise ValueError(f"dof must be in [0, {self.model.n_dof - 1}], got {dof}")
-        Q = self.coefficients(u)[dof]
-        return np.concatenate([[abs(Q[0])], np.hypot(Q[1::2], Q[2::2])])
+        dof = check_dof(dof, self.model.n_dof, self.amplitude_dof)
+        return harmonic_content(self.coefficients(u)[dof])
 
     def monitor(self, u: np.ndarray) -> dict:
         """frequency (Hz), amplitude (m), energy (J), contact_force_max (N),
@@ -184,7 +181,7 @@ class EPMCProblem(DampedHBMBase, BackboneProblemBase):
         Q = self.full_coefficients(x, ch, None)
         F = self.needed_force(x, ch.D, None)
         return {"frequency": omega / (2 * np.pi), "amplitude": self.amplitude(Q[self.amplitude_dof]),
-                "energy": _mean_energy(self.model, Q, omega),
+                "energy": mean_energy(self.model, Q, omega),
                 "contact_force_max": self.contact_force_max(x, F),
                 "damping_ratio": xi / (2 * omega), "xi": xi}
 

@@ -36,9 +36,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ... import _validate as check
+from ...core.measures import check_dof, harmonic_content, mean_energy
 from ...core.problem import ForcedProblemBase
 from ...model.model import Model
-from .conservative import _mean_energy
 from .damped import DampedHBMBase, synthesis_matrix
 
 __all__ = ["Excitation", "harmonic_force", "base_excitation", "ForcedResponseProblem"]
@@ -370,11 +370,8 @@ class ForcedResponseProblem(DampedHBMBase, ForcedProblemBase):
 
     def harmonic_content(self, u: np.ndarray, dof: int | None = None) -> np.ndarray:
         """|Q̂_k| for k = 0..H of ``dof`` (default the amplitude DOF); shape (H+1,)."""
-        dof = self.amplitude_dof if dof is None else check.integer("dof", dof)
-        if not 0 <= dof < self.model.n_dof:
-            raise ValueError(f"dof must be in [0, {self.model.n_dof - 1}], got {dof}")
-        Q = self.coefficients(u)[dof]
-        return np.concatenate([[abs(Q[0])], np.hypot(Q[1::2], Q[2::2])])
+        dof = check_dof(dof, self.model.n_dof, self.amplitude_dof)
+        return harmonic_content(self.coefficients(u)[dof])
 
     def phase(self, q_coeffs: np.ndarray) -> float:
         """Lag (rad) of the fundamental of ``q_coeffs`` behind the excitation, in [−π/2, 3π/2)."""
@@ -393,7 +390,7 @@ class ForcedResponseProblem(DampedHBMBase, ForcedProblemBase):
         q = Q[self.amplitude_dof]
         F = self._needed(x, omega, sigma)
         rec = {"frequency": omega / (2 * np.pi), "amplitude": self.amplitude(q), "phase": self.phase(q),
-               "energy": _mean_energy(self.model, Q, omega),
+               "energy": mean_energy(self.model, Q, omega),
                "contact_force_max": self.contact_force_max(x, F)}
         if self.stability:
             mu = self._multipliers(Q, omega)

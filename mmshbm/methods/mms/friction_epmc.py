@@ -26,9 +26,9 @@ from __future__ import annotations
 import numpy as np
 
 from ... import _validate as check
+from ...core.measures import mean_energy
 from ...core.problem import BackboneProblemBase
 from ...model.model import Model
-from .conservative import _mean_energy
 from .damped import DampedHBMBase
 from .friction_forced import FrictionRows, check_friction_model, check_law
 
@@ -258,6 +258,6 @@ class FrictionEPMCProblem(FrictionRows, DampedHBMBase, BackboneProblemBase):
         k = np.repeat(np.arange(1, self.H + 1), 2)
         visc = np.pi * omega * float(np.einsum("j,ij,ij->", k**2, Ql[:, 1:], self.C @ Ql[:, 1:]))
         return {"frequency": omega / (2 * np.pi), "amplitude": self.amplitude(Q[self.amplitude_dof]),
-                "energy": _mean_energy(self.model, Q, omega), "contact_force_max": 0.0,
+                "energy": mean_energy(self.model, Q, omega), "contact_force_max": 0.0,
                 "damping_ratio": xi / (2 * omega), "xi": xi, "slip_fraction": slip,
                 "friction_dissipation": float(work), "viscous_dissipation": visc}

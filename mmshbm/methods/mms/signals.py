@@ -4,13 +4,10 @@ harmonic content and the amplitude with its gradient (a mixin of
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
-from numba import njit
 
 from ... import _validate as check
-from ...core.kernels import JIT_OPTIONS
+from ...core.measures import _cosine_peak, check_dof, harmonic_content
 
 __all__ = ["SignalsMixin"]
 
@@ -160,11 +157,8 @@ class SignalsMixin:
 
     def harmonic_content(self, u: np.ndarray, dof: int | None = None) -> np.ndarray:
         """|Q_k| for k = 0..H of ``dof`` (default the amplitude DOF); shape (H+1,)."""
-        dof = self.amplitude_dof if dof is None else check.integer("dof", dof)
-        if not 0 <= dof < self.model.n_dof:
-            raise ValueError(f"dof must be in [0, {self.model.n_dof - 1}], got {dof}")
-        Q = self.coefficients(u)[dof]
-        return np.concatenate([[abs(Q[0])], np.hypot(Q[1::2], Q[2::2])])
+        dof = check_dof(dof, self.model.n_dof, self.amplitude_dof)
+        return harmonic_content(self.coefficients(u)[dof])
 
     def _amplitude_row(self, a: np.ndarray, omega: float, eta: np.ndarray) -> np.ndarray:
         """Cosine coefficients (H+1,) of the amplitude DOF's motion."""
@@ -225,42 +219,3 @@ class SignalsMixin:
             return float(amplitude), grad
         grad[-1] = 0.0
         return float(amplitude), grad * self.colscale
-
-
-@njit(**JIT_OPTIONS)
-def _cosine_peak(row, sign, cos_fine, tau_fine, cos_k):
-    """Largest value of sign·q (|q| when sign is 0) for q(τ) = Σ_k row_k cos kτ: the largest
-    sample on the fine grid (cos_fine (H+1, n), tau_fine (n,)), refined by Newton on
-    q′(τ) = 0 (at most 8 steps, to 1e-14 in τ). Returns (the value, the sign s with
-    value = s·q(τ*)); ``cos_k`` <- cos kτ* (the gradient of q(τ*) in row, envelope theorem)."""
-    H1 = row.shape[0]
-    n = tau_fine.shape[0]
-    best = -np.inf
-    j = 0
-    for i in range(n):
-        q = 0.0
-        for k in range(H1):
-            q += row[k] * cos_fine[k, i]
-        y = sign * q if sign != 0.0 else abs(q)
-        if y > best:
-            best = y
-            j = i
-    tau = tau_fine[j]
-    for _ in range(8):
-        d1 = 0.0
-        d2 = 0.0
-        for k in range(H1):
-            d1 -= k * row[k] * math.sin(k * tau)
-            d2 -= k * k * row[k] * math.cos(k * tau)
-        if d2 == 0.0:
-            break
-        step = d1 / d2
-        tau -= step
-        if abs(step) < 1e-14:
-            break
-    value = 0.0
-    for k in range(H1):
-        cos_k[k] = math.cos(k * tau)
-        value += row[k] * cos_k[k]
-    s = sign if sign != 0.0 else math.copysign(1.0, value)
-    return s * value, s

@@ -10,7 +10,7 @@ is
 (F̂ = F_c − i F_s the excitation, σ(Ω) as in :class:`~mmshbm.methods.mms.forced.Excitation`),
 and each stop is a penalty spring: with the DOF's admissible interval [lo, hi],
 f_p = k_p [(q − hi)₊ − (lo − q)₊], projected with the projection of MMS-HBM
-(:func:`mmshbm.core.projection.project_contact`: by default exact, the switching instants
+(:func:`mmshbm.contact.unilateral.project_contact`: by default exact, the switching instants
 located and the pieces integrated in closed form, so the residual is C¹; or sampled AFT).
 The sampled projection is kinked wherever a sample changes state, and with k_p = 10³ k_c
 each kink is a jump of k_p/N in the Jacobian: on the default beam (0.5 %, 2.3 N, H = 5)
@@ -30,12 +30,13 @@ import numpy as np
 import scipy.sparse as sp
 
 from ... import _validate as check
+from ...contact.unilateral import contact_projection
 from ...core.harmonics import check_harmonics
+from ...core.measures import check_dof, harmonic_content, mean_energy, refined_max
 from ...core.problem import ForcedProblemBase
 from ...model.contact import admissible_intervals
 from ...model.model import Model
-from ..mms.conservative import _mean_energy
-from ..mms.damped import contact_projection, fine_samples, refined_max
+from ..mms.damped import fine_samples
 from ..mms.forced import Excitation, harmonic_force
 
 __all__ = ["PenaltyForcedProblem", "DEFAULT_PENALTY_FACTOR"]
@@ -218,9 +219,9 @@ class PenaltyForcedProblem(ForcedProblemBase):
         return t, np.array(out)
 
     def harmonic_content(self, u, dof=None):
-        dof = self.amplitude_dof if dof is None else dof
-        Q = self.coefficients(u)[dof]
-        return np.concatenate([[abs(Q[0])], np.hypot(Q[1::2], Q[2::2])])
+        """|Q_k|, k = 0..H, of ``dof`` (default the amplitude DOF); shape (H+1,)."""
+        dof = check_dof(dof, self.model.n_dof, self.amplitude_dof)
+        return harmonic_content(self.coefficients(u)[dof])
 
     def monitor(self, u) -> dict:
         """frequency (Hz), amplitude (m), phase (rad), energy (J), contact_force_max (N)."""
@@ -239,4 +240,4 @@ class PenaltyForcedProblem(ForcedProblemBase):
         amplitude = max(refined_max(samples), refined_max(-samples))
         return {"frequency": omega / (2 * np.pi), "amplitude": amplitude,
                 "phase": float((lag + 0.5 * np.pi) % (2 * np.pi) - 0.5 * np.pi),
-                "energy": _mean_energy(self.model, Qall, omega), "contact_force_max": force}
+                "energy": mean_energy(self.model, Qall, omega), "contact_force_max": force}

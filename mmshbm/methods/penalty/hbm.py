@@ -36,7 +36,7 @@ Conventions follow :mod:`mmshbm.methods.mms.conservative`:
 * Analytic, sparse Jacobian. Harmonic k's block is K − (kΩ)² M (sparse, the pattern of the
   FE matrices); the penalty couples the harmonics only in the contact DOF's row and column,
   ∂R_{m,c}/∂Q_{k,c} += k_p P_{mk} with P the cosine product matrix of the active set
-  (:func:`~mmshbm.core.kernels._cosine_product_matrix`); the Ω column is −2k²Ω M Q_k. The CSR
+  (:func:`~mmshbm.contact.projection._cosine_product_matrix`); the Ω column is −2k²Ω M Q_k. The CSR
   pattern is built once; each evaluation only fills its data vector (a Numba kernel), so the
   cost per Jacobian is that of writing its non-zeros, not of scipy sparse arithmetic.
 * Scaled unknowns: Q_k,i by gap·max(|φ_i|, 10⁻³ max|φ|)·ρ, with φ the first linear mode
@@ -85,20 +85,25 @@ import numpy as np
 import scipy.sparse as sp
 
 from ... import _validate as check
-from ...core.harmonics import check_harmonics, default_n_samples, transform
-from ...core.kernels import _cosine_product_matrix
-from ...core.problem import BackboneProblemBase
-from ...model.model import Model
-from .._contacts import (
+from ...contact.projection import _cosine_product_matrix
+from ...contact.table import (
     DEFAULT_PENALTY_FACTOR,
-    amplitude_sign,
     contact_table,
     penalty_values,
-    refined_peak,
     start_mode,
     static_contact_stiffness,
 )
-from ..mms.conservative import _mean_energy, _refined_max
+from ...core.harmonics import check_harmonics, default_n_samples, transform
+from ...core.measures import (
+    amplitude_peak,
+    amplitude_sign,
+    check_dof,
+    harmonic_content,
+    mean_energy,
+    refined_max,
+)
+from ...core.problem import BackboneProblemBase
+from ...model.model import Model
 from ._kernels import _penalty_contacts, _penalty_hbm_jacobian
 
 __all__ = ["PenaltyHBMProblem", "DEFAULT_PENALTY_FACTOR", "penalty_n_samples"]
@@ -221,7 +226,7 @@ class PenaltyHBMProblem(BackboneProblemBase):
     penalty_stiffness : float or sequence of float, optional
         k_p (N/m), > 0: one for all contacts or one per contact. Default
         ``DEFAULT_PENALTY_FACTOR`` (10³) times each contact's static stiffness k_c
-        (:func:`~mmshbm.methods._contacts.static_contact_stiffness`: the condensed
+        (:func:`~mmshbm.contact.table.static_contact_stiffness`: the condensed
         (w_cᵀ D_0⁻¹ w_c)⁻¹ when the contact DOFs are massless, as in 0.1, else
         1/(e_dᵀ K⁻¹ e_d) from a sparse factorisation of K; the same number where both
         apply). The relative frequency error of the backbone scales like k_c/k_p (module
@@ -465,9 +470,8 @@ class PenaltyHBMProblem(BackboneProblemBase):
 
     def harmonic_content(self, u: np.ndarray, dof: int | None = None) -> np.ndarray:
         """|Q_k| for k = 0..H of ``dof`` (default the amplitude DOF); shape (H+1,)."""
-        dof = self.amplitude_dof if dof is None else int(dof)
-        Q, _ = self.unpack(u)
-        return np.abs(Q[:, dof])
+        dof = check_dof(dof, self.n, self.amplitude_dof)
+        return harmonic_content(self.coefficients(u)[dof])
 
     def monitor(self, u: np.ndarray) -> dict:
         """The per-point quantities of a backbone: frequency (Hz), amplitude (m, at
@@ -485,11 +489,11 @@ class PenaltyHBMProblem(BackboneProblemBase):
             q_amp = q[0]
         else:
             q_amp = Q[:, self.amplitude_dof] @ self._cos_fine
-        peaks = [self.penalty_stiffnesses[i] * max(_refined_max(penetration[i]), 0.0) for i in range(ct.n)]
+        peaks = [self.penalty_stiffnesses[i] * max(refined_max(penetration[i]), 0.0) for i in range(ct.n)]
         rec = {
             "frequency": omega / (2 * np.pi),
-            "amplitude": refined_peak(q_amp, self._amp_sign),
-            "energy": _mean_energy(self.model, self.coefficients(u), omega) + spring,
+            "amplitude": amplitude_peak(q_amp, self._amp_sign),
+            "energy": mean_energy(self.model, self.coefficients(u), omega) + spring,
             "contact_force_max": float(max(peaks)),
         }
         if ct.n > 1:
@@ -516,5 +520,5 @@ def penalty_n_samples(harmonics: int, penalty_factor: float) -> int:
 def _condensed_contact_stiffness(model: Model) -> float:
     """k_c (N/m): the static stiffness of the structure at the contact of a single-contact
     model (with several contacts, the smallest over the contacts); see
-    :func:`~mmshbm.methods._contacts.static_contact_stiffness`."""
+    :func:`~mmshbm.contact.table.static_contact_stiffness`."""
     return float(static_contact_stiffness(model).min())

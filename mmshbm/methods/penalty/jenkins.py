@@ -31,8 +31,9 @@ import scipy.sparse as sp
 from ... import _validate as check
 from ...contact.coulomb import jenkins_hysteresis
 from ...core.harmonics import check_harmonics
+from ...core.measures import refined_max
 from ...model.model import Model
-from ..mms.damped import fine_samples, refined_max
+from ..mms.damped import fine_samples
 from ..mms.forced import Excitation, harmonic_force
 from ..mms.friction_forced import check_friction_model
 from .forced import PenaltyForcedProblem

@@ -37,10 +37,10 @@ import numpy as np
 from ... import _validate as check
 from ...core.condense import make_condensation
 from ...core.harmonics import check_harmonics
+from ...core.measures import amplitude_peak, check_dof, condensed_energy, harmonic_content, refined_max
 from ...core.problem import BackboneProblemBase
 from ...model.contact import admissible_intervals
 from ...model.model import Model
-from ..mms.conservative import _condensed_energy, _refined_max
 from ._reduced_kernels import _penalty_reduced_residual
 from .hbm import DEFAULT_PENALTY_FACTOR, penalty_n_samples
 
@@ -245,10 +245,8 @@ class ReducedPenaltyHBMProblem(BackboneProblemBase):
 
     def harmonic_content(self, u: np.ndarray, dof: int | None = None) -> np.ndarray:
         """|Q_k| for k = 0..H of ``dof`` (default the amplitude DOF); shape (H+1,)."""
-        dof = self.amplitude_dof if dof is None else check.integer("dof", dof)
-        if not 0 <= dof < self.model.n_dof:
-            raise ValueError(f"dof must be in [0, {self.model.n_dof - 1}], got {dof}")
-        return np.abs(_cosines(self.coefficients(u)[dof]))
+        dof = check_dof(dof, self.model.n_dof, self.amplitude_dof)
+        return harmonic_content(self.coefficients(u)[dof])
 
     def _amplitude_signal(self, a: np.ndarray, omega: float) -> np.ndarray:
         """The amplitude DOF's motion on the fine grid."""
@@ -272,14 +270,14 @@ class ReducedPenaltyHBMProblem(BackboneProblemBase):
         if hasattr(self.cond, "check_range"):  # modal: a converged point beyond the truncation warns
             self.cond.check_range(omega, self.H)
         q = self._amplitude_signal(a, omega)
-        amplitude = _refined_max(-self._away_side * q) if self._away_side else _refined_max(np.abs(q))
+        amplitude = amplitude_peak(q, self._away_side)
         _, qc, lam = self.contact_signals(u)
         spring = 0.5 / self.penalty_stiffness * float(np.sum(np.mean(lam**2, axis=1)))
         return {
             "frequency": omega / (2 * np.pi),
             "amplitude": amplitude,
-            "energy": _condensed_energy(D, dD, a, omega) + spring,
-            "contact_force_max": max(_refined_max(row) for row in lam),
+            "energy": condensed_energy(D, dD, a, omega) + spring,
+            "contact_force_max": max(refined_max(row) for row in lam),
         }
 
 

@@ -3,14 +3,8 @@ with mass): the contact LCP followed along a step, the step's force sum and its
 derivatives, the time step and its sensitivities (:mod:`mmshbm.methods.shooting.conservative`).
 
 The contact forces λ (m,) at fixed free gaps h = gap + A q solve the LCP
-
-    g = h + G λ >= 0,   λ >= 0,   gᵀλ = 0
-
-(G the Delassus matrix of the massless contact DOFs, 1/k_p on the diagonal of a penalty
-spring on a DOF with mass). λ(h) is continuous and piecewise linear: on the region of an
-active set J, λ_J = −G_JJ⁻¹ h_J. Along a straight path h(s) = h0 + s (h1 − h0) it is
-followed exactly by principal pivoting (:func:`_lcp_path`): on each piece λ and g are
-affine in s, and the piece ends where an active λ_j or an inactive g_i reaches zero.
+g = h + G λ >= 0, λ >= 0, gᵀλ = 0; they are followed exactly along each step by
+principal pivoting with the kernels of :mod:`mmshbm.contact.lcp`.
 
 Band storage, the band kernels and the tangent layout are those of
 :mod:`mmshbm.methods.shooting._kernels`.
@@ -21,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ...contact.lcp import _inverse_sub, _lcp_jacobian, _lcp_path, _lcp_point, lcp_solve  # noqa: F401
 from ...core.kernels import JIT_OPTIONS
 from ._kernels import (
     _band_solve,
@@ -31,177 +26,11 @@ from ._kernels import (
     _block_update,
 )
 
-__all__ = ["lcp_solve"]
+__all__: list[str] = []  # kernels; lcp_solve (mmshbm.contact.lcp) is re-exported at its old path
 
 _MAX_NEWTON = 60
 # Tangent columns per block (as in _shooting_kernels).
 _BLOCK = 16
-
-
-@njit(**JIT_OPTIONS)
-def _inverse_sub(G, idx, nJ, Ginv, work):
-    """In place: Ginv[:nJ, :nJ] <- (G[idx, idx])⁻¹ for the first nJ entries of ``idx``, by
-    Gauss–Jordan elimination with partial pivoting. False if singular."""
-    for a in range(nJ):
-        for b in range(nJ):
-            work[a, b] = G[idx[a], idx[b]]
-            Ginv[a, b] = 1.0 if a == b else 0.0
-    for col in range(nJ):
-        piv = col
-        big = abs(work[col, col])
-        for r in range(col + 1, nJ):
-            if abs(work[r, col]) > big:
-                big = abs(work[r, col])
-                piv = r
-        if not big > 0.0:
-            return False
-        if piv != col:
-            for b in range(nJ):
-                tmp = work[col, b]
-                work[col, b] = work[piv, b]
-                work[piv, b] = tmp
-                tmp = Ginv[col, b]
-                Ginv[col, b] = Ginv[piv, b]
-                Ginv[piv, b] = tmp
-        d = 1.0 / work[col, col]
-        for b in range(nJ):
-            work[col, b] *= d
-            Ginv[col, b] *= d
-        for r in range(nJ):
-            if r != col:
-                f = work[r, col]
-                if f != 0.0:
-                    for b in range(nJ):
-                        work[r, b] -= f * work[col, b]
-                        Ginv[r, b] -= f * Ginv[col, b]
-    return True
-
-
-@njit(**JIT_OPTIONS)
-def _lcp_path(G, h0, h1, act, integral, lam1, F, D0, D1, idx, Ginv, work):
-    """Follow the LCP solution λ(h(s)) along h(s) = h0 + s (h1 − h0), s from 0 to 1.
-
-    act : (m,) bool, the active set valid at h0 on entry, the one at h1 on exit.
-    integral : also accumulate F = 2 ∫₀¹ λ ds (N) and its derivatives D0 = ∂F/∂h0,
-        D1 = ∂F/∂h1 (m, m) (exact: λ is linear on each piece and continuous, so
-        F = Σ (s_k+1 − s_k)(λ(s_k) + λ(s_k+1)), D1 = Σ J_k (s_k+1² − s_k²),
-        D0 = Σ J_k ((1 − s_k)² − (1 − s_k+1)²) with J_k = ∂λ/∂h on piece k).
-    lam1 : (m,) output, λ(h1). idx (m,) int, Ginv, work (m, m): work arrays.
-    Returns the number of pieces, or −1 if the path does not end (degenerate pivoting)
-    or meets a singular G_JJ.
-    """
-    m = h0.shape[0]
-    if integral:
-        for i in range(m):
-            F[i] = 0.0
-            for j in range(m):
-                D0[i, j] = 0.0
-                D1[i, j] = 0.0
-    s0 = 0.0
-    pieces = 0
-    while True:
-        pieces += 1
-        if pieces > 4 * m + 8:
-            return -1
-        nJ = 0
-        for i in range(m):
-            if act[i]:
-                idx[nJ] = i
-                nJ += 1
-        if nJ and not _inverse_sub(G, idx, nJ, Ginv, work):
-            return -1
-        # λ_J(s) = −Ginv h_J(s): value at s0 and slope; g(s) = h(s) + G_:J λ_J(s)
-        s_next = 1.0
-        leave = -1
-        for a in range(nJ):
-            val = 0.0
-            slope = 0.0
-            for b in range(nJ):
-                jb = idx[b]
-                val -= Ginv[a, b] * (h0[jb] + s0 * (h1[jb] - h0[jb]))
-                slope -= Ginv[a, b] * (h1[jb] - h0[jb])
-            lam1[idx[a]] = val  # λ at s0 (reused below)
-            work[a, 0] = slope  # (work's column 0 is free once Ginv is formed)
-            if slope < 0.0:
-                s = s0 - val / slope if val > 0.0 else s0
-                if s < s_next:
-                    s_next = s
-                    leave = idx[a]
-        for i in range(m):
-            if act[i]:
-                continue
-            val = h0[i] + s0 * (h1[i] - h0[i])
-            slope = h1[i] - h0[i]
-            for a in range(nJ):
-                val += G[i, idx[a]] * lam1[idx[a]]
-                slope += G[i, idx[a]] * work[a, 0]
-            if slope < 0.0:
-                s = s0 - val / slope if val > 0.0 else s0
-                if s < s_next:
-                    s_next = s
-                    leave = i
-        if s_next >= 1.0:
-            s_next = 1.0
-            leave = -1
-        ds = s_next - s0
-        if integral and nJ:
-            for a in range(nJ):
-                ia = idx[a]
-                F[ia] += ds * (2.0 * lam1[ia] + ds * work[a, 0])
-            c1 = s_next * s_next - s0 * s0
-            c0 = (1.0 - s0) * (1.0 - s0) - (1.0 - s_next) * (1.0 - s_next)
-            for a in range(nJ):
-                for b in range(nJ):
-                    D1[idx[a], idx[b]] -= c1 * Ginv[a, b]
-                    D0[idx[a], idx[b]] -= c0 * Ginv[a, b]
-        if leave < 0:
-            for i in range(m):
-                lam1[i] = 0.0
-            for a in range(nJ):
-                val = 0.0
-                for b in range(nJ):
-                    val -= Ginv[a, b] * h1[idx[b]]
-                lam1[idx[a]] = max(val, 0.0)
-            return pieces
-        act[leave] = not act[leave]
-        s0 = s_next
-
-
-@njit(**JIT_OPTIONS)
-def _lcp_jacobian(G, act, J, idx, Ginv, work):
-    """J <- ∂λ/∂h = −E_J G_JJ⁻¹ E_Jᵀ (m, m) for the active set ``act``. False if singular."""
-    m = act.shape[0]
-    for i in range(m):
-        for j in range(m):
-            J[i, j] = 0.0
-    nJ = 0
-    for i in range(m):
-        if act[i]:
-            idx[nJ] = i
-            nJ += 1
-    if nJ and not _inverse_sub(G, idx, nJ, Ginv, work):
-        return False
-    for a in range(nJ):
-        for b in range(nJ):
-            J[idx[a], idx[b]] = -Ginv[a, b]
-    return True
-
-
-@njit(**JIT_OPTIONS)
-def _lcp_point(G, h, act, lam, idx, Ginv, work):
-    """The LCP solution at h (λ (m,) and the active set ``act``, outputs), by following
-    the path from a point with every free gap positive (λ = 0 there) to h. Returns the
-    number of pieces, or −1 (see :func:`_lcp_path`)."""
-    m = h.shape[0]
-    start = np.empty(m)
-    big = 1.0
-    for i in range(m):
-        big = max(big, abs(h[i]))
-    for i in range(m):
-        start[i] = abs(h[i]) + big
-        act[i] = False
-    dummy = np.empty((0, 0))
-    return _lcp_path(G, start, h, act, False, lam, lam, dummy, dummy, idx, Ginv, work)
 
 
 @njit(**JIT_OPTIONS)
@@ -498,32 +327,3 @@ def _integrate_multi(Sf, Pb, Mb, Kb, A, Z, AZ, G, gap, h, n_steps, avf, q, v, dq
             for k in range(m):
                 LAM[step + 1, k] = lam1[k]
     return closed
-
-
-def lcp_solve(G: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The solution of the LCP g = h + G λ >= 0, λ >= 0, gᵀλ = 0 for each column of ``h``.
-
-    Parameters
-    ----------
-    G : ndarray, shape (m, m)
-        Symmetric positive semidefinite, with G_JJ nonsingular on the active sets met.
-    h : ndarray, shape (m,) or (m, n_t)
-
-    Returns
-    -------
-    lam : ndarray, like ``h``
-    active : ndarray of bool, like ``h``
-    """
-    G = np.ascontiguousarray(G, dtype=np.float64)
-    H = np.asarray(h, dtype=np.float64)
-    Hc = H.reshape(H.shape[0], -1)
-    m, n_t = Hc.shape
-    lam = np.zeros((m, n_t))
-    act = np.zeros((m, n_t), dtype=bool)
-    idx, Ginv, work = np.empty(m, dtype=np.int64), np.empty((m, m)), np.empty((m, m))
-    a, lk = np.zeros(m, dtype=np.bool_), np.zeros(m)
-    for j in range(n_t):
-        if _lcp_point(G, np.ascontiguousarray(Hc[:, j]), a, lk, idx, Ginv, work) < 0:
-            raise RuntimeError(f"the contact LCP has no unique solution at h = {Hc[:, j]}")
-        lam[:, j], act[:, j] = lk, a
-    return lam.reshape(H.shape), act.reshape(H.shape)

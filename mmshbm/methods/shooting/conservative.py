@@ -103,11 +103,12 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from ... import _validate as check
+from ...contact.lcp import lcp_solve
+from ...contact.table import contact_law, contact_table, penalty_values, start_mode
+from ...core.measures import amplitude_peak, amplitude_sign, refined_max
 from ...core.problem import BackboneProblemBase
 from ...model.model import Model
-from .._contacts import amplitude_sign, contact_law, contact_table, penalty_values, refined_peak, start_mode
-from ..mms.conservative import _refined_max
-from ._contact_kernels import _integrate_multi, lcp_solve
+from ._contact_kernels import _integrate_multi
 from ._kernels import _band_cholesky, _band_solve, _band_solve_rows, _integrate
 from .signals import ShootingSignals
 
@@ -258,7 +259,7 @@ class ShootingProblem(ShootingSignals, BackboneProblemBase):
     def _init_contacts(self, K_cc, K_lc, penalty_stiffness) -> None:
         """Free gaps h = gap + A q_l (permuted order), the Delassus matrix G of the LCP at
         fixed q_l and the massless DOFs' recovery q_c = B q_l + E λ
-        (:func:`~mmshbm.methods._contacts.contact_law`; penalty springs on DOFs with mass)."""
+        (:func:`~mmshbm.contact.table.contact_law`; penalty springs on DOFs with mass)."""
         ct = self.contacts
         if (~ct.massless).any():
             kp = penalty_values(self.model, penalty_stiffness)
@@ -476,15 +477,15 @@ class ShootingProblem(ShootingSignals, BackboneProblemBase):
         lam = self.trajectory(u)[3]
         q_amp = self._dof_at_steps(u, self.amplitude_dof)
         if lam.ndim == 1:
-            peak = max(_refined_max(lam), 0.0) if lam.max() > 0 else 0.0
+            peak = max(refined_max(lam), 0.0) if lam.max() > 0 else 0.0
             closed = float(np.mean(lam > 0))
             peaks = [peak]
         else:
-            peaks = [max(_refined_max(col), 0.0) if col.max() > 0 else 0.0 for col in lam.T]
+            peaks = [max(refined_max(col), 0.0) if col.max() > 0 else 0.0 for col in lam.T]
             closed = float(np.mean(np.any(lam > 0, axis=1)))
         rec = {
             "frequency": omega / (2 * np.pi),
-            "amplitude": refined_peak(q_amp, self._amp_sign),
+            "amplitude": amplitude_peak(q_amp, self._amp_sign),
             "energy": self.energy(u),
             "contact_force_max": float(max(peaks)),
             "closed_fraction": closed,

@@ -25,10 +25,9 @@ import numpy as np
 import scipy.linalg as la
 
 from ... import _validate as check
+from ...core.measures import check_dof, harmonic_content, mean_energy, refined_max, sample_coefficients
 from ...core.problem import ForcedProblemBase
 from ...model.model import Model
-from ..mms.conservative import _mean_energy
-from ..mms.damped import refined_max
 from ..mms.forced import Excitation, harmonic_force
 from ._forced_kernels import _forced_integrate
 
@@ -218,12 +217,11 @@ class ShootingForcedProblem(ForcedProblemBase):
         return t[:-1], lam[None, :-1]
 
     def harmonic_content(self, u, dof=None, harmonics: int = 10):
-        dof = self.amplitude_dof if dof is None else dof
+        """|Q_k|, k = 0..harmonics, of ``dof`` (default the amplitude DOF) from the DFT of
+        the N step samples over one period; shape (harmonics+1,)."""
+        dof = check_dof(dof, self.model.n_dof, self.amplitude_dof)
         _, q, _ = self.trajectory(u)
-        c = np.fft.rfft(q[dof, :-1]) / self.N
-        out = 2 * np.abs(c[: harmonics + 1])
-        out[0] = abs(c[0].real)
-        return out
+        return harmonic_content(sample_coefficients(q[dof, :-1], harmonics))
 
     def monitor(self, u) -> dict:
         """frequency, amplitude (largest |q| at the steps), phase, energy, contact_force_max,
@@ -231,16 +229,12 @@ class ShootingForcedProblem(ForcedProblemBase):
         z0, omega = self.unpack(u)
         t, q, lam = self.trajectory(u)
         qa = q[self.amplitude_dof, :-1]
-        c = np.fft.rfft(q[:, :-1], axis=1) / self.N
-        Qh = np.zeros((self.model.n_dof, 21))
-        Qh[:, 0] = c[:, 0].real
-        Qh[:, 1::2] = 2 * c[:, 1:11].real
-        Qh[:, 2::2] = -2 * c[:, 1:11].imag
+        Qh = sample_coefficients(q[:, :-1], 10)
         q1 = Qh[self.amplitude_dof, 1] - 1j * Qh[self.amplitude_dof, 2]
         lag = np.angle(self.excitation.reference) - np.angle(q1)
         rec = {"frequency": omega / (2 * np.pi), "amplitude": max(refined_max(qa), refined_max(-qa)),
                "phase": float((lag + 0.5 * np.pi) % (2 * np.pi) - 0.5 * np.pi),
-               "energy": _mean_energy(self.model, Qh, omega),
+               "energy": mean_energy(self.model, Qh, omega),
                "contact_force_max": refined_max(lam[:-1]) if lam.max() > 0 else 0.0}
         if self.stability:
             mu = self.floquet_multipliers(u)

@@ -9,7 +9,8 @@ from __future__ import annotations
 import numpy as np
 
 from ... import _validate as check
-from ._contact_kernels import lcp_solve
+from ...contact.lcp import lcp_solve
+from ...core.measures import check_dof, harmonic_content, sample_coefficients
 
 __all__ = ["ShootingSignals"]
 
@@ -99,19 +100,13 @@ class ShootingSignals:
         """|Q_k| for k = 0..harmonics of ``dof`` (default the amplitude DOF), from the DFT of
         the N step samples over one period; shape (harmonics+1,). ``harmonics`` defaults
         to min(10, N/2 − 1)."""
-        dof = self.amplitude_dof if dof is None else check.integer("dof", dof)
-        if not 0 <= dof < self.model.n_dof:
-            raise ValueError(f"dof must be in [0, {self.model.n_dof - 1}], got {dof}")
+        dof = check_dof(dof, self.model.n_dof, self.amplitude_dof)
         if harmonics is None:
             harmonics = min(10, self.N // 2 - 1)
         harmonics = check.integer("harmonics", harmonics, minimum=0)
         if harmonics > self.N // 2 - 1:
             raise ValueError(f"harmonics must be <= N/2 - 1 = {self.N // 2 - 1}, got {harmonics}")
-        q = self._dof_at_steps(u, dof)
-        c = np.fft.rfft(q) / self.N
-        amp = 2 * np.abs(c[: harmonics + 1])
-        amp[0] = abs(c[0].real)
-        return amp
+        return harmonic_content(sample_coefficients(self._dof_at_steps(u, dof), harmonics))
 
     def _dof_at_steps(self, u: np.ndarray, dof: int) -> np.ndarray:
         _, Q, _, lam = self.trajectory(u)

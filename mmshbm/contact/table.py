@@ -1,15 +1,14 @@
-"""Contact data the baselines and the exact reference share: the contacts of a model as
-arrays, the static stiffness at each contact, the start mode and the amplitude measure.
+"""Contact data the methods and the exact reference share: the contacts of a model as
+arrays, the static stiffness at each contact, the penalty values, the contacts in terms of
+the DOFs with mass (the LCP data) and the start mode.
 
 A model's contacts (:class:`~mmshbm.model.contact.Contact`) put rigid stops at
 ``q[dof_i] = side_i gap_i``; the gap of contact i is ``g_i = gap_i − side_i q[dof_i]`` and
 its force λ_i >= 0 acts on the structure as ``w_i λ_i`` with ``w_i = −side_i e_dof_i``.
 
-Amplitude convention (the preamble of the project's model contract): the branch amplitude
-is measured at ``model.amplitude_dof``; when the model has a single (one-sided) contact
-and the amplitude DOF is its DOF, it is the largest excursion *away from the stop*
-(``max −side·q``, as in mmshbm 0.1); for any other amplitude DOF it is the largest |q|
-over the period.
+The amplitude convention and its peak measure are :mod:`mmshbm.core.measures`
+(``amplitude_sign`` and ``refined_peak`` here are its objects, at the names of earlier
+releases).
 """
 
 from __future__ import annotations
@@ -20,6 +19,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ..core.measures import amplitude_peak as refined_peak
+from ..core.measures import amplitude_sign
 from ..model.model import Model
 
 __all__ = ["DEFAULT_PENALTY_FACTOR", "ContactTable", "contact_table", "static_contact_stiffness",
@@ -214,23 +215,3 @@ def start_mode(model: Model, mode: int) -> tuple[float, np.ndarray]:
                 phi = -phi
             break
     return float(f), phi
-
-
-def amplitude_sign(model: Model) -> int:
-    """How the amplitude is measured at ``model.amplitude_dof``: ``side`` (±1) when the
-    model has a single contact and the amplitude DOF is its DOF (amplitude = max of
-    ``−side·q``, the excursion away from the stop), 0 otherwise (amplitude = max |q|)."""
-    amp = model.amplitude_dof
-    if model.n_contacts == 1 and model.contacts[0].dof == amp:
-        return int(model.contacts[0].side)
-    return 0
-
-
-def refined_peak(q: np.ndarray, sign: int) -> float:
-    """The amplitude of the periodic samples ``q`` (shape (n,)) by the convention of
-    :func:`amplitude_sign`: the largest ``−sign·q`` (sign ±1) or |q| (sign 0), refined by a
-    parabola through the sampled peak."""
-    from .mms.conservative import _refined_max
-
-    y = np.abs(q) if sign == 0 else -sign * q
-    return _refined_max(y)

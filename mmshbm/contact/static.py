@@ -27,12 +27,11 @@ static problem at every step), so :func:`branch_signals` returns them unchanged.
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 import scipy.linalg as la
 
 from ..model.model import Model
+from .lcp import lcp_enumerated
 
 __all__ = ["StaticContact", "admissible_signals", "branch_signals"]
 
@@ -98,24 +97,7 @@ class StaticContact:
 
     def _lcp(self, h: np.ndarray) -> np.ndarray:
         """λ >= 0 with g = h + Gλ >= 0 and g·λ = 0 (exact, by active sets)."""
-        n = len(h)
-        if np.all(h >= 0):
-            return np.zeros(n)
-        tol = 1e-10 * max(float(np.max(np.abs(h))), 1e-300)
-        guess = tuple(np.flatnonzero(h < 0))
-        subsets = (s for k in range(1, n + 1) for s in itertools.combinations(range(n), k))
-        sets = itertools.chain([guess], (s for s in subsets if s != guess))
-        for active in sets:
-            idx = list(active)
-            lam = np.zeros(n)
-            sol = np.linalg.lstsq(self.G[np.ix_(idx, idx)], -h[idx], rcond=None)[0]
-            if np.any(sol < -1e-10 * max(float(np.max(np.abs(sol))), 1e-300)):
-                continue
-            lam[idx] = np.maximum(sol, 0.0)
-            g = h + self.G @ lam
-            if np.all(g >= -tol):
-                return lam
-        raise ValueError("the static contact problem has no solution (conflicting stops?)")
+        return lcp_enumerated(self.G, h)
 
 
 def admissible_signals(model: Model, Q: np.ndarray, omega: float, n_samples: int = 256,
