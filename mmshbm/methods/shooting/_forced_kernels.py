@@ -19,7 +19,7 @@ import numpy as np
 from numba import njit
 
 from ...core.kernels import JIT_OPTIONS
-from ._kernels import _contact_root, _force_sum
+from ._kernels import _contact_root, _force_sum, _start_gap
 
 __all__: list[str] = []
 
@@ -63,14 +63,7 @@ def _forced_integrate(Sinv, P, Gam, diag, a, z, alpha, kc, gap, h, dh, G, dG, q,
     Y = np.empty(n)
     Tt = np.empty(n)
     ak = alpha * kc
-    h0 = gap
-    for i in range(n):
-        h0 += a[i] * q[i]
-    if store:
-        for i in range(n):
-            Q[0, i] = q[i]
-            V[0, i] = v[i]
-        LAM[0] = kc * max(0.0, -h0)
+    h0 = _start_gap(a, q, v, gap, kc, Q, V, LAM)
     c1 = 4.0 / (h * h)
     c2 = 4.0 / h
     c3 = 8.0 / (h * h * h)

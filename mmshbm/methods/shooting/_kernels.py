@@ -259,6 +259,21 @@ def _tangent_step(Sf, Mb, Kb, a, z, alpha, F0, F1, h, q, v, qn, dq, dv, dh, Wb, 
 
 
 @njit(**JIT_OPTIONS)
+def _start_gap(a, q, v, gap, kc, Q, V, LAM):
+    """The contact's gap gap + a·q at the start of a period; with rows in Q, the start's
+    state and contact force k_c max(0, −gap) written to row 0 of Q, V and LAM."""
+    h0 = gap
+    for i in range(q.shape[0]):
+        h0 += a[i] * q[i]
+    if Q.shape[0] > 0:
+        for i in range(q.shape[0]):
+            Q[0, i] = q[i]
+            V[0, i] = v[i]
+        LAM[0] = kc * max(0.0, -h0)
+    return h0
+
+
+@njit(**JIT_OPTIONS)
 def _integrate(Sf, Pb, Mb, Kb, a, z, alpha, kc, gap, h, n_steps, avf, q, v, dq, dv, dh, Q, V, LAM):
     """Integrate ``n_steps`` steps of size ``h`` (s), in place.
 
@@ -296,14 +311,7 @@ def _integrate(Sf, Pb, Mb, Kb, a, z, alpha, kc, gap, h, n_steps, avf, q, v, dq, 
     c2 = 4.0 / h
     ak = alpha * kc
     closed = 0
-    h0 = gap
-    for i in range(n):
-        h0 += a[i] * q[i]
-    if store:
-        for i in range(n):
-            Q[0, i] = q[i]
-            V[0, i] = v[i]
-        LAM[0] = kc * max(0.0, -h0)
+    h0 = _start_gap(a, q, v, gap, kc, Q, V, LAM)
     for k in range(n_steps):
         _band_symv(Pb, q, y)
         for i in range(n):
