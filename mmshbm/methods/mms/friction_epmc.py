@@ -46,7 +46,9 @@ def stuck_mode(model: Model, mode: int = 1) -> tuple[float, np.ndarray, float]:
     shape[keep] = phi[:, -1]
     shape /= shape[model.amplitude_dof]
     force = model.K @ shape  # the force each clamped DOF needs per unit amplitude
-    onset = [fc.slip_force / abs(force[fc.dof]) for fc in model.friction if force[fc.dof] != 0]
+    # a contact pressed by a unilateral contact's force: its preload while the contact is open
+    onset = [fc.mu * (fc.normal_load if fc.normal_contact is None else fc.preload) / abs(force[fc.dof])
+             for fc in model.friction if force[fc.dof] != 0]
     return float(freqs[-1]), shape, (min(onset) if onset else np.inf)
 
 
@@ -79,13 +81,13 @@ class FrictionEPMCProblem(FrictionRows, DampedHBMBase):
 
     def __init__(self, model: Model, harmonics: int = 5, n_samples: int | None = None, r: float | None = None,
                  mode: int = 1, backend: str = "auto", projection: str = "exact", law: str = "play"):
-        check_friction_model(model, who="the EPMC (damped nonlinear modes)")
+        check_friction_model(model, coupled_ok=True, who="the EPMC (damped nonlinear modes)")
         check_law(law, projection)
-        if model.contacts:
-            raise NotImplementedError("EPMC with friction and unilateral contacts together is not yet "
-                                      "available")
-        if np.any([fc.slip_force == 0 for fc in model.friction]):
-            raise ValueError("a friction contact has slip force μN = 0 (it slides freely): remove it")
+        if np.any([fc.mu * (fc.normal_load if fc.normal_contact is None else fc.preload) == 0
+                   for fc in model.friction]):
+            raise ValueError("a friction contact has slip force μN = 0 with its contact open (it slides "
+                             "freely, and the branch starts on the mode with the friction DOFs stuck): "
+                             "remove it, or give a preload > 0 with normal_contact=")
         amp_dof = model.amplitude_dof
         l_index = np.flatnonzero(model.l == amp_dof)
         if not len(l_index):

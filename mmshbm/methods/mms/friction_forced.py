@@ -424,16 +424,17 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
             history.append(r)
         raise RuntimeError(f"no convergence in {max_iter} iterations (residual {history[-1]:.2e})")
 
-    def start_point(self, frequency: float, max_iter: int = 50) -> np.ndarray:
+    def start_point(self, frequency: float, max_iter: int = 50, tol: float = 1e-11) -> np.ndarray:
         """Converged unknowns at ``frequency`` (Hz) by Newton from the free-slip, then the
         full-stick linear response, then (with unilateral contacts) the force ramped up from
         a level that keeps the stops open (the first that converges); the stuck response when
-        none does (the continuation's first corrector then tries)."""
+        none does (the continuation's first corrector then tries). ``tol`` as
+        :meth:`solve_at`."""
         guesses = [self.linear_point, self.stuck_point]
         if self.model.contacts:  # the force raised from a level that keeps the stops open
             guesses.append(lambda f: ForcedResponseProblem.start_point(self, f))
         for guess in guesses:
-            u, ok = self.solve_at(frequency, guess(frequency), max_iter)
+            u, ok = self.solve_at(frequency, guess(frequency), max_iter, tol)
             if ok:
                 return u
         return self.stuck_point(frequency)
