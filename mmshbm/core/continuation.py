@@ -32,6 +32,7 @@ from .pinned import PinnedFailure
 from .special_points import SpecialPoint
 from .steps import (
     SKIP_MIN_TOL,  # noqa: F401 (imported from here before the split)
+    _corner_step,
     _corrector,
     _curvature,
     _Failure,
@@ -215,12 +216,24 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
             det_sign["last"] = _orientation_safe(problem, u, t)
         status = "max_steps"
         n_jumps = sum(1 for s in special if s[0] == "jump")
+        # corners of a nonsmooth branch crossed at fixed parameter (see steps._corner_step)
+        corner = bool(getattr(problem, "corner_parameter", False))
         while step < opt.max_steps:
             try:
                 curv = curvature["k"] if opt.step_control == "residual" else None
-                u_new, nit, hist, J, t_new, sign, rec = _step(problem, u, t, ds, opt, curv)
-                if t_new @ t < math.cos(opt.max_angle) and ds > opt.corner_ds:
-                    raise _Failure("tangent turned too far")
+                try:
+                    u_new, nit, hist, J, t_new, sign, rec = _step(problem, u, t, ds, opt, curv)
+                    if t_new @ t < math.cos(opt.max_angle) and ds > opt.corner_ds:
+                        raise _Failure("tangent turned too far")
+                    if (corner and ds <= opt.corner_ds and t_new @ t < math.cos(opt.max_angle)
+                            and t_new[-1] * t[-1] < 0):
+                        # a sharp turn that reverses the parameter: at a corner the bordered
+                        # tangent (oriented along t) points back along the new piece
+                        t_new, sign = -t_new, -sign
+                except _Failure:
+                    if not (corner and ds <= opt.corner_ds):
+                        raise
+                    u_new, nit, hist, J, t_new, sign, rec = _corner_step(problem, u, t, ds, opt)
             except _Failure as err:
                 ds *= 0.5
                 log.debug("step failed (%s); ds -> %g", err, ds)

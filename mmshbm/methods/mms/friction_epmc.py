@@ -53,13 +53,17 @@ def stuck_mode(model: Model, mode: int = 1) -> tuple[float, np.ndarray, float]:
 
 
 class FrictionEPMCProblem(FrictionRows, DampedHBMBase):
-    """EPMC of a model with friction contacts (constant normal loads), as a continuation
+    """EPMC of a model with friction contacts (constant normal loads, or pressed by a
+    unilateral contact's force: ``normal_contact=`` with ``preload`` > 0), as a continuation
     problem.
 
     Parameters
     ----------
     model : Model
-        Friction contacts with s = μN > 0, no unilateral contact, ``amplitude_dof`` a DOF
+        Friction contacts with s = μN > 0 (μ·preload > 0 for one pressed by a unilateral
+        contact: the branch starts stuck with the contacts open); unilateral contacts
+        optional (their rows as in the impact EPMC, the friction rows of
+        :mod:`~mmshbm.contact.coulomb_coupled` for ``normal_contact=``), ``amplitude_dof`` a DOF
         with mass; viscous damping optional.
     harmonics : int
         H >= 1.

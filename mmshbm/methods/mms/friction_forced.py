@@ -83,7 +83,7 @@ def check_friction_model(model: Model, coupled_ok: bool = False, who: str = "thi
     if coupled and not coupled_ok:
         raise NotImplementedError(f"friction coupled to a unilateral contact's force (normal_contact=, "
                                   f"DOFs {coupled}) is not yet solved by {who}: give a constant "
-                                  "normal_load, or use the MMS-HBM forced response")
+                                  "normal_load, or use MMS-HBM (the forced response or the EPMC)")
 
 
 class FrictionRows:
@@ -245,6 +245,11 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
     their recovery from x: a stuck node's coefficients vanish, and without them the
     arclength would not see (and step over) the resonances of the stuck structure.
     """
+
+    #: the continuation crosses corners of the branch at fixed frequency
+    #: (:func:`mmshbm.core.steps._corner_step`): where stick arcs appear or vanish the
+    #: tangent can turn by more than 90° within 1e-5 Hz (107° on the tip damper at H = 7)
+    corner_parameter = True
 
     def __init__(self, model: Model, force, harmonics: int = 5, n_samples: int | None = None,
                  r: float | None = None, backend: str = "auto", stability: bool | str = "auto",
