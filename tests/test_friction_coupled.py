@@ -1,6 +1,6 @@
 """Impact with friction (``normal_contact=``) beyond the forced MMS-HBM response: the EPMC
 (damped nonlinear modes) against the shooting stepper's period map, the Jenkins baseline's
-refusal, and the solid beam's tip face (fe/solid.py ``solid_tip_friction_model``)."""
+refusal, and the solid beam's tip face (fe/damper.py ``solid_tip_friction_model``)."""
 
 import warnings
 
@@ -83,7 +83,7 @@ def test_jenkins_baseline_refuses_normal_contact_by_name():
 # ---------------------------------------------------------------------- the solid beam's tip face
 @pytest.fixture(scope="module")
 def solid():
-    from mmshbm.fe.solid import solid_tip_friction_model
+    from mmshbm.fe.damper import solid_tip_friction_model
 
     return solid_tip_friction_model(mu=MU, preload=PRE)  # 4 × 1 × 1 order-2 elements, f_1 = 49.7 Hz
 
