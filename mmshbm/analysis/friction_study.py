@@ -122,7 +122,7 @@ def resonance_peak(problem, grid: np.ndarray, guesses: list | None = None, xtol:
             if ok:
                 break
         if not ok:
-            u_new, ok = problem.solve_at(f, problem.start_point(f, max_iter), max_iter, tol)
+            u_new, ok = problem.solve_at(f, problem.start_point(f, max_iter, tol), max_iter, tol)
         ok_all &= ok
         if ok:  # a point that did not converge neither counts nor starts the next
             u = u_new
@@ -138,7 +138,7 @@ def resonance_peak(problem, grid: np.ndarray, guesses: list | None = None, xtol:
     def neg(f):
         u, ok = problem.solve_at(f, cache["u"], max_iter, tol)
         if not ok:
-            u, ok = problem.solve_at(f, problem.start_point(f, max_iter), max_iter, tol)
+            u, ok = problem.solve_at(f, problem.start_point(f, max_iter, tol), max_iter, tol)
         if not ok:  # counts as no amplitude (finite: the search's parabolas stay defined)
             cache["ok"] = False
             return 0.0

@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-import math
 from collections.abc import Callable
 
 import numpy as np
@@ -38,6 +37,7 @@ from .special_points import SpecialPoint
 from .status import Status
 from .steps import (
     SKIP_MIN_TOL,  # noqa: F401 (imported from here before the split)
+    _advance,
     _corrector,
     _curvature,
     _Failure,
@@ -47,7 +47,6 @@ from .steps import (
     _orientation_safe,
     _outside,
     _predicted_converged,  # noqa: F401
-    _step,
     _tangent,
     _tangent_sign,  # noqa: F401
     newton,
@@ -162,9 +161,7 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
         while step < opt.max_steps:
             try:
                 curv = curvature if opt.step_control == "residual" else None
-                u_new, nit, hist, J, t_new, sign, rec = _step(problem, u, t, ds, opt, curv)
-                if t_new @ t < math.cos(opt.max_angle) and ds > opt.corner_ds:
-                    raise _Failure("tangent turned too far")
+                u_new, nit, hist, J, t_new, sign, rec = _advance(problem, u, t, ds, opt, curv)
             except _Failure as err:
                 ds *= 0.5
                 log.debug("step failed (%s); ds -> %g", err, ds)

@@ -28,7 +28,9 @@ runners call them directly and never probe a problem for attributes.
     tangent, tol, max_iter, step_tol)``, a compiled corrector returning (u, iterations,
     history, J) or None to let the Python loop run; ``measure``, the record whose relative
     change caps the arclength step (None: only ``ds_max``); ``progress_records``, the
-    records a progress bar shows.
+    records a progress bar shows; ``corner_parameter``, True for a nonsmooth branch whose
+    corners are crossed at fixed parameter (the last unknown), e.g. stick arcs of friction
+    that vanish between two frequencies.
 :class:`PinnedSolves`
     ``amplitude_and_gradient(u) -> (A, ∇A)`` and ``amplitude_value(u) -> A`` for Newton
     with the amplitude pinned (:mod:`mmshbm.core.pinned`); None: the amplitude is
@@ -95,6 +97,7 @@ class StepControl(Protocol):
     fast_newton: Callable[..., tuple | None] | None
     measure: str | None
     progress_records: tuple[str, ...]
+    corner_parameter: bool
 
 
 @runtime_checkable
@@ -165,6 +168,9 @@ class ContinuationProblemBase:
     fast_newton: Callable[..., tuple | None] | None = None
     measure: str | None = "amplitude"
     progress_records: tuple[str, ...] = ("frequency", "amplitude")
+    #: True for a nonsmooth branch whose corners (a tangent turning past 90° within one
+    #: step) are crossed at fixed parameter (``core.steps._advance``)
+    corner_parameter: bool = False
     # PinnedSolves
     amplitude_and_gradient: Callable[[np.ndarray], tuple[float, np.ndarray]] | None = None
     amplitude_value: Callable[[np.ndarray], float] | None = None

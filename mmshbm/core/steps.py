@@ -186,6 +186,47 @@ def _step(problem, u, t, ds, opt, curvature):
     return u_new, nit, hist, J, t_new, sign, _monitor(problem, u_new)
 
 
+def _advance(problem, u, t, ds, opt, curvature):
+    """One continuation step (:func:`_step`) that refuses a tangent turned by more than
+    ``opt.max_angle`` while the step is longer than ``opt.corner_ds``. For problems with
+    ``corner_parameter`` set, a shorter step that turns sharply and reverses the parameter is
+    a corner of a nonsmooth branch: the tangent is turned back along the new piece, and a
+    failed step is retried at fixed parameter (:func:`_corner_step`). Same returns as
+    :func:`_step`; raises ``_Failure``."""
+    corner = problem.corner_parameter and ds <= opt.corner_ds
+    try:
+        u_new, nit, hist, J, t_new, sign, rec = _step(problem, u, t, ds, opt, curvature)
+        if t_new @ t < math.cos(opt.max_angle) and ds > opt.corner_ds:
+            raise _Failure("tangent turned too far")
+        if corner and t_new @ t < math.cos(opt.max_angle) and t_new[-1] * t[-1] < 0:
+            # at a corner the bordered tangent (oriented along t) points back along the new piece
+            t_new, sign = -t_new, -sign
+    except _Failure:
+        if not corner:
+            raise
+        return _corner_step(problem, u, t, ds, opt)
+    return u_new, nit, hist, J, t_new, sign, rec
+
+
+def _corner_step(problem, u, t, ds, opt):
+    """A step across a corner of the branch (the tangent turning by more than 90° within
+    one step, where the pseudo-arclength hyperplane ahead does not meet the new piece and the
+    bordered tangent points back along it), for problems that set ``corner_parameter``:
+    Newton at the parameter of the predictor (the last unknown fixed at u_pred's), the new
+    tangent oriented so that the parameter keeps its direction. Same returns as
+    :func:`_step`; raises ``_Failure``."""
+    u_pred = u + ds * t
+    e = np.zeros(len(u))
+    e[-1] = 1.0
+    u_new, nit, hist, J = newton(problem, u_pred, e, u_pred, opt.newton_tol, opt.max_newton, opt.step_tol)
+    if np.linalg.norm(u_new - u_pred) > 4.0 * ds + 10 * opt.newton_tol:
+        raise _Failure("corner step left the predictor cone")
+    t_new, sign = _tangent_sign(J, t)
+    if t_new[-1] * t[-1] < 0:
+        t_new, sign = -t_new, -sign
+    return u_new, nit, hist, J, t_new, sign, _monitor(problem, u_new)
+
+
 def _corrector(problem, u, t, ds, opt, start=None, curvature=None):
     """Newton on the hyperplane t·(v − u_pred) = 0 through the predictor u_pred = u + ds t
     (+ ½ ds² κ with the branch's curvature vector κ, when given: a second-order predictor,

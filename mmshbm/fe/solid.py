@@ -33,7 +33,7 @@ from .. import _validate as check
 from ..model.model import Model
 from . import mesh as mesh1d
 
-__all__ = ["solid_beam_model", "solid_beam_matrices", "rebuild_solid"]
+__all__ = ["solid_beam_model", "solid_beam_matrices", "rebuild_solid", "solid_force"]
 
 
 def _element(order: int):
@@ -169,7 +169,7 @@ def solid_beam_matrices(beam, n_length: int = 40, n_width: int = 2, n_height: in
 
 
 def solid_beam_model(beam, n_length: int = 40, n_width: int = 2, n_height: int = 2, grading: float = 10.0,
-                     order: int = 2, massless_tip: bool = True) -> Model:
+                     order: int = 2, massless_tip: bool = True, *, contact: str = "face") -> Model:
     """The clamped solid beam with a rigid plane under its tip face (module docstring).
 
     Parameters
@@ -181,16 +181,23 @@ def solid_beam_model(beam, n_length: int = 40, n_width: int = 2, n_height: int =
         Zero the mass of the tip-face nodes (the MMS-HBM model). False keeps it: the
         contacts then carry mass (for linear modes, penalty-HBM, or the model
         conversions).
+    contact : {"face", "point"}
+        "face": one contact per tip-face node; "point": one contact only, on the tip-face
+        node of the centre line nearest the plane (y = 0, z = +h/2; the nearest node if the
+        mesh has none there): a rounded pad that touches at one point.
 
     Returns
     -------
     Model
         DOFs in scikit-fem's numbering without the root face's; one contact per
-        tip-face node on its u_z (gap ``beam.gap``, side +1), ordered by (y, z);
+        tip-face node on its u_z (gap ``beam.gap``, side +1), ordered by (y, z) (one, with
+        ``contact="point"``);
         ``amplitude_dof`` on the centre line; ``description`` with ``kind = "SolidBeam"``.
     """
     if not isinstance(massless_tip, bool | np.bool_):
         raise TypeError(f"massless_tip must be a bool, got {type(massless_tip).__name__} {massless_tip!r}")
+    if contact not in ("face", "point"):
+        raise ValueError(f"contact must be 'face' or 'point', got {contact!r}")
     M, K, loc, comp = solid_beam_matrices(beam, n_length, n_width, n_height, grading, order)
     L = beam.length
     tol = 1e-9 * L
@@ -205,10 +212,14 @@ def solid_beam_model(beam, n_length: int = 40, n_width: int = 2, n_height: int =
     vertical = np.flatnonzero(tip & (comp == 2))
     vertical = vertical[np.lexsort((loc[2, vertical], loc[1, vertical]))]
     centre = vertical[int(np.argmin(np.hypot(loc[1, vertical], loc[2, vertical])))]
+    if contact == "point":
+        vertical = vertical[[int(np.argmin(np.hypot(loc[1, vertical], loc[2, vertical] - beam.height / 2)))]]
     data = {name: getattr(beam, name) for name in _BEAM_FIELDS}
     description = {"kind": "SolidBeam", **data, "n_length": int(n_length), "n_width": int(n_width),
                    "n_height": int(n_height), "grading": float(grading), "order": int(order),
                    "massless_tip": bool(massless_tip)}
+    if contact != "face":
+        description["contact"] = contact
     return Model.from_matrices(M, K, contact_dof=vertical.tolist(), gap=beam.gap, stop_side=1,
                                description=description, amplitude_dof=int(centre))
 
@@ -223,9 +234,46 @@ def rebuild_solid(description: dict) -> Model:
         beam = SimpleNamespace(**{name: description[name] for name in _BEAM_FIELDS})
         d = description
         return solid_beam_model(beam, d["n_length"], d["n_width"], d["n_height"], d["grading"], d["order"],
-                                d["massless_tip"])
+                                d["massless_tip"], contact=d.get("contact", "face"))
     except KeyError as err:
         raise ValueError(f"description lacks the entry {err.args[0]!r}") from None
+
+
+def solid_force(model: Model, amplitude: float = 1.0, at: float = 0.5) -> np.ndarray:
+    """Force vector (n_dof,) of a solid beam model: ``amplitude`` newtons along z, shared
+    equally by the vertical DOFs of the cross-section nearest ``at`` × length (0 < at < 1,
+    DOFs with mass)."""
+    d = model.description
+    if d.get("kind") != "SolidBeam":
+        raise ValueError(f"model is not a solid beam: kind={d.get('kind')!r}")
+    if not (np.isfinite(at) and 0 < at < 1):
+        raise ValueError(f"at must be a fraction of the length in (0, 1), got {at!r}")
+    from types import SimpleNamespace
+
+    beam = SimpleNamespace(**{name: d[name] for name in _BEAM_FIELDS})
+    loc, comp = _kept_locations(beam, d)
+    x = np.unique(loc[0])
+    x_at = x[int(np.argmin(np.abs(x - at * beam.length)))]
+    rows = np.flatnonzero((np.abs(loc[0] - x_at) <= 1e-9 * beam.length) & (comp == 2))
+    force = np.zeros(model.n_dof)
+    force[rows] = float(amplitude) / len(rows)
+    return force
+
+
+def _kept_locations(beam, description: dict) -> tuple[np.ndarray, np.ndarray]:
+    """(locations (3, n_dof), component (n_dof,)) of a solid model's DOFs (root face removed)."""
+    from skfem import MeshHex
+    from skfem.assembly import Dofs
+
+    d = description
+    L, b, h = beam.length, beam.width, beam.height
+    x = mesh1d.node_coordinates(mesh1d.graded_lengths(L, d["n_length"], d["grading"]))
+    x[-1] = L
+    m = MeshHex.init_tensor(x, np.linspace(-b / 2, b / 2, d["n_width"] + 1),
+                            np.linspace(-h / 2, h / 2, d["n_height"] + 1))
+    loc, comp = _dof_locations(m, Dofs(m, _element(d["order"])))
+    keep = loc[0] > 1e-9 * L
+    return loc[:, keep], comp[keep]
 
 
 #: the beam data a solid model's description records (:class:`~mmshbm.fe.beam.TimoshenkoBeam`'s fields)

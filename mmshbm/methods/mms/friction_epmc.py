@@ -47,18 +47,24 @@ def stuck_mode(model: Model, mode: int = 1) -> tuple[float, np.ndarray, float]:
     shape[keep] = phi[:, -1]
     shape /= shape[model.amplitude_dof]
     force = model.K @ shape  # the force each clamped DOF needs per unit amplitude
-    onset = [fc.slip_force / abs(force[fc.dof]) for fc in model.friction if force[fc.dof] != 0]
+    # a contact pressed by a unilateral contact's force: its preload while the contact is open
+    onset = [fc.mu * (fc.normal_load if fc.normal_contact is None else fc.preload) / abs(force[fc.dof])
+             for fc in model.friction if force[fc.dof] != 0]
     return float(freqs[-1]), shape, (min(onset) if onset else np.inf)
 
 
 class FrictionEPMCProblem(FrictionRows, DampedHBMBase, BackboneProblemBase):
-    """EPMC of a model with friction contacts (constant normal loads), as a continuation
+    """EPMC of a model with friction contacts (constant normal loads, or pressed by a
+    unilateral contact's force: ``normal_contact=`` with ``preload`` > 0), as a continuation
     problem.
 
     Parameters
     ----------
     model : Model
-        Friction contacts with s = μN > 0, no unilateral contact, ``amplitude_dof`` a DOF
+        Friction contacts with s = μN > 0 (μ·preload > 0 for one pressed by a unilateral
+        contact: the branch starts stuck with the contacts open); unilateral contacts
+        optional (their rows as in the impact EPMC, the friction rows of
+        :mod:`~mmshbm.contact.coulomb_coupled` for ``normal_contact=``), ``amplitude_dof`` a DOF
         with mass; viscous damping optional.
     harmonics : int
         H >= 1.
@@ -80,13 +86,13 @@ class FrictionEPMCProblem(FrictionRows, DampedHBMBase, BackboneProblemBase):
 
     def __init__(self, model: Model, harmonics: int = 5, n_samples: int | None = None, r: float | None = None,
                  mode: int = 1, backend: str = "auto", projection: str = "exact", law: str = "play"):
-        check_friction_model(model, who="the EPMC (damped nonlinear modes)")
+        check_friction_model(model, coupled_ok=True, who="the EPMC (damped nonlinear modes)")
         check_law(law, projection)
-        if model.contacts:
-            raise NotImplementedError("EPMC with friction and unilateral contacts together is not yet "
-                                      "available")
-        if np.any([fc.slip_force == 0 for fc in model.friction]):
-            raise ValueError("a friction contact has slip force μN = 0 (it slides freely): remove it")
+        if np.any([fc.mu * (fc.normal_load if fc.normal_contact is None else fc.preload) == 0
+                   for fc in model.friction]):
+            raise ValueError("a friction contact has slip force μN = 0 with its contact open (it slides "
+                             "freely, and the branch starts on the mode with the friction DOFs stuck): "
+                             "remove it, or give a preload > 0 with normal_contact=")
         amp_dof = model.amplitude_dof
         l_index = np.flatnonzero(model.l == amp_dof)
         if not len(l_index):

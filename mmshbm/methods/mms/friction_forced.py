@@ -83,7 +83,7 @@ def check_friction_model(model: Model, coupled_ok: bool = False, who: str = "thi
     if coupled and not coupled_ok:
         raise NotImplementedError(f"friction coupled to a unilateral contact's force (normal_contact=, "
                                   f"DOFs {coupled}) is not yet solved by {who}: give a constant "
-                                  "normal_load, or use the MMS-HBM forced response")
+                                  "normal_load, or use MMS-HBM (the forced response or the EPMC)")
 
 
 class FrictionRows:
@@ -245,6 +245,11 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
     their recovery from x: a stuck node's coefficients vanish, and without them the
     arclength would not see (and step over) the resonances of the stuck structure.
     """
+
+    #: the continuation crosses corners of the branch at fixed frequency
+    #: (:func:`mmshbm.core.steps._corner_step`): where stick arcs appear or vanish the
+    #: tangent can turn by more than 90° within 1e-5 Hz (107° on the tip damper at H = 7)
+    corner_parameter = True
 
     def __init__(self, model: Model, force, harmonics: int = 5, n_samples: int | None = None,
                  r: float | None = None, backend: str = "auto", stability: bool | str = "auto",
@@ -424,16 +429,17 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
             history.append(r)
         raise RuntimeError(f"no convergence in {max_iter} iterations (residual {history[-1]:.2e})")
 
-    def start_point(self, frequency: float, max_iter: int = 50) -> np.ndarray:
+    def start_point(self, frequency: float, max_iter: int = 50, tol: float = 1e-11) -> np.ndarray:
         """Converged unknowns at ``frequency`` (Hz) by Newton from the free-slip, then the
         full-stick linear response, then (with unilateral contacts) the force ramped up from
         a level that keeps the stops open (the first that converges); the stuck response when
-        none does (the continuation's first corrector then tries)."""
+        none does (the continuation's first corrector then tries). ``tol`` as
+        :meth:`solve_at`."""
         guesses = [self.linear_point, self.stuck_point]
         if self.model.contacts:  # the force raised from a level that keeps the stops open
             guesses.append(lambda f: ForcedResponseProblem.start_point(self, f))
         for guess in guesses:
-            u, ok = self.solve_at(frequency, guess(frequency), max_iter)
+            u, ok = self.solve_at(frequency, guess(frequency), max_iter, tol)
             if ok:
                 return u
         return self.stuck_point(frequency)

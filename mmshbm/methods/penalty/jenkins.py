@@ -81,6 +81,8 @@ class JenkinsForcedProblem(PenaltyForcedProblem):
 
     def __init__(self, model: Model, force, harmonics: int = 5, tangential_stiffness=None,
                  n_samples: int | None = None, stability: bool = False):
+        # impact with friction (normal_contact=) would need the normal contact as a penalty
+        # too, its sampled force feeding the Jenkins return map's slip force per sample: not built
         check_friction_model(model, who="the Jenkins baseline (method=\"penalty\")")
         if model.contacts:
             raise NotImplementedError("the Jenkins baseline takes friction contacts alone "
