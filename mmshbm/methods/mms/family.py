@@ -212,15 +212,11 @@ class FamilyMixin:
         from the condensed stiffness alone: T_k = −(Ω/8) a_kᵀ ∂D_k/∂Ω a_k (with the pole
         unknowns' part). Exact for the condensation used (no modal basis needed): the
         kinetic energy of the DOFs with mass in harmonic k, whatever their shape."""
+        from ._family_kernels import harmonic_energies
+
         a, omega = self.unpack(u)
         _, dD = self._condensed(omega, True)
-        eta = self.unpack_eta(u)
-        quad = np.einsum("ki,kij,kj->k", a, dD, a)
-        for p, k in enumerate(self._pole_k):
-            quad[k] -= 2.0 * k * k * omega * eta[p] ** 2
-        energies = -omega / 8.0 * quad
-        energies[0] = 0.0
-        return np.maximum(energies, 0.0)
+        return harmonic_energies(a, dD, self.unpack_eta(u), self._pole_k, omega)
 
     def fundamental_share(self, u: np.ndarray) -> float:
         """Share (0..1) of the period-mean kinetic energy in the fundamental harmonic (k = 1),
@@ -239,18 +235,11 @@ class FamilyMixin:
         open-contact mode j (``resonance_harmonic`` k, ``resonance_mode`` j, 1-based; 0
         and NaN for H = 1). A detuning that changes sign along the branch is an internal
         resonance crossed."""
-        energies = self.harmonic_energies(u)
-        total = float(energies[1:].sum())
-        out = {"fundamental_share": float(energies[1] / total) if total > 0 else 1.0,
-               "resonance_harmonic": 0.0, "resonance_mode": 0.0, "resonance_detuning": float("nan")}
-        if self.H >= 2 and total > 0:
-            k = int(np.argmax(energies[2:])) + 2
-            freqs = self.tracked_frequencies
-            f = k * float(u[-1] * self.colscale[-1]) / (2 * np.pi)
-            j = int(np.argmin(np.abs(freqs - f)))
-            out.update(resonance_harmonic=float(k), resonance_mode=float(j + 1),
-                       resonance_detuning=float(f / freqs[j] - 1.0))
-        return out
+        from ._family_kernels import family_records  # one compiled pass, the same numbers
+
+        a, omega = self.unpack(u)
+        _, dD = self._condensed(omega, True)
+        return family_records(a, dD, self.unpack_eta(u), self._pole_k, omega, self.tracked_frequencies)
 
     def _share_setup(self):
         """(row, s0, s, sv, pole_j): the starting mode's projections for
