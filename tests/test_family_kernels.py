@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mmshbm.methods.mms._family_kernels import _pairwise_sum, family_records, harmonic_energies
+from mmshbm.methods.mms._family_kernels import _block_sum, family_records, harmonic_energies
 
 
 def _energies_numpy(a, dD, eta, pole_k, omega):
@@ -32,17 +32,18 @@ def _records_numpy(a, dD, eta, pole_k, omega, freqs):
     return out
 
 
-def test_pairwise_sum_is_numpys():
+def test_block_sum_is_numpys():
     rng = np.random.default_rng(5)
-    for n in [*range(1, 140), 255, 256, 257, 1000, 4097]:
+    for n in range(1, 129):
         x = np.abs(rng.standard_normal(n + 3)) * 10.0 ** rng.integers(-8, 3, size=n + 3)
-        assert _pairwise_sum(x, 2, n) == float(x[2:2 + n].sum())
+        assert _block_sum(x, 2, n) == float(x[2:2 + n].sum())
 
 
 def test_records_are_the_numpy_expressions_bit_for_bit():
     rng = np.random.default_rng(11)
-    for _ in range(3000):
-        n_c, H1, n_p = rng.integers(1, 6), rng.integers(2, 30), rng.integers(0, 4)
+    for trial in range(3000):
+        n_c, n_p = rng.integers(1, 6), rng.integers(0, 4)
+        H1 = rng.integers(2, 30) if trial % 100 else rng.integers(120, 140)  # either side of H = 128
         a = rng.standard_normal((H1, n_c)) * 1e-3
         dD = rng.standard_normal((H1, n_c, n_c)) * 1e-2
         dD -= 2e-2 * np.eye(n_c)  # mostly positive energies, some clipped at 0

@@ -5,7 +5,8 @@ nearest tracked mode (:meth:`~mmshbm.methods.mms.family.FamilyMixin.family_recor
 The kernels reproduce the NumPy expressions they replace operation for operation, so
 their results are the same floating-point numbers: ``einsum("ki,kij,kj->k")`` sums
 (a_ki·D_kij)·a_kj over i then j into one accumulator, ``ndarray.sum`` is NumPy's
-pairwise summation (8 accumulators on blocks of up to 128 numbers), ``argmax``/``argmin``
+pairwise summation (8 accumulators on a block of up to 128 numbers: H <= 128 here, the
+NumPy expressions themselves above), ``argmax``/``argmin``
 take the first extremum (the first NaN where there is one). They are compiled without
 fast-math flags for that reason (no contraction into fused multiply-adds, no
 reassociation).
@@ -25,7 +26,8 @@ _JIT = dict(cache=True, nogil=True)  # exact IEEE arithmetic: no fast-math flags
 
 @njit(**_JIT)
 def _block_sum(x, lo, n):
-    """NumPy's sum of a block of n <= 128 numbers x[lo:lo+n] (8 accumulators)."""
+    """NumPy's sum of n <= 128 numbers x[lo:lo+n] (``x[lo:lo+n].sum()``: 8 accumulators;
+    NumPy halves longer arrays into such blocks)."""
     if n < 8:
         res = 0.0
         for i in range(n):
@@ -50,53 +52,6 @@ def _block_sum(x, lo, n):
         res += x[lo + i]
         i += 1
     return res
-
-
-@njit(**_JIT)
-def _pairwise_sum(x, lo, n):
-    """NumPy's pairwise sum of x[lo:lo+n] (the order of ``x[lo:lo+n].sum()``): blocks of
-    up to 128 numbers, halved (to a multiple of 8) above that. Without recursion (Numba's
-    cache does not keep recursive kernels): the halving tree is walked with a stack of
-    (lo, n, partial) frames."""
-    if n <= 128:
-        return _block_sum(x, lo, n)
-    # frames: lo, n, state (0: left half to do, 1: right half to do, 2: both done), left value
-    f_lo = np.empty(64, dtype=np.int64)
-    f_n = np.empty(64, dtype=np.int64)
-    f_state = np.zeros(64, dtype=np.int64)
-    f_left = np.zeros(64)
-    top = 0
-    f_lo[0], f_n[0], f_state[0] = lo, n, 0
-    result = 0.0
-    while top >= 0:
-        m = f_n[top]
-        half = m // 2
-        half -= half % 8
-        if f_state[top] == 0:
-            f_state[top] = 1
-            c_lo, c_n = f_lo[top], half
-        elif f_state[top] == 1:
-            f_state[top] = 2
-            c_lo, c_n = f_lo[top] + half, m - half
-        else:
-            value = f_left[top] + result  # left + right
-            top -= 1
-            result = value
-            if top >= 0:
-                if f_state[top] == 1:
-                    f_left[top] = value
-                # state 2: result already holds the right half's value
-            continue
-        if c_n <= 128:
-            v = _block_sum(x, c_lo, c_n)
-            if f_state[top] == 1:
-                f_left[top] = v
-            else:
-                result = v
-        else:
-            top += 1
-            f_lo[top], f_n[top], f_state[top] = c_lo, c_n, 0
-    return result
 
 
 @njit(**_JIT)
@@ -143,7 +98,7 @@ def _family_records(a, dD, eta, pole_k, omega, freqs, energies, out, two):
     NaN for H = 1 or no motion); freqs (n_t,) Hz."""
     _harmonic_energies(a, dD, eta, pole_k, omega, energies, two)
     H = len(energies) - 1
-    total = _pairwise_sum(energies, 1, H)
+    total = _block_sum(energies, 1, H)  # H <= 128: one block of NumPy's pairwise sum
     out[0] = energies[1] / total if total > 0 else 1.0
     out[1] = 0.0
     out[2] = 0.0
@@ -181,9 +136,32 @@ def harmonic_energies(a: np.ndarray, dD: np.ndarray, eta: np.ndarray, pole_k: np
 def family_records(a: np.ndarray, dD: np.ndarray, eta: np.ndarray, pole_k: np.ndarray, omega: float,
                    freqs: np.ndarray) -> dict:
     """The family records of one point (see :meth:`FamilyMixin.family_records`): arguments
-    as :func:`harmonic_energies`, ``freqs`` (n_t,) Hz the tracked open-contact modes."""
+    as :func:`harmonic_energies`, ``freqs`` (n_t,) Hz the tracked open-contact modes.
+    Above H = 128 (NumPy sums in several blocks) the NumPy expressions themselves."""
+    if a.shape[0] - 1 > _MAX_H:
+        return _family_records_numpy(a, dD, eta, pole_k, omega, freqs)
     out = np.empty(4)
     _family_records(np.ascontiguousarray(a), np.ascontiguousarray(dD), np.ascontiguousarray(eta), pole_k,
                     float(omega), np.ascontiguousarray(freqs, dtype=float), np.empty(a.shape[0]), out, 2.0)
     return {"fundamental_share": float(out[0]), "resonance_harmonic": float(out[1]),
             "resonance_mode": float(out[2]), "resonance_detuning": float(out[3])}
+
+
+#: the largest H of the compiled records (NumPy's sum of H numbers is one block up to 128)
+_MAX_H = 128
+
+
+def _family_records_numpy(a, dD, eta, pole_k, omega, freqs) -> dict:
+    """:func:`family_records` by the NumPy expressions the kernel reproduces."""
+    energies = harmonic_energies(a, dD, eta, pole_k, omega)
+    total = float(energies[1:].sum())
+    out = {"fundamental_share": float(energies[1] / total) if total > 0 else 1.0,
+           "resonance_harmonic": 0.0, "resonance_mode": 0.0, "resonance_detuning": float("nan")}
+    H = len(energies) - 1
+    if H >= 2 and total > 0:
+        k = int(np.argmax(energies[2:])) + 2
+        f = k * float(omega) / (2 * np.pi)
+        j = int(np.argmin(np.abs(freqs - f)))
+        out.update(resonance_harmonic=float(k), resonance_mode=float(j + 1),
+                   resonance_detuning=float(f / freqs[j] - 1.0))
+    return out
