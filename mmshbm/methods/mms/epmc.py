@@ -60,6 +60,14 @@ def fundamental_share(M, Q: np.ndarray) -> float:
     return float(T[0] / total) if total > 0 else 1.0
 
 
+class _Landed(Exception):
+    """Ends the path following of :meth:`EPMCProblem.family_landing` (u None: a loop)."""
+
+    def __init__(self, u, amplitude: float):
+        super().__init__()
+        self.u, self.amplitude = u, amplitude
+
+
 class EPMCProblem(DampedHBMBase):
     """Damped nonlinear mode (EPMC) by MMS-HBM, as a continuation problem.
 
@@ -270,6 +278,53 @@ class EPMCProblem(DampedHBMBase):
         grad = np.zeros(len(u))
         grad[cols] = sign * synthesis_matrix(self.H, np.array([tau]))[0] * self.colscale[cols]
         return best, grad
+
+    def family_landing(self, u_from: np.ndarray, rec_from: dict, excursion: list, amplitude_max: float,
+                       amplitude_min: float = 0.0):
+        """Land on the family beyond an excursion by following the path on: from the
+        excursion's last states (``excursion``, scaled unknowns, in order), plain path
+        following until a point on the family (fundamental share >= 0.5) lies above
+        ``amplitude_min`` (the frontier, m). Returns (u, amplitude) of that point for the
+        jump's pinned solve (:func:`mmshbm.core.family.jump`). A damped mode often passes
+        a tongue by itself once the branch comes back up; where the path instead closes
+        into a loop (it comes back to the excursion's first state) or does not come back
+        within twice the excursion's length, raises ValueError and the jump goes on with
+        its predictors (``u_from``, ``rec_from``: the origin, unused here)."""
+        from ...core.continuation import ContinuationOptions, continue_branch
+
+        if len(excursion) < 2:
+            raise ValueError("no excursion to follow")
+        memo = getattr(self, "_landing_memo", None)
+        key = (len(excursion), np.asarray(excursion[-1], dtype=float).tobytes(), float(amplitude_min))
+        if memo is not None and memo[0] == key:
+            if memo[1] is None:
+                raise ValueError("the path does not come back onto the family above the frontier")
+            return memo[1][0].copy(), memo[1][1]
+        first = np.asarray(excursion[0], dtype=float)
+        steps = np.linalg.norm(np.diff(np.asarray(excursion, dtype=float), axis=0), axis=1)
+        closed = 0.5 * float(np.median(steps))
+        t0 = np.asarray(excursion[-1], dtype=float) - np.asarray(excursion[-2], dtype=float)
+        count = [0]
+
+        def watch(u, rec):
+            count[0] += 1
+            if rec.get("fundamental_share", 1.0) >= 0.5 and rec["amplitude"] > amplitude_min * (1 + 1e-3):
+                raise _Landed(np.array(u, dtype=float), float(rec["amplitude"]))
+            if count[0] > 3 and np.linalg.norm(u - first) < closed:
+                raise _Landed(None, 0.0)  # the loop closed
+
+        found = None
+        try:
+            continue_branch(self, np.asarray(excursion[-1], dtype=float), t0 / np.linalg.norm(t0),
+                            ContinuationOptions(follow="path", bounds={"amplitude": (0.0, amplitude_max)},
+                                                max_steps=min(2 * len(excursion) + 40, 400)),
+                            callback=watch, catch_interrupt=False)
+        except _Landed as landed:
+            found = None if landed.u is None else (landed.u, landed.amplitude)
+        self._landing_memo = (key, found)
+        if found is None:
+            raise ValueError("the path does not come back onto the family above the frontier")
+        return found[0].copy(), found[1]
 
     def family_frequency_limit(self) -> float:
         """The highest frequency (Hz) of the starting mode's family: the linear mode's
