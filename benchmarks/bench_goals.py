@@ -12,8 +12,9 @@
 
 The study throughput (1000 backbones) is tracked in ``bench_studies.py``. The README's
 benchmark tables and docs/benchmarks.md are generated from one recorded run of this
-suite: ``mmshbm bench --from-asv`` prints them, ``python benchmarks/asv_tables.py
---update`` rewrites them (docs/benchmarks.md, "Record the tables").
+suite: ``mmshbm bench --from-asv`` prints them, ``mmshbm bench --from-asv --update
+README.md docs/benchmarks.md`` rewrites them from the run recorded in
+``benchmarks/results`` (docs/benchmarks.md, "Record the tables").
 """
 
 from __future__ import annotations

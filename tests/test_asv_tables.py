@@ -76,3 +76,12 @@ def test_update_replaces_the_block_only(tmp_path, capsys):
         asv_tables.update_file(bare, "x")
     assert main(["bench", "--update", str(doc)]) == 2
     assert main(["bench", "--from-asv", str(tmp_path / "nothing")]) == 2
+
+
+def test_default_reads_asv_folder_and_the_committed_record(tmp_path, monkeypatch):
+    committed = _results(tmp_path / "benchmarks", 3_000, commit="cccccccccc")
+    monkeypatch.chdir(tmp_path)
+    assert asv_tables.find_results().resolve() == committed.resolve()  # no .asv folder: the record
+    newer = _results(tmp_path / ".asv", 4_000, commit="dddddddddd")
+    assert asv_tables.find_results().resolve() == newer.resolve()  # the newest of both
+    assert asv_tables.load_run().commit == "dddddddddd"

@@ -169,3 +169,13 @@ def test_model_and_beam_exclusive():
         studies.grid_specs(mmshbm.default_beam(), model=mmshbm.OneDofOscillator().model())
     with pytest.raises(ValueError, match="elements"):
         studies.grid_specs(model=mmshbm.OneDofOscillator().model(), elements=(4,))
+
+
+def test_pool_gets_the_longest_runs_first():
+    from mmshbm.analysis.executors import longest_first
+    from mmshbm.analysis.studies import grid_specs
+
+    specs = grid_specs(harmonics=(1, 15, 5), elements=(8, 200))
+    order = [(s.coords["harmonics"], s.coords["elements"]) for s in longest_first(specs)]
+    assert order == [(15, 200), (15, 8), (5, 200), (5, 8), (1, 200), (1, 8)]
+    assert sorted(s.index for s in longest_first(specs)) == list(range(len(specs)))

@@ -10,8 +10,12 @@ each file, so that the published figures are those of one recorded run and say w
     mmshbm bench --from-asv --update README.md docs/benchmarks.md
 
 ``RESULTS`` is an asv results file (``.asv/results/<machine>/<commit>-<env>.json``) or a
-folder of them (default ``.asv/results``: the most recent file that holds the
-``bench_goals`` figures).
+folder of them (default: the most recent file that holds the ``bench_goals`` figures
+under ``.asv/results``, asv's own folder, ignored by git, and ``benchmarks/results``, the
+recorded run the published tables come from, committed)::
+
+    mkdir -p benchmarks/results/vm && cp .asv/results/benchmarks.json benchmarks/results/ \
+        && cp .asv/results/vm/<commit>-<env>.json .asv/results/vm/machine.json benchmarks/results/vm/
 """
 
 from __future__ import annotations
@@ -24,8 +28,8 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["AsvRun", "find_results", "load_run", "goal_table", "equal_accuracy_table", "tables",
-           "update_file", "BEGIN", "END"]
+__all__ = ["AsvRun", "DEFAULT_FOLDERS", "find_results", "load_run", "goal_table", "equal_accuracy_table",
+           "tables", "update_file", "BEGIN", "END"]
 
 #: markers of the generated block in a Markdown file
 BEGIN = "<!-- begin: tables from asv (mmshbm bench --from-asv --update) -->"
@@ -58,16 +62,27 @@ class AsvRun:
         return sorted({n for n, _ in self.values if n.startswith(prefix)})
 
 
+#: where the results are looked for by default: asv's folder, then the committed record
+DEFAULT_FOLDERS = (Path(".asv/results"), Path("benchmarks/results"))
+
+
 def find_results(path=None) -> Path:
     """The results file: ``path`` itself, or the most recent file under ``path`` (default
-    ``.asv/results``) that holds ``bench_goals`` figures."""
-    path = Path(".asv/results" if path is None else path)
-    if path.is_file():
-        return path
-    if not path.is_dir():
-        raise FileNotFoundError(f"no asv results at {path} (run asv first, see docs/benchmarks.md)")
+    :data:`DEFAULT_FOLDERS`, those that exist) that holds ``bench_goals`` figures."""
+    if path is None:
+        folders = [f for f in DEFAULT_FOLDERS if f.is_dir()]
+        if not folders:
+            raise FileNotFoundError(f"no asv results in {' or '.join(map(str, DEFAULT_FOLDERS))} (run asv "
+                                    "first, see docs/benchmarks.md)")
+    else:
+        path = Path(path)
+        if path.is_file():
+            return path
+        if not path.is_dir():
+            raise FileNotFoundError(f"no asv results at {path} (run asv first, see docs/benchmarks.md)")
+        folders = [path]
     best, best_date = None, -1
-    for f in path.rglob("*.json"):
+    for f in (f for folder in folders for f in folder.rglob("*.json")):
         if f.name in ("machine.json", "benchmarks.json"):
             continue
         try:
@@ -77,7 +92,8 @@ def find_results(path=None) -> Path:
         if any(k.startswith(_PREFIX) for k in data.get("results", {})) and data.get("date", 0) > best_date:
             best, best_date = f, data.get("date", 0)
     if best is None:
-        raise FileNotFoundError(f"no asv results with bench_goals figures under {path}")
+        where = " or ".join(map(str, folders))
+        raise FileNotFoundError(f"no asv results with bench_goals figures under {where}")
     return best
 
 

@@ -6,6 +6,10 @@ so the per-task cost of an executor (pickling a task, a round trip through the p
 queues or Dask's scheduler: of the order of 0.1–1 ms per task for a process pool, a few
 ms for Dask) is paid once per chunk instead of once per backbone. Every spec is executed
 by the same function whatever the executor and chunk, so the numbers are identical.
+
+Specs go to the pool longest first (:func:`longest_first`, by an estimate of their cost
+from H and the model's size): a study's wall time is set by its longest runs, and a long
+run sent last keeps one worker busy while the others idle.
 """
 
 from __future__ import annotations
@@ -18,7 +22,7 @@ import time
 from .. import _validate as check
 from .runspec import execute
 
-__all__ = ["open_executor", "run_specs", "auto_chunksize"]
+__all__ = ["open_executor", "run_specs", "auto_chunksize", "estimated_cost", "longest_first"]
 
 log = logging.getLogger(__name__)
 
@@ -28,6 +32,23 @@ def auto_chunksize(n_runs: int, workers: int) -> int:
     last chunk then costs a worker at most ~1/16 of its share), and one spec per task for
     small studies (fewer than 32 runs per worker), whose runs differ widely in cost."""
     return max(1, n_runs // (16 * max(1, workers)))
+
+
+def estimated_cost(spec) -> float:
+    """A relative cost of one run, for ordering only: harmonic-balance runs grow with
+    H^2.5 (unknowns and samples grow with H, and higher H meets more internal resonances
+    to jump over), shooting with the number of elements; either a little with the model's
+    size (the condensation's modes)."""
+    coords = getattr(spec, "coords", {}) or {}
+    size = float(coords.get("elements", 21) or 21)
+    if getattr(spec, "method", "mmshbm") == "shooting":
+        return 50.0 * size
+    return max(int(getattr(spec, "harmonics", 1) or 1), 1) ** 2.5 * (1.0 + size / 400.0)
+
+
+def longest_first(specs: list) -> list:
+    """``specs`` sorted by decreasing :func:`estimated_cost` (ties in their order)."""
+    return sorted(specs, key=lambda spec: -estimated_cost(spec))
 
 
 def open_executor(executor, workers: int):
@@ -111,7 +132,8 @@ def run_specs(specs: list, executor, workers: int, *, chunksize="auto", verbose:
                 info["busy_s"] += busy
                 _progress(bar, spec, out[spec.index])
         else:
-            chunks = [specs[i:i + chunksize] for i in range(0, len(specs), chunksize)]
+            ordered = longest_first(specs)
+            chunks = [ordered[i:i + chunksize] for i in range(0, len(ordered), chunksize)]
             info["tasks"] = len(chunks)
             futures = {pool.submit(execute_chunk, chunk): chunk for chunk in chunks}
             try:

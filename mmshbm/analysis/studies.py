@@ -85,6 +85,8 @@ class Study:
     runs: list
     branches: list
     metadata: dict = field(default_factory=dict)
+    # tables already computed: (amplitudes, unit, branch ids) -> FrequencyTable
+    _tables: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __len__(self) -> int:
         return len(self.runs)
@@ -140,6 +142,10 @@ class Study:
 
         amps = _amplitudes(amplitudes)
         unit = _unit(unit)
+        # the report, the CSV and the convergence plot ask for the same table: solved once
+        key = (tuple(amps.tolist()), unit, tuple(map(id, self.branches)), tuple(map(id, self.runs)))
+        if key in self._tables:
+            return self._tables[key]
         n = len(self)
         f = np.full((n, len(amps)), np.nan)
         share = np.full((n, len(amps)), np.nan)
@@ -154,9 +160,11 @@ class Study:
                 share[i, j] = mode_share_at(b, a * scale)
                 partner[i].append(partner_at(b, a * scale))
                 notes[i].append(explain(b, a * scale, f[i, j], intervals))
-        return FrequencyTable(axes=self.axes, runs=[dict(r) for r in self.runs], amplitudes=amps, unit=unit,
-                              frequency=f, status=[b.status for b in self.branches], notes=notes,
-                              mode_share=share, partner=partner)
+        table = FrequencyTable(axes=self.axes, runs=[dict(r) for r in self.runs], amplitudes=amps, unit=unit,
+                               frequency=f, status=[b.status for b in self.branches], notes=notes,
+                               mode_share=share, partner=partner)
+        self._tables[key] = table
+        return table
 
     def convergence(self, amplitudes, unit: str = "gap", *, table: FrequencyTable | None = None
                     ) -> list[ConvergenceFit]:

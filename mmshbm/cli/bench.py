@@ -19,9 +19,10 @@ def register(sub) -> None:
     p.add_argument("--repeats", type=common.positive_int, default=None, help="timing repeats (default 3)")
     p.add_argument("--amplitude", type=common.positive_float, default=None,
                    help="amplitude (gaps) compared at (default: oscillator 2, beam 1.5)")
-    p.add_argument("--from-asv", nargs="?", const=".asv/results", default=None, metavar="RESULTS",
+    p.add_argument("--from-asv", nargs="?", const="", default=None, metavar="RESULTS",
                    help="print the tables of a recorded asv run instead (a results file or folder, default "
-                        ".asv/results: the newest run with the bench_goals figures)")
+                        ".asv/results and the committed benchmarks/results: the newest run with the "
+                        "bench_goals figures)")
     p.add_argument("--update", nargs="+", default=None, metavar="FILE",
                    help="with --from-asv: write the tables into FILEs (README.md docs/benchmarks.md) between "
                         "their generated-block markers")
@@ -44,7 +45,7 @@ def register(sub) -> None:
 def _from_asv(args) -> int:
     from ..analysis import asv_tables
 
-    run = asv_tables.load_run(args.from_asv)
+    run = asv_tables.load_run(args.from_asv or None)
     block = asv_tables.tables(run)
     print(block)
     for path in args.update or ():

@@ -403,8 +403,8 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin, BackboneProblemBase):
             "amplitude": float(out[0]),
             "energy": float(out[1]),
             "contact_force_max": float(out[2]),
-            "mode_share": self.mode_share(u),
-            **self.family_records(u),
+            "mode_share": self._mode_share_at(u, a, omega, eta, dD),
+            **self._family_records_at(a, omega, eta, dD),
         }
 
 

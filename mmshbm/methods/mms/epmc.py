@@ -25,6 +25,16 @@ energy identity removes, so the bordered Jacobian stays regular at C = 0.
 
 Ω is the last unknown (the continuation's folds are folds in frequency, as for
 backbones).
+
+The family guard of :mod:`mmshbm.core.family` keeps the branch on the starting mode's
+family as for conservative backbones: every point records ``fundamental_share``, the
+fundamental harmonic's share of the period-mean kinetic energy. Where a harmonic k meets
+a damped higher mode j (kΩ ≈ ω_j) the energy moves into mode j, the damping ratio of
+the nonlinear mode rises with it and the path can close into a loop (on the 21-element
+beam at H = 20, harmonics 4 and 5 near the second mode fold the branch at 3.8 gaps,
+66 Hz, back down to 2 gaps and around); the guard sees the branch come back onto the
+family below its frontier and jumps past the loop by solves at a pinned amplitude
+(:meth:`scaled_state`, :meth:`family_frequency_limit`).
 """
 
 from __future__ import annotations
@@ -35,9 +45,29 @@ from ... import _validate as check
 from ...core.measures import check_dof, harmonic_content, mean_energy
 from ...core.problem import BackboneProblemBase
 from ...model.model import Model
-from .damped import DampedHBMBase, synthesis_matrix
+from .conservative import _held_frequency
+from .damped import DampedHBMBase, fine_samples, synthesis_matrix
 
-__all__ = ["EPMCProblem"]
+__all__ = ["EPMCProblem", "fundamental_share"]
+
+
+def fundamental_share(M, Q: np.ndarray) -> float:
+    """Share (0..1) of the period-mean kinetic energy in the fundamental harmonic of the
+    motion with NLvib-ordered coefficients ``Q`` (n_dof, 2H+1) and mass matrix ``M``
+    (n_dof, n_dof): T_k ∝ k²(Q_ckᵀMQ_ck + Q_skᵀMQ_sk). 1 for a motion at rest."""
+    MQ = np.einsum("ij,ij->j", Q, M @ Q)
+    k = np.arange(1, (Q.shape[1] - 1) // 2 + 1)
+    T = k**2 * (MQ[1::2] + MQ[2::2])
+    total = float(T.sum())
+    return float(T[0] / total) if total > 0 else 1.0
+
+
+class _Landed(Exception):
+    """Ends the path following of :meth:`EPMCProblem.family_landing` (u None: a loop)."""
+
+    def __init__(self, u, amplitude: float):
+        super().__init__()
+        self.u, self.amplitude = u, amplitude
 
 
 class EPMCProblem(DampedHBMBase, BackboneProblemBase):
@@ -92,6 +122,9 @@ class EPMCProblem(DampedHBMBase, BackboneProblemBase):
         self._anchor_col = 2 * self.n_c + self.anchor  # the sine of harmonic 1 is block 2
         self.colscale = np.concatenate([self.xscale, [self.omega_ref, self.omega_ref]])
         self.n_unknowns = self.n_x + 2
+        # columns of u holding the amplitude DOF's coefficients (None: a DOF with mass)
+        self._amp_col = (np.arange(self.n_coef) * self.n_c + int(np.searchsorted(c, amp_dof))
+                         if i_amp < len(c) and c[i_amp] == amp_dof else None)
 
     # ------------------------------------------------------------------ unknowns
     def unpack(self, u: np.ndarray) -> tuple[np.ndarray, float, float]:
@@ -183,7 +216,121 @@ class EPMCProblem(DampedHBMBase, BackboneProblemBase):
         return {"frequency": omega / (2 * np.pi), "amplitude": self.amplitude(Q[self.amplitude_dof]),
                 "energy": mean_energy(self.model, Q, omega),
                 "contact_force_max": self.contact_force_max(x, F),
-                "damping_ratio": xi / (2 * omega), "xi": xi}
+                "damping_ratio": xi / (2 * omega), "xi": xi,
+                "fundamental_share": fundamental_share(self.model.M, Q)}
+
+    # ------------------------------------------------------------------ family guard
+    def frequency_of(self, u: np.ndarray) -> float:
+        """Ω/2π (Hz) of the scaled unknowns ``u`` (no evaluation)."""
+        return float(u[-1] * self.colscale[-1] / (2 * np.pi))
+
+    def scaled_state(self, u: np.ndarray, factor: float) -> np.ndarray:
+        """``u`` with every displacement coefficient times ``factor``, ξ and Ω kept (far
+        above the gap a piecewise-linear system is nearly homogeneous): a predictor of
+        the family at ``factor`` times the amplitude of ``u``."""
+        out = np.array(u, dtype=float)
+        out[:-2] *= factor
+        return out
+
+    def amplitude_value(self, u: np.ndarray) -> float:
+        """The monitored amplitude (m) of ``u`` alone."""
+        if self._amp_col is not None:
+            return self.amplitude(u[self._amp_col] * self.colscale[self._amp_col])
+        return self.amplitude(self.coefficients(u)[self.amplitude_dof])
+
+    def amplitude_and_gradient(self, u: np.ndarray, h: float = 1e-7) -> tuple[float, np.ndarray]:
+        """The monitored amplitude (m) and its gradient with respect to the scaled unknowns
+        (the pinned solves of the family guard's jumps). For an amplitude DOF without mass
+        the amplitude is the largest value of s·q(τ) with q linear in x: its gradient is
+        s·E(τ*) at the maximiser τ* (envelope theorem; τ* from the parabola through the
+        fine samples' peak, as the value); otherwise central differences of
+        :meth:`amplitude_value`."""
+        if self._amp_col is None:
+            value = self.amplitude_value(u)
+            grad = np.empty(len(u))
+            for i in range(len(u)):
+                e = np.zeros(len(u))
+                e[i] = h
+                grad[i] = (self.amplitude_value(u + e) - self.amplitude_value(u - e)) / (2 * h)
+            return value, grad
+        cols = self._amp_col
+        q = u[cols] * self.colscale[cols]
+        y = fine_samples(q, self._n_fine)
+        contacts = self.model.contacts
+        if len(contacts) == 1 and self.model.amplitude_dof == contacts[0].dof and self._away_convention:
+            signs = (-contacts[0].side,)
+        else:
+            signs = (1.0, -1.0)
+        best, tau, sign = -np.inf, 0.0, 1.0
+        n = len(y)
+        for sg in signs:
+            ys = sg * y
+            j = int(np.argmax(ys))
+            ym, y0, yp = ys[j - 1], ys[j], ys[(j + 1) % n]
+            denom = ym - 2 * y0 + yp
+            value, delta = float(y0), 0.0
+            if denom < 0:
+                value = float(y0 - 0.125 * (yp - ym) ** 2 / denom)
+                delta = 0.5 * (ym - yp) / denom
+            if value > best:
+                best, tau, sign = value, 2 * np.pi * (j + delta) / n, sg
+        grad = np.zeros(len(u))
+        grad[cols] = sign * synthesis_matrix(self.H, np.array([tau]))[0] * self.colscale[cols]
+        return best, grad
+
+    def family_landing(self, u_from: np.ndarray, rec_from: dict, excursion: list, amplitude_max: float,
+                       amplitude_min: float = 0.0):
+        """Land on the family beyond an excursion by following the path on: from the
+        excursion's last states (``excursion``, scaled unknowns, in order), plain path
+        following until a point on the family (fundamental share >= 0.5) lies above
+        ``amplitude_min`` (the frontier, m). Returns (u, amplitude) of that point for the
+        jump's pinned solve (:func:`mmshbm.core.family.jump`). A damped mode often passes
+        a tongue by itself once the branch comes back up; where the path instead closes
+        into a loop (it comes back to the excursion's first state) or does not come back
+        within twice the excursion's length, raises ValueError and the jump goes on with
+        its predictors (``u_from``, ``rec_from``: the origin, unused here)."""
+        from ...core.continuation import ContinuationOptions, continue_branch
+
+        if len(excursion) < 2:
+            raise ValueError("no excursion to follow")
+        memo = getattr(self, "_landing_memo", None)
+        key = (len(excursion), np.asarray(excursion[-1], dtype=float).tobytes(), float(amplitude_min))
+        if memo is not None and memo[0] == key:
+            if memo[1] is None:
+                raise ValueError("the path does not come back onto the family above the frontier")
+            return memo[1][0].copy(), memo[1][1]
+        first = np.asarray(excursion[0], dtype=float)
+        steps = np.linalg.norm(np.diff(np.asarray(excursion, dtype=float), axis=0), axis=1)
+        closed = 0.5 * float(np.median(steps))
+        t0 = np.asarray(excursion[-1], dtype=float) - np.asarray(excursion[-2], dtype=float)
+        count = [0]
+
+        def watch(u, rec):
+            count[0] += 1
+            if rec.get("fundamental_share", 1.0) >= 0.5 and rec["amplitude"] > amplitude_min * (1 + 1e-3):
+                raise _Landed(np.array(u, dtype=float), float(rec["amplitude"]))
+            if count[0] > 3 and np.linalg.norm(u - first) < closed:
+                raise _Landed(None, 0.0)  # the loop closed
+
+        found = None
+        try:
+            continue_branch(self, np.asarray(excursion[-1], dtype=float), t0 / np.linalg.norm(t0),
+                            ContinuationOptions(follow="path", bounds={"amplitude": (0.0, amplitude_max)},
+                                                max_steps=min(2 * len(excursion) + 40, 400)),
+                            callback=watch, catch_interrupt=False)
+        except _Landed as landed:
+            found = None if landed.u is None else (landed.u, landed.amplitude)
+        self._landing_memo = (key, found)
+        if found is None:
+            raise ValueError("the path does not come back onto the family above the frontier")
+        return found[0].copy(), found[1]
+
+    def family_frequency_limit(self) -> float:
+        """The highest frequency (Hz) of the starting mode's family: the linear mode's
+        frequency with every contact DOF held at its stop (rigid stops stiffen the
+        structure at most that far)."""
+        top = _held_frequency(self.model, [ct.dof for ct in self.model.contacts], self.mode)
+        return float(max(top, self.mode_frequency))
 
     def floquet_multipliers(self, u: np.ndarray) -> np.ndarray:
         """Floquet multipliers of the EPMC orbit (the flow with C − ξM; one trivial +1),

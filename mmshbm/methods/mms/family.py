@@ -198,13 +198,22 @@ class FamilyMixin:
         fast = self._fast_setup() if hasattr(self, "_fast_setup") else False
         if not fast:
             return float(self.modal_shares(u)[self.mode - 1, 1])
+        a, omega = self.unpack(u)
+        _, dD = self._condensed(omega, True)
+        return self._mode_share_at(u, a, omega, self.unpack_eta(u), dD)
+
+    def _mode_share_at(self, u: np.ndarray, a: np.ndarray, omega: float, eta: np.ndarray,
+                       dD: np.ndarray) -> float:
+        """:meth:`mode_share` of ``u`` from its unpacked (a, Ω, η) and ∂D/∂Ω at Ω (the
+        monitor has them)."""
+        fast = self._fast_setup() if hasattr(self, "_fast_setup") else False
+        if not fast:
+            return float(self.modal_shares(u)[self.mode - 1, 1])
         from ...core.corrector_kernels import _start_mode_share
 
         row, s0, s, sv, pole_j = self._share_setup()
-        a, omega = self.unpack(u)
-        _, dD = self._condensed(omega, True)
         D0, B, w2, Rs, keep, static, rtol = fast["cond"]
-        return float(_start_mode_share(np.ascontiguousarray(a), self.unpack_eta(u), omega, dD, self._pole_k,
+        return float(_start_mode_share(np.ascontiguousarray(a), eta, omega, dD, self._pole_k,
                                        pole_j, self._pole_w2, B, w2, keep, s0, s, sv))
 
     def harmonic_energies(self, u: np.ndarray) -> np.ndarray:
@@ -212,15 +221,11 @@ class FamilyMixin:
         from the condensed stiffness alone: T_k = −(Ω/8) a_kᵀ ∂D_k/∂Ω a_k (with the pole
         unknowns' part). Exact for the condensation used (no modal basis needed): the
         kinetic energy of the DOFs with mass in harmonic k, whatever their shape."""
+        from ._family_kernels import harmonic_energies
+
         a, omega = self.unpack(u)
         _, dD = self._condensed(omega, True)
-        eta = self.unpack_eta(u)
-        quad = np.einsum("ki,kij,kj->k", a, dD, a)
-        for p, k in enumerate(self._pole_k):
-            quad[k] -= 2.0 * k * k * omega * eta[p] ** 2
-        energies = -omega / 8.0 * quad
-        energies[0] = 0.0
-        return np.maximum(energies, 0.0)
+        return harmonic_energies(a, dD, self.unpack_eta(u), self._pole_k, omega)
 
     def fundamental_share(self, u: np.ndarray) -> float:
         """Share (0..1) of the period-mean kinetic energy in the fundamental harmonic (k = 1),
@@ -239,18 +244,16 @@ class FamilyMixin:
         open-contact mode j (``resonance_harmonic`` k, ``resonance_mode`` j, 1-based; 0
         and NaN for H = 1). A detuning that changes sign along the branch is an internal
         resonance crossed."""
-        energies = self.harmonic_energies(u)
-        total = float(energies[1:].sum())
-        out = {"fundamental_share": float(energies[1] / total) if total > 0 else 1.0,
-               "resonance_harmonic": 0.0, "resonance_mode": 0.0, "resonance_detuning": float("nan")}
-        if self.H >= 2 and total > 0:
-            k = int(np.argmax(energies[2:])) + 2
-            freqs = self.tracked_frequencies
-            f = k * float(u[-1] * self.colscale[-1]) / (2 * np.pi)
-            j = int(np.argmin(np.abs(freqs - f)))
-            out.update(resonance_harmonic=float(k), resonance_mode=float(j + 1),
-                       resonance_detuning=float(f / freqs[j] - 1.0))
-        return out
+        a, omega = self.unpack(u)
+        _, dD = self._condensed(omega, True)
+        return self._family_records_at(a, omega, self.unpack_eta(u), dD)
+
+    def _family_records_at(self, a: np.ndarray, omega: float, eta: np.ndarray, dD: np.ndarray) -> dict:
+        """:meth:`family_records` from the unpacked (a, Ω, η) and ∂D/∂Ω at Ω, in one
+        compiled pass (:mod:`._family_kernels`: the same numbers as NumPy's)."""
+        from ._family_kernels import family_records
+
+        return family_records(a, dD, eta, self._pole_k, omega, self._modal_basis()[0])
 
     def _share_setup(self):
         """(row, s0, s, sv, pole_j): the starting mode's projections for
