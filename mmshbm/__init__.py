@@ -46,6 +46,7 @@ _LAZY = {
     "solid_beam_model": "mmshbm.fe.solid",
     "tip_damper_model": "mmshbm.fe.damper",
     "tip_damper_force": "mmshbm.fe.damper",
+    "solid_tip_friction_model": "mmshbm.fe.damper",
     "normal_load_study": "mmshbm.analysis.friction_study",
     "branch_stability": "mmshbm.methods.mms.stability",
     "phase_resonance_backbone": "mmshbm.analysis.phase_resonance",
