@@ -56,14 +56,21 @@ def amplitude_sign(model: Model) -> int:
     return 0
 
 
-def refined_max(y: np.ndarray) -> float:
-    """Largest value of a periodic sampled signal, refined by a parabola through the peak."""
+def refined_argmax(y: np.ndarray) -> tuple[float, float]:
+    """(largest value, its position in samples) of a periodic sampled signal ``y`` (shape
+    (n,)), refined by a parabola through the sampled peak and its neighbours; the position
+    is fractional, in [−0.5, n − 0.5]."""
     j = int(np.argmax(y))
     ym, y0, yp = y[j - 1], y[j], y[(j + 1) % len(y)]
     denom = ym - 2 * y0 + yp
     if denom < 0:
-        return float(y0 - 0.125 * (yp - ym) ** 2 / denom)
-    return float(y0)
+        return float(y0 - 0.125 * (yp - ym) ** 2 / denom), j + 0.5 * (ym - yp) / denom
+    return float(y0), float(j)
+
+
+def refined_max(y: np.ndarray) -> float:
+    """Largest value of a periodic sampled signal, refined by a parabola through the peak."""
+    return refined_argmax(y)[0]
 
 
 def amplitude_peak(q: np.ndarray, sign: int) -> float:

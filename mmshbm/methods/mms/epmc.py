@@ -42,7 +42,7 @@ from __future__ import annotations
 import numpy as np
 
 from ... import _validate as check
-from ...core.measures import check_dof, harmonic_content, mean_energy
+from ...core.measures import check_dof, harmonic_content, mean_energy, refined_argmax
 from ...core.problem import BackboneProblemBase
 from ...model.model import Model
 from .conservative import _held_frequency
@@ -264,16 +264,9 @@ class EPMCProblem(DampedHBMBase, BackboneProblemBase):
         best, tau, sign = -np.inf, 0.0, 1.0
         n = len(y)
         for sg in signs:
-            ys = sg * y
-            j = int(np.argmax(ys))
-            ym, y0, yp = ys[j - 1], ys[j], ys[(j + 1) % n]
-            denom = ym - 2 * y0 + yp
-            value, delta = float(y0), 0.0
-            if denom < 0:
-                value = float(y0 - 0.125 * (yp - ym) ** 2 / denom)
-                delta = 0.5 * (ym - yp) / denom
+            value, position = refined_argmax(sg * y)
             if value > best:
-                best, tau, sign = value, 2 * np.pi * (j + delta) / n, sg
+                best, tau, sign = value, 2 * np.pi * position / n, sg
         grad = np.zeros(len(u))
         grad[cols] = sign * synthesis_matrix(self.H, np.array([tau]))[0] * self.colscale[cols]
         return best, grad
