@@ -161,3 +161,16 @@ def test_a_clearance_jump_lands_where_the_backbone_climbs_towards_the_held_frequ
     for s in jumps:
         assert b.records["on_family"][s.index] == 1.0 and s.data["frequency_to"] < held
     assert b.frequency.max() < held
+
+
+def test_a_clearance_locked_at_its_held_frequency_reaches_its_bound():
+    """A 7-mass chain (H = 1) whose heavy masses swing on a clearance with a stiff contact
+    spring: from 1.36 gaps on the frequency stays at 0.7317 Hz (the held limit) while the
+    amplitude grows only through the pole unknown of the first clamped mode, about
+    2·10⁻⁶ gaps per unit of arclength. The step cap stopped growing at 1000 ds_max and the
+    run ran out of its 1000 steps at 5.1 gaps; with the cap limited only by the 2 % change
+    of amplitude it reaches 10 gaps in under 300 points."""
+    case = corpus.generate(150, seed=0, contacts=("clearance",))[149]
+    assert (case.kind, case.harmonics) == ("chain", 1)
+    r = corpus.run_case(case)
+    assert r.completed and r.points < 300, r.status

@@ -329,7 +329,7 @@ def _backfill(problem, u, t, frontier: float, landing: float, opt: ContinuationO
 #: the cap on the step grows past ds_max up to the step that would change the amplitude by
 #: this fraction (linearly extrapolated from the last step), at most _CAP_GROWTH ds_max
 _CAP_AMPLITUDE = 0.02
-_CAP_GROWTH = 1000.0
+_CAP_GROWTH = 1.0e6
 
 
 def _step_cap(opt: ContinuationOptions, rec_prev: dict, rec_new: dict, ds_prev: float) -> float:
