@@ -174,3 +174,22 @@ def test_a_clearance_locked_at_its_held_frequency_reaches_its_bound():
     assert (case.kind, case.harmonics) == ("chain", 1)
     r = corpus.run_case(case)
     assert r.completed and r.points < 300, r.status
+
+
+def test_where_the_branch_has_no_frequency_it_says_why():
+    """A 3-mass chain (gap 1 cm, H = 31): its last jump below the bound skips 1.296-1.399
+    gaps, so the branch has no frequency at 1.3 gaps (``frequency_at`` is NaN rather than
+    an interpolation across the tongue). The exact comparison counts this miss as
+    explained by the branch itself: the jump's skipped interval holds the amplitude."""
+    from mmshbm.analysis import corpus_exact as ce
+
+    case = ce.chains(14, seed=0)[13]
+    model = case.model()
+    A = 1.3 * model.gap
+    b = mmshbm.backbone(model, harmonics=31, max_amplitude=1.2 * A)
+    assert np.isnan(b.frequency_at(A))
+    skips = [(s.data["amplitude_frontier"], s.data["amplitude_to"]) for s in b.special_points
+             if s.kind == "jump"]
+    assert any(lo < A < hi for lo, hi in skips), skips
+    assert "skipped" in ce._reported(b, A)
+    assert "skipped" not in ce._reported(b, 1.1 * model.gap)
