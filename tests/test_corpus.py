@@ -161,3 +161,35 @@ def test_a_clearance_jump_lands_where_the_backbone_climbs_towards_the_held_frequ
     for s in jumps:
         assert b.records["on_family"][s.index] == 1.0 and s.data["frequency_to"] < held
     assert b.frequency.max() < held
+
+
+def test_a_clearance_locked_at_its_held_frequency_reaches_its_bound():
+    """A 7-mass chain (H = 1) whose heavy masses swing on a clearance with a stiff contact
+    spring: from 1.36 gaps on the frequency stays at 0.7317 Hz (the held limit) while the
+    amplitude grows only through the pole unknown of the first clamped mode, about
+    2·10⁻⁶ gaps per unit of arclength. The step cap stopped growing at 1000 ds_max and the
+    run ran out of its 1000 steps at 5.1 gaps; with the cap limited only by the 2 % change
+    of amplitude it reaches 10 gaps in under 300 points."""
+    case = corpus.generate(150, seed=0, contacts=("clearance",))[149]
+    assert (case.kind, case.harmonics) == ("chain", 1)
+    r = corpus.run_case(case)
+    assert r.completed and r.points < 300, r.status
+
+
+def test_where_the_branch_has_no_frequency_it_says_why():
+    """A 3-mass chain (gap 1 cm, H = 31): its last jump below the bound skips 1.296-1.399
+    gaps, so the branch has no frequency at 1.3 gaps (``frequency_at`` is NaN rather than
+    an interpolation across the tongue). The exact comparison counts this miss as
+    explained by the branch itself: the jump's skipped interval holds the amplitude."""
+    from mmshbm.analysis import corpus_exact as ce
+
+    case = ce.chains(14, seed=0)[13]
+    model = case.model()
+    A = 1.3 * model.gap
+    b = mmshbm.backbone(model, harmonics=31, max_amplitude=1.2 * A)
+    assert np.isnan(b.frequency_at(A))
+    skips = [(s.data["amplitude_frontier"], s.data["amplitude_to"]) for s in b.special_points
+             if s.kind == "jump"]
+    assert any(lo < A < hi for lo, hi in skips), skips
+    assert "skipped" in ce._reported(b, A)
+    assert "skipped" not in ce._reported(b, 1.1 * model.gap)

@@ -285,7 +285,7 @@ class _Points:
 #: measure (the amplitude) by this fraction (linearly extrapolated from the last step), at
 #: most _CAP_GROWTH ds_max
 _CAP_AMPLITUDE = 0.02
-_CAP_GROWTH = 1000.0
+_CAP_GROWTH = 1.0e6
 
 
 def _step_cap(measure: str | None, opt: ContinuationOptions, rec_prev: dict, rec_new: dict,
