@@ -161,6 +161,21 @@ class Circle:
     n_unknowns = 2
     step_control = "residual"  # not a capability of a plain object: the driver ignores it
 
+    def residual(self, u):
+        return np.array([u @ u - 1.0])
+
+    def residual_and_jacobian(self, u):
+        return self.residual(u), 2 * u[None, :]
+
+    def monitor(self, u):
+        return {"x": float(u[0]), "y": float(u[1])}
+
+
+class OldCircle:
+    """The circle with the earlier protocol: one ``evaluate`` for R and (R, J)."""
+
+    n_unknowns = 2
+
     def evaluate(self, u, jacobian=True):
         R = np.array([u @ u - 1.0])
         return (R, 2 * u[None, :]) if jacobian else R
@@ -169,12 +184,62 @@ class Circle:
         return {"x": float(u[0]), "y": float(u[1])}
 
 
+class OldCircleProblem(OldCircle, protocol.ContinuationProblemBase):
+    """The earlier protocol on the base: ``evaluate`` overridden, nothing else."""
+
+    measure = None
+
+
+class NewCircleProblem(Circle, protocol.ContinuationProblemBase):
+    """The circle on the base with the two methods."""
+
+    measure = None
+    step_control = "effort"
+
+
 def test_a_plain_problem_gets_the_defaults():
     wrapped = protocol.as_problem(Circle())
     assert isinstance(wrapped, protocol.ContinuationProblemBase)
     assert wrapped.step_control == "effort" and wrapped.fast_newton is None
-    with pytest.raises(TypeError, match="n_unknowns, evaluate"):
+    with pytest.raises(TypeError, match="n_unknowns, residual"):
         protocol.as_problem(object())
+
+
+def test_residual_and_jacobian_agree_with_the_compatibility_evaluate():
+    u = np.array([0.6, -0.3])
+    R, J = np.array([u @ u - 1.0]), 2 * u[None, :]
+    for p in (NewCircleProblem(), OldCircleProblem(), protocol.as_problem(Circle()),
+              protocol.as_problem(OldCircle())):
+        np.testing.assert_array_equal(p.residual(u), R)
+        np.testing.assert_array_equal(p.residual_and_jacobian(u)[1], J)
+        np.testing.assert_array_equal(p.evaluate(u, jacobian=False), R)
+        np.testing.assert_array_equal(p.evaluate(u)[1], J)
+    assert isinstance(OldCircle(), protocol.EvaluateProblem)
+    assert not isinstance(OldCircle(), protocol.ContinuationProblem)
+
+
+def test_a_problem_with_only_the_old_evaluate_runs_the_driver():
+    """The earlier protocol (``evaluate`` alone) on the base and as a plain object follows
+    the same circle, point for point, as the two new methods do."""
+    start, tangent = np.array([0.0, -1.0]), np.array([1.0, 0.0])
+    opt = ContinuationOptions(bounds={"x": (-0.5, 2.0)})
+    runs = [continue_branch(p, start, tangent, opt)
+            for p in (NewCircleProblem(), OldCircleProblem(), Circle(), OldCircle())]
+    for res in runs:
+        assert res.status == "bound:x" and len(res.u) > 5
+        np.testing.assert_allclose(np.hypot(*res.u.T), 1.0, atol=1e-10)
+    np.testing.assert_array_equal(runs[1].u, runs[0].u)  # measure None on both
+    np.testing.assert_array_equal(runs[3].u, runs[2].u)  # the plain objects: every default
+
+
+def test_a_problem_with_neither_protocol_says_so():
+    class Empty(protocol.ContinuationProblemBase):
+        n_unknowns = 2
+
+    for call in (lambda p: p.residual(np.zeros(2)), lambda p: p.residual_and_jacobian(np.zeros(2)),
+                 lambda p: p.evaluate(np.zeros(2))):
+        with pytest.raises(NotImplementedError, match="defines neither"):
+            call(Empty())
 
 
 # --------------------------------------------------------------------------- Status

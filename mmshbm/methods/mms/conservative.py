@@ -365,7 +365,16 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin, BackboneProblemBase):
         self._cached = (omega, D, dD)
         return D, dD
 
-    def evaluate(self, u: np.ndarray, jacobian: bool = True):
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        """The scaled residual R(u), shape (n_unknowns − 1,) (see :meth:`_evaluate`)."""
+        return self._evaluate(u, False)
+
+    def residual_and_jacobian(self, u: np.ndarray):
+        """(R, J): the scaled residual and J = ∂R/∂u, shape (n_unknowns − 1, n_unknowns)
+        (see :meth:`_evaluate`)."""
+        return self._evaluate(u, True)
+
+    def _evaluate(self, u: np.ndarray, jacobian: bool):
         """Scaled residual ((H+1) n_c + n_p,) and, if asked, its Jacobian
         ((H+1) n_c + n_p, (H+1) n_c + n_p + 1). Counted in :attr:`evaluations`."""
         self.evaluations += 1

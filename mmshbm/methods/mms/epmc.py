@@ -152,7 +152,16 @@ class EPMCProblem(DampedHBMBase, BackboneProblemBase):
         return t / np.linalg.norm(t)
 
     # ------------------------------------------------------------------ residual
-    def evaluate(self, u: np.ndarray, jacobian: bool = True):
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        """The scaled residual R(u), shape (n_unknowns − 1,) (see :meth:`_evaluate`)."""
+        return self._evaluate(u, False)
+
+    def residual_and_jacobian(self, u: np.ndarray):
+        """(R, J): the scaled residual and J = ∂R/∂u, shape (n_unknowns − 1, n_unknowns)
+        (see :meth:`_evaluate`)."""
+        return self._evaluate(u, True)
+
+    def _evaluate(self, u: np.ndarray, jacobian: bool):
         """Scaled residual (n_x + 1,) and, if asked, its Jacobian (n_x + 1, n_x + 2)."""
         x, xi, omega = self.unpack(u)
         ch = self._condensed(omega, xi, jacobian, jacobian)

@@ -47,13 +47,19 @@ class FilteredProblem(ContinuationProblemBase):
             cols = np.concatenate([np.arange(k * n_c, (k + 1) * n_c) for k in filtered])
         self.cols = cols
 
-    def evaluate(self, u: np.ndarray, jacobian: bool = True):
-        out = self.problem.evaluate(u, jacobian)
-        R, J = out if jacobian else (out, None)
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        """The wrapped problem's residual with the rows of the filtered columns replaced
+        by those unknowns (n_unknowns − 1,)."""
+        R = self.problem.residual(u).copy()
+        R[self.cols] = u[self.cols]
+        return R
+
+    def residual_and_jacobian(self, u: np.ndarray):
+        """(R, J) of :meth:`residual`: J (n_unknowns − 1, n_unknowns), the filtered rows
+        unit rows."""
+        R, J = self.problem.residual_and_jacobian(u)
         R = R.copy()
         R[self.cols] = u[self.cols]
-        if not jacobian:
-            return R
         J = J.copy()
         J[self.cols, :] = 0.0
         J[self.cols, self.cols] = 1.0

@@ -376,7 +376,16 @@ class PenaltyHBMProblem(BackboneProblemBase):
                           self._kp_ref, self._f_t, self._s_t)
         return self._tr.time_to_cos(self._f_t)
 
-    def evaluate(self, u: np.ndarray, jacobian: bool = True):
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        """The scaled residual R(u), shape (n_unknowns − 1,) (see :meth:`_evaluate`)."""
+        return self._evaluate(u, False)
+
+    def residual_and_jacobian(self, u: np.ndarray):
+        """(R, J): the scaled residual and J = ∂R/∂u, shape (n_unknowns − 1, n_unknowns)
+        (see :meth:`_evaluate`)."""
+        return self._evaluate(u, True)
+
+    def _evaluate(self, u: np.ndarray, jacobian: bool):
         """Scaled residual and, if asked, its Jacobian.
 
         Parameters

@@ -375,7 +375,16 @@ class ShootingProblem(ShootingSignals, BackboneProblemBase):
         return q, v, closed, (Q, V, LAM)
 
     # ------------------------------------------------------------------ residual
-    def evaluate(self, u: np.ndarray, jacobian: bool = True):
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        """The scaled residual R(u), shape (n_unknowns − 1,) (see :meth:`_evaluate`)."""
+        return self._evaluate(u, False)
+
+    def residual_and_jacobian(self, u: np.ndarray):
+        """(R, J): the scaled residual and J = ∂R/∂u, shape (n_unknowns − 1, n_unknowns)
+        (see :meth:`_evaluate`)."""
+        return self._evaluate(u, True)
+
+    def _evaluate(self, u: np.ndarray, jacobian: bool):
         """Scaled residual v_l(T/2)/(ω_ref s), shape (n_l,), and, if asked, its Jacobian
         with respect to the scaled unknowns, shape (n_l, n_l + 1)."""
         x, omega = self.unpack(u)
@@ -416,7 +425,7 @@ class ShootingProblem(ShootingSignals, BackboneProblemBase):
         length = self.gap if self.gap > 0 else amplitude
         du_norm = np.inf
         for _ in range(max_iter):
-            R, J = self.evaluate(u)
+            R, J = self.residual_and_jacobian(u)
             c = (row @ u[:-1] - amplitude) / length
             res = max(np.max(np.abs(R)), abs(c))
             if res <= tol or (res <= np.sqrt(tol) and du_norm <= 1e-9 * np.max(np.abs(u))):
