@@ -103,6 +103,10 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin, BackboneProblemBase):
     method = "mmshbm"
     #: the continuation's step rule for this problem (ContinuationOptions.step_control="auto")
     step_control = "residual"
+    #: the compiled corrector's data (:meth:`_fast_setup`): None until built, False when it does not apply
+    _fast: dict | bool | None = None
+    #: the Floquet solver of :func:`~mmshbm.methods.mms.stability.conservative_multipliers`; None until built
+    _floquet_solver = None
 
     def __init__(self, model: Model, harmonics: int = 5, n_samples: int | None = None,
                  r=None, mode: int = 1, backend: str = "auto", projection: str = "exact", poles: bool = True):
@@ -261,7 +265,7 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin, BackboneProblemBase):
     def _fast_setup(self):
         """Data of the compiled corrector (:mod:`mmshbm.core.corrector_kernels`), or False
         when it does not apply (a back end other than the modal one)."""
-        fast = getattr(self, "_fast", None)
+        fast = self._fast
         if fast is not None:
             return fast
         cond = self.cond

@@ -250,6 +250,8 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
     #: (:func:`mmshbm.core.steps._corner_step`): where stick arcs appear or vanish the
     #: tangent can turn by more than 90° within 1e-5 Hz (107° on the tip damper at H = 7)
     corner_parameter = True
+    #: the Floquet solver of the normal contacts' phases; None until built
+    _normal_floquet = None
 
     def __init__(self, model: Model, force, harmonics: int = 5, n_samples: int | None = None,
                  r: float | None = None, backend: str = "auto", stability: bool | str = "auto",
@@ -470,7 +472,7 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
             return self._floquet.multipliers([[(a, b) for a, b, sg in pc if sg == 0] for pc in pieces], omega)
         from .stability import FloquetSolver
 
-        if getattr(self, "_normal_floquet", None) is None:
+        if self._normal_floquet is None:
             self._normal_floquet = FloquetSolver(self.model)
         normal = self._normal_floquet.phases(Q[self.model.l])
         return self._floquet.multipliers(merge_phases(normal, pieces), omega)
