@@ -62,8 +62,8 @@ def test_no_probing_of_problems_in_the_driver_and_the_methods():
     """Neither the driver (core/) nor any method module (methods/) asks a problem, or a
     problem class itself, whether it has an attribute: capabilities and caches are
     declared (``ContinuationProblemBase``, class attributes, ``__init__``). Probes of
-    other objects (a model's ``friction``, a condensation's ``backend``, a matrix's
-    ``toarray``) stay."""
+    other objects (a model's ``friction``, a modal condensation's ``reduction``, a
+    matrix's ``toarray``) stay."""
     files = sorted((PACKAGE / "core").glob("*.py")) + sorted((PACKAGE / "methods").rglob("*.py"))
     found = [f"{f.relative_to(PACKAGE)}:{n}" for f in files
              for n in _probe_lines(f.read_text(encoding="utf-8"))]

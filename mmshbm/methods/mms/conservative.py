@@ -269,7 +269,7 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin, BackboneProblemBase):
         if fast is not None:
             return fast
         cond = self.cond
-        if getattr(cond, "backend", None) != "modal":
+        if cond.backend != "modal":
             self._fast = False
             return False
         from ...core import corrector_kernels as ck
@@ -401,7 +401,7 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin, BackboneProblemBase):
         table of every tracked mode and harmonic, ``modal_shares``, is added for the whole
         branch at the end (:meth:`branch_records`)."""
         a, omega = self.unpack(u)
-        if getattr(self.cond, "backend", None) == "modal":
+        if self.cond.backend == "modal":
             self.cond.check_range(omega, self.H)  # warns once past the modes kept
         D, dD = self._condensed(omega, True)
         out = np.empty(3)

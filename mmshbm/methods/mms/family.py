@@ -194,7 +194,7 @@ class FamilyMixin:
         a, omega = self.unpack(u)
         freqs, Phi, MPhiT, M_ll = self._modal_basis()
         eta = self.unpack_eta(u)
-        if getattr(self.cond, "backend", None) == "modal":
+        if self.cond.backend == "modal":
             return self._modal_shares_projected(a, omega, eta, MPhiT)
         Ql = self._recover(a, omega, eta)
         shares, _ = kinetic_energy_shares(Phi, MPhiT, Ql, omega, M_ll)
@@ -287,7 +287,7 @@ class FamilyMixin:
         states = np.asarray(states, dtype=float)
         if not len(states):
             return {"modal_shares": np.empty((0,))}
-        if getattr(self.cond, "backend", None) != "modal":
+        if self.cond.backend != "modal":
             return {"modal_shares": np.array([self.modal_shares(u) for u in states])}
         return {"modal_shares": self._modal_shares_all(states)}
 
