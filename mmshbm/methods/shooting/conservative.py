@@ -376,22 +376,16 @@ class ShootingProblem(ShootingSignals, BackboneProblemBase):
 
     # ------------------------------------------------------------------ residual
     def residual(self, u: np.ndarray) -> np.ndarray:
-        """The scaled residual R(u), shape (n_unknowns − 1,) (see :meth:`_evaluate`)."""
-        return self._evaluate(u, False)
+        """Scaled residual v_l(T/2)/(ω_ref s), shape (n_l,)."""
+        x, omega = self.unpack(u)
+        _, v, _, _ = self._integrate(x, omega, self.N // 2)
+        return v / self.rowscale
 
-    def residual_and_jacobian(self, u: np.ndarray):
-        """(R, J): the scaled residual and J = ∂R/∂u, shape (n_unknowns − 1, n_unknowns)
-        (see :meth:`_evaluate`)."""
-        return self._evaluate(u, True)
-
-    def _evaluate(self, u: np.ndarray, jacobian: bool):
-        """Scaled residual v_l(T/2)/(ω_ref s), shape (n_l,), and, if asked, its Jacobian
-        with respect to the scaled unknowns, shape (n_l, n_l + 1)."""
+    def residual_and_jacobian(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(R, J): :meth:`residual` (n_l,) and its Jacobian with respect to the scaled
+        unknowns, shape (n_l, n_l + 1), from the integration's sensitivities."""
         x, omega = self.unpack(u)
         half = self.N // 2
-        if not jacobian:
-            _, v, _, _ = self._integrate(x, omega, half)
-            return v / self.rowscale
         n = self.n_l
         h = self._check_omega(omega)
         dq = np.zeros((n, n + 1))
