@@ -146,6 +146,10 @@ def test_every_registered_problem_satisfies_the_protocol(models):
             assert p.step_control in ("effort", "residual")
             u = p.linear_mode_point(1e-4) if kind == "backbone" else p.linear_response_point(1.0)
             assert u.shape == (p.n_unknowns,)
+            R, J = p.residual_and_jacobian(u)
+            assert R.shape == (p.n_unknowns - 1,) and J.shape == (p.n_unknowns - 1, p.n_unknowns)
+            np.testing.assert_array_equal(p.residual(u), R)
+            np.testing.assert_array_equal(p.evaluate(u, jacobian=False), R)
             np.testing.assert_array_equal(p.linear_point(1e-4 if kind == "backbone" else 1.0), u)
     assert len(seen) == 13
 
