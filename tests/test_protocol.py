@@ -38,39 +38,44 @@ PROTOCOL_NAMES = set().union(*(_member_names(p) for p in (
 PROBLEM_NAMES = {"problem", "aux", "filt", "solver"}
 
 
-def _probes(path: Path) -> list:
-    """getattr/hasattr calls on a problem object, or for a protocol name, in ``path``."""
+def _probe_lines(source: str) -> list:
+    """Lines of the getattr/hasattr calls in ``source`` on a problem object, for a
+    protocol name, or on ``self`` for a fixed name (a capability or a cache that a class
+    should declare)."""
     out = []
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+    for node in ast.walk(ast.parse(source)):
         if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
                 and node.func.id in ("getattr", "hasattr") and len(node.args) >= 2):
             continue
         target, name = node.args[0], node.args[1]
+        fixed = isinstance(name, ast.Constant)
         on_problem = ((isinstance(target, ast.Name) and target.id in PROBLEM_NAMES)
                       or (isinstance(target, ast.Attribute) and target.attr == "problem"))
-        for_protocol = isinstance(name, ast.Constant) and name.value in PROTOCOL_NAMES
-        if on_problem or for_protocol:
-            out.append(f"{path.relative_to(PACKAGE)}:{node.lineno}")
-    return out
+        on_self = isinstance(target, ast.Name) and target.id == "self" and fixed
+        for_protocol = fixed and name.value in PROTOCOL_NAMES
+        if on_problem or on_self or for_protocol:
+            out.append(node.lineno)
+    return sorted(out)
 
 
-def test_no_probing_of_problems_in_the_driver_and_the_runners():
-    files = sorted((PACKAGE / "core").glob("*.py")) + [PACKAGE / "methods" / "backbone.py",
-                                                        PACKAGE / "methods" / "frequency_response.py"]
-    found = [p for f in files if f.exists() for p in _probes(f)]
+def test_no_probing_of_problems_in_the_driver_and_the_methods():
+    """Neither the driver (core/) nor any method module (methods/) asks a problem, or a
+    problem class itself, whether it has an attribute: capabilities and caches are
+    declared (``ContinuationProblemBase``, class attributes, ``__init__``). Probes of
+    other objects (a model's ``friction``, a modal condensation's ``reduction``, a
+    matrix's ``toarray``) stay."""
+    files = sorted((PACKAGE / "core").glob("*.py")) + sorted((PACKAGE / "methods").rglob("*.py"))
+    found = [f"{f.relative_to(PACKAGE)}:{n}" for f in files
+             for n in _probe_lines(f.read_text(encoding="utf-8"))]
     assert found == []
 
 
-def test_no_method_module_probes_for_a_capability():
-    found = []
-    for f in sorted((PACKAGE / "methods").rglob("*.py")):
-        tree = ast.parse(f.read_text(encoding="utf-8"))
-        for node in ast.walk(tree):
-            if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
-                    and node.func.id in ("getattr", "hasattr") and len(node.args) >= 2
-                    and isinstance(node.args[1], ast.Constant) and node.args[1].value in PROTOCOL_NAMES):
-                found.append(f"{f.relative_to(PACKAGE)}:{node.lineno}")
-    assert found == []
+def test_the_probe_rule_sees_a_probe():
+    source = ("def f(problem, self, model, other, names):\n"
+              "    return (hasattr(problem, 'x'), getattr(self, '_cache', None),\n"
+              "            getattr(model, 'friction', ()), getattr(self.cond, 'backend', None),\n"
+              "            hasattr(other, 'fast_newton'), [getattr(self, n) for n in names])\n")
+    assert _probe_lines(source) == [2, 2, 4]
 
 
 def test_the_driver_reads_no_domain_record():
@@ -141,6 +146,10 @@ def test_every_registered_problem_satisfies_the_protocol(models):
             assert p.step_control in ("effort", "residual")
             u = p.linear_mode_point(1e-4) if kind == "backbone" else p.linear_response_point(1.0)
             assert u.shape == (p.n_unknowns,)
+            R, J = p.residual_and_jacobian(u)
+            assert R.shape == (p.n_unknowns - 1,) and J.shape == (p.n_unknowns - 1, p.n_unknowns)
+            np.testing.assert_array_equal(p.residual(u), R)
+            np.testing.assert_array_equal(p.evaluate(u, jacobian=False), R)
             np.testing.assert_array_equal(p.linear_point(1e-4 if kind == "backbone" else 1.0), u)
     assert len(seen) == 13
 
@@ -161,6 +170,21 @@ class Circle:
     n_unknowns = 2
     step_control = "residual"  # not a capability of a plain object: the driver ignores it
 
+    def residual(self, u):
+        return np.array([u @ u - 1.0])
+
+    def residual_and_jacobian(self, u):
+        return self.residual(u), 2 * u[None, :]
+
+    def monitor(self, u):
+        return {"x": float(u[0]), "y": float(u[1])}
+
+
+class OldCircle:
+    """The circle with the earlier protocol: one ``evaluate`` for R and (R, J)."""
+
+    n_unknowns = 2
+
     def evaluate(self, u, jacobian=True):
         R = np.array([u @ u - 1.0])
         return (R, 2 * u[None, :]) if jacobian else R
@@ -169,12 +193,62 @@ class Circle:
         return {"x": float(u[0]), "y": float(u[1])}
 
 
+class OldCircleProblem(OldCircle, protocol.ContinuationProblemBase):
+    """The earlier protocol on the base: ``evaluate`` overridden, nothing else."""
+
+    measure = None
+
+
+class NewCircleProblem(Circle, protocol.ContinuationProblemBase):
+    """The circle on the base with the two methods."""
+
+    measure = None
+    step_control = "effort"
+
+
 def test_a_plain_problem_gets_the_defaults():
     wrapped = protocol.as_problem(Circle())
     assert isinstance(wrapped, protocol.ContinuationProblemBase)
     assert wrapped.step_control == "effort" and wrapped.fast_newton is None
-    with pytest.raises(TypeError, match="n_unknowns, evaluate"):
+    with pytest.raises(TypeError, match="n_unknowns, residual"):
         protocol.as_problem(object())
+
+
+def test_residual_and_jacobian_agree_with_the_compatibility_evaluate():
+    u = np.array([0.6, -0.3])
+    R, J = np.array([u @ u - 1.0]), 2 * u[None, :]
+    for p in (NewCircleProblem(), OldCircleProblem(), protocol.as_problem(Circle()),
+              protocol.as_problem(OldCircle())):
+        np.testing.assert_array_equal(p.residual(u), R)
+        np.testing.assert_array_equal(p.residual_and_jacobian(u)[1], J)
+        np.testing.assert_array_equal(p.evaluate(u, jacobian=False), R)
+        np.testing.assert_array_equal(p.evaluate(u)[1], J)
+    assert isinstance(OldCircle(), protocol.EvaluateProblem)
+    assert not isinstance(OldCircle(), protocol.ContinuationProblem)
+
+
+def test_a_problem_with_only_the_old_evaluate_runs_the_driver():
+    """The earlier protocol (``evaluate`` alone) on the base and as a plain object follows
+    the same circle, point for point, as the two new methods do."""
+    start, tangent = np.array([0.0, -1.0]), np.array([1.0, 0.0])
+    opt = ContinuationOptions(bounds={"x": (-0.5, 2.0)})
+    runs = [continue_branch(p, start, tangent, opt)
+            for p in (NewCircleProblem(), OldCircleProblem(), Circle(), OldCircle())]
+    for res in runs:
+        assert res.status == "bound:x" and len(res.u) > 5
+        np.testing.assert_allclose(np.hypot(*res.u.T), 1.0, atol=1e-10)
+    np.testing.assert_array_equal(runs[1].u, runs[0].u)  # measure None on both
+    np.testing.assert_array_equal(runs[3].u, runs[2].u)  # the plain objects: every default
+
+
+def test_a_problem_with_neither_protocol_says_so():
+    class Empty(protocol.ContinuationProblemBase):
+        n_unknowns = 2
+
+    for call in (lambda p: p.residual(np.zeros(2)), lambda p: p.residual_and_jacobian(np.zeros(2)),
+                 lambda p: p.evaluate(np.zeros(2))):
+        with pytest.raises(NotImplementedError, match="defines neither"):
+            call(Empty())
 
 
 # --------------------------------------------------------------------------- Status

@@ -92,7 +92,7 @@ def solve_at_amplitude(problem, u0: np.ndarray, amplitude: float, *, tol: float 
     du_norm = math.inf
     for it in range(max_iter + 1):
         try:
-            R, J = problem.evaluate(u, jacobian=True)
+            R, J = problem.residual_and_jacobian(u)
             A, g = amplitude_and_gradient(problem, u)
         except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError) as err:
             raise PinnedFailure(f"evaluation failed: {err}") from None
@@ -129,7 +129,7 @@ def solve_at_amplitude(problem, u0: np.ndarray, amplitude: float, *, tol: float 
                 lam *= 0.5
                 continue
             try:
-                R_t = problem.evaluate(trial, jacobian=False)
+                R_t = problem.residual(trial)
                 A_t = (problem.amplitude_value(trial) if problem.amplitude_value is not None
                        else amplitude_and_gradient(problem, trial)[0])
                 n_t = max(float(np.abs(R_t).max()), abs(A_t / amplitude - 1.0))

@@ -66,7 +66,7 @@ class PoleSet:
         self.H = int(harmonics)
         lo, hi = float(omega_range[0]) * 0.97, float(omega_range[1]) * 1.03
         # the modal back end (mmshbm.core.modal) has its modes and leaves a term out itself
-        self.modal = getattr(cond, "backend", None) == "modal"
+        self.modal = cond.backend == "modal"
         if self.modal:
             w, phi = np.asarray(cond.omega_j, dtype=float), np.asarray(cond.phi_j, dtype=float)
         else:

@@ -11,11 +11,13 @@ runners call them directly and never probe a problem for attributes.
 
 ``n_unknowns : int``
     n, the number of scaled unknowns u (the last one is usually the frequency).
-``evaluate(u, jacobian=True)``
-    The scaled residual R(u), shape (n−1,); with ``jacobian`` the pair (R, J), J of
-    shape (n−1, n), a dense ndarray or a scipy.sparse matrix. Numerical failures raise
-    ArithmeticError, ValueError, RuntimeError or LinAlgError (the step then fails and is
-    retried smaller; never the run).
+``residual(u) -> R``
+    The scaled residual R(u), shape (n−1,).
+``residual_and_jacobian(u) -> (R, J)``
+    The same R(u) and its Jacobian J = ∂R/∂u, shape (n−1, n), a dense ndarray or a
+    scipy.sparse matrix. Numerical failures in either raise ArithmeticError, ValueError,
+    RuntimeError or LinAlgError (the step then fails and is retried smaller; never the
+    run).
 ``monitor(u) -> dict``
     The recorded quantities of a converged point (name -> float or array): what bounds
     act on and what the branch stores.
@@ -59,6 +61,12 @@ A problem that only has the required protocol (a test problem, a user's) goes th
 :func:`as_problem`, which wraps it in a :class:`ContinuationProblemBase` with every
 capability at its default; capabilities are offered by subclassing the base.
 
+``evaluate(u, jacobian=True)``, the one method that was both (R alone, or the pair
+(R, J) with ``jacobian``), stays on the base as a thin wrapper of the two. A problem that
+defines only ``evaluate`` (:class:`EvaluateProblem`, the earlier protocol) still works:
+the base's ``residual`` and ``residual_and_jacobian`` then call it, and
+:func:`as_problem` wraps a plain object that has only ``evaluate``.
+
 ``linear_point`` is the name both starts had before they were told apart: it stays as a
 thin alias, of ``linear_mode_point`` on backbone problems and of
 ``linear_response_point`` on forced ones.
@@ -72,8 +80,8 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 __all__ = ["AmplitudeStart", "BackboneProblemBase", "BranchRecords", "ContinuationProblem",
-           "ContinuationProblemBase", "FamilyEvents", "ForcedProblemBase", "FrequencyStart", "PinnedSolves",
-           "StepControl", "as_problem"]
+           "ContinuationProblemBase", "EvaluateProblem", "FamilyEvents", "ForcedProblemBase",
+           "FrequencyStart", "PinnedSolves", "StepControl", "as_problem"]
 
 
 @runtime_checkable
@@ -82,11 +90,28 @@ class ContinuationProblem(Protocol):
 
     n_unknowns: int
 
-    def evaluate(self, u: np.ndarray, jacobian: bool = True):
-        """Residual (n−1,) and, if ``jacobian``, the Jacobian (n−1, n), dense or sparse."""
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        """The scaled residual R(u), shape (n−1,)."""
+
+    def residual_and_jacobian(self, u: np.ndarray) -> tuple[np.ndarray, Any]:
+        """(R, J): R(u) (n−1,) and J = ∂R/∂u (n−1, n), a dense ndarray or scipy.sparse."""
 
     def monitor(self, u: np.ndarray) -> dict:
         """Scalar quantities recorded per point (e.g. frequency, amplitude, energy)."""
+
+
+@runtime_checkable
+class EvaluateProblem(Protocol):
+    """The earlier required protocol: one ``evaluate`` for R and (R, J).
+    :func:`as_problem` still takes a problem that has only this."""
+
+    n_unknowns: int
+
+    def evaluate(self, u: np.ndarray, jacobian: bool = True):
+        """R(u) (n−1,), or with ``jacobian`` the pair (R, J), J (n−1, n)."""
+
+    def monitor(self, u: np.ndarray) -> dict:
+        """Scalar quantities recorded per point."""
 
 
 @runtime_checkable
@@ -159,7 +184,8 @@ _SETTINGS = ("H", "N", "r", "mode", "penalty_stiffness", "steps_per_period")
 
 class ContinuationProblemBase:
     """Defaults of every capability (see the module docstring): a subclass implements
-    ``n_unknowns``, ``evaluate`` and ``monitor`` and overrides what it offers."""
+    ``n_unknowns``, ``residual``, ``residual_and_jacobian`` and ``monitor`` (or, as
+    before, ``evaluate`` in place of the two) and overrides what it offers."""
 
     n_unknowns: int
 
@@ -187,6 +213,31 @@ class ContinuationProblemBase:
     tracked_frequencies: Any = None
     H: int = 0
     N: int = 0
+
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        """The scaled residual R(u), shape (n−1,).
+
+        The default calls ``evaluate(u, jacobian=False)`` of a subclass that overrides
+        only ``evaluate``."""
+        if type(self).evaluate is ContinuationProblemBase.evaluate:
+            raise NotImplementedError(f"{type(self).__name__} defines neither residual nor evaluate")
+        return self.evaluate(u, jacobian=False)
+
+    def residual_and_jacobian(self, u: np.ndarray) -> tuple[np.ndarray, Any]:
+        """(R, J): the scaled residual R(u) (n−1,) and J = ∂R/∂u (n−1, n), a dense
+        ndarray or a scipy.sparse matrix.
+
+        The default calls ``evaluate(u, jacobian=True)`` of a subclass that overrides
+        only ``evaluate``."""
+        if type(self).evaluate is ContinuationProblemBase.evaluate:
+            raise NotImplementedError(f"{type(self).__name__} defines neither residual_and_jacobian "
+                                      f"nor evaluate")
+        return self.evaluate(u, jacobian=True)
+
+    def evaluate(self, u: np.ndarray, jacobian: bool = True):
+        """The earlier protocol, kept for old code: :meth:`residual_and_jacobian`
+        with ``jacobian``, else :meth:`residual`."""
+        return self.residual_and_jacobian(u) if jacobian else self.residual(u)
 
     def initial_tangent(self) -> np.ndarray:
         """Unit tangent at the start of the branch."""
@@ -240,11 +291,24 @@ class _Plain(ContinuationProblemBase):
         self.problem = problem
         self.n_unknowns = problem.n_unknowns
 
-    def evaluate(self, u, jacobian: bool = True):
-        return self.problem.evaluate(u, jacobian=jacobian)
+    def residual(self, u):
+        return self.problem.residual(u)
+
+    def residual_and_jacobian(self, u):
+        return self.problem.residual_and_jacobian(u)
 
     def monitor(self, u) -> dict:
         return self.problem.monitor(u)
+
+
+class _PlainEvaluate(_Plain):
+    """A problem with only the earlier protocol (:class:`EvaluateProblem`)."""
+
+    def residual(self, u):
+        return self.problem.evaluate(u, jacobian=False)
+
+    def residual_and_jacobian(self, u):
+        return self.problem.evaluate(u, jacobian=True)
 
 
 def as_problem(problem) -> ContinuationProblemBase:
@@ -254,11 +318,14 @@ def as_problem(problem) -> ContinuationProblemBase:
     Raises
     ------
     TypeError
-        When ``problem`` lacks ``n_unknowns``, ``evaluate`` or ``monitor``.
+        When ``problem`` lacks ``n_unknowns``, ``monitor`` or both ``residual`` and
+        ``residual_and_jacobian`` (and ``evaluate``).
     """
     if isinstance(problem, ContinuationProblemBase):
         return problem
-    if not isinstance(problem, ContinuationProblem):
-        raise TypeError(f"a continuation problem needs n_unknowns, evaluate(u, jacobian) and monitor(u); "
-                        f"got {type(problem).__name__}")
-    return _Plain(problem)
+    if isinstance(problem, ContinuationProblem):
+        return _Plain(problem)
+    if isinstance(problem, EvaluateProblem):
+        return _PlainEvaluate(problem)
+    raise TypeError(f"a continuation problem needs n_unknowns, residual(u), residual_and_jacobian(u) "
+                    f"(or evaluate(u, jacobian)) and monitor(u); got {type(problem).__name__}")

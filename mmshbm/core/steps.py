@@ -47,7 +47,7 @@ def newton(problem: ContinuationProblem, u: np.ndarray, tangent: np.ndarray, u_p
     du_norm = np.inf
     for it in range(max_iter + 1):
         try:
-            R, J = problem.evaluate(u, jacobian=True)
+            R, J = problem.residual_and_jacobian(u)
         except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError) as err:
             # ArithmeticError includes condense.SingularDynamicStiffness (kΩ on a pole);
             # RuntimeError is what SuperLU raises for an exactly singular matrix
@@ -155,7 +155,7 @@ def _tangent_sign(J, t_prev: np.ndarray) -> tuple[np.ndarray, float]:
 
 def _orientation_safe(problem, u, t) -> float:
     try:
-        _, J = problem.evaluate(u, jacobian=True)
+        _, J = problem.residual_and_jacobian(u)
     except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError):
         return 0.0
     return _orientation(J, t)

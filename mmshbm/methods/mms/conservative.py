@@ -103,6 +103,10 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin, BackboneProblemBase):
     method = "mmshbm"
     #: the continuation's step rule for this problem (ContinuationOptions.step_control="auto")
     step_control = "residual"
+    #: the compiled corrector's data (:meth:`_fast_setup`): None until built, False when it does not apply
+    _fast: dict | bool | None = None
+    #: the Floquet solver of :func:`~mmshbm.methods.mms.stability.conservative_multipliers`; None until built
+    _floquet_solver = None
 
     def __init__(self, model: Model, harmonics: int = 5, n_samples: int | None = None,
                  r=None, mode: int = 1, backend: str = "auto", projection: str = "exact", poles: bool = True):
@@ -261,11 +265,11 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin, BackboneProblemBase):
     def _fast_setup(self):
         """Data of the compiled corrector (:mod:`mmshbm.core.corrector_kernels`), or False
         when it does not apply (a back end other than the modal one)."""
-        fast = getattr(self, "_fast", None)
+        fast = self._fast
         if fast is not None:
             return fast
         cond = self.cond
-        if getattr(cond, "backend", None) != "modal":
+        if cond.backend != "modal":
             self._fast = False
             return False
         from ...core import corrector_kernels as ck
@@ -365,7 +369,16 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin, BackboneProblemBase):
         self._cached = (omega, D, dD)
         return D, dD
 
-    def evaluate(self, u: np.ndarray, jacobian: bool = True):
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        """The scaled residual R(u), shape (n_unknowns − 1,) (see :meth:`_evaluate`)."""
+        return self._evaluate(u, False)
+
+    def residual_and_jacobian(self, u: np.ndarray):
+        """(R, J): the scaled residual and J = ∂R/∂u, shape (n_unknowns − 1, n_unknowns)
+        (see :meth:`_evaluate`)."""
+        return self._evaluate(u, True)
+
+    def _evaluate(self, u: np.ndarray, jacobian: bool):
         """Scaled residual ((H+1) n_c + n_p,) and, if asked, its Jacobian
         ((H+1) n_c + n_p, (H+1) n_c + n_p + 1). Counted in :attr:`evaluations`."""
         self.evaluations += 1
@@ -388,7 +401,7 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin, BackboneProblemBase):
         table of every tracked mode and harmonic, ``modal_shares``, is added for the whole
         branch at the end (:meth:`branch_records`)."""
         a, omega = self.unpack(u)
-        if getattr(self.cond, "backend", None) == "modal":
+        if self.cond.backend == "modal":
             self.cond.check_range(omega, self.H)  # warns once past the modes kept
         D, dD = self._condensed(omega, True)
         out = np.empty(3)

@@ -94,6 +94,10 @@ class EPMCProblem(DampedHBMBase, BackboneProblemBase):
     """
 
     method = "epmc"
+    #: (key, landing or None) of the last :meth:`family_landing`, for the jump's repeated calls
+    _landing_memo: tuple | None = None
+    #: the Floquet solver of the multipliers; None until built
+    _floquet = None
 
     def __init__(self, model: Model, harmonics: int = 5, n_samples: int | None = None, r: float | None = None,
                  mode: int = 1, backend: str = "auto", projection: str = "exact"):
@@ -152,7 +156,16 @@ class EPMCProblem(DampedHBMBase, BackboneProblemBase):
         return t / np.linalg.norm(t)
 
     # ------------------------------------------------------------------ residual
-    def evaluate(self, u: np.ndarray, jacobian: bool = True):
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        """The scaled residual R(u), shape (n_unknowns − 1,) (see :meth:`_evaluate`)."""
+        return self._evaluate(u, False)
+
+    def residual_and_jacobian(self, u: np.ndarray):
+        """(R, J): the scaled residual and J = ∂R/∂u, shape (n_unknowns − 1, n_unknowns)
+        (see :meth:`_evaluate`)."""
+        return self._evaluate(u, True)
+
+    def _evaluate(self, u: np.ndarray, jacobian: bool):
         """Scaled residual (n_x + 1,) and, if asked, its Jacobian (n_x + 1, n_x + 2)."""
         x, xi, omega = self.unpack(u)
         ch = self._condensed(omega, xi, jacobian, jacobian)
@@ -286,7 +299,7 @@ class EPMCProblem(DampedHBMBase, BackboneProblemBase):
 
         if len(excursion) < 2:
             raise ValueError("no excursion to follow")
-        memo = getattr(self, "_landing_memo", None)
+        memo = self._landing_memo
         key = (len(excursion), np.asarray(excursion[-1], dtype=float).tobytes(), float(amplitude_min))
         if memo is not None and memo[0] == key:
             if memo[1] is None:
@@ -330,7 +343,7 @@ class EPMCProblem(DampedHBMBase, BackboneProblemBase):
         sorted by decreasing modulus (:mod:`mmshbm.methods.mms.stability`)."""
         from .stability import FloquetSolver
 
-        if getattr(self, "_floquet", None) is None:
+        if self._floquet is None:
             self._floquet = FloquetSolver(self.model)
         _, xi, omega = self.unpack(u)
         return self._floquet.multipliers(self.coefficients(u)[self.model.l], omega, xi)

@@ -19,6 +19,15 @@ _BASES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 class FamilyMixin:
     """Family bookkeeping of an MMS-HBM problem (needs the attributes of ``MMSHBMProblem``)."""
 
+    #: (problem, amplitudes, states) of the H_ref family (:meth:`reference_branch`); None until built
+    _reference: tuple | None = None
+    #: the starting mode's projections of :meth:`_share_setup`; None until built
+    _share_data: tuple | None = None
+
+    def _fast_setup(self):
+        """Data of the compiled corrector, or False: none by default (the host overrides)."""
+        return False
+
     # ------------------------------------------------------------------ jumps
     def frequency_of(self, u: np.ndarray) -> float:
         """Ω/2π (Hz) of the scaled unknowns ``u`` (no evaluation: the trust region of the
@@ -107,7 +116,7 @@ class FamilyMixin:
         path following up to ``amplitude_max`` (cached; recomputed for a larger one).
         With so few harmonics the branch meets no internal resonance with the higher
         modes that the H-harmonic branch meets. None when H_ref would not be below H."""
-        cached = getattr(self, "_reference", None)
+        cached = self._reference
         if cached is not None and cached[1][-1] >= amplitude_max * (1 - 1e-9):
             return cached
         from ...core.continuation import ContinuationOptions, continue_branch
@@ -185,7 +194,7 @@ class FamilyMixin:
         a, omega = self.unpack(u)
         freqs, Phi, MPhiT, M_ll = self._modal_basis()
         eta = self.unpack_eta(u)
-        if getattr(self.cond, "backend", None) == "modal":
+        if self.cond.backend == "modal":
             return self._modal_shares_projected(a, omega, eta, MPhiT)
         Ql = self._recover(a, omega, eta)
         shares, _ = kinetic_energy_shares(Phi, MPhiT, Ql, omega, M_ll)
@@ -195,7 +204,7 @@ class FamilyMixin:
         """Share of the period-mean kinetic energy in the starting mode at the fundamental
         harmonic (the family test of :mod:`mmshbm.core.family`); with the modal back end
         from one projected row, else from :meth:`modal_shares`."""
-        fast = self._fast_setup() if hasattr(self, "_fast_setup") else False
+        fast = self._fast_setup()
         if not fast:
             return float(self.modal_shares(u)[self.mode - 1, 1])
         a, omega = self.unpack(u)
@@ -206,7 +215,7 @@ class FamilyMixin:
                        dD: np.ndarray) -> float:
         """:meth:`mode_share` of ``u`` from its unpacked (a, Ω, η) and ∂D/∂Ω at Ω (the
         monitor has them)."""
-        fast = self._fast_setup() if hasattr(self, "_fast_setup") else False
+        fast = self._fast_setup()
         if not fast:
             return float(self.modal_shares(u)[self.mode - 1, 1])
         from ...core.corrector_kernels import _start_mode_share
@@ -258,7 +267,7 @@ class FamilyMixin:
     def _share_setup(self):
         """(row, s0, s, sv, pole_j): the starting mode's projections for
         :func:`~mmshbm.core.corrector_kernels._start_mode_share` (modal back end; built once)."""
-        data = getattr(self, "_share_data", None)
+        data = self._share_data
         if data is None:
             cond = self.cond
             row = np.ascontiguousarray(self._modal_basis()[2][self.mode - 1:self.mode])
@@ -278,7 +287,7 @@ class FamilyMixin:
         states = np.asarray(states, dtype=float)
         if not len(states):
             return {"modal_shares": np.empty((0,))}
-        if getattr(self.cond, "backend", None) != "modal":
+        if self.cond.backend != "modal":
             return {"modal_shares": np.array([self.modal_shares(u) for u in states])}
         return {"modal_shares": self._modal_shares_all(states)}
 

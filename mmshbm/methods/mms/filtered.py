@@ -32,7 +32,8 @@ class FilteredProblem(ContinuationProblemBase):
 
     Parameters
     ----------
-    problem : MMSHBMProblem (or any problem with the unknown layout [a_0..a_H (n_c each), Ω])
+    problem : MMSHBMProblem
+        Its ``harmonic_columns(k)`` name the unknowns of harmonic k.
     filtered : sequence of int
         Harmonics k >= 1 to remove.
     """
@@ -40,20 +41,21 @@ class FilteredProblem(ContinuationProblemBase):
     def __init__(self, problem, filtered):
         self.problem = as_problem(problem)
         self.n_unknowns = problem.n_unknowns
-        if hasattr(problem, "harmonic_columns"):
-            cols = np.concatenate([problem.harmonic_columns(k) for k in filtered])
-        else:
-            n_c = problem.n_c
-            cols = np.concatenate([np.arange(k * n_c, (k + 1) * n_c) for k in filtered])
-        self.cols = cols
+        self.cols = np.concatenate([problem.harmonic_columns(k) for k in filtered])
 
-    def evaluate(self, u: np.ndarray, jacobian: bool = True):
-        out = self.problem.evaluate(u, jacobian)
-        R, J = out if jacobian else (out, None)
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        """The wrapped problem's residual with the rows of the filtered columns replaced
+        by those unknowns (n_unknowns − 1,)."""
+        R = self.problem.residual(u).copy()
+        R[self.cols] = u[self.cols]
+        return R
+
+    def residual_and_jacobian(self, u: np.ndarray):
+        """(R, J) of :meth:`residual`: J (n_unknowns − 1, n_unknowns), the filtered rows
+        unit rows."""
+        R, J = self.problem.residual_and_jacobian(u)
         R = R.copy()
         R[self.cols] = u[self.cols]
-        if not jacobian:
-            return R
         J = J.copy()
         J[self.cols, :] = 0.0
         J[self.cols, self.cols] = 1.0
@@ -74,8 +76,6 @@ class FilteredProblem(ContinuationProblemBase):
 def _resonant_harmonic(problem, u: np.ndarray, mode: int, exclude) -> int | None:
     """The harmonic k >= 1 (not in ``exclude``) of the largest energy share of a mode
     other than the starting one at the point ``u`` (``problem.modal_shares``)."""
-    if not hasattr(problem, "modal_shares"):
-        return None
     shares = np.asarray(problem.modal_shares(u), dtype=float).copy()
     shares[mode - 1, :] = -1.0
     shares[:, 0] = -1.0
@@ -90,7 +90,9 @@ def pass_resonance(problem, u_from: np.ndarray, amplitude_from: float, harmonic:
                    family_share: float = 0.5, window: float = 0.3, max_filtered: int = 8,
                    max_releases: int = 8):
     """Land on the H-harmonic family beyond the resonance of ``harmonic`` at
-    ``f_resonance`` (Hz, = ω_j / (2π k)).
+    ``f_resonance`` (Hz, = ω_j / (2π k)). ``problem`` is an MMS-HBM problem
+    (:class:`~mmshbm.methods.mms.conservative.MMSHBMProblem`: its ``mode``,
+    ``modal_shares`` and ``harmonic_columns``).
 
     Continues the branch with ``harmonic`` filtered out from ``u_from`` until the frequency
     exceeds ``f_resonance·(1 + window)`` (or the amplitude reaches ``amplitude_max``); a
@@ -111,7 +113,7 @@ def pass_resonance(problem, u_from: np.ndarray, amplitude_from: float, harmonic:
     PinnedFailure
         If the filtered branch cannot be continued or no release lands on the family.
     """
-    mode = getattr(problem, "mode", 1)
+    mode = problem.mode
     filtered = [harmonic]
     filt = FilteredProblem(problem, filtered)
     u0 = np.array(u_from, dtype=float)

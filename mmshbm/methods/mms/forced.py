@@ -304,7 +304,16 @@ class ForcedResponseProblem(DampedHBMBase, ForcedProblemBase):
         R, Jx, Jp = self.fused_residual(ch.D, x, sigma * Pv, dD, dload)
         return R, Jx, Jp[:, 0], Jp[:, 1]
 
-    def evaluate(self, u: np.ndarray, jacobian: bool = True):
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        """The scaled residual R(u), shape (n_unknowns − 1,) (see :meth:`_evaluate`)."""
+        return self._evaluate(u, False)
+
+    def residual_and_jacobian(self, u: np.ndarray):
+        """(R, J): the scaled residual and J = ∂R/∂u, shape (n_unknowns − 1, n_unknowns)
+        (see :meth:`_evaluate`)."""
+        return self._evaluate(u, True)
+
+    def _evaluate(self, u: np.ndarray, jacobian: bool):
         """Scaled residual (n_x,) and, if asked, its Jacobian (n_x, n_x + 1)."""
         x, omega = self.unpack(u)
         R, Jx, Jw, _ = self.residual_parts(x, omega, 1.0, jacobian)

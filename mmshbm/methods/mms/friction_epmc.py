@@ -187,7 +187,16 @@ class FrictionEPMCProblem(FrictionRows, DampedHBMBase, BackboneProblemBase):
         return F
 
     # ------------------------------------------------------------------ residual
-    def evaluate(self, u: np.ndarray, jacobian: bool = True):
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        """The scaled residual R(u), shape (n_unknowns − 1,) (see :meth:`_evaluate`)."""
+        return self._evaluate(u, False)
+
+    def residual_and_jacobian(self, u: np.ndarray):
+        """(R, J): the scaled residual and J = ∂R/∂u, shape (n_unknowns − 1, n_unknowns)
+        (see :meth:`_evaluate`)."""
+        return self._evaluate(u, True)
+
+    def _evaluate(self, u: np.ndarray, jacobian: bool):
         """Scaled residual (n_unknowns − 1,) and, if asked, its Jacobian."""
         x, a1, b1, xi, omega = self.unpack(u)
         n_x, n_l, n_c = self.n_x, self.n_l, self.n_c

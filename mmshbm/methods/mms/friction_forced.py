@@ -250,6 +250,8 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
     #: (:func:`mmshbm.core.steps._corner_step`): where stick arcs appear or vanish the
     #: tangent can turn by more than 90° within 1e-5 Hz (107° on the tip damper at H = 7)
     corner_parameter = True
+    #: the Floquet solver of the normal contacts' phases; None until built
+    _normal_floquet = None
 
     def __init__(self, model: Model, force, harmonics: int = 5, n_samples: int | None = None,
                  r: float | None = None, backend: str = "auto", stability: bool | str = "auto",
@@ -308,12 +310,12 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         dx[1, n_c:2 * n_c], dx[1, 2 * n_c:3 * n_c] = z.imag, -z.real
         return np.array([q.real, -q.imag]), dx
 
-    def evaluate(self, u: np.ndarray, jacobian: bool = True):
+    def _evaluate(self, u: np.ndarray, jacobian: bool):
         """Scaled residual and, if asked, its Jacobian; with the amplitude DOF tracked, two
         more rows (its harmonic-1 unknowns equal their recovery from x; the Ω column of
         these rows by central differences of the recovery, step 1e-6 Ω)."""
         if self._track is None:
-            return super().evaluate(u, jacobian)
+            return super()._evaluate(u, jacobian)
         x, omega = self.unpack(u)
         ab = np.asarray(u[self.n_x:self.n_x + 2], dtype=float) * self.length
         R_x, Jx, Jw, _ = self.residual_parts(x, omega, 1.0, jacobian)
@@ -396,7 +398,7 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         from ...core.bordered import bordered_solve
 
         def merit(u):
-            R = self.evaluate(u, jacobian=False)
+            R = self.residual(u)
             return max(float(np.abs(R).max()), abs(float(tangent @ (u - u_pred)))), R
 
         r, _ = merit(u)
@@ -404,7 +406,7 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         for it in range(max_iter + 1):
             if not np.isfinite(r):
                 raise RuntimeError("non-finite residual")
-            R, J = self.evaluate(u, jacobian=True)
+            R, J = self.residual_and_jacobian(u)
             if it == max_iter and r > tol:
                 break
             du = -bordered_solve(J, tangent, np.append(R, tangent @ (u - u_pred)))
@@ -470,7 +472,7 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
             return self._floquet.multipliers([[(a, b) for a, b, sg in pc if sg == 0] for pc in pieces], omega)
         from .stability import FloquetSolver
 
-        if getattr(self, "_normal_floquet", None) is None:
+        if self._normal_floquet is None:
             self._normal_floquet = FloquetSolver(self.model)
         normal = self._normal_floquet.phases(Q[self.model.l])
         return self._floquet.multipliers(merge_phases(normal, pieces), omega)

@@ -117,7 +117,7 @@ class PhaseResonanceProblem(ForcedResponseProblem, BackboneProblemBase):
         return t / np.linalg.norm(t)
 
     # ------------------------------------------------------------------ residual
-    def evaluate(self, u, jacobian: bool = True):
+    def _evaluate(self, u, jacobian: bool):
         """Scaled residual (n_x + 1,) and, if asked, the Jacobian (n_x + 1, n_x + 2)."""
         x, sigma, omega = self.unpack(u)
         R, Jx, Jw, Js = self.residual_parts(x, omega, sigma, jacobian)

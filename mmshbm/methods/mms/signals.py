@@ -15,6 +15,10 @@ __all__ = ["SignalsMixin"]
 class SignalsMixin:
     """Signals of an MMS-HBM point (needs the attributes of ``MMSHBMProblem``)."""
 
+    def _fast_setup(self):
+        """Data of the compiled corrector, or False: none by default (the host overrides)."""
+        return False
+
     # ------------------------------------------------------------------ results
     def _recover(self, a: np.ndarray, omega: float, eta: np.ndarray) -> np.ndarray:
         """Coefficients (n_l, 2H+1) of the DOFs with mass of the cosine motion a at Ω."""
@@ -66,7 +70,7 @@ class SignalsMixin:
         shape = (len(omegas), self.H + 1, self.n_c, self.n_c)
         D = np.empty(shape)
         dD = np.empty(shape) if derivative else None
-        fast = self._fast_setup() if hasattr(self, "_fast_setup") else False
+        fast = self._fast_setup()
         if fast:  # the modal kernel straight into the slices (as _condensed, without its cache)
             from ...core._modal_kernels import _modal_dynamic_stiffness
             from ...core.condense import SingularDynamicStiffness

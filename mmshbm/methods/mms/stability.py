@@ -302,7 +302,7 @@ def conservative_multipliers(problem, u: np.ndarray) -> np.ndarray:
     model's damping is ignored (the orbit is that of the undamped structure)."""
     _, omega = problem.unpack(u)
     Q = problem.coefficients(u)
-    solver = getattr(problem, "_floquet_solver", None)
+    solver = problem._floquet_solver
     if solver is None:
         solver = FloquetSolver(problem.model)
         problem._floquet_solver = solver

@@ -166,7 +166,16 @@ class PenaltyForcedProblem(ForcedProblemBase):
         return t
 
     # ------------------------------------------------------------------ residual
-    def evaluate(self, u, jacobian: bool = True):
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        """The scaled residual R(u), shape (n_unknowns − 1,) (see :meth:`_evaluate`)."""
+        return self._evaluate(u, False)
+
+    def residual_and_jacobian(self, u: np.ndarray):
+        """(R, J): the scaled residual and J = ∂R/∂u, shape (n_unknowns − 1, n_unknowns)
+        (see :meth:`_evaluate`)."""
+        return self._evaluate(u, True)
+
+    def _evaluate(self, u, jacobian: bool):
         """Scaled residual (n(2H+1),) and, if asked, its sparse Jacobian (CSR)."""
         Q, omega = self.unpack(u)
         s, ds = self.excitation.scale(omega)

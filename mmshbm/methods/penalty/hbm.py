@@ -376,33 +376,26 @@ class PenaltyHBMProblem(BackboneProblemBase):
                           self._kp_ref, self._f_t, self._s_t)
         return self._tr.time_to_cos(self._f_t)
 
-    def evaluate(self, u: np.ndarray, jacobian: bool = True):
-        """Scaled residual and, if asked, its Jacobian.
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        """Scaled residual R, shape (n_dof·(H+1),): (K − (kΩ)² M) Q_k − Σ_i w_i λ_i,k,
+        divided by the row scales (``u``: scaled unknowns, shape (n_unknowns,))."""
+        return self._residual_terms(u)[0]
 
-        Parameters
-        ----------
-        u : ndarray, shape (n_unknowns,)
-            Scaled unknowns.
-        jacobian : bool
-            Also return the Jacobian.
+    def residual_and_jacobian(self, u: np.ndarray) -> tuple[np.ndarray, sp.csr_matrix]:
+        """(R, J): :meth:`residual` and ∂R/∂u (scaled), a scipy.sparse.csr_matrix of
+        shape (n_dof·(H+1), n_unknowns)."""
+        R, omega, MQ = self._residual_terms(u)
+        return R, self._jacobian(omega, MQ)
 
-        Returns
-        -------
-        R : ndarray, shape (n_dof·(H+1),)
-            (K − (kΩ)² M) Q_k − Σ_i w_i λ_i,k, divided by the row scales.
-        J : scipy.sparse.csr_matrix, shape (n_dof·(H+1), n_unknowns), only if ``jacobian``
-            ∂R/∂u (scaled).
-        """
+    def _residual_terms(self, u: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
+        """(R, Ω, M Q): :meth:`residual` and what its Jacobian reuses."""
         Q, omega = self.unpack(u)
         KQ = (self.K @ Q.T).T
         MQ = (self.M @ Q.T).T
         f_k = self._contact_aft(Q)
         R = KQ - (omega**2 * self._k2)[:, None] * MQ
         R[:, self.contacts.dofs] += f_k.T
-        R = R.ravel() / self.rowscale
-        if not jacobian:
-            return R
-        return R, self._jacobian(omega, MQ)
+        return R.ravel() / self.rowscale, omega, MQ
 
     def _jacobian(self, omega: float, MQ: np.ndarray) -> sp.csr_matrix:
         """Scaled sparse Jacobian from the active sets left in ``_s_t`` by the residual."""

@@ -191,7 +191,7 @@ class JenkinsForcedProblem(PenaltyForcedProblem):
         return float(np.sqrt(w2[0])), phi
 
     # ------------------------------------------------------------------ residual
-    def evaluate(self, u, jacobian: bool = True):
+    def _evaluate(self, u, jacobian: bool):
         """Scaled residual (n(2H+1),) and, if asked, its sparse Jacobian (CSR)."""
         Q, omega = self.unpack(u)
         s, ds = self.excitation.scale(omega)
@@ -245,16 +245,16 @@ class JenkinsForcedProblem(PenaltyForcedProblem):
 
         u = np.array(guess, dtype=float)
         u[-1] = 2 * np.pi * frequency / self.omega_ref
-        r = float(np.abs(self.evaluate(u, False)).max())
+        r = float(np.abs(self.residual(u)).max())
         for _ in range(max_iter):
             if r < tol:
                 return u, True
-            R, J = self.evaluate(u)
+            R, J = self.residual_and_jacobian(u)
             du = np.zeros_like(u)
             du[:-1] = spla.spsolve(J[:, :-1].tocsc(), -R)
             lam = 1.0
             while True:
-                r_new = float(np.abs(self.evaluate(u + lam * du, False)).max())
+                r_new = float(np.abs(self.residual(u + lam * du)).max())
                 if r_new < (1 - 1e-4 * lam) * r:
                     u, r = u + lam * du, r_new
                     break

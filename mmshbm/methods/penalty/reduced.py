@@ -178,7 +178,16 @@ class ReducedPenaltyHBMProblem(BackboneProblemBase):
         self._cached = (omega, D, dD)
         return D, dD
 
-    def evaluate(self, u: np.ndarray, jacobian: bool = True):
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        """The scaled residual R(u), shape (n_unknowns − 1,) (see :meth:`_evaluate`)."""
+        return self._evaluate(u, False)
+
+    def residual_and_jacobian(self, u: np.ndarray):
+        """(R, J): the scaled residual and J = ∂R/∂u, shape (n_unknowns − 1, n_unknowns)
+        (see :meth:`_evaluate`)."""
+        return self._evaluate(u, True)
+
+    def _evaluate(self, u: np.ndarray, jacobian: bool):
         """Scaled residual ((H+1) n_c,) and, if asked, its dense Jacobian ((H+1) n_c, n_unknowns)."""
         a, omega = self.unpack(u)
         D, dD = self._condensed(omega, jacobian)

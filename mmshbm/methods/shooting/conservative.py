@@ -375,14 +375,17 @@ class ShootingProblem(ShootingSignals, BackboneProblemBase):
         return q, v, closed, (Q, V, LAM)
 
     # ------------------------------------------------------------------ residual
-    def evaluate(self, u: np.ndarray, jacobian: bool = True):
-        """Scaled residual v_l(T/2)/(ω_ref s), shape (n_l,), and, if asked, its Jacobian
-        with respect to the scaled unknowns, shape (n_l, n_l + 1)."""
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        """Scaled residual v_l(T/2)/(ω_ref s), shape (n_l,)."""
+        x, omega = self.unpack(u)
+        _, v, _, _ = self._integrate(x, omega, self.N // 2)
+        return v / self.rowscale
+
+    def residual_and_jacobian(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(R, J): :meth:`residual` (n_l,) and its Jacobian with respect to the scaled
+        unknowns, shape (n_l, n_l + 1), from the integration's sensitivities."""
         x, omega = self.unpack(u)
         half = self.N // 2
-        if not jacobian:
-            _, v, _, _ = self._integrate(x, omega, half)
-            return v / self.rowscale
         n = self.n_l
         h = self._check_omega(omega)
         dq = np.zeros((n, n + 1))
@@ -416,7 +419,7 @@ class ShootingProblem(ShootingSignals, BackboneProblemBase):
         length = self.gap if self.gap > 0 else amplitude
         du_norm = np.inf
         for _ in range(max_iter):
-            R, J = self.evaluate(u)
+            R, J = self.residual_and_jacobian(u)
             c = (row @ u[:-1] - amplitude) / length
             res = max(np.max(np.abs(R)), abs(c))
             if res <= tol or (res <= np.sqrt(tol) and du_norm <= 1e-9 * np.max(np.abs(u))):

@@ -176,7 +176,16 @@ class ShootingForcedProblem(ForcedProblemBase):
         J[:, :2 * n] -= np.eye(2 * n)
         return R, J
 
-    def evaluate(self, u, jacobian: bool = True):
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        """The scaled residual R(u), shape (n_unknowns − 1,) (see :meth:`_evaluate`)."""
+        return self._evaluate(u, False)
+
+    def residual_and_jacobian(self, u: np.ndarray):
+        """(R, J): the scaled residual and J = ∂R/∂u, shape (n_unknowns − 1, n_unknowns)
+        (see :meth:`_evaluate`)."""
+        return self._evaluate(u, True)
+
+    def _evaluate(self, u, jacobian: bool):
         """Scaled residual (2 n_l,) and, if asked, its Jacobian (2 n_l, 2 n_l + 1)."""
         z0, omega = self.unpack(u)
         R, J = self._residual(z0, omega, jacobian)

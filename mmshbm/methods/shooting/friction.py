@@ -220,7 +220,16 @@ class FrictionShootingProblem(ForcedProblemBase):
             R[-1] = np.mean(G[1:]) / (sh.k * self.colscale[-2])
         return R
 
-    def evaluate(self, u, jacobian: bool = True):
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        """The scaled residual R(u), shape (n_unknowns − 1,) (see :meth:`_evaluate`)."""
+        return self._evaluate(u, False)
+
+    def residual_and_jacobian(self, u: np.ndarray):
+        """(R, J): the scaled residual and J = ∂R/∂u, shape (n_unknowns − 1, n_unknowns)
+        (see :meth:`_evaluate`)."""
+        return self._evaluate(u, True)
+
+    def _evaluate(self, u, jacobian: bool):
         R = self._residual(u)
         if not jacobian:
             return R
