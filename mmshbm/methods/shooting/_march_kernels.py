@@ -72,12 +72,76 @@ def _node_law(cn, ct, rnn, rnt, rtn, rtt, side, gap, mu, pre, u_old, first, out)
 
 
 @njit(**JIT_OPTIONS)
-def _interface(c, R, side, gap, mu, pre, u_old, lam, g, ut, combo, max_sweeps, tol):
-    """All contacts' laws with q_I = c + R f: block Gauss–Seidel over the contacts, each
-    block (normal, tangential) solved exactly with the others held (one contact: one exact
-    solve). Updates lam, g, ut, combo in place (warm start: their values on entry); returns
-    the sweeps taken, −1 if a block has no consistent state or the sweeps do not settle."""
+def _active_set(c, R, side, gap, mu, pre, u_old, lam, g, ut, combo, max_iter):
+    """All contacts' laws with q_I = c + R f by a primal–dual active set: the linear system
+    of every contact's current combination solved at once, each contact whose inequalities
+    fail switched (open ↔ closed, stick → slip in the force's sign, slip → stick), until
+    none fails. On success updates lam, g, ut, combo and returns the iterations; −1 (nothing
+    changed) when it cycles or exceeds max_iter."""
     nk = len(side)
+    m = 2 * nk
+    cb = combo.copy()
+    E = np.empty((m, m))
+    r = np.empty(m)
+    B = np.empty((m, m))  # q_I = c + B x, x = (λ_0, g_0, λ_1, ...)
+    for i in range(m):
+        for k in range(nk):
+            B[i, 2 * k], B[i, 2 * k + 1] = -side[k] * R[i, 2 * k], R[i, 2 * k + 1]
+    for it in range(max_iter):
+        E[:, :] = 0.0
+        for k in range(nk):
+            n, t = 2 * k, 2 * k + 1
+            nm, tg = cb[k] // 3, cb[k] % 3
+            if nm == 0:
+                E[n, n], r[n] = 1.0, 0.0
+            else:
+                E[n] = -side[k] * B[n]
+                r[n] = side[k] * c[n] - gap[k]
+            if tg == 0:
+                E[t] = B[t]
+                r[t] = u_old[k] - c[t]
+            else:
+                sg = 1.0 if tg == 1 else -1.0
+                E[t, n], E[t, t], r[t] = -sg * mu[k], 1.0, sg * mu[k] * pre[k]
+        x = np.linalg.solve(E, r)
+        q = c + B @ x
+        switched = False
+        for k in range(nk):
+            n, t = 2 * k, 2 * k + 1
+            nm, tg = cb[k] // 3, cb[k] % 3
+            S = mu[k] * (pre[k] + x[n])
+            tol = 1e-12 * max(1.0, abs(S))
+            if nm == 1 and x[n] < -tol:
+                nm, switched = 0, True
+            elif nm == 0 and gap[k] - side[k] * q[n] < -1e-14 * max(gap[k], 1e-300):
+                nm, switched = 1, True
+            if tg == 0 and abs(x[t]) > S + tol:
+                tg, switched = (1 if x[t] > 0 else 2), True
+            elif tg != 0:
+                sg = 1.0 if tg == 1 else -1.0
+                if -sg * (q[t] - u_old[k]) < -1e-14 * max(abs(q[t]), 1e-300):
+                    tg, switched = 0, True
+            cb[k] = 3 * nm + tg
+        if not switched:
+            for k in range(nk):
+                lam[k], g[k], ut[k], combo[k] = max(x[2 * k], 0.0), x[2 * k + 1], q[2 * k + 1], cb[k]
+            return it + 1
+    return -1
+
+
+@njit(**JIT_OPTIONS)
+def _interface(c, R, side, gap, mu, pre, u_old, lam, g, ut, combo, max_sweeps, tol):
+    """All contacts' laws with q_I = c + R f. One contact: its exact solve (the enumeration
+    of :mod:`.friction_impact`). Several: the active set (:func:`_active_set`), and where it
+    cycles block Gauss–Seidel over the contacts, each block (normal, tangential) solved
+    exactly with the others held. Updates lam, g, ut, combo in place (warm start: their
+    values on entry); returns the iterations taken, −1 if a block has no consistent state or
+    the sweeps do not settle."""
+    nk = len(side)
+    if nk > 1:
+        it = _active_set(c, R, side, gap, mu, pre, u_old, lam, g, ut, combo, 100)
+        if it > 0:
+            return it
     out = np.empty(4)
     for sweep in range(max_sweeps):
         change, scale = 0.0, 0.0

@@ -168,6 +168,7 @@ class SteadyOrbit:
         self.q_l, self.lam, self.g, self.u_t = q_l, lam, g, u_t
         self.work = np.asarray(work, dtype=float)
         self._bound = bound
+        self.period = float("nan")
 
     @property
     def max_displacement(self) -> float:
@@ -178,6 +179,16 @@ class SteadyOrbit:
     def contact_force_max(self) -> float:
         """Largest contact force (N) over the contacts and the samples."""
         return float(self.lam.max())
+
+    @property
+    def impulse(self) -> np.ndarray:
+        """Contact impulse per recorded period (N·s, summed over the contacts, trapezoidal):
+        the period's mean contact force times T, shape (multiple,)."""
+        lam = self.lam.sum(axis=1)
+        steps = (len(lam) - 1) // self.multiple
+        h = self.period / steps
+        mid = 0.5 * (lam[1:] + lam[:-1])
+        return np.array([mid[i * steps:(i + 1) * steps].sum() * h for i in range(self.multiple)])
 
     @property
     def slip_fraction(self) -> float:
@@ -234,5 +245,7 @@ def march_to_steady(model, force, frequency: float, steps_per_period: int = 512,
         recs.append(rec)
         work.append(w)
     joined = [np.concatenate([r[i][:-1] for r in recs] + [recs[-1][i][-1:]]) for i in range(4)]
-    return SteadyOrbit(z, multiple, len(change), change, mr.Phi @ joined[0].T, *joined[1:], work,
-                       mr.mu * (mr.pre + joined[1]))
+    orbit = SteadyOrbit(z, multiple, len(change), change, mr.Phi @ joined[0].T, *joined[1:], work,
+                        mr.mu * (mr.pre + joined[1]))
+    orbit.period = 2 * np.pi / mr.omega
+    return orbit
