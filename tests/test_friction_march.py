@@ -81,7 +81,7 @@ def test_the_march_from_rest_settles_on_a_period_doubled_orbit(point):
     1.0912e-3 m, contact force 488 and 490 N)."""
     model, force = point
     orbit = march_to_steady(model, force, FREQ, 8192, max_periods=600, tol=1e-8, max_multiple=2)
-    assert orbit.multiple == 2
+    assert orbit.converged and orbit.multiple == 2
     assert orbit.change[-1, 0] > 0.1
     assert orbit.contact_force_max > 100.0 and np.all(orbit.work > 0)
     assert 0.9e-3 < orbit.max_displacement < 1.2e-3

@@ -149,6 +149,8 @@ class SteadyOrbit:
         The orbit's period in periods of the force (1: T-periodic; 2: period doubled, ...),
         the smallest k <= ``max_multiple`` whose change fell below the tolerance (the
         largest when none did).
+    converged : bool
+        Whether one did (False: ``max_periods`` ran out).
     periods : int
         Periods marched before the record.
     change : ndarray (periods, max_multiple)
@@ -168,7 +170,7 @@ class SteadyOrbit:
         self.q_l, self.lam, self.g, self.u_t = q_l, lam, g, u_t
         self.work = np.asarray(work, dtype=float)
         self._bound = bound
-        self.period = float("nan")
+        self.period, self.converged = float("nan"), False
 
     @property
     def max_displacement(self) -> float:
@@ -226,7 +228,7 @@ def march_to_steady(model, force, frequency: float, steps_per_period: int = 512,
     mr.reset()
     sc_v = 1.0 / mr.omega
     past = [np.concatenate([eta, sc_v * vel])]
-    change, multiple = [], max_multiple
+    change, multiple, converged = [], max_multiple, False
     for p in range(max_periods):
         mr._period(eta, vel, ut, False)
         now = np.concatenate([eta, sc_v * vel])
@@ -236,7 +238,7 @@ def march_to_steady(model, force, frequency: float, steps_per_period: int = 512,
         past = (past + [now])[-max_multiple:]
         hit = [k + 1 for k, c in enumerate(change[-1]) if c <= tol]
         if p + 1 >= min_periods and hit:
-            multiple = hit[0]
+            multiple, converged = hit[0], True
             break
     z = mr.to_physical(eta, vel, ut)
     recs, work = [], []
@@ -247,5 +249,5 @@ def march_to_steady(model, force, frequency: float, steps_per_period: int = 512,
     joined = [np.concatenate([r[i][:-1] for r in recs] + [recs[-1][i][-1:]]) for i in range(4)]
     orbit = SteadyOrbit(z, multiple, len(change), change, mr.Phi @ joined[0].T, *joined[1:], work,
                         mr.mu * (mr.pre + joined[1]))
-    orbit.period = 2 * np.pi / mr.omega
+    orbit.period, orbit.converged = 2 * np.pi / mr.omega, converged
     return orbit
