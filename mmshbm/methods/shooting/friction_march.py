@@ -19,9 +19,12 @@ contacts, each block that exact solve with the others' forces held, to a relativ
 of ``sweep_tol``.
 
 Steady state by marching: no Newton on the period map. The transient of mode j decays as
-exp(−2π ζ_j f_j t); :func:`march_to_steady` marches until the state's change over one
-period falls below a tolerance, reports the change per period (its ratio is the slowest
-multiplier) and the orbit's measures over the last period.
+exp(−2π ζ_j f_j t); :func:`march_to_steady` marches until the modal state repeats after
+k <= ``max_multiple`` periods (period-doubled orbits are steady states too), and reports
+the change per period and the orbit's measures over its last k periods. The tip layer's
+stiffest modes must be resolved (h ω_max of order 1): the trapezoidal rule neither
+resolves nor damps a mode with h ω >> 1, and impacts ring such modes on
+(docs/friction.md).
 """
 
 from __future__ import annotations
