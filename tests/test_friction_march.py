@@ -89,3 +89,75 @@ def test_the_march_from_rest_settles_on_a_period_doubled_orbit(point):
     assert orbit.max_displacement == pytest.approx(1.091160e-3, rel=5e-4)
     assert 400.0 < orbit.contact_force_max < 600.0
     np.testing.assert_allclose(np.sort(orbit.work), [1.489e-4, 2.050e-4], rtol=2e-2)
+
+
+def _all_consistent(c, R, side, gap, mu, pre, u_old):
+    """Every (λ, g) of a few contacts whose combination of {open, closed} × {stick, slip ±}
+    per contact keeps every law: the 6^n_k linear solves, enumerated in plain NumPy."""
+    import itertools
+
+    nk = len(side)
+    B = R * np.repeat(np.stack([-side, np.ones(nk)], axis=1).ravel()[None, :], 2 * nk, axis=0)
+    found = []
+    for combo in itertools.product(range(6), repeat=nk):
+        E, r = np.zeros((2 * nk, 2 * nk)), np.zeros(2 * nk)
+        for k, cb in enumerate(combo):
+            n, t = 2 * k, 2 * k + 1
+            if cb // 3 == 0:
+                E[n, n] = 1.0
+            else:
+                E[n], r[n] = -side[k] * B[n], side[k] * c[n] - gap[k]
+            if cb % 3 == 0:
+                E[t], r[t] = B[t], u_old[k] - c[t]
+            else:
+                sg = 1.0 if cb % 3 == 1 else -1.0
+                E[t, n], E[t, t], r[t] = -sg * mu[k], 1.0, sg * mu[k] * pre[k]
+        x = np.linalg.solve(E, r)
+        q = c + B @ x
+        lam, g, ut = x[0::2], x[1::2], q[1::2]
+        S, tol = mu * (pre + lam), 1e-12 * max(1.0, np.abs(x).max())
+        ok = np.all(lam >= -tol) and np.all(gap - side * q[0::2] >= -1e-14 * gap)
+        ok &= np.all(np.abs(lam * (gap - side * q[0::2])) <= 1e-9 * max(1.0, lam.max()) * gap)
+        ok &= np.all(np.abs(g) <= S + tol)
+        for k, cb in enumerate(combo):
+            if cb % 3:
+                sg = 1.0 if cb % 3 == 1 else -1.0
+                ok &= bool(-sg * (ut[k] - u_old[k]) >= -1e-14 * max(abs(ut[k]), 1e-300))
+        if ok:
+            found.append(x)
+    return found
+
+
+def test_the_face_contacts_active_set_is_the_unique_consistent_state():
+    """Three tip-face contacts (a corner, the centre, the opposite corner; their compliance
+    in the face model at 8192 steps), random predictors that press about half the stops,
+    stick and slip both: the primal–dual active set of the march returns the one combination
+    of the 6³ whose laws all hold (enumerated in plain NumPy; each case has exactly one)."""
+    from mmshbm.fe.damper import solid_tip_friction_model
+    from mmshbm.fe.solid import solid_force
+    from mmshbm.methods.shooting._march_kernels import _active_set
+
+    model = solid_tip_friction_model(mu=MU, preload=PRE)
+    mr = ImpactFrictionMarch(model, solid_force(model, 20.0), FREQ, 8192)
+    pick = [0, 4, 8]
+    idx = np.ravel([[2 * k, 2 * k + 1] for k in pick])
+    R = np.ascontiguousarray(mr.R[np.ix_(idx, idx)])
+    side, gap, mu, pre = (np.ascontiguousarray(a[pick]) for a in (mr.side, mr.gap, mr.mu, mr.pre))
+    rng = np.random.default_rng(3)
+    closed, slid = 0, 0
+    for _ in range(15):
+        c = np.empty(6)
+        c[0::2] = side * gap + rng.normal(0.0, 2e-7, 3)
+        c[1::2] = rng.normal(0.0, 1e-7, 3)
+        u_old = rng.normal(0.0, 1e-7, 3)
+        lam, g, ut = np.zeros(3), np.zeros(3), np.zeros(3)
+        combo = np.zeros(3, dtype=np.int64)
+        assert _active_set(c, R, side, gap, mu, pre, u_old, lam, g, ut, combo, 100) > 0
+        found = _all_consistent(c, R, side, gap, mu, pre, u_old)
+        assert len(found) == 1
+        scale = max(np.abs(found[0]).max(), 1e-300)
+        assert np.abs(lam - found[0][0::2]).max() <= 1e-9 * scale
+        assert np.abs(g - found[0][1::2]).max() <= 1e-9 * scale
+        closed += int(np.sum(lam > 0))
+        slid += int(np.sum(combo % 3 > 0))
+    assert closed > 10 and slid > 10

@@ -137,11 +137,17 @@ def _interface(c, R, side, gap, mu, pre, u_old, lam, g, ut, combo, max_sweeps, t
     exactly with the others held. Updates lam, g, ut, combo in place (warm start: their
     values on entry); returns the iterations taken, −1 if a block has no consistent state or
     the sweeps do not settle."""
-    nk = len(side)
-    if nk > 1:
+    if len(side) > 1:
         it = _active_set(c, R, side, gap, mu, pre, u_old, lam, g, ut, combo, 100)
         if it > 0:
             return it
+    return _gauss_seidel(c, R, side, gap, mu, pre, u_old, lam, g, ut, combo, max_sweeps, tol)
+
+
+@njit(**JIT_OPTIONS)
+def _gauss_seidel(c, R, side, gap, mu, pre, u_old, lam, g, ut, combo, max_sweeps, tol):
+    """Block Gauss–Seidel over the contacts (arguments and return as :func:`_interface`)."""
+    nk = len(side)
     out = np.empty(4)
     for sweep in range(max_sweeps):
         change, scale = 0.0, 0.0

@@ -14,9 +14,13 @@ coordinates' of :class:`~.friction_impact.ImpactFrictionShooting` (the scheme is
 under the change of coordinates: one node, the two march the same orbit to round-off), at
 O(n_l + n_l m) per step instead of a dense solve. Each step solves the contacts' laws
 exactly: one contact as :mod:`.friction_impact` (the first consistent {open, closed} ×
-{stick, slip ±} combination, a 2 × 2 solve each); several by block Gauss–Seidel over the
-contacts, each block that exact solve with the others' forces held, to a relative change
-of ``sweep_tol``.
+{stick, slip ±} combination, a 2 × 2 solve each); several by a primal–dual active set
+(every contact's combination at once, one linear solve per pass, the contacts whose laws
+fail switched; warm-started from the previous step, one pass where nothing changes). Where
+it cycles, block Gauss–Seidel over the contacts (each block that exact solve with the
+others' forces held, to a relative change of ``sweep_tol``), which settles on mildly
+coupled contacts only (on the face's 9 contacts with the stops pressed by 2e-7 m it did
+not, in 20000 sweeps): a step that neither settles raises.
 
 Steady state by marching: no Newton on the period map. The transient of mode j decays as
 exp(−2π ζ_j f_j t); :func:`march_to_steady` marches until the modal state repeats after
