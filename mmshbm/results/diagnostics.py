@@ -36,9 +36,13 @@ study summaries):
     The branch ended short of its bounds (its status is not ``"bound:<name>"``: a step
     budget ``max_steps``, a step size below ``ds_min``, a failed start, ...).
 
-For harmonic balance the last two are truncation effects of the Fourier series (more
-harmonics reduce them); ``branch.time_signals(i, admissible=True)`` gives signals of the
-massless DOFs that satisfy the contact law exactly (:mod:`mmshbm.contact.static`).
+For harmonic balance "penetration" and "negative_force" are truncation effects of the
+Fourier series (more harmonics reduce them); ``branch.time_signals(i, admissible=True)``
+gives signals of the massless DOFs that satisfy the contact law exactly
+(:mod:`mmshbm.contact.static`), and ``branch.truncation_error(A)``
+(:mod:`mmshbm.results.truncation`) estimates, on demand, how far the frequency at an
+amplitude A is from its limit in H — with or without these findings: truncation moves the
+frequency also where the series neither pulls nor passes the stop.
 
 The mode shares come from ``records["mode_share"]`` when the method recorded them,
 otherwise they are computed here from the solver's coefficients of all DOFs
@@ -238,7 +242,7 @@ def _warnings(branch, found: list[Finding]) -> list[str]:
              f"them): the contact DOF passes the stop by up to {pen.value:.3g} gaps (from "
              f"{_where(branch, pen.first)}) and the contact force pulls by up to {-neg.value:.3g} of the "
              f"peak (from point {neg.first}); branch.time_signals(i, admissible=True) gives admissible "
-             "signals")
+             "signals, branch.truncation_error(A) estimates the frequency's error at amplitude A")
     out = []
     for f in found:
         if f.kind == "penetration":

@@ -11,7 +11,8 @@ symmetric orbit of the piecewise-linear system). :func:`truncation_error` estima
 2. the solver is rebuilt at H₁ = 2H and H₂ = 4H (``factors``) from what the branch stores
    (model, method and method options), the start's harmonics padded with zeros, and the
    point solved with the amplitude pinned (:func:`mmshbm.core.pinned.solve_at_amplitude`;
-   the 4H solve starts from the 2H one);
+   the 4H solve starts from the 2H one; where Newton fails from the padded start, H is
+   raised by ~20 % per pinned solve instead);
 3. with d₁ = f(2H) − f(H) and d₂ = f(4H) − f(2H): where both have the same sign and
    |d₂| < |d₁| the series is taken as f = f_∞ + C·H^−p with the *measured* rate
    p = log₂(d₁/d₂) and extrapolated (Richardson): f_∞ = f(4H) + d₂/(2^p − 1), and the
@@ -19,8 +20,9 @@ symmetric orbit of the piecewise-linear system). :func:`truncation_error` estima
    in an algebraic regime (it oscillates or does not contract: typical near an internal
    resonance, or when a larger H resolves another orbit); the estimate is then the larger
    of |d₁| and |f(4H) − f(H)| relative to f(H), times ``safety`` (``asymptotic`` False).
-   With one factor (``factors=(2,)``) the rate is assumed (``rate``, default 1: the
-   slowest rate measured on the test models, so that the estimate errs large).
+   With one factor (``factors=(2,)``), or where the 4H solve fails, the rate is assumed
+   (``rate``, default 1: about the slowest rate measured on the test models, so that the
+   estimate errs large).
 
 Assumptions: the re-solves stay on the same orbit (the start is the branch's own point, and
 Newton from the padded coefficients lands on the nearest solution: a larger H that
@@ -127,19 +129,28 @@ def truncation_error(branch, amplitude: float, *, factors=(2, 4), rate: float = 
     options = {k: v for k, v in dict(branch.metadata.get("method_options", {})).items() if k != "n_samples"}
     model = branch.get_model()
     harmonics, freqs, note = [H], [float(f0)], ""
+    def raised(solver, u, H2):
+        """The pinned point at H2 from the point u of ``solver``: (solver, u)."""
+        coef, omega = solver.unpack(u)
+        padded = np.zeros((H2 + 1, coef.shape[1]))
+        padded[:coef.shape[0]] = coef
+        new = branch._build_solver(model, {**options, "harmonics": H2})
+        u2, _, _, _ = solve_at_amplitude(new, new.pack(padded, omega), a, tol=tol, max_iter=40)
+        return new, u2
+
     for k in factors:
         H2 = k * H
         harmonics.append(H2)
         if not math.isfinite(freqs[-1]):
             freqs.append(math.nan)
             continue
-        coef, omega = solver.unpack(u)
-        padded = np.zeros((H2 + 1, coef.shape[1]))
-        padded[:coef.shape[0]] = coef
-        options["harmonics"] = H2
-        solver = branch._build_solver(model, dict(options))
         try:
-            u, _, _, _ = solve_at_amplitude(solver, solver.pack(padded, omega), a, tol=tol, max_iter=40)
+            try:
+                solver, u = raised(solver, u, H2)
+            except (PinnedFailure, ArithmeticError, ValueError):
+                # the padded start is too far: raise H by ~20 % per solve instead
+                while solver.H < H2:
+                    solver, u = raised(solver, u, min(H2, max(solver.H + 1, math.ceil(1.2 * solver.H))))
             freqs.append(float(solver.monitor(u)["frequency"]))
         except (PinnedFailure, ArithmeticError, ValueError) as err:
             freqs.append(math.nan)
@@ -150,6 +161,9 @@ def truncation_error(branch, amplitude: float, *, factors=(2, 4), rate: float = 
 def _estimate(a: float, harmonics: tuple, f: tuple, rate: float, safety: float,
               note: str) -> TruncationEstimate:
     """The estimate from the frequencies at H and the larger harmonics (module docstring)."""
+    if len(f) == 3 and all(math.isfinite(v) for v in f[:2]) and not math.isfinite(f[2]):
+        two = _estimate(a, harmonics[:2], f[:2], rate, safety, "")
+        return TruncationEstimate(a, harmonics, f, two.error, rate, two.limit, False, f"{note}; {two.note}")
     if not all(math.isfinite(v) for v in f):
         return TruncationEstimate(a, harmonics, f, math.nan, note=note or "a solve failed")
     if len(f) == 2:
