@@ -114,3 +114,17 @@ def test_refuses_branches_without_harmonics():
     with pytest.raises(ValueError, match="factors"):
         b.truncation_error(1.5, factors=(1,))
     assert math.isfinite(float(b.truncation_error(1.5)))
+
+
+def test_a_miss_is_explained_by_the_estimate_beyond_the_tolerance():
+    """corpus_exact's rule: a miss is explained when the branch's estimate at the amplitude
+    is at least the comparison tolerance, or its orbit closes more than once, or it
+    reports something there."""
+    case = ce.chains(1, seed=0)[0]
+    miss = ce.ExactComparison(case, True, 1.0, 1.002, "bound:amplitude", 1, 0.0, [])
+    assert not miss.explained
+    assert ce.ExactComparison(case, True, 1.0, 1.002, "", 1, 0.0, [], estimate=1.5e-3).explained
+    assert not ce.ExactComparison(case, True, 1.0, 1.002, "", 1, 0.0, [], estimate=5e-4).explained
+    assert ce.ExactComparison(case, True, 1.0, 1.002, "", 1, 0.0, [], estimate=5e-4).reasons(tol=4e-4)
+    assert ce.ExactComparison(case, True, 1.0, 1.002, "", 1, 0.0, [], branch_contacts=3).explained
+    assert ce.ExactComparison(case, True, 1.0, 1.002, "", 1, 0.0, [], reported="skipped").explained
