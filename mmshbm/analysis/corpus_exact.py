@@ -7,7 +7,7 @@ measured excursion equals the prescribed amplitude. :func:`compare` computes the
 branch at H harmonics to a little beyond that amplitude and compares its
 ``frequency_at`` with the exact frequency.
 
-A miss (|f_branch / f_exact − 1| > tol) is *explained by the result itself* when the
+A miss (``|f_branch / f_exact − 1| > tol``) is *explained by the result itself* when the
 branch says, at that amplitude, that it may differ from the single-contact orbit:
 
 * its own truncation error estimate (:meth:`mmshbm.Branch.truncation_error`: re-solves

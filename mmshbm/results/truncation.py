@@ -4,7 +4,7 @@ A harmonic balance branch (MMS-HBM, penalty-HBM) truncates the Fourier series at
 harmonics; its frequency at an amplitude converges to a limit f_∞ as H grows, the
 frequency of a genuine periodic orbit (for MMS-HBM with the exact projection: an exact
 symmetric orbit of the piecewise-linear system). :func:`truncation_error` estimates
-|f_H − f_∞| / f_∞ at one amplitude from re-solves of the *same* amplitude at larger H:
+``|f_H − f_∞| / f_∞`` at one amplitude from re-solves of the *same* amplitude at larger H:
 
 1. the branch's point at the amplitude (:func:`~mmshbm.results.family_points.family_point`,
    the point ``frequency_at`` returns) is the start;
@@ -14,12 +14,12 @@ symmetric orbit of the piecewise-linear system). :func:`truncation_error` estima
    the 4H solve starts from the 2H one; where Newton fails from the padded start, H is
    raised by ~20 % per pinned solve instead);
 3. with d₁ = f(2H) − f(H) and d₂ = f(4H) − f(2H): where both have the same sign and
-   |d₂| < |d₁| the series is taken as f = f_∞ + C·H^−p with the *measured* rate
+   ``|d₂| < |d₁|`` the series is taken as f = f_∞ + C·H^−p with the *measured* rate
    p = log₂(d₁/d₂) and extrapolated (Richardson): f_∞ = f(4H) + d₂/(2^p − 1), and the
-   estimate is |f(H) − f_∞| / f_∞ (``asymptotic`` True). Otherwise the series is not (yet)
+   estimate is ``|f(H) − f_∞| / f_∞`` (``asymptotic`` True). Otherwise the series is not (yet)
    in an algebraic regime (it oscillates or does not contract: typical near an internal
    resonance, or when a larger H resolves another orbit); the estimate is then the larger
-   of |d₁| and |f(4H) − f(H)| relative to f(H), times ``safety`` (``asymptotic`` False).
+   of ``|d₁|`` and ``|f(4H) − f(H)|`` relative to f(H), times ``safety`` (``asymptotic`` False).
    With one factor (``factors=(2,)``), or where the 4H solve fails, the rate is assumed
    (``rate``, default 1: about the slowest rate measured on the test models, so that the
    estimate errs large).
@@ -58,7 +58,7 @@ class TruncationEstimate:
         The frequency (Hz) at the amplitude for each entry of ``harmonics`` (NaN where a
         solve failed).
     error : float
-        Estimated relative error |f_H − f_∞| / f_∞ of the branch's frequency (NaN when the
+        Estimated relative error ``|f_H − f_∞| / f_∞`` of the branch's frequency (NaN when the
         re-solves failed).
     rate : float
         The algebraic rate p used (measured, or assumed with one re-solve; NaN when none
