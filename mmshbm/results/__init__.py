@@ -9,7 +9,7 @@ _NAMES = {
     "Branch": "branch", "versions": "branch", "branch_payload": "branch",
     "branch_from_payload": "branch", "rebuild_model": "models",
     "write_archive": "archive", "read_archive": "archive",
-    "FrequencyResponse": "response", "ResultBase": "base",
+    "FrequencyResponse": "response", "ResultBase": "base", "TruncationEstimate": "truncation",
 }
 
 

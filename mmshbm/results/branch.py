@@ -305,6 +305,12 @@ class Branch(ResultBase):
         BranchWarning
             When ``amplitude`` lies outside the amplitude range of the family front (the
             answer is then NaN): the message gives that range in m and in gaps.
+
+        Notes
+        -----
+        The answer is the branch's, at its H: how far the truncated Fourier series leaves
+        it from the limit in H is estimated on demand by :meth:`truncation_error` (two
+        re-solves of that amplitude at larger H).
         """
         a = amplitude_in_m(self, amplitude, unit)
         warn_outside_front(self, a)
@@ -320,6 +326,25 @@ class Branch(ResultBase):
         """
         amps = [amplitude_in_m(self, a, unit) for a in np.atleast_1d(amplitudes)]
         return solve_at(self, amps, tol=tol)
+
+    def truncation_error(self, amplitude: float, *, unit: str = "m", factors=(2, 4), rate: float = 1.0,
+                         tol: float = 1e-10):
+        """Estimated relative error of :meth:`frequency_at` at ``amplitude`` (m, or gaps with
+        ``unit="gap"``) from the truncation of the Fourier series: the same amplitude
+        re-solved at 2H and 4H and extrapolated with the measured algebraic rate
+        (:func:`mmshbm.results.truncation.truncation_error`, which states the method and its
+        assumptions). On demand only: two pinned solves at larger H.
+
+        Returns
+        -------
+        TruncationEstimate
+            ``.error`` (relative), ``.frequency`` at each H, ``.rate``, ``.limit`` (Hz),
+            ``.asymptotic``, ``.note``; ``float(estimate)`` is ``.error``.
+        """
+        from .truncation import truncation_error
+
+        a = amplitude_in_m(self, amplitude, unit)
+        return truncation_error(self, a, factors=factors, rate=rate, tol=tol)
 
     def __repr__(self) -> str:
         if len(self) == 0:

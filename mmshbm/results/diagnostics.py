@@ -36,9 +36,11 @@ study summaries):
     The branch ended short of its bounds (its status is not ``"bound:<name>"``: a step
     budget ``max_steps``, a step size below ``ds_min``, a failed start, ...).
 
-For harmonic balance the last two are truncation effects of the Fourier series (more
-harmonics reduce them); ``branch.time_signals(i, admissible=True)`` gives signals of the
-massless DOFs that satisfy the contact law exactly (:mod:`mmshbm.contact.static`).
+For harmonic balance "penetration" and "negative_force" are truncation effects (more
+harmonics reduce them); ``branch.time_signals(i, admissible=True)`` gives admissible signals
+(:mod:`mmshbm.contact.static`), and ``branch.truncation_error(A)``
+(:mod:`mmshbm.results.truncation`) estimates the frequency's truncation error at an
+amplitude A, on demand: truncation moves it also where neither finding is made.
 
 The mode shares come from ``records["mode_share"]`` when the method recorded them,
 otherwise they are computed here from the solver's coefficients of all DOFs
@@ -238,7 +240,7 @@ def _warnings(branch, found: list[Finding]) -> list[str]:
              f"them): the contact DOF passes the stop by up to {pen.value:.3g} gaps (from "
              f"{_where(branch, pen.first)}) and the contact force pulls by up to {-neg.value:.3g} of the "
              f"peak (from point {neg.first}); branch.time_signals(i, admissible=True) gives admissible "
-             "signals")
+             "signals, branch.truncation_error(A) estimates the frequency's error at amplitude A")
     out = []
     for f in found:
         if f.kind == "penetration":
@@ -417,7 +419,8 @@ def _contact(branch, solver, th: CheckThresholds) -> list[Finding]:
             f"{len(bad)} of {len(branch)} points, from {_where(branch, int(bad[0]))}; deepest "
             f"{pen[worst]:.3g} gaps at point {worst} ({branch.frequency[worst]:.4g} Hz)"
             + ("; more harmonics reduce it, branch.time_signals(i, admissible=True) gives admissible "
-               "signals" if branch.harmonics else ""),
+               "signals, branch.truncation_error(A) estimates the frequency's error at amplitude A"
+               if branch.harmonics else ""),
             int(bad[0]), int(bad[-1]), float(pen[worst])))
     bad = np.flatnonzero(neg > th.negative_force)
     if len(bad):
@@ -427,7 +430,8 @@ def _contact(branch, solver, th: CheckThresholds) -> list[Finding]:
             f"{branch.method} branch: the contact force changes sign (pulls) by more than "
             f"{th.negative_force:g} of the peak force at {len(bad)} of {len(branch)} points, from "
             f"{_where(branch, int(bad[0]))}; worst {neg[worst]:.3g} of the peak at point {worst}"
-            + (" (a truncation effect of the Fourier series)" if branch.harmonics else ""),
+            + (" (a truncation effect of the Fourier series; branch.truncation_error(A) estimates the "
+               "frequency's error at amplitude A)" if branch.harmonics else ""),
             int(bad[0]), int(bad[-1]), float(-neg[worst])))
     return out
 
