@@ -238,7 +238,7 @@ def _extrapolated(us: list, recs: list, clean: list, amplitude: float) -> np.nda
 
 
 def _nearer_landing(problem, u_front, frontier: float, u_land, landing: float, predictor,
-                    amplitude_max: float, step: float, accept):
+                    amplitude_max: float, step: float, accept, rec_land: dict, coexisting=None):
     """A landing on the family nearer the frontier than ``landing``: the filtered passage
     of an internal resonance lands where the resonant harmonic is released, which can be
     well beyond the tongue (the family may reappear between two tongues). Tries
@@ -246,7 +246,11 @@ def _nearer_landing(problem, u_front, frontier: float, u_land, landing: float, p
     landing, from the state interpolated between the frontier point and the landing and
     from the problem's family predictor (from the frontier and back from the landing);
     returns (u, iterations, history, record, tangent, amplitude) of the lowest one on the
-    family, or None."""
+    family, or None. With ``coexisting(u, tangent, landing, rec_land)`` (True when the
+    branch through the nearer point passes the landing's amplitude on the family at
+    another orbit) the lowest point found is checked, and None returned when it lies on
+    such a coexisting branch: a tongue's side that keeps the fundamental's majority up
+    to its fold, which the filtered passage went around."""
     if landing <= frontier * (1.0 + 2.0 * step):
         return None
     grid = []
@@ -273,12 +277,15 @@ def _nearer_landing(problem, u_front, frontier: float, u_land, landing: float, p
             except (PinnedFailure, ArithmeticError, ValueError) as err:
                 log.debug("nearer landing at %.4g: %s", a, err)
                 continue
+            if coexisting is not None and coexisting(u, t, landing, rec_land):
+                log.debug("nearer landing at %.4g lies on a branch beside the landing's", a)
+                return None
             return u, nit, hist, rec, t, a
     return None
 
 
 def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, amplitude_max: float,
-         newton_tol: float, max_newton: int, monitor) -> tuple:
+         newton_tol: float, max_newton: int, monitor, coexisting=None) -> tuple:
     """Land on the family beyond the frontier.
 
     Tries the origins of :meth:`FamilyGuard.origins` and, from each, amplitudes
@@ -287,7 +294,8 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     ``family_frequency_limit``. A landing counts when Newton converges, the point is on
     the family, and its frequency is within 15 % of the predicted one or at or above the
     frontier's (a backbone with rigid stops only stiffens), inside the frequency window
-    (else it found another branch).
+    (else it found another branch). ``coexisting`` checks a landing nearer the frontier
+    than a filtered passage's (:func:`_nearer_landing`).
 
     Returns
     -------
@@ -357,7 +365,7 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
                 u0, target = landing(us[origin], recs[origin], excursion, amplitude_max, frontier)
                 u, nit, hist, rec, t = accept(u0, target, math.nan)
                 nearer = _nearer_landing(problem, us[guard.frontier_index], frontier, u, target, predictor,
-                                         amplitude_max, step, accept)
+                                         amplitude_max, step, accept, rec, coexisting)
                 if nearer is not None:
                     u, nit, hist, rec, t, target = nearer
                 return u, nit, hist, rec, t, target, origin

@@ -98,7 +98,9 @@ class FamilyFollower:
         try:
             u_j, nit_j, hist_j, rec_j, t_j, target, i_from = jump(
                 problem, guard, points, records, step=self.family.jump_step, amplitude_max=self.amplitude_max,
-                newton_tol=opt.newton_tol, max_newton=opt.max_newton, monitor=_pinned_monitor)
+                newton_tol=opt.newton_tol, max_newton=opt.max_newton, monitor=_pinned_monitor,
+                coexisting=lambda u, t, a, rec: _coexisting(self.follow, problem, u, t, a, rec, opt,
+                                                            self.family))
         except PinnedFailure as err:
             raise RelocationFailed(str(err)) from None
         A_from = float(records[i_from]["amplitude"])
@@ -138,6 +140,41 @@ def _outside(rec: dict, bounds) -> bool:
 
 #: the backfill's target residual of the residual step rule (ContinuationOptions' default)
 _BACKFILL_TARGET_RESIDUAL = 1e-3
+
+
+#: relative frequency difference above which two orbits at one amplitude are distinct
+_SAME_ORBIT = 1e-5
+
+
+def _coexisting(follow: Callable, problem, u, t, landing: float, rec_land: dict, opt: ContinuationOptions,
+                family: FamilyOptions) -> bool:
+    """Whether the branch through a landing ``u`` (tangent ``t``, oriented to growing
+    amplitude) found below a jump's landing (amplitude ``landing``, record ``rec_land``)
+    is another orbit: followed up (plain path following, at most 2·``max_excursion``
+    steps) it reaches the landing's amplitude on the family (the fundamental's majority)
+    at a frequency other than the landing's. Two orbits with the fundamental's majority
+    then coexist there; the one the filtered passage reached continues the family, the
+    other is the side of a tongue that folds back above it while the fundamental keeps
+    the majority. False when the branch folds, leaves the family or does not get there."""
+    f_land = float(rec_land.get("frequency", math.nan))
+    if not math.isfinite(f_land):
+        return False
+    up = dataclasses.replace(
+        opt, max_steps=2 * family.max_excursion, follow="path", step_control="auto",
+        target_residual=_BACKFILL_TARGET_RESIDUAL, bounds={"amplitude": (0.0, landing)})
+    try:
+        res = follow(problem, u, t, up, catch_interrupt=False)
+    except (PinnedFailure, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
+        return False
+    if res.status != Status.bound("amplitude") or len(res.u) < 2:
+        return False
+    rec = {k: v[-1] for k, v in res.records.items()}
+    if not float(rec["amplitude"]) >= landing * (1 - 1e-6):
+        return False
+    share = family_value(rec)
+    if share is not None and share < family.family_share:
+        return False
+    return abs(float(rec.get("frequency", math.nan)) / f_land - 1.0) > _SAME_ORBIT
 
 
 def _backfill(follow: Callable, problem, u, t, frontier: float, landing: float, opt: ContinuationOptions,
