@@ -180,6 +180,44 @@ def test_a_clearance_locked_at_its_held_frequency_reaches_its_bound():
     assert r.completed and r.points < 300, r.status
 
 
+def _bilinear_frequency(m: float, k: float, k_c: float, g: float, X: float) -> float:
+    """Exact frequency (Hz) of a mass ``m`` on a spring ``k`` whose massless contact node
+    (spring ``k_c``) meets two stops at ±``g``, free oscillation of amplitude ``X`` > g:
+    a quarter period is the soft motion from 0 to g plus the stiff motion (about the
+    offset k_c g/(k + k_c)) from g to X, each a piece of a sinusoid."""
+    w1, w2 = np.sqrt(k / m), np.sqrt((k + k_c) / m)
+    x_e = k_c * g / (k + k_c)
+    v_g2 = (k * X**2 + k_c * (X - g) ** 2 - k * g**2) / m
+    t_soft = np.arcsin(g / np.sqrt(g**2 + v_g2 / w1**2)) / w1
+    t_stiff = np.arccos((g - x_e) / (X - x_e)) / w2
+    return 1.0 / (4.0 * (t_soft + t_stiff))
+
+
+@pytest.mark.parametrize("seed, index, contacts, tol", [
+    (0, 97, ("clearance",), 5e-4),  # H = 15: measured 0.4-1.5e-4
+    (8, 241, corpus.CONTACTS, 2e-2),  # H = 1: measured 0.03-1.3 %
+])
+def test_a_mass_on_a_very_stiff_clearance_reaches_its_bound(seed, index, contacts, tol):
+    """One mass on a clearance whose contact spring is 10⁴-10⁵ times its own: the
+    frequency climbs from the open to near the held one (up to a hundredfold) while the
+    amplitude grows through the pole unknown of the clamped mode. Scaled as a force that
+    unknown reached 10⁵ (the pole row's scaled residual that much more sensitive to Ω), the
+    residual step control held every step to a 0.2 % change of amplitude and the H = 15
+    run ran out of its 1000 steps at 3.2 gaps; scaled by the motion it gives the mass, both
+    reach 10 gaps in under 300 points, on the exact bilinear frequency within the
+    truncation of H (closed form, both stops at the same gap)."""
+    case = corpus.generate(index + 1, seed=seed, contacts=contacts)[index]
+    p = case.params
+    assert case.contact == "clearance" and len(p["masses"]) == 1 and not p["ground"][0]
+    assert p["gaps"][0] == p["gaps"][1] and p["node_k"][0] > 1e4 * p["springs"][0]
+    model = case.model()
+    b = mmshbm.backbone(model, harmonics=case.harmonics, max_amplitude=10 * model.gap)
+    assert b.status == "bound:amplitude" and len(b) < 300, (b.status, len(b))
+    for a in (2.0, 5.0, 10.0 * (1 - 1e-9)):
+        f = _bilinear_frequency(p["masses"][0], p["springs"][0], p["node_k"][0], p["gaps"][0], a * model.gap)
+        assert abs(b.frequency_at(a * model.gap) / f - 1) < tol, a
+
+
 def test_a_chain_whose_jump_skipped_the_compared_amplitude_now_lands_below_it():
     """A 3-mass chain (gap 1 cm, H = 31) whose last jump below the bound once skipped
     1.296-1.399 gaps (no frequency at 1.3 gaps, reported as skipped). With the pole
