@@ -177,12 +177,18 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin, BackboneProblemBase):
         self.xscale = length * np.maximum(shape, 1e-3 * shape.max())
         fscale = np.abs(self.cond.D0) @ self.xscale
         fscale[self.cdof] = self.contact_stiffness_each * length
-        # η_jk moves the DOFs with mass by −φ_j η: scale it so that this motion is the length
-        # scale (scaled as the force b_j η it also gives, a stiff contact spring would make
-        # the scaled η, and the pole row's sensitivity to Ω, grow with the spring)
+        # η_jk gives the force b_j η and moves the DOFs with mass by −φ_j η: scale it by the
+        # larger of the η that gives the force scale and the η that moves them by the length
+        # scale (by the force alone, a stiff contact spring makes the scaled η, and the
+        # pole row's sensitivity to Ω, grow with the spring; by the motion alone, a mode
+        # that barely touches the contact makes η a free direction that the arclength
+        # spends itself on)
+        bnorm = np.abs(self._pole_b).max(axis=1) if n_p else np.zeros(0)
+        by_force = np.where(bnorm > 0, fscale.max() / np.maximum(bnorm, 1e-300), 1.0)
         phimax = (np.abs(self.pole_set.phi[:, [j for _, j in self.pole_set.pairs]]).max(axis=0)
                   if n_p else np.zeros(0))
-        self.eta_scale = np.where(phimax > 0, length / np.maximum(phimax, 1e-300), 1.0)
+        by_motion = np.where(phimax > 0, length / np.maximum(phimax, 1e-300), 1.0)
+        self.eta_scale = np.maximum(by_force, by_motion)
         self.colscale = np.concatenate([np.tile(self.xscale, self.H + 1), self.eta_scale, [self.omega_ref]])
         self.rowscale = np.concatenate([np.tile(fscale, self.H + 1), self._pole_w2 * self.eta_scale])
         self.n_unknowns = (self.H + 1) * self.n_c + n_p + 1
