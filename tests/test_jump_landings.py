@@ -27,3 +27,24 @@ def test_a_nearer_landing_on_a_coexisting_tongue_side_is_refused(monkeypatch):
     assert taken.status.startswith("jump failed")
     front = taken.family_front()
     assert abs(taken.amplitude[front].max() / model.gap - 7.06) < 0.05
+
+
+def test_the_family_goes_on_above_a_6_to_1_tongue():
+    """A 7-mass chain (one-sided, H = 9) meets the 6:1 resonance with mode 2 at 3.5 gaps:
+    below f2/6 its branch becomes the tongue (locked near f2/6, folding back at 7.59
+    gaps). A first-mode orbit exists above the tongue: the last jump leaves the family
+    below f2/6 and lands above it, and the fundamental holds the majority from there to
+    10 gaps (measured 0.82 at the bound); the family does not end at the tongue's fold."""
+    from mmshbm.analysis import corpus
+
+    case = corpus.generate(79, seed=0, contacts=("one-sided",))[78]
+    assert (case.kind, case.harmonics, len(case.params["masses"])) == ("chain", 9, 7)
+    model = case.model()
+    f2 = model.linear_frequencies(2)[1]
+    b = mmshbm.backbone(model, harmonics=9, max_amplitude=10 * model.gap)
+    assert b.status == "bound:amplitude" and b.records["on_family"][-1] == 1.0
+    last = [s for s in b.special_points if s.kind == "jump"][-1]
+    assert last.data["frequency_from"] < f2 / 6 < last.data["frequency_to"]
+    front = b.family_front()
+    above = front[front >= last.index]
+    assert min(b.records["fundamental_share"][above]) >= 0.5
