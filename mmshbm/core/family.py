@@ -223,8 +223,9 @@ class _Outside(PinnedFailure):
 
 
 class _OffFamily(PinnedFailure):
-    """A pinned solve that converged to a point off the family (by its fundamental share:
-    the same start gives the same point whatever the frequency window)."""
+    """A pinned solve that converged to a point off the family (by its fundamental share).
+    The far search does not repeat it: only its wider trust region could change where
+    Newton goes from the same start, which is rare for a solve that converged."""
 
 
 #: largest ratio between consecutive targets of the far search beyond the near targets
