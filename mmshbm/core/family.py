@@ -222,6 +222,16 @@ class _Outside(PinnedFailure):
     """A predictor outside the jump's trust region (not solved, not counted)."""
 
 
+class _OffFamily(PinnedFailure):
+    """A pinned solve that converged to a point off the family (by its fundamental share).
+    The far search does not repeat it: only its wider trust region could change where
+    Newton goes from the same start, which is rare for a solve that converged."""
+
+
+#: largest ratio between consecutive targets of the far search beyond the near targets
+_FAR_RATIO = 1.1
+
+
 def _extrapolated(us: list, recs: list, clean: list, amplitude: float) -> np.ndarray:
     """u at ``amplitude`` by a polynomial in the amplitude (degree <= 2) through the last
     clean frontier points."""
@@ -238,7 +248,7 @@ def _extrapolated(us: list, recs: list, clean: list, amplitude: float) -> np.nda
 
 
 def _nearer_landing(problem, u_front, frontier: float, u_land, landing: float, predictor,
-                    amplitude_max: float, step: float, accept):
+                    amplitude_max: float, step: float, accept, rec_land: dict, coexisting=None):
     """A landing on the family nearer the frontier than ``landing``: the filtered passage
     of an internal resonance lands where the resonant harmonic is released, which can be
     well beyond the tongue (the family may reappear between two tongues). Tries
@@ -246,7 +256,11 @@ def _nearer_landing(problem, u_front, frontier: float, u_land, landing: float, p
     landing, from the state interpolated between the frontier point and the landing and
     from the problem's family predictor (from the frontier and back from the landing);
     returns (u, iterations, history, record, tangent, amplitude) of the lowest one on the
-    family, or None."""
+    family, or None. With ``coexisting(u, tangent, landing, rec_land)`` (True when the
+    branch through the nearer point passes the landing's amplitude on the family at
+    another orbit) the lowest point found is checked, and None returned when it lies on
+    such a coexisting branch: a tongue's side that keeps the fundamental's majority up
+    to its fold, which the filtered passage went around."""
     if landing <= frontier * (1.0 + 2.0 * step):
         return None
     grid = []
@@ -273,12 +287,15 @@ def _nearer_landing(problem, u_front, frontier: float, u_land, landing: float, p
             except (PinnedFailure, ArithmeticError, ValueError) as err:
                 log.debug("nearer landing at %.4g: %s", a, err)
                 continue
+            if coexisting is not None and coexisting(u, t, landing, rec_land):
+                log.debug("nearer landing at %.4g lies on a branch beside the landing's", a)
+                return None
             return u, nit, hist, rec, t, a
     return None
 
 
 def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, amplitude_max: float,
-         newton_tol: float, max_newton: int, monitor) -> tuple:
+         newton_tol: float, max_newton: int, monitor, coexisting=None) -> tuple:
     """Land on the family beyond the frontier.
 
     Tries the origins of :meth:`FamilyGuard.origins` and, from each, amplitudes
@@ -287,7 +304,8 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     ``family_frequency_limit``. A landing counts when Newton converges, the point is on
     the family, and its frequency is within 15 % of the predicted one or at or above the
     frontier's (a backbone with rigid stops only stiffens), inside the frequency window
-    (else it found another branch).
+    (else it found another branch). ``coexisting`` checks a landing nearer the frontier
+    than a filtered passage's (:func:`_nearer_landing`).
 
     Returns
     -------
@@ -336,7 +354,7 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
         f = rec.get("frequency", math.nan)
         share = family_value(rec)
         if share is not None and share < guard.family_share:
-            raise PinnedFailure(f"landed off the family (fundamental share {share:.3f}) at {target:.4g}")
+            raise _OffFamily(f"landed off the family (fundamental share {share:.3f}) at {target:.4g}")
         # near the predicted frequency, or on the rising side of the frontier: a backbone
         # with rigid stops only stiffens, so the family beyond the frontier lies at or
         # above the frontier's frequency (a predictor taken from a point near grazing
@@ -357,7 +375,7 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
                 u0, target = landing(us[origin], recs[origin], excursion, amplitude_max, frontier)
                 u, nit, hist, rec, t = accept(u0, target, math.nan)
                 nearer = _nearer_landing(problem, us[guard.frontier_index], frontier, u, target, predictor,
-                                         amplitude_max, step, accept)
+                                         amplitude_max, step, accept, rec, coexisting)
                 if nearer is not None:
                     u, nit, hist, rec, t, target = nearer
                 return u, nit, hist, rec, t, target, origin
@@ -367,9 +385,10 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
                 last_error = f"filtered passage: {err}"
                 log.debug("jump from %d by filtering: %s", origin, last_error)
     origins = guard.origins(lambda i: float(recs[i]["amplitude"]))
+    settled = set()  # attempts that landed off the family: the far search does not repeat them
     try:
         return _search(problem, us, recs, guard, origins, targets, amplitude_max, accept, frequency_of,
-                       monitor)
+                       monitor, settled)
     except _Exhausted as err:
         reason = f" after {_MAX_SOLVES} pinned solves: "
         last_error = str(err) if str(err) != "no attempt" else last_error
@@ -381,18 +400,24 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     # just past grazing (a clearance) can leave the window extrapolated from a frontier
     # near grazing; the family is sought again from the frontier's best origin, up to the
     # bound, in the window up to the highest frequency the family can reach (the
-    # problem's limit: rigid stops stiffen the structure at most to all contacts held)
+    # problem's limit: rigid stops stiffen the structure at most to all contacts held).
+    # Its targets beyond the near ones are at most _FAR_RATIO apart: whether Newton
+    # converges from a predictor scaled several-fold is a matter of the target, and
+    # doubling steps can leave a family that returns below the bound with only one or two
+    # tries near it
     far = list(targets)
     for i in range(7, 13):
         target = min(frontier * (1.0 + step * 2.0**i), amplitude_max)
+        while target > far[-1] * _FAR_RATIO * (1 + 1e-12):
+            far.append(far[-1] * _FAR_RATIO)
         if target > far[-1] * (1 + 1e-12):
             far.append(target)
     limit = problem.family_frequency_limit
     window["hi"] = max(_frequency_window(recs, guard, far[-1])[1], limit() if limit is not None else 0.0)
     solves[:] = [0, _MAX_FAR_SOLVES]
     try:
-        return _search(problem, us, recs, guard, origins[:1], far, amplitude_max, accept, frequency_of,
-                       monitor)
+        return _search(problem, us, recs, guard, origins, far, amplitude_max, accept, frequency_of,
+                       monitor, settled)
     except PinnedFailure as err:
         far_error = str(err)
         log.debug("far jump from %.4g: %s", frontier, far_error)
@@ -400,10 +425,12 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
                         f"up to {far[-1]:.4g}: {far_error}")
 
 
-def _search(problem, us, recs, guard, origins, targets, amplitude_max, accept, frequency_of, monitor):
+def _search(problem, us, recs, guard, origins, targets, amplitude_max, accept, frequency_of, monitor,
+            settled: set):
     """Pinned solves from each origin at each target (increasing) from each predictor,
     until one lands (returns the jump's tuple); raises _Exhausted when the budget runs
-    out, else PinnedFailure with the last solve's reason."""
+    out, else PinnedFailure with the last solve's reason. Attempts (origin, target,
+    predictor) in ``settled`` are skipped; those that land off the family are added."""
     last_error = "no attempt"
     for origin in origins:
         A_o = float(recs[origin]["amplitude"])
@@ -411,6 +438,9 @@ def _search(problem, us, recs, guard, origins, targets, amplitude_max, accept, f
             if target <= A_o * (1 + 1e-12):
                 continue
             for name, u0 in _predictors(problem, us, recs, guard, origin, target, amplitude_max):
+                key = (origin, target, name)
+                if key in settled:
+                    continue
                 try:
                     f_pred = problem.frequency_of(u0) if frequency_of is not None else \
                         monitor(problem, u0).get("frequency", math.nan)
@@ -421,6 +451,9 @@ def _search(problem, us, recs, guard, origins, targets, amplitude_max, accept, f
                 except _Outside as err:  # no solve tried: keep the last solve's reason
                     if last_error == "no attempt":
                         last_error = str(err)
+                except _OffFamily as err:
+                    settled.add(key)
+                    last_error = str(err)
                 except (PinnedFailure, ArithmeticError, ValueError) as err:
                     last_error = str(err)
                 log.debug("jump attempt from %d (%.4g) to %.4g by the %s predictor: %s", origin, A_o, target,

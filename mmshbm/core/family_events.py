@@ -98,7 +98,9 @@ class FamilyFollower:
         try:
             u_j, nit_j, hist_j, rec_j, t_j, target, i_from = jump(
                 problem, guard, points, records, step=self.family.jump_step, amplitude_max=self.amplitude_max,
-                newton_tol=opt.newton_tol, max_newton=opt.max_newton, monitor=_pinned_monitor)
+                newton_tol=opt.newton_tol, max_newton=opt.max_newton, monitor=_pinned_monitor,
+                coexisting=lambda u, t, a, rec: _coexisting(self.follow, problem, u, t, a, rec, opt,
+                                                            self.family, self.amplitude_max))
         except PinnedFailure as err:
             raise RelocationFailed(str(err)) from None
         A_from = float(records[i_from]["amplitude"])
@@ -138,6 +140,49 @@ def _outside(rec: dict, bounds) -> bool:
 
 #: the backfill's target residual of the residual step rule (ContinuationOptions' default)
 _BACKFILL_TARGET_RESIDUAL = 1e-3
+
+
+#: relative frequency difference below which a branch crossing an amplitude passes
+#: through a given point there (crossings are interpolated linearly between branch points)
+_SAME_ORBIT = 1e-3
+
+
+def _coexisting(follow: Callable, problem, u, t, landing: float, rec_land: dict, opt: ContinuationOptions,
+                family: FamilyOptions, amplitude_max: float) -> bool:
+    """Whether the branch through a landing ``u`` (tangent ``t``, oriented to growing
+    amplitude) found below a jump's landing (amplitude ``landing``, record ``rec_land``)
+    is another orbit's: followed up (plain path following, at most 2·``max_excursion``
+    steps) it crosses the landing's amplitude with the fundamental's majority, but never
+    through the landing point (the frequency there differs by more than ``_SAME_ORBIT``).
+    Two orbits with the fundamental's majority then coexist at that amplitude; the one
+    the filtered passage reached continues the family, the other is the side of a tongue
+    (it folds back above while the fundamental keeps the majority). False when the
+    branch passes through the landing (an S-bend may cross its amplitude first
+    elsewhere), or never crosses it on the family within those steps."""
+    f_land = float(rec_land.get("frequency", math.nan))
+    if not math.isfinite(f_land):
+        return False
+    up = dataclasses.replace(
+        opt, max_steps=2 * family.max_excursion, follow="path", step_control="auto",
+        target_residual=_BACKFILL_TARGET_RESIDUAL, bounds={"amplitude": (0.0, amplitude_max)})
+    try:
+        res = follow(problem, u, t, up, catch_interrupt=False)
+    except (PinnedFailure, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
+        return False
+    A = np.asarray(res.records.get("amplitude", []), dtype=float)
+    f = np.asarray(res.records.get("frequency", np.full(len(A), np.nan)), dtype=float)
+    share = res.records.get(FAMILY_RECORD)
+    crossed = False
+    for i in range(len(A) - 1):
+        if (A[i] - landing) * (A[i + 1] - landing) > 0 or A[i] == A[i + 1]:
+            continue
+        w = (landing - A[i]) / (A[i + 1] - A[i])
+        f_x = (1 - w) * f[i] + w * f[i + 1]
+        if abs(f_x / f_land - 1.0) <= _SAME_ORBIT:
+            return False
+        if share is None or (1 - w) * share[i] + w * share[i + 1] >= family.family_share:
+            crossed = True
+    return crossed
 
 
 def _backfill(follow: Callable, problem, u, t, frontier: float, landing: float, opt: ContinuationOptions,

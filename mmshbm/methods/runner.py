@@ -315,4 +315,5 @@ def run_metadata(model: Model, method: str, problem, options: dict, copts: Conti
     return {"model": model.description, "method": method, "harmonics": int(problem.H),
             "n_samples": int(problem.N), **fields, "method_options": jsonable(options),
             "continuation": jsonable(dataclasses.asdict(copts)), "elapsed_s": done.elapsed_s,
-            "python": platform.python_version(), "numpy": np.__version__, **done.metadata()}
+            "python": platform.python_version(), "numpy": np.__version__, **done.metadata(),
+            **({"pole_scaling": problem.pole_scaling} if getattr(problem, "pole_scaling", None) else {})}

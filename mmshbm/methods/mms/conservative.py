@@ -181,9 +181,22 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin, BackboneProblemBase):
         self.xscale = length * np.maximum(shape, 1e-3 * shape.max())
         fscale = np.abs(self.cond.D0) @ self.xscale
         fscale[self.cdof] = self.contact_stiffness_each * length
-        # η_jk enters the force as b_j η: scale it so that b_j η is the force scale
+        # η_jk gives the force b_j η and moves the DOFs with mass by −φ_j η: scale it by the
+        # larger of the η that gives the force scale and the η that moves them by the length
+        # scale (by the force alone, a stiff contact spring makes the scaled η, and the
+        # pole row's sensitivity to Ω, grow with the spring; by the motion alone, a mode
+        # that barely touches the contact makes η a free direction that the arclength
+        # spends itself on)
         bnorm = np.abs(self._pole_b).max(axis=1) if n_p else np.zeros(0)
-        self.eta_scale = np.where(bnorm > 0, fscale.max() / np.maximum(bnorm, 1e-300), 1.0)
+        by_force = np.where(bnorm > 0, fscale.max() / np.maximum(bnorm, 1e-300), 1.0)
+        phimax = (np.abs(self.pole_set.phi[:, [j for _, j in self.pole_set.pairs]]).max(axis=0)
+                  if n_p else np.zeros(0))
+        by_motion = np.where(phimax > 0, length / np.maximum(phimax, 1e-300), 1.0)
+        self.eta_scale = np.maximum(by_force, by_motion)
+        #: how the pole unknowns are scaled (recorded with a branch: results saved before it
+        #: scaled them by the force alone, :meth:`states_from_force_scaling`)
+        self.pole_scaling = "force-or-motion"
+        self._eta_scale_force = by_force
         self.colscale = np.concatenate([np.tile(self.xscale, self.H + 1), self.eta_scale, [self.omega_ref]])
         self.rowscale = np.concatenate([np.tile(fscale, self.H + 1), self._pole_w2 * self.eta_scale])
         self.n_unknowns = (self.H + 1) * self.n_c + n_p + 1
@@ -215,6 +228,15 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin, BackboneProblemBase):
         x = u * self.colscale
         n_a = (self.H + 1) * self.n_c
         return x[:n_a].reshape(self.H + 1, self.n_c), float(x[-1])
+
+    def states_from_force_scaling(self, states: np.ndarray) -> np.ndarray:
+        """Scaled unknowns (n_points, n_unknowns) of a branch saved when the pole unknowns
+        were scaled by the force alone (η/s_force) in this problem's scaling."""
+        out = np.array(states, dtype=float, copy=True)
+        if self.n_poles and out.ndim == 2 and out.shape[1] == self.n_unknowns:
+            n_a = (self.H + 1) * self.n_c
+            out[:, n_a:n_a + self.n_poles] *= self._eta_scale_force / self.eta_scale
+        return out
 
     def unpack_eta(self, u: np.ndarray) -> np.ndarray:
         """The pole unknowns η (n_p,) of the scaled unknowns (see :mod:`mmshbm.core.poles`)."""

@@ -1,0 +1,50 @@
+"""Where a jump over an internal resonance lands (mmshbm.core.family, family_events)."""
+
+import mmshbm
+import mmshbm.core.family_events as family_events
+
+
+def test_a_nearer_landing_on_a_coexisting_tongue_side_is_refused(monkeypatch):
+    """The 100-element beam at H = 15: the filtered passage of the 13:1 resonance with
+    mode 3 releases on the family at 5.24 gaps (67.007 Hz); the search for a landing
+    nearer the frontier finds an orbit with the fundamental's majority at 3.09 gaps
+    whose branch passes 5.24 gaps at 66.74 Hz, not through the release point: it is
+    the side of the 12:1 tongue with mode 3, which keeps the majority up to its fold at
+    7.06 gaps, and no jump from that fold finds the family. Refusing that landing keeps
+    the release point; the branch reaches 10 gaps on the family, within the truncation
+    of H of the H = 11 branch (measured 0.19 %; H = 11 to 15 moves the 21-element beam
+    by 0.19 % too)."""
+    model = mmshbm.default_beam().model(100)
+    top = 10 * model.gap
+    b = mmshbm.backbone(model, harmonics=15, max_amplitude=top)
+    assert b.status == "bound:amplitude"
+    assert b.records["on_family"][-1] == 1.0 and b.records["fundamental_share"][-1] > 0.5
+    h11 = mmshbm.backbone(model, harmonics=11, max_amplitude=top)
+    assert abs(b.frequency[-1] / h11.frequency[-1] - 1) < 5e-3
+    # the cause: with every nearer landing taken, the branch follows the tongue's side
+    monkeypatch.setattr(family_events, "_coexisting", lambda *args, **kw: False)
+    taken = mmshbm.backbone(model, harmonics=15, max_amplitude=top)
+    assert taken.status.startswith("jump failed")
+    front = taken.family_front()
+    assert abs(taken.amplitude[front].max() / model.gap - 7.06) < 0.05
+
+
+def test_the_family_goes_on_above_a_6_to_1_tongue():
+    """A 7-mass chain (one-sided, H = 9) meets the 6:1 resonance with mode 2 at 3.5 gaps:
+    below f2/6 its branch becomes the tongue (locked near f2/6, folding back at 7.59
+    gaps). A first-mode orbit exists above the tongue: the last jump leaves the family
+    below f2/6 and lands above it, and the fundamental holds the majority from there to
+    10 gaps (measured 0.82 at the bound); the family does not end at the tongue's fold."""
+    from mmshbm.analysis import corpus
+
+    case = corpus.generate(79, seed=0, contacts=("one-sided",))[78]
+    assert (case.kind, case.harmonics, len(case.params["masses"])) == ("chain", 9, 7)
+    model = case.model()
+    f2 = model.linear_frequencies(2)[1]
+    b = mmshbm.backbone(model, harmonics=9, max_amplitude=10 * model.gap)
+    assert b.status == "bound:amplitude" and b.records["on_family"][-1] == 1.0
+    last = [s for s in b.special_points if s.kind == "jump"][-1]
+    assert last.data["frequency_from"] < f2 / 6 < last.data["frequency_to"]
+    front = b.family_front()
+    above = front[front >= last.index]
+    assert min(b.records["fundamental_share"][above]) >= 0.5
