@@ -202,6 +202,23 @@ def test_resume_rejects_another_configuration(tmp_path):
         mmshbm.backbone(osc.model(), harmonics=3, method="penalty", resume=path)
 
 
+def test_resume_refuses_a_checkpoint_without_the_pole_scaling(tmp_path):
+    """Checkpoints written before the pole unknowns' scaling was recorded hold states in
+    another scaling: resuming one is refused by name, not continued from wrong states."""
+    import json
+
+    osc = OneDofOscillator(1.0, 1.0, 4.0, 1.0)
+    path = tmp_path / "osc.ckpt"
+    mmshbm.backbone(osc.model(), harmonics=3, max_steps=3, checkpoint=path)
+    lines = path.read_text().splitlines(keepends=True)
+    header = json.loads(lines[0])
+    assert header["pole_scaling"] == "force-or-motion"
+    del header["pole_scaling"]
+    path.write_text(json.dumps(header, separators=(",", ":")) + "\n" + "".join(lines[1:]))
+    with pytest.raises(ValueError, match="pole_scaling differ"):
+        mmshbm.backbone(osc.model(), harmonics=3, resume=path)
+
+
 @pytest.mark.parametrize("content, match", [
     (None, "cannot read checkpoint file"),
     (b"", "not an mmshbm checkpoint"),

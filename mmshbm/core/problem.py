@@ -197,6 +197,12 @@ class ContinuationProblemBase:
     #: True for a nonsmooth branch whose corners (a tangent turning past 90° within one
     #: step) are crossed at fixed parameter (``core.steps._advance``)
     corner_parameter: bool = False
+    #: how the unknowns of pole terms are scaled, when the problem has them (recorded with a
+    #: result and a checkpoint: files from before it was recorded scaled them by force)
+    pole_scaling: str | None = None
+    #: states of a result saved before ``pole_scaling`` was recorded, converted to this
+    #: problem's scaling (None: nothing to convert)
+    states_from_force_scaling: Callable[[np.ndarray], np.ndarray] | None = None
     # PinnedSolves
     amplitude_and_gradient: Callable[[np.ndarray], tuple[float, np.ndarray]] | None = None
     amplitude_value: Callable[[np.ndarray], float] | None = None

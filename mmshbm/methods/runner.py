@@ -128,6 +128,7 @@ def checkpoint_header(model: Model, method: str, problem, options: dict, **extra
             "model_description": model.description, "solver": resolved,
             "method_options": jsonable({k: v for k, v in options.items()
                                         if k not in ("harmonics", "n_samples", "r", "mode")}),
+            **({"pole_scaling": problem.pole_scaling} if problem.pole_scaling else {}),
             **jsonable(extra)}
 
 
@@ -316,4 +317,4 @@ def run_metadata(model: Model, method: str, problem, options: dict, copts: Conti
             "n_samples": int(problem.N), **fields, "method_options": jsonable(options),
             "continuation": jsonable(dataclasses.asdict(copts)), "elapsed_s": done.elapsed_s,
             "python": platform.python_version(), "numpy": np.__version__, **done.metadata(),
-            **({"pole_scaling": problem.pole_scaling} if getattr(problem, "pole_scaling", None) else {})}
+            **({"pole_scaling": problem.pole_scaling} if problem.pole_scaling else {})}
