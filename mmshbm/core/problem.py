@@ -81,7 +81,7 @@ import numpy as np
 
 __all__ = ["AmplitudeStart", "BackboneProblemBase", "BranchRecords", "ContinuationProblem",
            "ContinuationProblemBase", "EvaluateProblem", "FamilyEvents", "ForcedProblemBase",
-           "FrequencyStart", "PinnedSolves", "StepControl", "as_problem"]
+           "FrequencyStart", "OneEvaluation", "PinnedSolves", "StepControl", "as_problem"]
 
 
 @runtime_checkable
@@ -180,6 +180,23 @@ class BranchRecords(Protocol):
 
 #: the problem attributes a checkpoint header records (a resumed run must agree on them)
 _SETTINGS = ("H", "N", "r", "mode", "penalty_stiffness", "steps_per_period")
+
+
+
+class OneEvaluation:
+    """Mixin of a problem whose residual and Jacobian come from one routine,
+    ``_evaluate(u, jacobian) -> R | (R, J)``, that shares its intermediate results (the
+    condensed stiffness, the projection) between the two: :meth:`residual` and
+    :meth:`residual_and_jacobian` call it. Put it first among the bases."""
+
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        """The scaled residual R(u), shape (n_unknowns − 1,) (see ``_evaluate``)."""
+        return self._evaluate(u, False)
+
+    def residual_and_jacobian(self, u: np.ndarray):
+        """(R, J): the scaled residual and J = ∂R/∂u, shape (n_unknowns − 1, n_unknowns)
+        (see ``_evaluate``)."""
+        return self._evaluate(u, True)
 
 
 class ContinuationProblemBase:

@@ -185,7 +185,7 @@ class ResultBase:
         if n is not None and self.states.ndim == 2 and len(self) and self.states.shape[1] != n:
             raise ValueError(f"the rebuilt {self.method} solver has {n} unknowns but the {self._NOUN}'s "
                              f"states have {self.states.shape[1]}: the options do not match the run")
-        convert = getattr(solver, "states_from_force_scaling", None)  # solvers of any kind: a plain object too
+        convert = getattr(solver, "states_from_force_scaling", None)  # any solver, a plain object too
         if convert is not None and "pole_scaling" not in self.metadata:  # saved before it was recorded
             converted = convert(self.states)
             try:  # in place: arrays taken from the result before keep their meaning

@@ -52,7 +52,7 @@ from ...core.harmonics import check_harmonics
 from ...core.measures import condensed_energy as _condensed_energy  # noqa: F401  (earlier private names)
 from ...core.measures import mean_energy as _mean_energy  # noqa: F401
 from ...core.measures import refined_max as _refined_max  # noqa: F401
-from ...core.problem import BackboneProblemBase
+from ...core.problem import BackboneProblemBase, OneEvaluation
 from ...model.contact import admissible_intervals
 from ...model.model import Model
 from .family import FamilyMixin
@@ -65,7 +65,7 @@ _PROJECTIONS = ("exact", "sampled")
 _HELD: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-class MMSHBMProblem(SignalsMixin, FamilyMixin, BackboneProblemBase):
+class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBase):
     """MMS-HBM on a :class:`Model`, as a continuation problem.
 
     Parameters
@@ -391,14 +391,6 @@ class MMSHBMProblem(SignalsMixin, FamilyMixin, BackboneProblemBase):
         self._cached = (omega, D, dD)
         return D, dD
 
-    def residual(self, u: np.ndarray) -> np.ndarray:
-        """The scaled residual R(u), shape (n_unknowns − 1,) (see :meth:`_evaluate`)."""
-        return self._evaluate(u, False)
-
-    def residual_and_jacobian(self, u: np.ndarray):
-        """(R, J): the scaled residual and J = ∂R/∂u, shape (n_unknowns − 1, n_unknowns)
-        (see :meth:`_evaluate`)."""
-        return self._evaluate(u, True)
 
     def _evaluate(self, u: np.ndarray, jacobian: bool):
         """Scaled residual ((H+1) n_c + n_p,) and, if asked, its Jacobian

@@ -43,7 +43,7 @@ import numpy as np
 
 from ... import _validate as check
 from ...core.measures import check_dof, harmonic_content, mean_energy, refined_argmax
-from ...core.problem import BackboneProblemBase
+from ...core.problem import BackboneProblemBase, OneEvaluation
 from ...model.model import Model
 from .conservative import _held_frequency
 from .damped import DampedHBMBase, fine_samples, synthesis_matrix
@@ -70,7 +70,7 @@ class _Landed(Exception):
         self.u, self.amplitude = u, amplitude
 
 
-class EPMCProblem(DampedHBMBase, BackboneProblemBase):
+class EPMCProblem(OneEvaluation, DampedHBMBase, BackboneProblemBase):
     """Damped nonlinear mode (EPMC) by MMS-HBM, as a continuation problem.
 
     Parameters
@@ -156,14 +156,6 @@ class EPMCProblem(DampedHBMBase, BackboneProblemBase):
         return t / np.linalg.norm(t)
 
     # ------------------------------------------------------------------ residual
-    def residual(self, u: np.ndarray) -> np.ndarray:
-        """The scaled residual R(u), shape (n_unknowns − 1,) (see :meth:`_evaluate`)."""
-        return self._evaluate(u, False)
-
-    def residual_and_jacobian(self, u: np.ndarray):
-        """(R, J): the scaled residual and J = ∂R/∂u, shape (n_unknowns − 1, n_unknowns)
-        (see :meth:`_evaluate`)."""
-        return self._evaluate(u, True)
 
     def _evaluate(self, u: np.ndarray, jacobian: bool):
         """Scaled residual (n_x + 1,) and, if asked, its Jacobian (n_x + 1, n_x + 2)."""

@@ -37,7 +37,7 @@ import numpy as np
 
 from ... import _validate as check
 from ...core.measures import check_dof, harmonic_content, mean_energy
-from ...core.problem import ForcedProblemBase
+from ...core.problem import ForcedProblemBase, OneEvaluation
 from ...model.model import Model
 from .damped import DampedHBMBase, synthesis_matrix
 
@@ -171,7 +171,7 @@ def base_excitation(model: Model, direction, acceleration: float | None = None,
                       {"kind": "base_displacement", "displacement": d, "direction": r.tolist()})
 
 
-class ForcedResponseProblem(DampedHBMBase, ForcedProblemBase):
+class ForcedResponseProblem(OneEvaluation, DampedHBMBase, ForcedProblemBase):
     """MMS-HBM forced response as a continuation problem in (x, Ω).
 
     Parameters
@@ -304,14 +304,6 @@ class ForcedResponseProblem(DampedHBMBase, ForcedProblemBase):
         R, Jx, Jp = self.fused_residual(ch.D, x, sigma * Pv, dD, dload)
         return R, Jx, Jp[:, 0], Jp[:, 1]
 
-    def residual(self, u: np.ndarray) -> np.ndarray:
-        """The scaled residual R(u), shape (n_unknowns − 1,) (see :meth:`_evaluate`)."""
-        return self._evaluate(u, False)
-
-    def residual_and_jacobian(self, u: np.ndarray):
-        """(R, J): the scaled residual and J = ∂R/∂u, shape (n_unknowns − 1, n_unknowns)
-        (see :meth:`_evaluate`)."""
-        return self._evaluate(u, True)
 
     def _evaluate(self, u: np.ndarray, jacobian: bool):
         """Scaled residual (n_x,) and, if asked, its Jacobian (n_x, n_x + 1)."""

@@ -27,7 +27,7 @@ import numpy as np
 
 from ... import _validate as check
 from ...core.measures import mean_energy
-from ...core.problem import BackboneProblemBase
+from ...core.problem import BackboneProblemBase, OneEvaluation
 from ...model.model import Model
 from .damped import DampedHBMBase
 from .friction_forced import FrictionRows, check_friction_model, check_law
@@ -53,7 +53,7 @@ def stuck_mode(model: Model, mode: int = 1) -> tuple[float, np.ndarray, float]:
     return float(freqs[-1]), shape, (min(onset) if onset else np.inf)
 
 
-class FrictionEPMCProblem(FrictionRows, DampedHBMBase, BackboneProblemBase):
+class FrictionEPMCProblem(OneEvaluation, FrictionRows, DampedHBMBase, BackboneProblemBase):
     """EPMC of a model with friction contacts (constant normal loads, or pressed by a
     unilateral contact's force: ``normal_contact=`` with ``preload`` > 0), as a continuation
     problem.
@@ -187,14 +187,6 @@ class FrictionEPMCProblem(FrictionRows, DampedHBMBase, BackboneProblemBase):
         return F
 
     # ------------------------------------------------------------------ residual
-    def residual(self, u: np.ndarray) -> np.ndarray:
-        """The scaled residual R(u), shape (n_unknowns − 1,) (see :meth:`_evaluate`)."""
-        return self._evaluate(u, False)
-
-    def residual_and_jacobian(self, u: np.ndarray):
-        """(R, J): the scaled residual and J = ∂R/∂u, shape (n_unknowns − 1, n_unknowns)
-        (see :meth:`_evaluate`)."""
-        return self._evaluate(u, True)
 
     def _evaluate(self, u: np.ndarray, jacobian: bool):
         """Scaled residual (n_unknowns − 1,) and, if asked, its Jacobian."""

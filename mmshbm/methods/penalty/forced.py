@@ -33,7 +33,7 @@ from ... import _validate as check
 from ...contact.unilateral import contact_projection
 from ...core.harmonics import check_harmonics
 from ...core.measures import check_dof, harmonic_content, mean_energy, refined_max
-from ...core.problem import ForcedProblemBase
+from ...core.problem import ForcedProblemBase, OneEvaluation
 from ...model.contact import admissible_intervals
 from ...model.model import Model
 from ..mms.damped import fine_samples
@@ -45,7 +45,7 @@ __all__ = ["PenaltyForcedProblem", "DEFAULT_PENALTY_FACTOR"]
 DEFAULT_PENALTY_FACTOR = 1e3
 
 
-class PenaltyForcedProblem(ForcedProblemBase):
+class PenaltyForcedProblem(OneEvaluation, ForcedProblemBase):
     """Penalty harmonic balance on all DOFs, forced, as a continuation problem in (Q, Ω).
 
     Parameters
@@ -166,14 +166,6 @@ class PenaltyForcedProblem(ForcedProblemBase):
         return t
 
     # ------------------------------------------------------------------ residual
-    def residual(self, u: np.ndarray) -> np.ndarray:
-        """The scaled residual R(u), shape (n_unknowns − 1,) (see :meth:`_evaluate`)."""
-        return self._evaluate(u, False)
-
-    def residual_and_jacobian(self, u: np.ndarray):
-        """(R, J): the scaled residual and J = ∂R/∂u, shape (n_unknowns − 1, n_unknowns)
-        (see :meth:`_evaluate`)."""
-        return self._evaluate(u, True)
 
     def _evaluate(self, u, jacobian: bool):
         """Scaled residual (n(2H+1),) and, if asked, its sparse Jacobian (CSR)."""

@@ -38,7 +38,7 @@ from ... import _validate as check
 from ...core.condense import make_condensation
 from ...core.harmonics import check_harmonics
 from ...core.measures import amplitude_peak, check_dof, condensed_energy, harmonic_content, refined_max
-from ...core.problem import BackboneProblemBase
+from ...core.problem import BackboneProblemBase, OneEvaluation
 from ...model.contact import admissible_intervals
 from ...model.model import Model
 from ._reduced_kernels import _penalty_reduced_residual
@@ -49,7 +49,7 @@ __all__ = ["ReducedPenaltyHBMProblem"]
 log = logging.getLogger(__name__)
 
 
-class ReducedPenaltyHBMProblem(BackboneProblemBase):
+class ReducedPenaltyHBMProblem(OneEvaluation, BackboneProblemBase):
     """Penalty HBM condensed onto the massless (contact) DOFs, as a continuation problem.
 
     Parameters
@@ -178,14 +178,6 @@ class ReducedPenaltyHBMProblem(BackboneProblemBase):
         self._cached = (omega, D, dD)
         return D, dD
 
-    def residual(self, u: np.ndarray) -> np.ndarray:
-        """The scaled residual R(u), shape (n_unknowns − 1,) (see :meth:`_evaluate`)."""
-        return self._evaluate(u, False)
-
-    def residual_and_jacobian(self, u: np.ndarray):
-        """(R, J): the scaled residual and J = ∂R/∂u, shape (n_unknowns − 1, n_unknowns)
-        (see :meth:`_evaluate`)."""
-        return self._evaluate(u, True)
 
     def _evaluate(self, u: np.ndarray, jacobian: bool):
         """Scaled residual ((H+1) n_c,) and, if asked, its dense Jacobian ((H+1) n_c, n_unknowns)."""

@@ -26,7 +26,7 @@ import scipy.linalg as la
 
 from ... import _validate as check
 from ...core.measures import check_dof, harmonic_content, mean_energy, refined_max, sample_coefficients
-from ...core.problem import ForcedProblemBase
+from ...core.problem import ForcedProblemBase, OneEvaluation
 from ...model.model import Model
 from ..mms.forced import Excitation, harmonic_force
 from ._forced_kernels import _forced_integrate
@@ -34,7 +34,7 @@ from ._forced_kernels import _forced_integrate
 __all__ = ["ShootingForcedProblem"]
 
 
-class ShootingForcedProblem(ForcedProblemBase):
+class ShootingForcedProblem(OneEvaluation, ForcedProblemBase):
     """Forced shooting (trapezoidal AVF rule) as a continuation problem in (z₀, Ω).
 
     Parameters
@@ -176,14 +176,6 @@ class ShootingForcedProblem(ForcedProblemBase):
         J[:, :2 * n] -= np.eye(2 * n)
         return R, J
 
-    def residual(self, u: np.ndarray) -> np.ndarray:
-        """The scaled residual R(u), shape (n_unknowns − 1,) (see :meth:`_evaluate`)."""
-        return self._evaluate(u, False)
-
-    def residual_and_jacobian(self, u: np.ndarray):
-        """(R, J): the scaled residual and J = ∂R/∂u, shape (n_unknowns − 1, n_unknowns)
-        (see :meth:`_evaluate`)."""
-        return self._evaluate(u, True)
 
     def _evaluate(self, u, jacobian: bool):
         """Scaled residual (2 n_l,) and, if asked, its Jacobian (2 n_l, 2 n_l + 1)."""

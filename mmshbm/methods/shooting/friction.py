@@ -27,7 +27,7 @@ import numpy as np
 import scipy.linalg as la
 
 from ... import _validate as check
-from ...core.problem import ForcedProblemBase
+from ...core.problem import ForcedProblemBase, OneEvaluation
 from ..exact.friction import FrictionSystem, periodic_state
 
 __all__ = ["FrictionShooting", "friction_shooting_orbit", "ShootingOrbit"]
@@ -147,7 +147,7 @@ def friction_shooting_orbit(model, force, frequency: float, steps_per_period: in
     return ShootingOrbit(sh, z, converged, res, it)
 
 
-class FrictionShootingProblem(ForcedProblemBase):
+class FrictionShootingProblem(OneEvaluation, ForcedProblemBase):
     """Shooting with friction as a continuation problem in (z, Ω) for
     :func:`mmshbm.frequency_response` (``method="shooting"``): unknowns the state
     z = (q_l, q_l', u) at t = 0 and Ω, scaled; residual z(T) − z; Jacobian by forward
@@ -220,14 +220,6 @@ class FrictionShootingProblem(ForcedProblemBase):
             R[-1] = np.mean(G[1:]) / (sh.k * self.colscale[-2])
         return R
 
-    def residual(self, u: np.ndarray) -> np.ndarray:
-        """The scaled residual R(u), shape (n_unknowns − 1,) (see :meth:`_evaluate`)."""
-        return self._evaluate(u, False)
-
-    def residual_and_jacobian(self, u: np.ndarray):
-        """(R, J): the scaled residual and J = ∂R/∂u, shape (n_unknowns − 1, n_unknowns)
-        (see :meth:`_evaluate`)."""
-        return self._evaluate(u, True)
 
     def _evaluate(self, u, jacobian: bool):
         R = self._residual(u)
