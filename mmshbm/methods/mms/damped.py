@@ -283,6 +283,22 @@ class DampedHBMBase(ContinuationProblemBase):
         Q[self.model.l] = Ql
         return Q
 
+    def angular_frequency(self, u: np.ndarray) -> float:
+        """Ω (rad/s) of the scaled unknowns ``u`` (each problem knows where it keeps Ω)."""
+        raise NotImplementedError(f"{type(self).__name__} does not say where its frequency is")
+
+    def time_signals(self, u: np.ndarray, dofs=None, n_samples: int = 256):
+        """(t (n_samples,) s, q (n_dofs, n_samples)) over one period (all DOFs when None)."""
+        omega = self.angular_frequency(u)
+        Q = self.coefficients(u)
+        if dofs is not None:
+            dofs = np.atleast_1d(np.asarray(dofs))
+            if dofs.dtype.kind not in "iu" or np.any((dofs < 0) | (dofs >= self.model.n_dof)):
+                raise ValueError(f"dofs must be integer indices in [0, {self.model.n_dof - 1}], got {dofs}")
+            Q = Q[dofs]
+        tau, q = self.signals(Q, n_samples)
+        return tau / omega, q
+
     def signals(self, Q: np.ndarray, n_samples: int) -> tuple[np.ndarray, np.ndarray]:
         """(τ (n,), q (n_rows, n)) of NLvib-ordered coefficient rows ``Q`` over one period."""
         n_samples = check.integer("n_samples", n_samples, minimum=1)

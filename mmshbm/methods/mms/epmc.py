@@ -181,17 +181,9 @@ class EPMCProblem(OneEvaluation, DampedHBMBase, BackboneProblemBase):
         x, xi, omega = self.unpack(u)
         return self.full_coefficients(x, self._condensed(omega, xi, recover=True), None)
 
-    def time_signals(self, u: np.ndarray, dofs=None, n_samples: int = 256):
-        """(t (n_samples,) s, q (n_dofs, n_samples)) over one period (all DOFs when None)."""
-        _, _, omega = self.unpack(u)
-        Q = self.coefficients(u)
-        if dofs is not None:
-            dofs = np.atleast_1d(np.asarray(dofs))
-            if dofs.dtype.kind not in "iu" or np.any((dofs < 0) | (dofs >= self.model.n_dof)):
-                raise ValueError(f"dofs must be integer indices in [0, {self.model.n_dof - 1}], got {dofs}")
-            Q = Q[dofs]
-        tau, q = self.signals(Q, n_samples)
-        return tau / omega, q
+    def angular_frequency(self, u: np.ndarray) -> float:
+        """Ω (rad/s) of the scaled unknowns ``u``."""
+        return self.unpack(u)[2]
 
     def contact_force(self, u: np.ndarray, n_samples: int = 256):
         """(t (n_samples,) s, λ (n_samples,) N) of the first contact (all contacts: rows of

@@ -345,17 +345,9 @@ class ForcedResponseProblem(OneEvaluation, DampedHBMBase, ForcedProblemBase):
         s, _ = self.excitation.scale(omega)
         return self.needed_force(x, ch.D, sigma * s * ch.P[:, 0])
 
-    def time_signals(self, u: np.ndarray, dofs=None, n_samples: int = 256):
-        """(t (n_samples,) s, q (n_dofs, n_samples)) over one period (all DOFs when None)."""
-        _, omega, _ = self._state(u)
-        Q = self.coefficients(u)
-        if dofs is not None:
-            dofs = np.atleast_1d(np.asarray(dofs))
-            if dofs.dtype.kind not in "iu" or np.any((dofs < 0) | (dofs >= self.model.n_dof)):
-                raise ValueError(f"dofs must be integer indices in [0, {self.model.n_dof - 1}], got {dofs}")
-            Q = Q[dofs]
-        tau, q = self.signals(Q, n_samples)
-        return tau / omega, q
+    def angular_frequency(self, u: np.ndarray) -> float:
+        """Ω (rad/s) of the scaled unknowns ``u``."""
+        return self._state(u)[1]
 
     def contact_force(self, u: np.ndarray, n_samples: int = 256):
         """(t (n_samples,) s, λ (n_contacts, n_samples) N): the force of each stop (>= 0 in
