@@ -240,3 +240,26 @@ def test_a_chain_whose_jump_skipped_the_compared_amplitude_now_lands_below_it():
     r = ce.compare(case)
     assert r.clean and r.explained and r.truncation
     assert r.error_2h < 0.2 * r.error
+
+
+def test_exact_chains_with_contact_springs_drawn_like_the_others():
+    """``contact_decades`` redraws only the contact node's spring, inside its range, the same
+    for the same seed; the rest of each chain is the corpus's."""
+    from mmshbm.analysis import corpus_exact as ce
+
+    base = ce.chains(12, seed=4)
+    soft = ce.chains(12, seed=4, contact_decades=(1.0, 2.0))
+    again = ce.chains(12, seed=4, contact_decades=(1.0, 2.0))
+    assert [c.params["node_k"] for c in soft] == [c.params["node_k"] for c in again]
+    for a, b in zip(base, soft):
+        assert 10.0 <= b.params["node_k"][0] <= 100.0
+        assert a.params["masses"] == b.params["masses"] and a.params["springs"] == b.params["springs"]
+
+
+def test_cli_corpus_exact(tmp_path, capsys):
+    """Two chains whose branches agree with the exact orbit to 1e-3: exit 0, a row each."""
+    assert main(["bench", "--corpus-exact", "2", "--seed", "3", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "on the first mode's orbit" in out
+    rows = (tmp_path / "corpus_exact.csv").read_text().splitlines()
+    assert len(rows) == 3 and rows[2].split(",")[8] == "1"

@@ -198,7 +198,7 @@ def goal_table(run: AsvRun) -> str:
         if math.isfinite(warm) or math.isfinite(first) or math.isfinite(cold):
             rows.append((f"`mmshbm backbone` whole process, warm / first run after `pip install .` / "
                          f"nothing compiled ({what})",
-                         f"{_fmt(warm, '.2f', ' s')} / {_fmt(first, '.2f', ' s')} / {_fmt(cold, '.2f', ' s')}",
+                         " / ".join(_fmt(v, ".2f", " s") for v in (warm, first, cold)),
                          "≤ 1 s / ≤ 3 s / –"))
     for name in run.names("bench_studies."):
         params_of = [p for n, p in run.values if n == name]
