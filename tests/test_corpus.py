@@ -251,7 +251,7 @@ def test_exact_chains_with_contact_springs_drawn_like_the_others():
     soft = ce.chains(12, seed=4, contact_decades=(1.0, 2.0))
     again = ce.chains(12, seed=4, contact_decades=(1.0, 2.0))
     assert [c.params["node_k"] for c in soft] == [c.params["node_k"] for c in again]
-    for a, b in zip(base, soft):
+    for a, b in zip(base, soft, strict=True):
         assert 10.0 <= b.params["node_k"][0] <= 100.0
         assert a.params["masses"] == b.params["masses"] and a.params["springs"] == b.params["springs"]
 
