@@ -56,3 +56,27 @@ def test_no_coexistence_where_the_branch_never_leaves_its_family():
     case = corpus.generate(138, seed=0)[137]
     p, _ = _run(case.model(), harmonics=case.harmonics, max_amplitude=10 * case.model().gap, follow="path")
     assert coexisting_intervals(p) == []
+
+
+def test_the_segment_from_the_front_into_a_tongue_holds_coexisting_orbits():
+    """A chain whose branch leaves its family front at 1.265 gaps (the fundamental loses
+    the kinetic energy's majority), rises on the tongue side to a fold at 1.54 gaps, and
+    jumps from 1.265 gaps onto an orbit 9 % higher in frequency. Its first point off the
+    front is at 1.301 gaps, so at 1.3 gaps only the path's segment from the front point
+    holds the tongue side's orbit. The exact single-contact orbit at 1.3 gaps
+    (mmshbm.exact) is that orbit: the branch must say that another orbit coexists there
+    with its backbone, at the exact orbit's frequency."""
+    from mmshbm.analysis import corpus_exact as ce
+
+    model = ce.chains(288, seed=23)[287].model()
+    A = 1.3 * model.gap
+    orbit = mmshbm.exact.periodic_orbit(model, A)
+    assert orbit.converged and orbit.n_contacts == 1
+    b, _ = _run(model, harmonics=31, max_amplitude=1.56 * model.gap)
+    assert abs(b.frequency_at(A) / orbit.frequency - 1) > 0.05  # the backbone is the other orbit
+    holding = [c for c in coexisting_intervals(b) if c.lo <= A <= c.hi]
+    assert len(holding) == 1
+    f_lo, f_hi = holding[0].frequency_other
+    # the tongue side's orbits between the front point and the first point off it: the
+    # exact orbit's frequency lies between theirs
+    assert f_lo * (1 - 1e-3) <= orbit.frequency <= f_hi * (1 + 1e-3)

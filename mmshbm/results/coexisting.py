@@ -82,13 +82,25 @@ def coexisting_intervals(branch) -> list[Coexistence]:
             covered.append([lo_s, hi_s])
     raw = []  # (lo, hi, other point indices)
     # each excursion (a run of consecutive points off the front) is a continuous piece of
-    # the path: it has an orbit at every amplitude between its smallest and largest
+    # the path: it has an orbit at every amplitude between its smallest and largest, and
+    # between it and the point it left or reached without a jump (the path's segment
+    # from the last front point to the first point off it holds orbits of every
+    # amplitude in between, none of them the front's)
+    jumps = {int(s[1]) for s in branch.special_points if s[0] == "jump"}
     runs = np.split(off, np.flatnonzero(np.diff(off) > 1) + 1) if len(off) else []
     for run in runs:
-        a_lo, a_hi = float(A[run].min()), float(A[run].max())
+        span = A[run]
+        if run[0] > 0 and int(run[0]) not in jumps:
+            span = np.append(span, A[run[0] - 1])
+        if run[-1] + 1 < len(branch) and int(run[-1]) + 1 not in jumps:
+            span = np.append(span, A[run[-1] + 1])
+        p_lo, p_hi = float(A[run].min()), float(A[run].max())
+        a_lo, a_hi = float(span.min()), float(span.max())
         for lo_s, hi_s in covered:
             lo, hi = max(a_lo, lo_s), min(a_hi, hi_s)
-            if lo <= hi * (1 + _RTOL):
+            points_inside = max(p_lo, lo_s) <= min(p_hi, hi_s) * (1 + _RTOL)
+            # a segment's end alone (a front point the path left) is the front's own orbit
+            if points_inside or hi > lo * (1 + _RTOL):
                 pts = run[(A[run] >= lo * (1 - _RTOL)) & (A[run] <= hi * (1 + _RTOL))]
                 raw.append((lo, max(lo, hi), set((pts if len(pts) else run).tolist())))
     # a jump that lands at the frontier's amplitude (nothing skipped) at another frequency:
