@@ -154,12 +154,16 @@ def newton_modal_entry(args: tuple):
     tuples that takes its slow path (≈ 1 µs a tuple: a third of a warm corrector on a small
     problem). A problem resolves the types once and keeps the entry point; every later call
     must pass arguments of the same types (the problem's arrays are fixed; u, u_pred, t and
-    hist are C-contiguous float64 vectors, the scalars Python floats and ints). Under
-    ``NUMBA_DISABLE_JIT=1`` the Python function itself.
+    hist are C-contiguous float64 vectors, the scalars Python floats and ints). The entry
+    point is kept per argument types (:func:`~mmshbm.core._entry.compiled_entry`): the
+    next problem's arguments are not typed again. Under ``NUMBA_DISABLE_JIT=1`` the
+    Python function itself.
     """
     if not hasattr(_newton_modal, "compile"):
         return _newton_modal
-    return _newton_modal.compile(tuple(_newton_modal.typeof_pyval(a) for a in args))
+    from ._entry import compiled_entry
+
+    return compiled_entry(_newton_modal, args)
 
 
 @njit(**JIT_OPTIONS)

@@ -147,9 +147,9 @@ def _tangent_sign(J, t_prev: np.ndarray) -> tuple[np.ndarray, float]:
     rhs = np.zeros(len(t_prev))
     rhs[-1] = 1.0
     t, sign = _bordered_solve_sign(J, t_prev, rhs)
-    if not np.all(np.isfinite(t)):
+    if not np.isfinite(t).all():
         raise _Failure("singular Jacobian at the tangent")
-    t /= np.linalg.norm(t)
+    t /= math.sqrt(t.dot(t))  # np.linalg.norm(t), without its checks
     return (t, sign) if t @ t_prev >= 0 else (-t, sign)
 
 
@@ -195,9 +195,12 @@ def _advance(problem, u, t, ds, opt, curvature):
     :func:`_step`; raises ``_Failure``."""
     corner = problem.corner_parameter and ds <= opt.corner_ds
     try:
-        u_new, nit, hist, J, t_new, sign, rec = _step(problem, u, t, ds, opt, curvature)
+        # _step, with the monitor after the turn test (a refused step is not monitored)
+        u_new, nit, hist, J = _corrector(problem, u, t, ds, opt, curvature=curvature)
+        t_new, sign = _tangent_sign(J, t)
         if t_new @ t < math.cos(opt.max_angle) and ds > opt.corner_ds:
             raise _Failure("tangent turned too far")
+        rec = _monitor(problem, u_new)
         if corner and t_new @ t < math.cos(opt.max_angle) and t_new[-1] * t[-1] < 0:
             # at a corner the bordered tangent (oriented along t) points back along the new piece
             t_new, sign = -t_new, -sign
@@ -237,7 +240,8 @@ def _corrector(problem, u, t, ds, opt, start=None, curvature=None):
         u_pred = u_pred + 0.5 * ds * ds * curvature
     u_new, nit, hist, J = newton(problem, u_pred if start is None else start, t, u_pred, opt.newton_tol,
                                  opt.max_newton, opt.step_tol)
-    if np.linalg.norm(u_new - u_pred) > 2.0 * ds + 10 * opt.newton_tol:
+    d = u_new - u_pred
+    if math.sqrt(d.dot(d)) > 2.0 * ds + 10 * opt.newton_tol:  # np.linalg.norm(d), without its checks
         raise _Failure("corrector left the predictor cone")
     return u_new, nit, hist, J
 

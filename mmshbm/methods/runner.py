@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import functools
 import inspect
 import logging
 import platform
@@ -82,9 +83,9 @@ def check_option_names(problem_class, options: Mapping, *, what: str, skip: int 
     list of str
         The option names the constructor takes.
     """
-    params = list(inspect.signature(problem_class).parameters.values())[skip:]
-    valid = [p.name for p in params if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
-    if any(p.kind == p.VAR_KEYWORD for p in params):
+    valid, var_keyword = _parameter_names(problem_class, skip)
+    valid = list(valid)
+    if var_keyword:
         return valid
     unknown = [k for k in options if k not in valid]
     if unknown:
@@ -96,6 +97,15 @@ def check_option_names(problem_class, options: Mapping, *, what: str, skip: int 
         raise TypeError(f"unknown option{'s' if len(unknown) > 1 else ''} {', '.join(hints)} for {what}; "
                         f"method options: {valid}; continuation options: {sorted(CONTINUATION_FIELDS)}")
     return valid
+
+
+@functools.lru_cache(maxsize=64)
+def _parameter_names(problem_class, skip: int) -> tuple[tuple[str, ...], bool]:
+    """(names of the keyword-capable parameters of ``problem_class``'s constructor after its
+    first ``skip``, whether it takes ``**kwargs``): one signature inspection per class."""
+    params = list(inspect.signature(problem_class).parameters.values())[skip:]
+    return (tuple(p.name for p in params if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)),
+            any(p.kind == p.VAR_KEYWORD for p in params))
 
 
 def path_argument(name: str, value) -> Path | None:

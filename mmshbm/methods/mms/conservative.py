@@ -46,7 +46,10 @@ import weakref
 import numpy as np
 
 from ... import _validate as check
-from ...core.condense import make_condensation
+from ...core import corrector_kernels as ck
+from ...core._entry import compiled_entry
+from ...core._modal_kernels import _modal_dynamic_stiffness
+from ...core.condense import SingularDynamicStiffness, make_condensation
 from ...core.contact_kernels import _mmshbm_eval, _mmshbm_monitor_multi
 from ...core.harmonics import check_harmonics
 from ...core.measures import condensed_energy as _condensed_energy  # noqa: F401  (earlier private names)
@@ -209,6 +212,9 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
                       np.zeros(H + 1), np.empty(H + 1), np.empty(N), np.empty(N), np.empty(2 * N + 2),
                       np.empty(2 * H + 1), np.empty(2 * H + 1), np.empty(2 * H + 1), np.empty((H + 1, H + 1)))
         self._J_dummy = np.empty((1, 1))
+        # work arrays of the monitor's kernel (its last four arguments; out (3,) last)
+        self._monitor_work = (np.empty(H + 1), np.empty(H + 1), np.empty(N), np.empty(3))
+        self._monitor_call = None
         # the condensed stiffness of the last Ω (the monitor of a converged point reuses
         # the one of Newton's last evaluation)
         self._cached = (None, None, None)
@@ -294,7 +300,6 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         if cond.backend != "modal":
             self._fast = False
             return False
-        from ...core import corrector_kernels as ck
         from ...core.modal import _POLE_RTOL
 
         H, n_c, m = self.H, self.n_c, cond.n_modes
@@ -319,7 +324,11 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
                                   np.empty(n), np.empty((H + 1, n_c)), np.empty(self.n_poles), np.zeros(1)),
             "ework": ck.EvalWork(*self._work),
         }
-        return self._fast
+        fast = self._fast
+        # the arguments after (u, u_pred, t, tol, step_tol, max_iter) that do not change
+        fast["fixed"] = (int(self.n_c), int(self.H))
+        fast["data"] = tuple(fast[k] for k in ("scale", "cond", "poles", "law", "samples", "work", "ework"))
+        return fast
 
     def fast_newton(self, u0, u_pred, tangent, tol: float, max_iter: int, step_tol: float):
         """Newton corrector on [R(u); t·(u − u_pred)] = 0 in one compiled loop (modal
@@ -327,9 +336,9 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
 
         Returns (u, iterations, residual history, Jacobian at u), or raises ArithmeticError
         with the reason (the continuation's failure)."""
-        from ...core import corrector_kernels as ck
-
-        fast = self._fast_setup()
+        fast = self._fast
+        if fast is None:
+            fast = self._fast_setup()
         if not fast:
             return None
         u = np.array(u0, dtype=float)
@@ -338,9 +347,8 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         D, dD, J = work.D, work.dD, work.J
         u_pred = np.ascontiguousarray(u_pred, dtype=float)
         tangent = np.ascontiguousarray(tangent, dtype=float)
-        args = (u, u_pred, tangent, float(tol), float(step_tol), int(max_iter), int(self.n_c), int(self.H),
-                hist, fast["scale"], fast["cond"], fast["poles"], fast["law"], fast["samples"], work,
-                fast["ework"])
+        args = (u, u_pred, tangent, float(tol), float(step_tol), int(max_iter), *fast["fixed"], hist,
+                *fast["data"])
         if "call" not in fast:  # the compiled overload, without the dispatcher's per-call typing
             fast["call"] = ck.newton_modal_entry(args)
         status, it = fast["call"](*args)
@@ -364,11 +372,10 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         last, D, dD = self._cached
         if last == omega and (dD is not None or not derivative):
             return D, dD
-        fast = self._fast_setup()
+        fast = self._fast
+        if fast is None:
+            fast = self._fast_setup()
         if fast:  # the modal kernel with the poles' terms left out and their static part added
-            from ...core._modal_kernels import _modal_dynamic_stiffness
-            from ...core.condense import SingularDynamicStiffness
-
             D0, B, w2, Rs, keep, static, rtol = fast["cond"]
             D = np.empty((self.H + 1, self.n_c, self.n_c))
             dD = np.empty_like(D) if derivative else None
@@ -418,13 +425,21 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         if self.cond.backend == "modal":
             self.cond.check_range(omega, self.H)  # warns once past the modes kept
         D, dD = self._condensed(omega, True)
-        out = np.empty(3)
         a = np.ascontiguousarray(a)
         eta = self.unpack_eta(u)
-        _mmshbm_monitor_multi(D, dD, a, eta, self._pole_k, self._pole_b, self.cdof, self.lo, self.hi,
-                              self.r_each, omega, self._amplitude_row(a, omega, eta), self._amp_sign,
-                              self._cos_table, self._sin_table, np.empty(self.H + 1), np.empty(self.H + 1),
-                              np.empty(self.N), out)
+        args = (D, dD, a, eta, self._pole_k, self._pole_b, self.cdof, self.lo, self.hi, self.r_each, omega,
+                self._amplitude_row(a, omega, eta), self._amp_sign, self._cos_table, self._sin_table,
+                *self._monitor_work)
+        call = self._monitor_call
+        if call is None:
+            # the compiled corrector's problems (modal back end) pass arrays of fixed types
+            # (C-contiguous float64, made here or by the corrector): the compiled overload is
+            # typed once; others go through the dispatcher
+            call = _mmshbm_monitor_multi
+            if self._fast and hasattr(_mmshbm_monitor_multi, "compile"):
+                call = self._monitor_call = compiled_entry(_mmshbm_monitor_multi, args)
+        call(*args)
+        out = self._monitor_work[-1]
         return {
             "frequency": omega / (2 * np.pi),
             "amplitude": float(out[0]),
