@@ -64,6 +64,8 @@ from .signals import SignalsMixin
 __all__ = ["MMSHBMProblem"]
 
 _PROJECTIONS = ("exact", "sampled")
+#: most Ω whose condensed stiffness a problem keeps (:attr:`MMSHBMProblem._by_omega`)
+_BY_OMEGA = 4096
 #: model -> {(held DOFs, mode): frequency (Hz)} of :func:`_held_frequency`
 _HELD: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
@@ -218,6 +220,9 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         # the condensed stiffness of the last Ω (the monitor of a converged point reuses
         # the one of Newton's last evaluation)
         self._cached = (None, None, None)
+        #: Ω (rad/s) -> (D, dD) computed by :meth:`_condensed` (read only): what
+        #: :meth:`condensed_many` takes instead of computing it again
+        self._by_omega = {}
         #: residual (+ Jacobian) evaluations so far, the compiled corrector's included
         self.evaluations = 0
         # fine grid for amplitude and peak force
@@ -388,6 +393,10 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
                     f"fixed-interface eigenfrequency {np.sqrt(w2[j]):.9g} rad/s (mode index {j})")
             D += static
             self._cached = (omega, D, dD)
+            if derivative:  # a converged point's (the monitor's): the branch's records use it again
+                if len(self._by_omega) >= _BY_OMEGA:
+                    self._by_omega.clear()
+                self._by_omega[omega] = (D, dD)
             return D, dD
         if self.pole_set is not None and self.pole_set.n:
             D, dD = self.pole_set.dynamic_stiffness(omega, derivative)
