@@ -41,6 +41,7 @@ those scales produce.
 
 from __future__ import annotations
 
+import functools
 import weakref
 
 import numpy as np
@@ -207,9 +208,10 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         self.n_unknowns = (self.H + 1) * self.n_c + n_p + 1
 
         H, N = self.H, self.N
-        self._tau = 2 * np.pi * np.arange(N) / N
-        self._cos_table = np.cos(np.outer(np.arange(2 * H + 1), self._tau))
-        self._sin_table = np.sin(np.outer(np.arange(H + 1), self._tau))
+        # sample grid, its cosine and sine tables, and the fine grid for amplitude and peak
+        # force (each problem its own copies: the kernels take them as writable arrays)
+        self._tau, self._cos_table, self._sin_table, self._tau_fine, self._cos_fine = (
+            t.copy() for t in _tables(H, N))
         self._work = (np.empty((H + 1, self.n_c)), np.empty((H + 1, self.n_c)), np.empty(H + 1),
                       np.zeros(H + 1), np.empty(H + 1), np.empty(N), np.empty(N), np.empty(2 * N + 2),
                       np.empty(2 * H + 1), np.empty(2 * H + 1), np.empty(2 * H + 1), np.empty((H + 1, H + 1)))
@@ -225,10 +227,6 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         self._by_omega = {}
         #: residual (+ Jacobian) evaluations so far, the compiled corrector's included
         self.evaluations = 0
-        # fine grid for amplitude and peak force
-        n_fine = max(512, 8 * N)
-        self._tau_fine = 2 * np.pi * np.arange(n_fine) / n_fine
-        self._cos_fine = np.cos(np.outer(np.arange(H + 1), self._tau_fine))
         self._modal = None  # open-contact modes for the energy shares (built on first use)
 
     # ------------------------------------------------------------------ unknowns
@@ -457,6 +455,18 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
             "mode_share": self._mode_share_at(u, a, omega, eta, dD),
             **self._family_records_at(a, omega, eta, dD),
         }
+
+
+@functools.lru_cache(maxsize=32)
+def _tables(H: int, N: int) -> tuple[np.ndarray, ...]:
+    """(τ (N,), cos kτ (2H+1, N), sin kτ (H+1, N), fine τ (n_fine,), cos kτ (H+1, n_fine) on
+    it) of an MMS-HBM problem, n_fine = max(512, 8N); computed once per (H, N), read only
+    (a problem takes copies)."""
+    tau = 2 * np.pi * np.arange(N) / N
+    n_fine = max(512, 8 * N)
+    tau_fine = 2 * np.pi * np.arange(n_fine) / n_fine
+    return (tau, np.cos(np.outer(np.arange(2 * H + 1), tau)), np.sin(np.outer(np.arange(H + 1), tau)),
+            tau_fine, np.cos(np.outer(np.arange(H + 1), tau_fine)))
 
 
 def _held_frequency(model: Model, dofs, mode: int) -> float:
