@@ -248,7 +248,7 @@ def _corrector(problem, u, t, ds, opt, start=None, curvature=None):
 
 def _outside(rec: dict, bounds) -> tuple | None:
     """(name, bound value) of the first bound that ``rec`` violates, else None."""
-    for name, (lo, hi) in dict(bounds).items():
+    for name, (lo, hi) in (bounds if isinstance(bounds, dict) else dict(bounds)).items():
         v = rec.get(name)
         if v is None:
             continue

@@ -446,12 +446,12 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
             if self._fast and hasattr(_mmshbm_monitor_multi, "compile"):
                 call = self._monitor_call = compiled_entry(_mmshbm_monitor_multi, args)
         call(*args)
-        out = self._monitor_work[-1]
+        amplitude, energy, force = self._monitor_work[-1].tolist()
         return {
             "frequency": omega / (2 * np.pi),
-            "amplitude": float(out[0]),
-            "energy": float(out[1]),
-            "contact_force_max": float(out[2]),
+            "amplitude": amplitude,
+            "energy": energy,
+            "contact_force_max": force,
             "mode_share": self._mode_share_at(u, a, omega, eta, dD),
             **self._family_records_at(a, omega, eta, dD),
         }
