@@ -239,7 +239,7 @@ def _first_point(problem, u0, t0, opt: ContinuationOptions):
     t0 = t0 / np.linalg.norm(t0)
     u0 = np.asarray(u0, dtype=float)
     u, nit, hist, J = newton(problem, u0, t0, u0, opt.newton_tol, opt.max_newton, opt.step_tol)
-    t = _tangent(J, t0)
+    t = _tangent(J, t0, problem)
     return u, t, nit, hist, _monitor(problem, u), J
 
 
@@ -351,7 +351,7 @@ def _refine_onto_bound(problem, u, t, ds, crossed, rec_prev, rec_new, opt, fallb
             except _Failure:  # nonsmooth residuals: the warm start can miss; retry cold
                 u_s, nit, hist, J = _corrector(problem, u, t, s, opt)
             rec = _monitor(problem, u_s)
-            t_s = _tangent(J, t)
+            t_s = _tangent(J, t, problem)
         except _Failure:
             break
         f = rec[name] - target

@@ -136,17 +136,24 @@ def _orientation(J, t: np.ndarray) -> float:
 _DET_LIMIT = 400
 
 
-def _tangent(J, t_prev: np.ndarray) -> np.ndarray:
-    return _tangent_sign(J, t_prev)[0]
+def _tangent(J, t_prev: np.ndarray, problem=None) -> np.ndarray:
+    return _tangent_sign(J, t_prev, problem)[0]
 
 
-def _tangent_sign(J, t_prev: np.ndarray) -> tuple[np.ndarray, float]:
+def _tangent_sign(J, t_prev: np.ndarray, problem=None) -> tuple[np.ndarray, float]:
     """Unit tangent (oriented along ``t_prev``) and the sign of det [J; t] (0 if unknown):
     det [J; t_prev] and det [J; t] share their sign when t·t_prev > 0, because both are the
-    cofactor vector of J (a multiple of t) dotted with the last row."""
-    rhs = np.zeros(len(t_prev))
-    rhs[-1] = 1.0
-    t, sign = _bordered_solve_sign(J, t_prev, rhs)
+    cofactor vector of J (a multiple of t) dotted with the last row. A ``problem`` whose
+    corrector already solved [J; t_prevᵀ] x = e_n gives x (``solved_tangent(J, t_prev)``,
+    None otherwise)."""
+    solved = getattr(problem, "solved_tangent", None)
+    solved = solved(J, t_prev) if solved is not None else None
+    if solved is not None:
+        t, sign = solved
+    else:
+        rhs = np.zeros(len(t_prev))
+        rhs[-1] = 1.0
+        t, sign = _bordered_solve_sign(J, t_prev, rhs)
     if not np.isfinite(t).all():
         raise _Failure("singular Jacobian at the tangent")
     t /= math.sqrt(t.dot(t))  # np.linalg.norm(t), without its checks
@@ -182,7 +189,7 @@ def _step(problem, u, t, ds, opt, curvature):
     """One step from (u, t): corrector, tangent and monitor. Returns (u, iterations,
     residual history, J, tangent, sign of det [J; t], record)."""
     u_new, nit, hist, J = _corrector(problem, u, t, ds, opt, curvature=curvature)
-    t_new, sign = _tangent_sign(J, t)
+    t_new, sign = _tangent_sign(J, t, problem)
     return u_new, nit, hist, J, t_new, sign, _monitor(problem, u_new)
 
 
@@ -197,7 +204,7 @@ def _advance(problem, u, t, ds, opt, curvature):
     try:
         # _step, with the monitor after the turn test (a refused step is not monitored)
         u_new, nit, hist, J = _corrector(problem, u, t, ds, opt, curvature=curvature)
-        t_new, sign = _tangent_sign(J, t)
+        t_new, sign = _tangent_sign(J, t, problem)
         if t_new @ t < math.cos(opt.max_angle) and ds > opt.corner_ds:
             raise _Failure("tangent turned too far")
         rec = _monitor(problem, u_new)

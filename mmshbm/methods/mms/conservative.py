@@ -50,6 +50,7 @@ from ... import _validate as check
 from ...core import corrector_kernels as ck
 from ...core._entry import compiled_entry
 from ...core._modal_kernels import _modal_dynamic_stiffness
+from ...core.bordered import _SMALL_DENSE
 from ...core.condense import SingularDynamicStiffness, make_condensation
 from ...core.contact_kernels import _mmshbm_eval, _mmshbm_monitor_multi
 from ...core.harmonics import check_harmonics
@@ -111,6 +112,8 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
     step_control = "residual"
     #: the compiled corrector's data (:meth:`_fast_setup`): None until built, False when it does not apply
     _fast: dict | bool | None = None
+    #: (J, t, x, sign) of the compiled corrector's last tangent solve (:meth:`solved_tangent`)
+    _solved_tangent = None
     #: the Floquet solver of :func:`~mmshbm.methods.mms.stability.conservative_multipliers`; None until built
     _floquet_solver = None
 
@@ -324,7 +327,9 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
             "samples": ck.Sampling(self._cos_table, self._sin_table, self._tau),
             "work": ck.NewtonWork(np.empty((H + 1, n_c, n_c)), np.empty((H + 1, n_c, n_c)), np.empty(n - 1),
                                   np.empty((n - 1, n)), np.empty((n, n)), np.empty(n), np.empty((n, n)),
-                                  np.empty(n), np.empty((H + 1, n_c)), np.empty(self.n_poles), np.zeros(1)),
+                                  np.empty(n), np.empty((H + 1, n_c)), np.empty(self.n_poles), np.zeros(1),
+                                  # the tangent solve where the continuation's is the same LU
+                                  np.empty(n if n <= _SMALL_DENSE else 0), np.zeros(1), np.zeros(1)),
             "ework": ck.EvalWork(*self._work),
         }
         fast = self._fast
@@ -356,17 +361,31 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
             fast["call"] = ck.newton_modal_entry(args)
         status, it = fast["call"](*args)
         self.evaluations += it if status == ck.SKIPPED else it + 1
-        if status == ck.CONVERGED:
-            self._cached = (float(u[-1] * self.colscale[-1]), D.copy(), dD.copy())
-            return u, int(it), hist[: it + 1].copy(), J.copy()
-        if status == ck.SKIPPED:  # D and J belong to the iterate before the last update
-            return u, int(it), hist[: it + 1].copy(), J.copy()
+        self._solved_tangent = None
+        if status == ck.CONVERGED or status == ck.SKIPPED:  # SKIPPED: D, J of the iterate before
+            if status == ck.CONVERGED:
+                self._cached = (float(u[-1] * self.colscale[-1]), D.copy(), dD.copy())
+            J = J.copy()
+            if len(work.tx) and work.t_info[0] == 0:
+                self._solved_tangent = (J, tangent, work.tx.copy(), float(work.t_sign[0]))
+            return u, int(it), hist[: it + 1].copy(), J
         if status == ck.POLE:  # the condensation's own message names the harmonic and the mode
             self._condensed(float(u[-1] * self.colscale[-1]), True)
         reason = {ck.NO_CONVERGENCE: f"no convergence in {max_iter} iterations (residual {hist[it]:.2e})",
                   ck.NON_FINITE: "non-finite residual", ck.SINGULAR: "singular Jacobian",
                   ck.POLE: "a harmonic of Ω sits on a fixed-interface eigenfrequency"}[status]
         raise ArithmeticError(reason)
+
+    def solved_tangent(self, J, t_prev):
+        """(x, sign of det [J; t_prevᵀ]) with [J; t_prevᵀ] x = e_n, when the compiled
+        corrector solved it at its return: ``J`` the Jacobian it returned and ``t_prev`` the
+        tangent it was given (the same objects); else None. Given once per corrector run
+        (the caller may scale x in place)."""
+        solved = self._solved_tangent
+        if solved is None or solved[0] is not J or solved[1] is not t_prev:
+            return None
+        self._solved_tangent = None
+        return solved[2], solved[3]
 
     # ------------------------------------------------------------------ residual
     def _condensed(self, omega: float, derivative: bool):
