@@ -402,7 +402,13 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
             D = np.empty((self.H + 1, self.n_c, self.n_c))
             dD = np.empty_like(D) if derivative else None
             out = D if dD is None else dD
-            info = _modal_dynamic_stiffness(D0, B, w2, Rs, omega, self.H, keep, rtol, D, out, derivative)
+            args = (D0, B, w2, Rs, float(omega), self.H, keep, rtol, D, out, bool(derivative))
+            call = fast.get("stiffness")
+            if call is None:  # the kernel's overload typed once (its arguments' types are fixed)
+                call = fast["stiffness"] = (compiled_entry(_modal_dynamic_stiffness, args)
+                                            if hasattr(_modal_dynamic_stiffness, "compile")
+                                            else _modal_dynamic_stiffness)
+            info = call(*args)
             if info:
                 k, j = divmod(info - 1, len(w2))
                 raise SingularDynamicStiffness(
