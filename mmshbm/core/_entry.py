@@ -19,15 +19,18 @@ __all__ = ["compiled_entry"]
 #: (kernel, type key) -> compiled entry point
 _ENTRIES: dict = {}
 _INT64 = (-(2**63), 2**63)
+#: the array flags Numba's type depends on: C_CONTIGUOUS, F_CONTIGUOUS, ALIGNED, WRITEABLE
+_FLAGS = 0x1 | 0x2 | 0x100 | 0x400
 
 
 def _type_key(value):
     """What Numba's ``typeof`` of ``value`` depends on, as a hashable tuple; None for a
     value this function does not describe (the caller then types it in full)."""
-    if isinstance(value, np.ndarray):
-        f = value.flags
-        return (value.dtype, value.ndim, f.c_contiguous, f.f_contiguous, f.writeable, f.aligned)
     cls = type(value)
+    if cls is np.ndarray:
+        return (value.dtype, value.ndim, value.flags.num & _FLAGS)
+    if isinstance(value, np.ndarray):
+        return (cls, value.dtype, value.ndim, value.flags.num & _FLAGS)
     if cls is float or cls is bool:
         return cls
     if cls is int:
