@@ -111,3 +111,25 @@ def test_problems_share_tables_and_selection_by_value_not_by_object(beam):
     assert p.cond.Rs is not q.cond.Rs
     np.testing.assert_array_equal(p.cond.Rs, q.cond.Rs)
     assert p.cond.error_estimate <= p.cond.tol  # the selection's own bound holds
+
+
+def test_projections_shared_between_condensations_project_the_recovery(beam):
+    """Two condensations of one reduction share a projector's projections; what they give is
+    the projector applied to the recovered motion (cosine coefficients of the DOFs with mass)."""
+    from mmshbm.core.condense import make_condensation
+
+    c1 = make_condensation(beam, "modal", harmonics=5)
+    c2 = make_condensation(beam, "modal", harmonics=5)
+    rng = np.random.default_rng(0)
+    P = rng.standard_normal((3, len(beam.l)))
+    a = rng.standard_normal((6, len(beam.c))) * beam.gap
+    omega = 2 * np.pi * 40.0
+    first = c1.projected_cosine_recovery(omega, a, P)
+    again = c2.projected_cosine_recovery(omega, a, P)
+    assert c2._projections[id(P)] is c1._projections[id(P)]
+    np.testing.assert_array_equal(first, again)
+    Qc = np.zeros((len(beam.c), 11))
+    Qc[:, 0], Qc[:, 1::2] = a[0], a[1:].T
+    Ql = c2.recover(omega, Qc)
+    ref = P @ np.column_stack([Ql[:, 0], Ql[:, 1::2]])
+    np.testing.assert_allclose(again, ref, rtol=1e-9, atol=1e-12 * np.abs(ref).max())

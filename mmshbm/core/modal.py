@@ -67,6 +67,9 @@ _RECOVERY: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 #: mode, max_frequency): (R(2..P+1), error estimate) (:meth:`ModalCondensation._set_modes`)}:
 #: what a condensation of the same model and request computes again otherwise (read only)
 _SELECTION: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: reduction -> {modes kept: {projector id: (projector, its projections)}} of
+#: :meth:`ModalCondensation.projected_cosine_recovery` (read only)
+_SHARED_PROJECTIONS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 #: projectors whose projections :meth:`ModalCondensation.projected_cosine_recovery` keeps
 _PROJECTORS = 4
 #: warn once when kΩ exceeds this fraction of the first left-out mode
@@ -235,7 +238,9 @@ class ModalCondensation:
         self._omega_next = math.inf if m >= red.n_modes else float(red.omega[m])
         self.cutoff = self._omega_next / (2 * np.pi)
         self._V = None  # recovery blocks, built on the first recover()
-        self._projections = {}  # projector id -> its projections (projected_cosine_recovery)
+        # projector id -> its projections (projected_cosine_recovery): shared by the
+        # condensations of one reduction with the same modes (the same numbers)
+        self._projections = _SHARED_PROJECTIONS.setdefault(red, {}).setdefault(m, {})
         self.design_frequency = self.H * self._omega_max(red) / (2 * np.pi)
         memo = _SELECTION.setdefault(red, {})
         key = ("modes", m, self.P, self.H, self.mode, self.max_frequency)
@@ -385,8 +390,10 @@ class ModalCondensation:
         a = np.asarray(a, dtype=float)
         key = id(projector)
         store = self._projections
-        cached = store.get(key)
-        if cached is None or cached[0] is not projector:
+        cached = store.pop(key, None)
+        if cached is not None and cached[0] is projector:
+            store[key] = cached  # the most recently used last
+        else:
             self._static_recovery()
             P = np.asarray(projector, dtype=float)
             cached = (projector, P @ self._Z0, P @ self.phi_j, [P @ V for V in self._V])

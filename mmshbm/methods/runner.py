@@ -243,7 +243,7 @@ def run(problem, copts: ContinuationOptions, start, *, callback=None, progress=N
             restored = previous.points
             log.info("resuming %s from point %d of %s", header["method"], len(restored) - 1, resume)
         if checkpoint is not None:
-            continuation = jsonable(dataclasses.asdict(copts))
+            continuation = _options_record(copts)
             writer = CheckpointWriter(checkpoint, {**header, "continuation": continuation,
                                                    **dict(header_extra or {})}, restored)
         t0 = time.perf_counter()
@@ -318,6 +318,15 @@ def name_bifurcations(rec: dict, special: list, n: int) -> tuple[np.ndarray, lis
 
 
 # ---------------------------------------------------------------------- metadata
+def _options_record(copts: ContinuationOptions) -> dict:
+    """``jsonable(dataclasses.asdict(copts))``: its fields read once (the same dict when no
+    field holds a dataclass, as none does: asdict would copy what jsonable copies again)."""
+    values = {f.name: getattr(copts, f.name) for f in dataclasses.fields(copts)}
+    if any(dataclasses.is_dataclass(v) for v in values.values()):
+        return jsonable(dataclasses.asdict(copts))
+    return jsonable(values)
+
+
 def run_metadata(model: Model, method: str, problem, options: dict, copts: ContinuationOptions, done: Run,
                  **fields) -> dict:
     """The metadata of a result: the model's description, method, H, N, the entry point's
@@ -325,6 +334,6 @@ def run_metadata(model: Model, method: str, problem, options: dict, copts: Conti
     options, wall time, versions, and the checkpoint files used."""
     return {"model": model.description, "method": method, "harmonics": int(problem.H),
             "n_samples": int(problem.N), **fields, "method_options": jsonable(options),
-            "continuation": jsonable(dataclasses.asdict(copts)), "elapsed_s": done.elapsed_s,
+            "continuation": _options_record(copts), "elapsed_s": done.elapsed_s,
             "python": platform.python_version(), "numpy": np.__version__, **done.metadata(),
             **({"pole_scaling": problem.pole_scaling} if problem.pole_scaling else {})}
