@@ -144,9 +144,9 @@ def _tangent_sign(J, t_prev: np.ndarray, problem=None) -> tuple[np.ndarray, floa
     """Unit tangent (oriented along ``t_prev``) and the sign of det [J; t] (0 if unknown):
     det [J; t_prev] and det [J; t] share their sign when t·t_prev > 0, because both are the
     cofactor vector of J (a multiple of t) dotted with the last row. A ``problem`` whose
-    corrector already solved [J; t_prevᵀ] x = e_n gives x (``solved_tangent(J, t_prev)``,
-    None otherwise)."""
-    solved = getattr(problem, "solved_tangent", None)
+    corrector already solved [J; t_prevᵀ] x = e_n gives x (its ``solved_tangent(J, t_prev)``
+    capability, :mod:`mmshbm.core.problem`)."""
+    solved = problem.solved_tangent if problem is not None else None
     solved = solved(J, t_prev) if solved is not None else None
     if solved is not None:
         t, sign = solved

@@ -76,7 +76,7 @@ class SignalsMixin:
             from ...core.condense import SingularDynamicStiffness
 
             D0, B, w2, Rs, keep, static, rtol = fast["cond"]
-            known = getattr(self, "_by_omega", {})  # those _condensed computed (the same numbers)
+            known = self._by_omega  # those _condensed computed (the same numbers)
             for i, omega in enumerate(omegas):
                 omega = float(omega)
                 hit = known.get(omega)
