@@ -66,8 +66,10 @@ from .signals import SignalsMixin
 __all__ = ["MMSHBMProblem"]
 
 _PROJECTIONS = ("exact", "sampled")
-#: most Ω whose condensed stiffness a problem keeps (:attr:`MMSHBMProblem._by_omega`)
+#: most Ω whose condensed stiffness a problem keeps (:attr:`MMSHBMProblem._by_omega`), and
+#: the most bytes they may take (fewer Ω for many contact DOFs)
 _BY_OMEGA = 4096
+_BY_OMEGA_BYTES = 64 << 20
 #: model -> {(held DOFs, mode): frequency (Hz)} of :func:`_held_frequency`
 _HELD: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
@@ -228,6 +230,7 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         #: Ω (rad/s) -> (D, dD) computed by :meth:`_condensed` (read only): what
         #: :meth:`condensed_many` takes instead of computing it again
         self._by_omega = {}
+        self._by_omega_max = max(16, min(_BY_OMEGA, _BY_OMEGA_BYTES // (16 * (H + 1) * self.n_c ** 2)))
         #: residual (+ Jacobian) evaluations so far, the compiled corrector's included
         self.evaluations = 0
         self._modal = None  # open-contact modes for the energy shares (built on first use)
@@ -417,7 +420,7 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
             D += static
             self._cached = (omega, D, dD)
             if derivative:  # a converged point's (the monitor's): the branch's records use it again
-                if len(self._by_omega) >= _BY_OMEGA:
+                if len(self._by_omega) >= self._by_omega_max:
                     self._by_omega.clear()
                 self._by_omega[omega] = (D, dD)
             return D, dD
@@ -482,11 +485,25 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         }
 
 
-@functools.lru_cache(maxsize=32)
 def _tables(H: int, N: int) -> tuple[np.ndarray, ...]:
     """(τ (N,), cos kτ (2H+1, N), sin kτ (H+1, N), fine τ (n_fine,), cos kτ (H+1, n_fine) on
-    it) of an MMS-HBM problem, n_fine = max(512, 8N); computed once per (H, N), read only
-    (a problem takes copies)."""
+    it) of an MMS-HBM problem, n_fine = max(512, 8N); kept per (H, N) up to
+    :data:`_TABLES_KEPT` numbers (read only: a problem takes copies)."""
+    if (3 * H + 2) * N + (H + 2) * max(512, 8 * N) <= _TABLES_KEPT:
+        return _kept_tables(H, N)
+    return _compute_tables(H, N)
+
+
+#: the largest tables (numbers) :func:`_tables` keeps (8 MB)
+_TABLES_KEPT = 1 << 20
+
+
+@functools.lru_cache(maxsize=32)
+def _kept_tables(H: int, N: int) -> tuple[np.ndarray, ...]:
+    return _compute_tables(H, N)
+
+
+def _compute_tables(H: int, N: int) -> tuple[np.ndarray, ...]:
     tau = 2 * np.pi * np.arange(N) / N
     n_fine = max(512, 8 * N)
     tau_fine = 2 * np.pi * np.arange(n_fine) / n_fine

@@ -90,7 +90,7 @@ class SignalsMixin:
                     raise SingularDynamicStiffness(f"a harmonic of Ω = {omega:.6g} rad/s sits on a "
                                                    "fixed-interface eigenfrequency")
                 D[i] += static
-                if derivative and len(known) < 4096:
+                if derivative and len(known) < self._by_omega_max:
                     known[omega] = (D[i].copy(), dD[i].copy())
             return D, dD
         cached = self._cached
