@@ -22,6 +22,7 @@ stop the branch on a point refined onto the bound by secant iteration in the arc
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import logging
 from collections.abc import Callable
@@ -108,12 +109,13 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
     problem = as_problem(problem)
     opt = options or ContinuationOptions()
     if opt.step_control == "auto":
-        opt = dataclasses.replace(opt, step_control=problem.step_control)
+        opt = _with_step_control(opt, problem.step_control)
     events = default_events(opt, continue_branch) if events is None else events
     pts = _Points(resume, opt.ds, on_point, callback, progress, problem.progress_records)
     events.replay(pts.recs, pts.special)
     u = t = None
     ds, step, curvature, det_last = opt.ds, 0, None, 0.0
+    bounds = dict(opt.bounds)
 
     def jump(reason: str, failed: Callable[[str], Status]) -> Status | None:
         """Relocate the branch where the events say; a Status when that ends it."""
@@ -178,7 +180,7 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
                     break
                 continue  # the ds_min status stands until another replaces it
             step += 1
-            crossed = _outside(rec, opt.bounds)
+            crossed = _outside(rec, bounds)
             if crossed:
                 u_new, nit, hist, rec, t_new = _refine_onto_bound(
                     problem, u, t, ds, crossed, pts.recs[-1], rec, opt, (u_new, nit, hist, rec, t_new))
@@ -220,6 +222,16 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
     return pts.result(status)
 
 
+def _with_step_control(opt: ContinuationOptions, rule) -> ContinuationOptions:
+    """``dataclasses.replace(opt, step_control=rule)``; a valid rule is set on a copy without
+    validating the other (valid) fields again."""
+    if rule not in ("residual", "effort"):
+        return dataclasses.replace(opt, step_control=rule)  # "auto" stays, anything else raises
+    new = copy.copy(opt)
+    object.__setattr__(new, "step_control", rule)
+    return new
+
+
 def _first_point(problem, u0, t0, opt: ContinuationOptions):
     """The first point, corrected from ``u0`` orthogonally to ``t0``: (u, unit tangent,
     iterations, residual history, record, Jacobian). Raises ``_Failure``."""
@@ -227,7 +239,7 @@ def _first_point(problem, u0, t0, opt: ContinuationOptions):
     t0 = t0 / np.linalg.norm(t0)
     u0 = np.asarray(u0, dtype=float)
     u, nit, hist, J = newton(problem, u0, t0, u0, opt.newton_tol, opt.max_newton, opt.step_tol)
-    t = _tangent(J, t0)
+    t = _tangent(J, t0, problem)
     return u, t, nit, hist, _monitor(problem, u), J
 
 
@@ -258,8 +270,10 @@ class _Points:
         self.nits.append(nit)
         self.dss.append(ds)
         self.hists.append(hist)
-        self.special.extend(new_special)
-        self.state.update(t=t, ds=ds_next, steps=steps)
+        if new_special:
+            self.special.extend(new_special)
+        state = self.state
+        state["t"], state["ds"], state["steps"] = t, ds_next, steps
         if self.on_point is not None:
             self.on_point({"index": len(self.us) - 1, "u": u, "tangent": t, "ds": ds, "ds_next": ds_next,
                            "steps": steps, "newton": nit, "history": hist, "record": rec,
@@ -337,7 +351,7 @@ def _refine_onto_bound(problem, u, t, ds, crossed, rec_prev, rec_new, opt, fallb
             except _Failure:  # nonsmooth residuals: the warm start can miss; retry cold
                 u_s, nit, hist, J = _corrector(problem, u, t, s, opt)
             rec = _monitor(problem, u_s)
-            t_s = _tangent(J, t)
+            t_s = _tangent(J, t, problem)
         except _Failure:
             break
         f = rec[name] - target

@@ -50,8 +50,10 @@ Sampling = namedtuple("Sampling", "cos sin tau")
 #: Scaling of the unknowns (n,) and of the residual rows (n-1,).
 Scaling = namedtuple("Scaling", "colscale rowscale")
 #: Work arrays of the corrector: D, dD (H+1, n_c, n_c), R (n-1,), J (n-1, n), A (n, n), rhs (n,),
-#: LU (n, n), du (n,), a (H+1, n_c), eta (n_p,), sign (1,).
-NewtonWork = namedtuple("NewtonWork", "D dD R J A rhs LU du a eta sign")
+#: LU (n, n), du (n,), a (H+1, n_c), eta (n_p,), sign (1,); the tangent solve at the converged
+#: point: tx (n,) or (0,) for none, t_sign (1,) the sign of its determinant, t_info (1,) 0 or
+#: the solve's nonzero return (singular).
+NewtonWork = namedtuple("NewtonWork", "D dD R J A rhs LU du a eta sign tx t_sign t_info")
 #: Work arrays of :func:`~mmshbm.core.contact_kernels._mmshbm_eval` (its last twelve arguments).
 EvalWork = namedtuple("EvalWork", "F dF pc ps gc g_t dg_t roots C_hi C_lo S_w P")
 
@@ -113,6 +115,7 @@ def _newton_modal(u, u_pred, t, tol, step_tol, max_iter, n_c, H, hist, scale, co
         if not math.isfinite(norm):
             return NON_FINITE, it
         if norm <= tol or (du_norm <= step_tol and norm <= math.sqrt(tol)):
+            _tangent_solve(J, t, A, rhs, LU, work)
             return CONVERGED, it
         if it == max_iter:
             break
@@ -142,8 +145,30 @@ def _newton_modal(u, u_pred, t, tol, step_tol, max_iter, n_c, H, hist, scale, co
                 predicted = norm * (norm / r_prev) ** 2
                 if predicted <= 0.1 * tol:
                     hist[it + 1] = predicted
+                    _tangent_solve(J, t, A, rhs, LU, work)
                     return SKIPPED, it + 1
     return NO_CONVERGENCE, max_iter
+
+
+@njit(**JIT_OPTIONS)
+def _tangent_solve(J, t, A, rhs, LU, work):
+    """The continuation's tangent system at the returned Jacobian J (n−1, n) with the
+    corrector's hyperplane normal t (n,): [J; tᵀ] x = e_n into ``work.tx``, the sign of the
+    determinant into ``work.t_sign``, the solve's return into ``work.t_info`` (the same LU,
+    so the same numbers, as :func:`mmshbm.core.bordered.bordered_solve_sign` of a small
+    dense system). Nothing when ``work.tx`` is empty (a system that path solves otherwise)."""
+    n = t.shape[0]
+    x = work.tx
+    if x.shape[0] != n:
+        return
+    for i in range(n - 1):
+        for j in range(n):
+            A[i, j] = J[i, j]
+        rhs[i] = 0.0
+    for j in range(n):
+        A[n - 1, j] = t[j]
+    rhs[n - 1] = 1.0
+    work.t_info[0] = _dense_solve(A, rhs, LU, x, work.t_sign)
 
 
 def newton_modal_entry(args: tuple):
@@ -154,12 +179,16 @@ def newton_modal_entry(args: tuple):
     tuples that takes its slow path (≈ 1 µs a tuple: a third of a warm corrector on a small
     problem). A problem resolves the types once and keeps the entry point; every later call
     must pass arguments of the same types (the problem's arrays are fixed; u, u_pred, t and
-    hist are C-contiguous float64 vectors, the scalars Python floats and ints). Under
-    ``NUMBA_DISABLE_JIT=1`` the Python function itself.
+    hist are C-contiguous float64 vectors, the scalars Python floats and ints). The entry
+    point is kept per argument types (:func:`~mmshbm.core._entry.compiled_entry`): the
+    next problem's arguments are not typed again. Under ``NUMBA_DISABLE_JIT=1`` the
+    Python function itself.
     """
     if not hasattr(_newton_modal, "compile"):
         return _newton_modal
-    return _newton_modal.compile(tuple(_newton_modal.typeof_pyval(a) for a in args))
+    from ._entry import compiled_entry
+
+    return compiled_entry(_newton_modal, args)
 
 
 @njit(**JIT_OPTIONS)

@@ -63,6 +63,13 @@ DEFAULT_TOL = 1e-10
 _POLE_RTOL = 64 * np.finfo(float).eps
 #: reduction -> {m: (Ṽ_i, Z_0)} of the recovery with m modes kept (read only)
 _RECOVERY: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: reduction -> {request: modes kept (:meth:`ModalCondensation._select`), ("modes", m, P, H,
+#: mode, max_frequency): (R(2..P+1), error estimate) (:meth:`ModalCondensation._set_modes`)}:
+#: what a condensation of the same model and request computes again otherwise (read only)
+_SELECTION: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: reduction -> {modes kept: {projector id: (projector, its projections)}} of
+#: :meth:`ModalCondensation.projected_cosine_recovery` (read only)
+_SHARED_PROJECTIONS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 #: projectors whose projections :meth:`ModalCondensation.projected_cosine_recovery` keeps
 _PROJECTORS = 4
 #: warn once when kΩ exceeds this fraction of the first left-out mode
@@ -189,7 +196,17 @@ class ModalCondensation:
 
     def _select(self, red: ModalReduction) -> int | None:
         """Number of modes m this request keeps from ``red``, or None if ``red`` holds too few
-        (the first left-out mode must be known, unless all are kept)."""
+        (the first left-out mode must be known, unless all are kept); kept per reduction and
+        request (:data:`_SELECTION`)."""
+        request = (self._complete_request, self._n_modes_request, self._cutoff_request, self.H, self.mode,
+                   self.max_frequency, self.tol, self.P)
+        memo = _SELECTION.setdefault(red, {})
+        if request not in memo:
+            memo[request] = self._select_modes(red)
+        return memo[request]
+
+    def _select_modes(self, red: ModalReduction) -> int | None:
+        """:meth:`_select` computed."""
         k, n_l = red.n_modes, red.n_l
         if self._complete_request:
             return n_l if red.complete else None
@@ -220,13 +237,20 @@ class ModalCondensation:
         self.complete = bool(red.complete and m == red.n_l)
         self._omega_next = math.inf if m >= red.n_modes else float(red.omega[m])
         self.cutoff = self._omega_next / (2 * np.pi)
-        self.Rs = np.ascontiguousarray(np.array([_tail(red, m, p) for p in range(2, self.P + 2)]))
         self._V = None  # recovery blocks, built on the first recover()
-        self._projections = {}  # projector id -> its projections (projected_cosine_recovery)
+        # projector id -> its projections (projected_cosine_recovery): shared by the
+        # condensations of one reduction with the same modes (the same numbers)
+        self._projections = _SHARED_PROJECTIONS.setdefault(red, {}).setdefault(m, {})
         self.design_frequency = self.H * self._omega_max(red) / (2 * np.pi)
-        self.error_estimate = float(self.truncation_error(2 * np.pi * self.design_frequency / self.H,
-                                                          self.H)[-1]) if math.isfinite(
-            self.design_frequency) else math.nan
+        memo = _SELECTION.setdefault(red, {})
+        key = ("modes", m, self.P, self.H, self.mode, self.max_frequency)
+        if key not in memo:
+            self.Rs = np.ascontiguousarray(np.array([_tail(red, m, p) for p in range(2, self.P + 2)]))
+            memo[key] = (self.Rs, float(self.truncation_error(2 * np.pi * self.design_frequency / self.H,
+                                                              self.H)[-1]) if math.isfinite(
+                self.design_frequency) else math.nan)
+        Rs, self.error_estimate = memo[key]
+        self.Rs = Rs.copy()
 
     # ------------------------------------------------------------------ public
     def truncation_error(self, omega: float, harmonics: int) -> np.ndarray:
@@ -366,8 +390,10 @@ class ModalCondensation:
         a = np.asarray(a, dtype=float)
         key = id(projector)
         store = self._projections
-        cached = store.get(key)
-        if cached is None or cached[0] is not projector:
+        cached = store.pop(key, None)
+        if cached is not None and cached[0] is projector:
+            store[key] = cached  # the most recently used last
+        else:
             self._static_recovery()
             P = np.asarray(projector, dtype=float)
             cached = (projector, P @ self._Z0, P @ self.phi_j, [P @ V for V in self._V])

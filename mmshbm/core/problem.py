@@ -28,11 +28,13 @@ runners call them directly and never probe a problem for attributes.
     ``step_control`` (``"effort"`` or ``"residual"``: the step rule that
     ``ContinuationOptions(step_control="auto")`` picks); ``fast_newton(u0, u_pred,
     tangent, tol, max_iter, step_tol)``, a compiled corrector returning (u, iterations,
-    history, J) or None to let the Python loop run; ``measure``, the record whose relative
-    change caps the arclength step (None: only ``ds_max``); ``progress_records``, the
-    records a progress bar shows; ``corner_parameter``, True for a nonsmooth branch whose
-    corners are crossed at fixed parameter (the last unknown), e.g. stick arcs of friction
-    that vanish between two frequencies.
+    history, J) or None to let the Python loop run; ``solved_tangent(J, t)``, the raw
+    tangent x of [J; tᵀ] x = e_n and the sign of that determinant when that corrector
+    already solved it for the J it returned (None otherwise); ``measure``, the record
+    whose relative change caps the arclength step (None: only ``ds_max``);
+    ``progress_records``, the records a progress bar shows; ``corner_parameter``, True for
+    a nonsmooth branch whose corners are crossed at fixed parameter (the last unknown),
+    e.g. stick arcs of friction that vanish between two frequencies.
 :class:`PinnedSolves`
     ``amplitude_and_gradient(u) -> (A, ∇A)`` and ``amplitude_value(u) -> A`` for Newton
     with the amplitude pinned (:mod:`mmshbm.core.pinned`); None: the amplitude is
@@ -120,6 +122,7 @@ class StepControl(Protocol):
 
     step_control: str
     fast_newton: Callable[..., tuple | None] | None
+    solved_tangent: Callable[[Any, np.ndarray], tuple[np.ndarray, float] | None] | None
     measure: str | None
     progress_records: tuple[str, ...]
     corner_parameter: bool
@@ -209,6 +212,7 @@ class ContinuationProblemBase:
     # StepControl
     step_control: str = "effort"
     fast_newton: Callable[..., tuple | None] | None = None
+    solved_tangent: Callable[[Any, np.ndarray], tuple[np.ndarray, float] | None] | None = None
     measure: str | None = "amplitude"
     progress_records: tuple[str, ...] = ("frequency", "amplitude")
     #: True for a nonsmooth branch whose corners (a tangent turning past 90° within one

@@ -48,16 +48,20 @@ def internal_resonances(frequency: np.ndarray, modal_shares: np.ndarray, mode_fr
     n_modes, H1 = shares.shape[1], shares.shape[2]
     fj = np.asarray(mode_frequencies, dtype=float)[:n_modes]
     found = []
+    # every pair (j, k) at once: the same numbers, k·f/ω_j, as one pair at a time
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratios = (np.arange(H1, dtype=float)[None, None, :] * frequency[:, None, None]) / fj[None, :, None]
+        hits = (np.abs(ratios - 1.0) <= ratio_tol) & (shares >= min_share)  # (n, n_modes, H+1)
+    any_hit = hits.any(axis=0)
     for j in range(n_modes):
         if j == mode - 1 or not fj[j] > 0:
             continue
         for k in range(1, H1):
-            ratio = k * frequency / fj[j]
-            s = shares[:, j, k]
-            hit = (np.abs(ratio - 1.0) <= ratio_tol) & (s >= min_share)
-            if not hit.any():
+            if not any_hit[j, k]:
                 continue
-            idx = np.flatnonzero(hit)
+            ratio = ratios[:, j, k]
+            s = shares[:, j, k]
+            idx = np.flatnonzero(hits[:, j, k])
             runs = np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1)
             for run in runs:
                 i = int(run[np.argmax(s[run])])

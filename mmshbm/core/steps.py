@@ -136,20 +136,27 @@ def _orientation(J, t: np.ndarray) -> float:
 _DET_LIMIT = 400
 
 
-def _tangent(J, t_prev: np.ndarray) -> np.ndarray:
-    return _tangent_sign(J, t_prev)[0]
+def _tangent(J, t_prev: np.ndarray, problem=None) -> np.ndarray:
+    return _tangent_sign(J, t_prev, problem)[0]
 
 
-def _tangent_sign(J, t_prev: np.ndarray) -> tuple[np.ndarray, float]:
+def _tangent_sign(J, t_prev: np.ndarray, problem=None) -> tuple[np.ndarray, float]:
     """Unit tangent (oriented along ``t_prev``) and the sign of det [J; t] (0 if unknown):
     det [J; t_prev] and det [J; t] share their sign when t·t_prev > 0, because both are the
-    cofactor vector of J (a multiple of t) dotted with the last row."""
-    rhs = np.zeros(len(t_prev))
-    rhs[-1] = 1.0
-    t, sign = _bordered_solve_sign(J, t_prev, rhs)
-    if not np.all(np.isfinite(t)):
+    cofactor vector of J (a multiple of t) dotted with the last row. A ``problem`` whose
+    corrector already solved [J; t_prevᵀ] x = e_n gives x (its ``solved_tangent(J, t_prev)``
+    capability, :mod:`mmshbm.core.problem`)."""
+    solved = problem.solved_tangent if problem is not None else None
+    solved = solved(J, t_prev) if solved is not None else None
+    if solved is not None:
+        t, sign = solved
+    else:
+        rhs = np.zeros(len(t_prev))
+        rhs[-1] = 1.0
+        t, sign = _bordered_solve_sign(J, t_prev, rhs)
+    if not np.isfinite(t).all():
         raise _Failure("singular Jacobian at the tangent")
-    t /= np.linalg.norm(t)
+    t /= math.sqrt(t.dot(t))  # np.linalg.norm(t), without its checks
     return (t, sign) if t @ t_prev >= 0 else (-t, sign)
 
 
@@ -182,7 +189,7 @@ def _step(problem, u, t, ds, opt, curvature):
     """One step from (u, t): corrector, tangent and monitor. Returns (u, iterations,
     residual history, J, tangent, sign of det [J; t], record)."""
     u_new, nit, hist, J = _corrector(problem, u, t, ds, opt, curvature=curvature)
-    t_new, sign = _tangent_sign(J, t)
+    t_new, sign = _tangent_sign(J, t, problem)
     return u_new, nit, hist, J, t_new, sign, _monitor(problem, u_new)
 
 
@@ -195,9 +202,12 @@ def _advance(problem, u, t, ds, opt, curvature):
     :func:`_step`; raises ``_Failure``."""
     corner = problem.corner_parameter and ds <= opt.corner_ds
     try:
-        u_new, nit, hist, J, t_new, sign, rec = _step(problem, u, t, ds, opt, curvature)
+        # _step, with the monitor after the turn test (a refused step is not monitored)
+        u_new, nit, hist, J = _corrector(problem, u, t, ds, opt, curvature=curvature)
+        t_new, sign = _tangent_sign(J, t, problem)
         if t_new @ t < math.cos(opt.max_angle) and ds > opt.corner_ds:
             raise _Failure("tangent turned too far")
+        rec = _monitor(problem, u_new)
         if corner and t_new @ t < math.cos(opt.max_angle) and t_new[-1] * t[-1] < 0:
             # at a corner the bordered tangent (oriented along t) points back along the new piece
             t_new, sign = -t_new, -sign
@@ -237,14 +247,15 @@ def _corrector(problem, u, t, ds, opt, start=None, curvature=None):
         u_pred = u_pred + 0.5 * ds * ds * curvature
     u_new, nit, hist, J = newton(problem, u_pred if start is None else start, t, u_pred, opt.newton_tol,
                                  opt.max_newton, opt.step_tol)
-    if np.linalg.norm(u_new - u_pred) > 2.0 * ds + 10 * opt.newton_tol:
+    d = u_new - u_pred
+    if math.sqrt(d.dot(d)) > 2.0 * ds + 10 * opt.newton_tol:  # np.linalg.norm(d), without its checks
         raise _Failure("corrector left the predictor cone")
     return u_new, nit, hist, J
 
 
 def _outside(rec: dict, bounds) -> tuple | None:
     """(name, bound value) of the first bound that ``rec`` violates, else None."""
-    for name, (lo, hi) in dict(bounds).items():
+    for name, (lo, hi) in (bounds if isinstance(bounds, dict) else dict(bounds)).items():
         v = rec.get(name)
         if v is None:
             continue

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import functools
 import inspect
 import logging
 import platform
@@ -82,9 +83,9 @@ def check_option_names(problem_class, options: Mapping, *, what: str, skip: int 
     list of str
         The option names the constructor takes.
     """
-    params = list(inspect.signature(problem_class).parameters.values())[skip:]
-    valid = [p.name for p in params if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
-    if any(p.kind == p.VAR_KEYWORD for p in params):
+    valid, var_keyword = _parameter_names(problem_class, skip)
+    valid = list(valid)
+    if var_keyword:
         return valid
     unknown = [k for k in options if k not in valid]
     if unknown:
@@ -96,6 +97,15 @@ def check_option_names(problem_class, options: Mapping, *, what: str, skip: int 
         raise TypeError(f"unknown option{'s' if len(unknown) > 1 else ''} {', '.join(hints)} for {what}; "
                         f"method options: {valid}; continuation options: {sorted(CONTINUATION_FIELDS)}")
     return valid
+
+
+@functools.lru_cache(maxsize=64)
+def _parameter_names(problem_class, skip: int) -> tuple[tuple[str, ...], bool]:
+    """(names of the keyword-capable parameters of ``problem_class``'s constructor after its
+    first ``skip``, whether it takes ``**kwargs``): one signature inspection per class."""
+    params = list(inspect.signature(problem_class).parameters.values())[skip:]
+    return (tuple(p.name for p in params if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)),
+            any(p.kind == p.VAR_KEYWORD for p in params))
 
 
 def path_argument(name: str, value) -> Path | None:
@@ -233,7 +243,7 @@ def run(problem, copts: ContinuationOptions, start, *, callback=None, progress=N
             restored = previous.points
             log.info("resuming %s from point %d of %s", header["method"], len(restored) - 1, resume)
         if checkpoint is not None:
-            continuation = jsonable(dataclasses.asdict(copts))
+            continuation = _options_record(copts)
             writer = CheckpointWriter(checkpoint, {**header, "continuation": continuation,
                                                    **dict(header_extra or {})}, restored)
         t0 = time.perf_counter()
@@ -308,6 +318,15 @@ def name_bifurcations(rec: dict, special: list, n: int) -> tuple[np.ndarray, lis
 
 
 # ---------------------------------------------------------------------- metadata
+def _options_record(copts: ContinuationOptions) -> dict:
+    """``jsonable(dataclasses.asdict(copts))``: its fields read once (the same dict when no
+    field holds a dataclass, as none does: asdict would copy what jsonable copies again)."""
+    values = {f.name: getattr(copts, f.name) for f in dataclasses.fields(copts)}
+    if any(dataclasses.is_dataclass(v) for v in values.values()):
+        return jsonable(dataclasses.asdict(copts))
+    return jsonable(values)
+
+
 def run_metadata(model: Model, method: str, problem, options: dict, copts: ContinuationOptions, done: Run,
                  **fields) -> dict:
     """The metadata of a result: the model's description, method, H, N, the entry point's
@@ -315,6 +334,6 @@ def run_metadata(model: Model, method: str, problem, options: dict, copts: Conti
     options, wall time, versions, and the checkpoint files used."""
     return {"model": model.description, "method": method, "harmonics": int(problem.H),
             "n_samples": int(problem.N), **fields, "method_options": jsonable(options),
-            "continuation": jsonable(dataclasses.asdict(copts)), "elapsed_s": done.elapsed_s,
+            "continuation": _options_record(copts), "elapsed_s": done.elapsed_s,
             "python": platform.python_version(), "numpy": np.__version__, **done.metadata(),
             **({"pole_scaling": problem.pole_scaling} if problem.pole_scaling else {})}

@@ -53,13 +53,9 @@ def _covered(branch, front: np.ndarray) -> list[tuple[float, float, int, int]]:
     separated by a jump (a jump's first point starts a new stretch; the interval it
     skipped is not covered)."""
     jumps = {int(s[1]) for s in branch.special_points if s[0] == "jump"}
-    A = branch.amplitude
-    out = []
-    for i, j in zip(front[:-1], front[1:], strict=False):
-        if j in jumps:
-            continue
-        out.append((float(A[i]), float(A[j]), int(i), int(j)))
-    return out
+    A = np.asarray(branch.amplitude, dtype=float).tolist()
+    idx = np.asarray(front, dtype=int).tolist()
+    return [(A[i], A[j], i, j) for i, j in zip(idx[:-1], idx[1:], strict=False) if j not in jumps]
 
 
 def coexisting_intervals(branch) -> list[Coexistence]:
@@ -72,7 +68,9 @@ def coexisting_intervals(branch) -> list[Coexistence]:
     if "on_family" not in branch.records or len(branch) < 2:
         return []
     front = family_front(branch)
-    off = np.setdiff1d(np.arange(len(branch)), front)
+    off_mask = np.ones(len(branch), dtype=bool)
+    off_mask[front] = False
+    off = np.flatnonzero(off_mask)  # np.setdiff1d(np.arange(len(branch)), front)
     A, f = np.asarray(branch.amplitude, dtype=float), np.asarray(branch.frequency, dtype=float)
     covered = []  # maximal intervals the front covers continuously
     for lo_s, hi_s, _, _ in _covered(branch, front):

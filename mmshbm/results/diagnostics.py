@@ -397,13 +397,14 @@ def _contact(branch, solver, th: CheckThresholds) -> list[Finding]:
             # the force right after the motion: a solver may cache the last point's orbit
             if np.max((sides * Q[i] - gaps) / scale[i]) >= -th.penetration:
                 L[i] = _stop_forces(model, Q[i], np.atleast_2d(solver.contact_force(u, n)[1]))
-    pen = np.max((sides[None] * Q - gaps[None]) / scale, axis=(1, 2)) if n_pts else np.zeros(0)
+    depth = (sides[None] * Q - gaps[None]) / scale  # (n_pts, n_k, n) gaps past the stop
+    pen = depth.max(axis=(1, 2)) if n_pts else np.zeros(0)
     # a contact that never comes near its stop carries no force but Newton's residual
     need_force = pen >= -th.penetration
     neg = np.zeros(n_pts)
     if n_pts:  # per stop: its pull against its own peak push
         floor = th.force_floor * f_scale
-        near = np.max((sides[None] * Q - gaps[None]) / scale, axis=2) >= -th.penetration  # (n_pts, n_k)
+        near = depth.max(axis=2) >= -th.penetration  # (n_pts, n_k)
         peak = np.maximum(L.max(axis=2), floor)
         lo = L.min(axis=2)
         ratio = np.where(near & (peak > 0) & (lo < -floor), -lo / peak, 0.0)

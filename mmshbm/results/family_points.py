@@ -41,10 +41,12 @@ def family_front(branch) -> np.ndarray:
     else:
         on = np.ones(len(branch), dtype=bool)
     front, best = [], -np.inf
+    amplitude = np.asarray(branch.amplitude, dtype=float).tolist()
+    on = np.asarray(on, dtype=bool).tolist()
     for i in range(len(branch)):
-        if on[i] and branch.amplitude[i] >= best * (1 - 1e-9):
+        if on[i] and amplitude[i] >= best * (1 - 1e-9):
             front.append(i)
-            best = max(best, float(branch.amplitude[i]))
+            best = max(best, amplitude[i])
     return np.array(front, dtype=int)
 
 

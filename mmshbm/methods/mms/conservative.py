@@ -41,12 +41,17 @@ those scales produce.
 
 from __future__ import annotations
 
+import functools
 import weakref
 
 import numpy as np
 
 from ... import _validate as check
-from ...core.condense import make_condensation
+from ...core import corrector_kernels as ck
+from ...core._entry import compiled_entry
+from ...core._modal_kernels import _modal_dynamic_stiffness
+from ...core.bordered import _SMALL_DENSE
+from ...core.condense import SingularDynamicStiffness, make_condensation
 from ...core.contact_kernels import _mmshbm_eval, _mmshbm_monitor_multi
 from ...core.harmonics import check_harmonics
 from ...core.measures import condensed_energy as _condensed_energy  # noqa: F401  (earlier private names)
@@ -61,6 +66,10 @@ from .signals import SignalsMixin
 __all__ = ["MMSHBMProblem"]
 
 _PROJECTIONS = ("exact", "sampled")
+#: most Ω whose condensed stiffness a problem keeps (:attr:`MMSHBMProblem._by_omega`), and
+#: the most bytes they may take (fewer Ω for many contact DOFs)
+_BY_OMEGA = 4096
+_BY_OMEGA_BYTES = 64 << 20
 #: model -> {(held DOFs, mode): frequency (Hz)} of :func:`_held_frequency`
 _HELD: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
@@ -105,6 +114,8 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
     step_control = "residual"
     #: the compiled corrector's data (:meth:`_fast_setup`): None until built, False when it does not apply
     _fast: dict | bool | None = None
+    #: (J, t, x, sign) of the compiled corrector's last tangent solve (:meth:`solved_tangent`)
+    _solved_tangent = None
     #: the Floquet solver of :func:`~mmshbm.methods.mms.stability.conservative_multipliers`; None until built
     _floquet_solver = None
 
@@ -202,22 +213,26 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         self.n_unknowns = (self.H + 1) * self.n_c + n_p + 1
 
         H, N = self.H, self.N
-        self._tau = 2 * np.pi * np.arange(N) / N
-        self._cos_table = np.cos(np.outer(np.arange(2 * H + 1), self._tau))
-        self._sin_table = np.sin(np.outer(np.arange(H + 1), self._tau))
+        # sample grid, its cosine and sine tables, and the fine grid for amplitude and peak
+        # force (each problem its own copies: the kernels take them as writable arrays)
+        self._tau, self._cos_table, self._sin_table, self._tau_fine, self._cos_fine = (
+            t.copy() for t in _tables(H, N))
         self._work = (np.empty((H + 1, self.n_c)), np.empty((H + 1, self.n_c)), np.empty(H + 1),
                       np.zeros(H + 1), np.empty(H + 1), np.empty(N), np.empty(N), np.empty(2 * N + 2),
                       np.empty(2 * H + 1), np.empty(2 * H + 1), np.empty(2 * H + 1), np.empty((H + 1, H + 1)))
         self._J_dummy = np.empty((1, 1))
+        # work arrays of the monitor's kernel (its last four arguments; out (3,) last)
+        self._monitor_work = (np.empty(H + 1), np.empty(H + 1), np.empty(N), np.empty(3))
+        self._monitor_call = None
         # the condensed stiffness of the last Ω (the monitor of a converged point reuses
         # the one of Newton's last evaluation)
         self._cached = (None, None, None)
+        #: Ω (rad/s) -> (D, dD) computed by :meth:`_condensed` (read only): what
+        #: :meth:`condensed_many` takes instead of computing it again
+        self._by_omega = {}
+        self._by_omega_max = max(16, min(_BY_OMEGA, _BY_OMEGA_BYTES // (16 * (H + 1) * self.n_c ** 2)))
         #: residual (+ Jacobian) evaluations so far, the compiled corrector's included
         self.evaluations = 0
-        # fine grid for amplitude and peak force
-        n_fine = max(512, 8 * N)
-        self._tau_fine = 2 * np.pi * np.arange(n_fine) / n_fine
-        self._cos_fine = np.cos(np.outer(np.arange(H + 1), self._tau_fine))
         self._modal = None  # open-contact modes for the energy shares (built on first use)
 
     # ------------------------------------------------------------------ unknowns
@@ -294,7 +309,6 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         if cond.backend != "modal":
             self._fast = False
             return False
-        from ...core import corrector_kernels as ck
         from ...core.modal import _POLE_RTOL
 
         H, n_c, m = self.H, self.n_c, cond.n_modes
@@ -316,10 +330,16 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
             "samples": ck.Sampling(self._cos_table, self._sin_table, self._tau),
             "work": ck.NewtonWork(np.empty((H + 1, n_c, n_c)), np.empty((H + 1, n_c, n_c)), np.empty(n - 1),
                                   np.empty((n - 1, n)), np.empty((n, n)), np.empty(n), np.empty((n, n)),
-                                  np.empty(n), np.empty((H + 1, n_c)), np.empty(self.n_poles), np.zeros(1)),
+                                  np.empty(n), np.empty((H + 1, n_c)), np.empty(self.n_poles), np.zeros(1),
+                                  # the tangent solve where the continuation's is the same LU
+                                  np.empty(n if n <= _SMALL_DENSE else 0), np.zeros(1), np.zeros(1)),
             "ework": ck.EvalWork(*self._work),
         }
-        return self._fast
+        fast = self._fast
+        # the arguments after (u, u_pred, t, tol, step_tol, max_iter) that do not change
+        fast["fixed"] = (int(self.n_c), int(self.H))
+        fast["data"] = tuple(fast[k] for k in ("scale", "cond", "poles", "law", "samples", "work", "ework"))
+        return fast
 
     def fast_newton(self, u0, u_pred, tangent, tol: float, max_iter: int, step_tol: float):
         """Newton corrector on [R(u); t·(u − u_pred)] = 0 in one compiled loop (modal
@@ -327,9 +347,9 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
 
         Returns (u, iterations, residual history, Jacobian at u), or raises ArithmeticError
         with the reason (the continuation's failure)."""
-        from ...core import corrector_kernels as ck
-
-        fast = self._fast_setup()
+        fast = self._fast
+        if fast is None:
+            fast = self._fast_setup()
         if not fast:
             return None
         u = np.array(u0, dtype=float)
@@ -338,24 +358,37 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         D, dD, J = work.D, work.dD, work.J
         u_pred = np.ascontiguousarray(u_pred, dtype=float)
         tangent = np.ascontiguousarray(tangent, dtype=float)
-        args = (u, u_pred, tangent, float(tol), float(step_tol), int(max_iter), int(self.n_c), int(self.H),
-                hist, fast["scale"], fast["cond"], fast["poles"], fast["law"], fast["samples"], work,
-                fast["ework"])
+        args = (u, u_pred, tangent, float(tol), float(step_tol), int(max_iter), *fast["fixed"], hist,
+                *fast["data"])
         if "call" not in fast:  # the compiled overload, without the dispatcher's per-call typing
             fast["call"] = ck.newton_modal_entry(args)
         status, it = fast["call"](*args)
         self.evaluations += it if status == ck.SKIPPED else it + 1
-        if status == ck.CONVERGED:
-            self._cached = (float(u[-1] * self.colscale[-1]), D.copy(), dD.copy())
-            return u, int(it), hist[: it + 1].copy(), J.copy()
-        if status == ck.SKIPPED:  # D and J belong to the iterate before the last update
-            return u, int(it), hist[: it + 1].copy(), J.copy()
+        self._solved_tangent = None
+        if status == ck.CONVERGED or status == ck.SKIPPED:  # SKIPPED: D, J of the iterate before
+            if status == ck.CONVERGED:
+                self._cached = (float(u[-1] * self.colscale[-1]), D.copy(), dD.copy())
+            J = J.copy()
+            if len(work.tx) and work.t_info[0] == 0:
+                self._solved_tangent = (J, tangent, work.tx.copy(), float(work.t_sign[0]))
+            return u, int(it), hist[: it + 1].copy(), J
         if status == ck.POLE:  # the condensation's own message names the harmonic and the mode
             self._condensed(float(u[-1] * self.colscale[-1]), True)
         reason = {ck.NO_CONVERGENCE: f"no convergence in {max_iter} iterations (residual {hist[it]:.2e})",
                   ck.NON_FINITE: "non-finite residual", ck.SINGULAR: "singular Jacobian",
                   ck.POLE: "a harmonic of Ω sits on a fixed-interface eigenfrequency"}[status]
         raise ArithmeticError(reason)
+
+    def solved_tangent(self, J, t_prev):
+        """(x, sign of det [J; t_prevᵀ]) with [J; t_prevᵀ] x = e_n, when the compiled
+        corrector solved it at its return: ``J`` the Jacobian it returned and ``t_prev`` the
+        tangent it was given (the same objects); else None. Given once per corrector run
+        (the caller may scale x in place)."""
+        solved = self._solved_tangent
+        if solved is None or solved[0] is not J or solved[1] is not t_prev:
+            return None
+        self._solved_tangent = None
+        return solved[2], solved[3]
 
     # ------------------------------------------------------------------ residual
     def _condensed(self, omega: float, derivative: bool):
@@ -364,16 +397,21 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         last, D, dD = self._cached
         if last == omega and (dD is not None or not derivative):
             return D, dD
-        fast = self._fast_setup()
+        fast = self._fast
+        if fast is None:
+            fast = self._fast_setup()
         if fast:  # the modal kernel with the poles' terms left out and their static part added
-            from ...core._modal_kernels import _modal_dynamic_stiffness
-            from ...core.condense import SingularDynamicStiffness
-
             D0, B, w2, Rs, keep, static, rtol = fast["cond"]
             D = np.empty((self.H + 1, self.n_c, self.n_c))
             dD = np.empty_like(D) if derivative else None
             out = D if dD is None else dD
-            info = _modal_dynamic_stiffness(D0, B, w2, Rs, omega, self.H, keep, rtol, D, out, derivative)
+            args = (D0, B, w2, Rs, float(omega), self.H, keep, rtol, D, out, bool(derivative))
+            call = fast.get("stiffness")
+            if call is None:  # the kernel's overload typed once (its arguments' types are fixed)
+                call = fast["stiffness"] = (compiled_entry(_modal_dynamic_stiffness, args)
+                                            if hasattr(_modal_dynamic_stiffness, "compile")
+                                            else _modal_dynamic_stiffness)
+            info = call(*args)
             if info:
                 k, j = divmod(info - 1, len(w2))
                 raise SingularDynamicStiffness(
@@ -381,6 +419,10 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
                     f"fixed-interface eigenfrequency {np.sqrt(w2[j]):.9g} rad/s (mode index {j})")
             D += static
             self._cached = (omega, D, dD)
+            if derivative:  # a converged point's (the monitor's): the branch's records use it again
+                if len(self._by_omega) >= self._by_omega_max:
+                    self._by_omega.clear()
+                self._by_omega[omega] = (D, dD)
             return D, dD
         if self.pole_set is not None and self.pole_set.n:
             D, dD = self.pole_set.dynamic_stiffness(omega, derivative)
@@ -418,21 +460,55 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         if self.cond.backend == "modal":
             self.cond.check_range(omega, self.H)  # warns once past the modes kept
         D, dD = self._condensed(omega, True)
-        out = np.empty(3)
         a = np.ascontiguousarray(a)
         eta = self.unpack_eta(u)
-        _mmshbm_monitor_multi(D, dD, a, eta, self._pole_k, self._pole_b, self.cdof, self.lo, self.hi,
-                              self.r_each, omega, self._amplitude_row(a, omega, eta), self._amp_sign,
-                              self._cos_table, self._sin_table, np.empty(self.H + 1), np.empty(self.H + 1),
-                              np.empty(self.N), out)
+        args = (D, dD, a, eta, self._pole_k, self._pole_b, self.cdof, self.lo, self.hi, self.r_each, omega,
+                self._amplitude_row(a, omega, eta), self._amp_sign, self._cos_table, self._sin_table,
+                *self._monitor_work)
+        call = self._monitor_call
+        if call is None:
+            # the compiled corrector's problems (modal back end) pass arrays of fixed types
+            # (C-contiguous float64, made here or by the corrector): the compiled overload is
+            # typed once; others go through the dispatcher
+            call = _mmshbm_monitor_multi
+            if self._fast and hasattr(_mmshbm_monitor_multi, "compile"):
+                call = self._monitor_call = compiled_entry(_mmshbm_monitor_multi, args)
+        call(*args)
+        amplitude, energy, force = self._monitor_work[-1].tolist()
         return {
             "frequency": omega / (2 * np.pi),
-            "amplitude": float(out[0]),
-            "energy": float(out[1]),
-            "contact_force_max": float(out[2]),
+            "amplitude": amplitude,
+            "energy": energy,
+            "contact_force_max": force,
             "mode_share": self._mode_share_at(u, a, omega, eta, dD),
             **self._family_records_at(a, omega, eta, dD),
         }
+
+
+def _tables(H: int, N: int) -> tuple[np.ndarray, ...]:
+    """(τ (N,), cos kτ (2H+1, N), sin kτ (H+1, N), fine τ (n_fine,), cos kτ (H+1, n_fine) on
+    it) of an MMS-HBM problem, n_fine = max(512, 8N); kept per (H, N) up to
+    :data:`_TABLES_KEPT` numbers (read only: a problem takes copies)."""
+    if (3 * H + 2) * N + (H + 2) * max(512, 8 * N) <= _TABLES_KEPT:
+        return _kept_tables(H, N)
+    return _compute_tables(H, N)
+
+
+#: the largest tables (numbers) :func:`_tables` keeps (8 MB)
+_TABLES_KEPT = 1 << 20
+
+
+@functools.lru_cache(maxsize=32)
+def _kept_tables(H: int, N: int) -> tuple[np.ndarray, ...]:
+    return _compute_tables(H, N)
+
+
+def _compute_tables(H: int, N: int) -> tuple[np.ndarray, ...]:
+    tau = 2 * np.pi * np.arange(N) / N
+    n_fine = max(512, 8 * N)
+    tau_fine = 2 * np.pi * np.arange(n_fine) / n_fine
+    return (tau, np.cos(np.outer(np.arange(2 * H + 1), tau)), np.sin(np.outer(np.arange(H + 1), tau)),
+            tau_fine, np.cos(np.outer(np.arange(H + 1), tau_fine)))
 
 
 def _held_frequency(model: Model, dofs, mode: int) -> float:

@@ -8,7 +8,9 @@ import weakref
 
 import numpy as np
 
+from ...core.corrector_kernels import _start_mode_share
 from ...core.modal_energy import kinetic_energy_shares
+from ._family_kernels import family_records, harmonic_energies
 
 __all__ = ["FamilyMixin"]
 
@@ -218,8 +220,6 @@ class FamilyMixin:
         fast = self._fast_setup()
         if not fast:
             return float(self.modal_shares(u)[self.mode - 1, 1])
-        from ...core.corrector_kernels import _start_mode_share
-
         row, s0, s, sv, pole_j = self._share_setup()
         D0, B, w2, Rs, keep, static, rtol = fast["cond"]
         return float(_start_mode_share(np.ascontiguousarray(a), eta, omega, dD, self._pole_k,
@@ -230,8 +230,6 @@ class FamilyMixin:
         from the condensed stiffness alone: T_k = −(Ω/8) a_kᵀ ∂D_k/∂Ω a_k (with the pole
         unknowns' part). Exact for the condensation used (no modal basis needed): the
         kinetic energy of the DOFs with mass in harmonic k, whatever their shape."""
-        from ._family_kernels import harmonic_energies
-
         a, omega = self.unpack(u)
         _, dD = self._condensed(omega, True)
         return harmonic_energies(a, dD, self.unpack_eta(u), self._pole_k, omega)
@@ -260,8 +258,6 @@ class FamilyMixin:
     def _family_records_at(self, a: np.ndarray, omega: float, eta: np.ndarray, dD: np.ndarray) -> dict:
         """:meth:`family_records` from the unpacked (a, Ω, η) and ∂D/∂Ω at Ω, in one
         compiled pass (:mod:`._family_kernels`: the same numbers as NumPy's)."""
-        from ._family_kernels import family_records
-
         return family_records(a, dD, eta, self._pole_k, omega, self._modal_basis()[0])
 
     def _share_setup(self):

@@ -76,12 +76,22 @@ class SignalsMixin:
             from ...core.condense import SingularDynamicStiffness
 
             D0, B, w2, Rs, keep, static, rtol = fast["cond"]
+            known = self._by_omega  # those _condensed computed (the same numbers)
             for i, omega in enumerate(omegas):
-                if _modal_dynamic_stiffness(D0, B, w2, Rs, float(omega), self.H, keep, rtol, D[i],
+                omega = float(omega)
+                hit = known.get(omega)
+                if hit is not None:
+                    D[i] = hit[0]
+                    if derivative:
+                        dD[i] = hit[1]
+                    continue
+                if _modal_dynamic_stiffness(D0, B, w2, Rs, omega, self.H, keep, rtol, D[i],
                                             dD[i] if derivative else D[i], derivative):
                     raise SingularDynamicStiffness(f"a harmonic of Ω = {omega:.6g} rad/s sits on a "
                                                    "fixed-interface eigenfrequency")
-            D += static[None]
+                D[i] += static
+                if derivative and len(known) < self._by_omega_max:
+                    known[omega] = (D[i].copy(), dD[i].copy())
             return D, dD
         cached = self._cached
         try:

@@ -1,0 +1,135 @@
+"""What a run keeps instead of computing again gives the numbers it would compute: the
+compiled overloads typed once per argument types, the corrector's tangent solve, the
+condensed stiffness of the converged points, the per-(H, N) tables and the modal
+selection."""
+
+import numpy as np
+import pytest
+
+import mmshbm
+from mmshbm.core._entry import _type_key, compiled_entry
+from mmshbm.core.bordered import bordered_solve_sign
+from mmshbm.core.kernels import _dense_solve
+from mmshbm.core.steps import _tangent_sign
+from mmshbm.methods.mms.conservative import MMSHBMProblem
+
+
+def _system(n=7, seed=3):
+    rng = np.random.default_rng(seed)
+    A = rng.standard_normal((n, n)) + n * np.eye(n)
+    return A, rng.standard_normal(n)
+
+
+def test_type_key_tells_apart_what_numba_types_apart():
+    c = np.zeros((3, 4))
+    readonly = c.copy()
+    readonly.flags.writeable = False
+    keys = {_type_key(c), _type_key(np.asfortranarray(c)), _type_key(c[:, ::2]), _type_key(readonly),
+            _type_key(c.astype(np.float32)), _type_key(c[0])}
+    assert len(keys) == 6
+    assert _type_key(np.ones((5, 2))) == _type_key(c)  # shape and values do not matter
+    assert _type_key(c[1:]) == _type_key(c)  # a C-contiguous view is typed as the array
+    assert _type_key(3) != _type_key(2**63) and _type_key(3) != _type_key(3.0) != _type_key(True)
+    assert _type_key((c, 1.0)) != _type_key((c, 1))
+    assert _type_key((c, None)) is None  # not described: typed in full every time
+
+
+def test_compiled_entry_is_kept_per_types_and_solves():
+    A, b = _system()
+    if not hasattr(_dense_solve, "compile"):
+        pytest.skip("NUMBA_DISABLE_JIT")
+    n = len(b)
+
+    def args(A):
+        return (A, b, np.empty((n, n)), np.empty(n), np.zeros(1))
+
+    first = args(A)
+    entry = compiled_entry(_dense_solve, first)
+    assert compiled_entry(_dense_solve, args(A.copy())) is entry  # same types: not typed again
+    fortran = args(np.asfortranarray(A))
+    other = compiled_entry(_dense_solve, fortran)
+    assert other is not entry
+    for call, a in ((entry, first), (other, fortran)):
+        assert call(*a) == 0
+        np.testing.assert_allclose(a[3], np.linalg.solve(A, b), rtol=1e-12, atol=1e-12)
+        assert a[4][0] == np.sign(np.linalg.det(A))
+
+
+@pytest.fixture(scope="module")
+def beam():
+    return mmshbm.default_beam().model(21)
+
+
+def test_corrector_tangent_is_the_bordered_solve(beam):
+    """The tangent the compiled corrector solves at its return is, bit for bit, the bordered
+    solve of the continuation (and it is handed out once, for that J and t only)."""
+    p = MMSHBMProblem(beam, harmonics=5)
+    u = p.linear_mode_point(0.5 * beam.gap)
+    t = p.initial_tangent()
+    u_new, nit, hist, J = p.fast_newton(u, u, t, 1e-10, 10, 1e-12)
+    assert p.solved_tangent(J, t.copy()) is None  # another tangent vector: not this solve
+    rhs = np.zeros(len(t))
+    rhs[-1] = 1.0
+    x_ref, sign_ref = bordered_solve_sign(J, t, rhs)
+    x, sign = p.solved_tangent(J, t)
+    np.testing.assert_array_equal(x, x_ref)
+    assert sign == sign_ref
+    assert p.solved_tangent(J, t) is None  # given once
+    p.fast_newton(u, u, t, 1e-10, 10, 1e-12)
+    t_kernel, s_kernel = _tangent_sign(J, t, p)  # the J of the first run: solved again
+    p2 = MMSHBMProblem(beam, harmonics=5)
+    _, _, _, J2 = p2.fast_newton(u, u, t, 1e-10, 10, 1e-12)
+    t_fresh, s_fresh = _tangent_sign(J2, t, p2)
+    np.testing.assert_array_equal(t_kernel, t_fresh)
+    assert s_kernel == s_fresh
+
+
+def test_condensed_stiffness_kept_by_frequency_is_the_computed_one(beam):
+    b = mmshbm.backbone(beam, harmonics=5, max_amplitude=3 * beam.gap)
+    omegas = 2 * np.pi * b.frequency
+    kept = b.solver
+    assert len(kept._by_omega) >= len(b) // 2  # the converged points' stiffness was kept
+    fresh = MMSHBMProblem(beam, harmonics=5)
+    for derivative in (False, True):
+        D, dD = kept.condensed_many(omegas, derivative=derivative)
+        D_ref, dD_ref = fresh.condensed_many(omegas, derivative=derivative)
+        np.testing.assert_array_equal(D, D_ref)
+        if derivative:
+            np.testing.assert_array_equal(dD, dD_ref)
+    # and the records computed from them: a branch's modal shares, again from scratch
+    np.testing.assert_array_equal(b.records["modal_shares"], fresh.branch_records(b.states)["modal_shares"])
+
+
+def test_problems_share_tables_and_selection_by_value_not_by_object(beam):
+    p, q = MMSHBMProblem(beam, harmonics=5), MMSHBMProblem(beam, harmonics=5)
+    for name in ("_tau", "_cos_table", "_sin_table", "_tau_fine", "_cos_fine"):
+        a, b = getattr(p, name), getattr(q, name)
+        assert a is not b and not np.shares_memory(a, b) and a.flags.writeable
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(p._cos_table, np.cos(np.outer(np.arange(11), p._tau)))
+    assert p.cond.n_modes == q.cond.n_modes and p.cond.error_estimate == q.cond.error_estimate
+    assert p.cond.Rs is not q.cond.Rs
+    np.testing.assert_array_equal(p.cond.Rs, q.cond.Rs)
+    assert p.cond.error_estimate <= p.cond.tol  # the selection's own bound holds
+
+
+def test_projections_shared_between_condensations_project_the_recovery(beam):
+    """Two condensations of one reduction share a projector's projections; what they give is
+    the projector applied to the recovered motion (cosine coefficients of the DOFs with mass)."""
+    from mmshbm.core.condense import make_condensation
+
+    c1 = make_condensation(beam, "modal", harmonics=5)
+    c2 = make_condensation(beam, "modal", harmonics=5)
+    rng = np.random.default_rng(0)
+    P = rng.standard_normal((3, len(beam.l)))
+    a = rng.standard_normal((6, len(beam.c))) * beam.gap
+    omega = 2 * np.pi * 40.0
+    first = c1.projected_cosine_recovery(omega, a, P)
+    again = c2.projected_cosine_recovery(omega, a, P)
+    assert c2._projections[id(P)] is c1._projections[id(P)]
+    np.testing.assert_array_equal(first, again)
+    Qc = np.zeros((len(beam.c), 11))
+    Qc[:, 0], Qc[:, 1::2] = a[0], a[1:].T
+    Ql = c2.recover(omega, Qc)
+    ref = P @ np.column_stack([Ql[:, 0], Ql[:, 1::2]])
+    np.testing.assert_allclose(again, ref, rtol=1e-9, atol=1e-12 * np.abs(ref).max())
