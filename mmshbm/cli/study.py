@@ -111,9 +111,12 @@ def _run_study(args):
 
         check_beam_elements(max(args.elements))  # before any run assembles a model
     measured = common.measured(args)
+    marks = common.DEFAULT_MARKS if args.figure2 else STUDY_MARKS
+    marks = tuple(args.amplitudes) if args.amplitudes else marks
     executor = None if args.executor == "serial" else (args.executor or "process")
+    # the workers tabulate their runs for the table written below (Study.table)
     shared = {"executor": executor, "workers": args.workers, "chunksize": args.chunksize,
-              "verbose": common.progress(args), "warn": False}
+              "verbose": common.progress(args), "warn": False, "tabulate": (marks, "gap")}
     if args.max_amplitude is not None:
         shared.update(max_amplitude=args.max_amplitude, unit="gap")
     if args.max_steps is not None:
@@ -136,8 +139,6 @@ def _run_study(args):
             study = studies.run_study(beam, elements=args.elements or (8, 21), grading=args.grading, **grid,
                                       **shared)
         name = "study"
-    marks = common.DEFAULT_MARKS if args.figure2 else STUDY_MARKS
-    marks = tuple(args.amplitudes) if args.amplitudes else marks
     return study, name, marks, measured
 
 

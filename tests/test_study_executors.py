@@ -1,0 +1,115 @@
+"""Where a study's work is done: process pools started by fork or spawn, and table rows
+computed by the workers right after their runs. Every path must give the numbers, notes,
+warnings and saved files of the plain serial study with the table solved afterwards."""
+
+import json
+import logging
+import threading
+import warnings
+
+import numpy as np
+import pytest
+
+from mmshbm import studies
+from mmshbm._warnings import BranchWarning
+from mmshbm.analysis import executors, table_rows
+from mmshbm.results.branch import read_archive
+
+GRID = {"harmonics": (3, 5), "elements": (4, 6), "max_amplitude": 3.0, "unit": "gap", "warn": False}
+AMPS = (1.5, 2.3)
+
+
+def _saved(study, path):
+    """The saved study's arrays and metadata, less the wall times."""
+    arrays, meta = read_archive(study.save(path))
+    for key in ("elapsed_s", "busy_s", "open_s", "executor"):
+        meta["metadata"].pop(key, None)
+    for branch in meta["branches"]:
+        branch["metadata"].pop("elapsed_s", None)
+    return arrays, json.dumps(meta, sort_keys=True, default=str)
+
+
+def _same_tables(a, b):
+    assert a.frequency.tobytes() == b.frequency.tobytes()
+    np.testing.assert_array_equal(a.mode_share, b.mode_share)
+    assert a.notes == b.notes and a.partner == b.partner and a.status == b.status
+
+
+def test_rows_tabulated_by_the_workers_equal_the_parent_table(tmp_path):
+    serial = studies.run_study(executor="serial", **GRID)
+    pooled = studies.run_study(executor="process", workers=2, tabulate=(AMPS, "gap"), **GRID)
+    rows = pooled._rows[(AMPS, "gap")]
+    assert sorted(rows) == [0, 1, 2, 3]
+    # at least one cell lies between stored points: its row rebuilt the model and solved there
+    assert any(row.model for row in rows.values())
+    _same_tables(serial.table(AMPS), pooled.table(AMPS))
+    assert not pooled._rows  # used once; the table is cached
+    assert np.isfinite(serial.table(AMPS).frequency).sum() >= 6
+    a, meta_a = _saved(serial, tmp_path / "serial.npz")
+    b, meta_b = _saved(pooled, tmp_path / "pooled.npz")
+    assert meta_a == meta_b  # the models the table attached are recorded alike
+    assert sorted(a) == sorted(b) and all(a[k].tobytes() == b[k].tobytes() for k in a)
+    # another table is solved on the parent side as before
+    _same_tables(serial.table((2.0,)), pooled.table((2.0,)))
+
+
+def test_rows_keep_their_warnings_and_log_records_for_the_parent(monkeypatch, caplog):
+    def row_values(branch, amplitudes, unit):
+        warnings.warn("cell 0 is off the family", BranchWarning, stacklevel=1)
+        logging.getLogger("mmshbm.results.family_points").warning("the pinned solve failed at %g", 2.5)
+        logging.getLogger("mmshbm.results.family_points").debug("not asked for")
+        return [50.0], [0.9], [None], [""]
+
+    class Branch:
+        model = solver = None
+
+    monkeypatch.setattr(table_rows, "row_values", row_values)
+    caplog.set_level(logging.DEBUG)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        row = table_rows.tabulate(Branch(), [2.5], "gap", logging.INFO)
+    assert not caught and not caplog.records  # kept in the row, not issued in the worker
+    assert row.frequency == [50.0] and not row.model
+    assert [m for m, *_ in row.warnings] == ["cell 0 is off the family"]
+    assert [r.getMessage() for r in row.logs] == ["the pinned solve failed at 2.5"]
+    with pytest.warns(BranchWarning, match="off the family"):
+        table_rows.replay(row, Branch())
+    assert [r.getMessage() for r in caplog.records] == ["the pinned solve failed at 2.5"]
+
+    def fails(branch, amplitudes, unit):
+        raise ValueError("no gap")
+
+    monkeypatch.setattr(table_rows, "row_values", fails)
+    assert table_rows.tabulate(Branch(), [2.5], "gap") is None  # the parent computes it and raises there
+
+
+def test_start_method_forks_only_without_other_threads(monkeypatch):
+    monkeypatch.delenv("MMSHBM_START_METHOD", raising=False)
+    monkeypatch.setattr(executors.sys, "platform", "linux")
+    assert executors.start_method() == "fork"
+    stop = threading.Event()
+    other = threading.Thread(target=stop.wait)
+    other.start()
+    try:
+        assert executors.start_method() == "spawn"
+    finally:
+        stop.set()
+        other.join()
+    monkeypatch.setattr(executors.sys, "platform", "darwin")
+    assert executors.start_method() == "spawn"
+    monkeypatch.setenv("MMSHBM_START_METHOD", "forkserver")
+    assert executors.start_method() == "forkserver"
+    monkeypatch.setenv("MMSHBM_START_METHOD", "thread")
+    with pytest.raises(ValueError, match="MMSHBM_START_METHOD"):
+        executors.start_method()
+
+
+def test_spawned_and_forked_workers_give_identical_numbers():
+    kw = {**GRID, "harmonics": (5,)}
+    serial = studies.run_study(executor="serial", **kw)
+    for method in ("spawn", "fork"):
+        with executors.process_pool(2, method) as pool:
+            study = studies.run_study(executor=pool, tabulate=(AMPS, "gap"), **kw)
+        for a, b in zip(serial.branches, study.branches, strict=True):
+            assert a.states.tobytes() == b.states.tobytes() and a.frequency.tobytes() == b.frequency.tobytes()
+        _same_tables(serial.table(AMPS), study.table(AMPS))
