@@ -67,3 +67,35 @@ def test_worker_switch(monkeypatch):
     assert _plot_worker.enabled()
     monkeypatch.setattr(_plot_worker, "_cores", lambda: 1)
     assert not _plot_worker.enabled()
+
+
+def test_worker_and_this_process_draw_at_once(branch, tmp_path):
+    """``draw(jobs, here)``: the child draws ``jobs`` while this process draws ``here``;
+    the child reads one pickle, so a write end of its stdin held elsewhere (a process
+    forked after it started) does not keep it waiting."""
+    import os
+
+    data = BranchData.of(branch)
+    with _plot_worker.PlotWorker(start=True, modules=("backbones",)) as worker:
+        held = os.dup(worker._proc.stdin.fileno())  # as a forked pool worker would hold it
+        try:
+            assert worker.draw([("plot_frequency_energy", (data,), {"path": tmp_path / "child.png"})],
+                               here=[("plot_frequency_energy", (data,), {"path": tmp_path / "here.png"})])
+        finally:
+            os.close(held)
+    assert (tmp_path / "child.png").read_bytes() == (tmp_path / "here.png").read_bytes()
+    with _plot_worker.PlotWorker(start=False) as worker:  # no child: both drawn here
+        assert not worker.draw([("plot_frequency_energy", (data,), {"path": tmp_path / "a.png"})],
+                               here=[("plot_frequency_energy", (data,), {"path": tmp_path / "b.png"})])
+    assert (tmp_path / "a.png").read_bytes() == (tmp_path / "b.png").read_bytes()
+
+
+def test_study_figures_drawn_by_the_worker_equal_those_drawn_here(tmp_path, monkeypatch):
+    from mmshbm.cli import main
+
+    argv = ["study", "-H", "3", "5", "--elements", "4", "6", "--max-amplitude", "3", "--amplitudes", "2.3"]
+    for flag in ("1", "0"):
+        monkeypatch.setenv("MMSHBM_PLOT_WORKER", flag)
+        assert main([*argv, "--out", str(tmp_path / flag)]) == 0
+    for name in ("study.png", "study_convergence.png", "study_table.csv"):
+        assert (tmp_path / "1" / name).read_bytes() == (tmp_path / "0" / name).read_bytes(), name

@@ -167,7 +167,7 @@ def execute_chunk(specs: list, tabulate: tuple | None = None) -> tuple[list, flo
 
 
 def run_specs(specs: list, executor, workers: int, *, chunksize="auto", verbose: bool = False,
-              tabulate: tuple | None = None) -> tuple:
+              tabulate: tuple | None = None, while_running=None) -> tuple:
     """Run every spec and return the branches in spec order.
 
     Parameters
@@ -183,6 +183,10 @@ def run_specs(specs: list, executor, workers: int, *, chunksize="auto", verbose:
     tabulate : (amplitudes, unit), optional
         Each task also computes its runs' table rows after them
         (:func:`mmshbm.analysis.table_rows.tabulate`).
+    while_running : callable, optional
+        Called without arguments in this process once the tasks are sent (before the
+        first run in this process for ``executor=None``): work of the caller's that can
+        overlap the runs (e.g. importing what it needs afterwards).
 
     Returns
     -------
@@ -209,6 +213,8 @@ def run_specs(specs: list, executor, workers: int, *, chunksize="auto", verbose:
     bar = None
     try:
         if pool is None:
+            if while_running is not None:
+                while_running()
             bar = _bar(len(specs), verbose)
             info["tasks"] = len(specs)
             for spec in specs:
@@ -222,6 +228,8 @@ def run_specs(specs: list, executor, workers: int, *, chunksize="auto", verbose:
             chunks = [ordered[i:i + chunksize] for i in range(0, len(ordered), chunksize)]
             info["tasks"] = len(chunks)
             futures = {pool.submit(execute_chunk, chunk, tabulate): chunk for chunk in chunks}
+            if while_running is not None:
+                while_running()
             bar = _bar(len(specs), verbose)  # after the pool forked: tqdm starts a monitor thread
             try:
                 for fut in cf.as_completed(futures):

@@ -296,7 +296,7 @@ def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
               params: Mapping[str, Sequence] | None = None, samples: Mapping[str, Sequence] | None = None,
               grading: float = 10.0, max_amplitude: float | None = None, unit: str = "m",
               executor="process", workers: int = 2, chunksize="auto", verbose: bool = False,
-              warn: bool = True, tabulate: tuple | None = None, **options) -> Study:
+              warn: bool = True, tabulate: tuple | None = None, while_running=None, **options) -> Study:
     """Run :func:`mmshbm.backbone` over a grid and collect the branches.
 
     Parameters
@@ -352,6 +352,10 @@ def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
         warnings and log messages are the same (they are issued when :meth:`Study.table`
         is called). Any other table, and the table of a user ``model``, is computed here
         as usual.
+    while_running : callable, optional
+        Called without arguments in this process once the runs are sent to the workers,
+        so that work of the caller's overlaps them (the ``mmshbm study`` command imports
+        matplotlib there).
     **options
         Passed to every :func:`mmshbm.backbone` call (continuation and method options).
 
@@ -377,7 +381,7 @@ def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
         tabulate = (tuple(_amplitudes(amps).tolist()), _unit(table_unit))
     t0 = time.perf_counter()
     branches, kind, info = run_specs(specs, executor, workers, chunksize=chunksize, verbose=verbose,
-                                     tabulate=tabulate)
+                                     tabulate=tabulate, while_running=while_running)
     elapsed = time.perf_counter() - t0
     rows = info.pop("rows", None)
     parent_models = _parent_models(model, specs)

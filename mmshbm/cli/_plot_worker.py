@@ -8,6 +8,9 @@ waits for its jobs on stdin; the parent sends the figures to draw, as
 :class:`~mmshbm.plotting.data.BranchData` (no solver, no model: unpickling them
 imports nothing heavy), and waits for the files.
 
+``mmshbm study`` draws its two figures at once: the child draws one while the parent
+draws the other (:meth:`PlotWorker.draw` with ``here``).
+
 The figures are the same as drawn in the parent (same code, same matplotlib and
 matplotlibrc). Whatever goes wrong in the child (it cannot start, dies, times out,
 a plot raises) makes the parent draw the figures itself, so the result never depends
@@ -30,6 +33,8 @@ log = logging.getLogger(__name__)
 
 #: seconds the parent waits for the child's figures before drawing them itself
 TIMEOUT_S = 120.0
+#: the modules of mmshbm.plotting the child imports before its jobs come (the backbone figures)
+MODULES = ("backbones", "signals", "response")
 
 
 def _cores() -> int:
@@ -69,15 +74,16 @@ class PlotWorker:
             worker.draw([("plot_backbone", (data,), {"path": "out/b.png"})])
     """
 
-    def __init__(self, start: bool | None = None):
+    def __init__(self, start: bool | None = None, modules: tuple[str, ...] = MODULES):
         self._proc = None
         if not (enabled() if start is None else start):
             return
         # the child imports exactly as this process does: same interpreter, same sys.path
         code = ("import sys, json; sys.path[:] = json.loads(sys.argv[1]); "
-                "from mmshbm.cli._plot_worker import _main; _main()")
+                "from mmshbm.cli._plot_worker import _main; _main(json.loads(sys.argv[2]))")
         try:
-            self._proc = subprocess.Popen([sys.executable, "-c", code, json.dumps(sys.path)],
+            self._proc = subprocess.Popen([sys.executable, "-c", code, json.dumps(sys.path),
+                                           json.dumps(list(modules))],
                                           stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
                                           stderr=subprocess.PIPE)
         except OSError as err:  # pragma: no cover - no way to start a process
@@ -87,29 +93,36 @@ class PlotWorker:
     def running(self) -> bool:
         return self._proc is not None and self._proc.poll() is None
 
-    def draw(self, jobs: list[tuple[str, tuple, dict]]) -> bool:
+    def draw(self, jobs: list[tuple[str, tuple, dict]], here: list[tuple[str, tuple, dict]] = ()) -> bool:
         """Draw ``jobs``: (name of a function of :mod:`mmshbm.plotting`, args, kwargs with
-        ``path``), in the child when it is running, else (or when it fails) here. Returns
-        True when the child drew them."""
+        ``path``), in the child when it is running, else (or when it fails) here; and
+        ``here`` (same form) in this process meanwhile. Returns True when the child drew
+        ``jobs``."""
         if not jobs:
             self.close()
+            _draw(here)
             return False
         if self._proc is not None:
             try:
-                _, err = self._proc.communicate(pickle.dumps(jobs, protocol=pickle.HIGHEST_PROTOCOL),
-                                                timeout=TIMEOUT_S)
-                if self._proc.returncode == 0:
-                    self._proc = None
-                    return True
-                log.info("plot worker failed (exit %s): drawing in this process\n%s", self._proc.returncode,
-                         err.decode(errors="replace").strip())
-            except (OSError, ValueError, pickle.PicklingError, subprocess.TimeoutExpired) as err:
+                self._proc.stdin.write(pickle.dumps(jobs, protocol=pickle.HIGHEST_PROTOCOL))
+                self._proc.stdin.flush()  # communicate() closes it
+            except (OSError, ValueError, pickle.PicklingError) as err:
                 log.info("plot worker failed (%s): drawing in this process", err)
+            else:
+                _draw(here)  # meanwhile (a plot that raises here ends the child on exit)
+                here = ()
+                try:
+                    _, err = self._proc.communicate(timeout=TIMEOUT_S)
+                    if self._proc.returncode == 0:
+                        self._proc = None
+                        return True
+                    log.info("plot worker failed (exit %s): drawing in this process\n%s",
+                             self._proc.returncode, err.decode(errors="replace").strip())
+                except (OSError, ValueError, subprocess.TimeoutExpired) as err:
+                    log.info("plot worker failed (%s): drawing in this process", err)
             self.close()
-        from .. import plotting
-
-        for name, args, kwargs in jobs:
-            getattr(plotting, name)(*args, **kwargs)
+        _draw(here)
+        _draw(jobs)
         return False
 
     def close(self) -> None:
@@ -128,26 +141,37 @@ class PlotWorker:
         self.close()
 
 
-def _serve() -> int:
-    """The child: import the plots, then draw the jobs read from stdin (none on EOF)."""
+def _draw(jobs) -> None:
+    """Draw ``jobs`` in this process."""
+    if not jobs:
+        return
+    from .. import plotting
+
+    for name, args, kwargs in jobs:
+        getattr(plotting, name)(*args, **kwargs)
+
+
+def _serve(modules=MODULES) -> int:
+    """The child: import the plots, then draw the jobs read from stdin (none on EOF).
+    One pickle is read, not up to EOF: processes forked by the parent after this child
+    started hold the write end of its stdin too."""
     import importlib
 
     from .. import plotting
 
-    for module in ("backbones", "signals", "response"):  # matplotlib: the point of running ahead
+    for module in modules:  # matplotlib: the point of running ahead
         importlib.import_module(f"{plotting.__name__}.{module}")
-
-    data = sys.stdin.buffer.read()
-    if not data:
+    try:
+        jobs = pickle.load(sys.stdin.buffer)
+    except EOFError:
         return 0
-    for name, args, kwargs in pickle.loads(data):
-        getattr(plotting, name)(*args, **kwargs)
+    _draw(jobs)
     return 0
 
 
-def _main() -> None:  # pragma: no cover - runs in the child
+def _main(modules=MODULES) -> None:  # pragma: no cover - runs in the child
     import gc
 
-    code = _serve()
+    code = _serve(tuple(modules))
     gc.freeze()  # a fast exit, as the mmshbm program's
     sys.exit(code)

@@ -62,7 +62,12 @@ def run(args) -> int:
         from .friction_study import run_normal_load
 
         return run_normal_load(args, params)
-    with warnings.catch_warnings(record=True) as caught:
+    from ._plot_worker import PlotWorker
+
+    # a grid study's two figures are drawn at once: one by a child that imports matplotlib
+    # while the runs go on (when a core is about idle, see _plot_worker.enabled), one here
+    with warnings.catch_warnings(record=True) as caught, \
+            PlotWorker(start=None if not args.figure2 else False, modules=("grids",)) as worker:
         # the package's warnings (the runs' checks, a model's truncation, ...) go to the
         # report file, one count on the terminal, every line with -v
         warnings.simplefilter("always", MmshbmWarning)
@@ -71,7 +76,7 @@ def run(args) -> int:
         table = study.table(marks, unit="gap")
         report = study.report(marks, unit="gap")
         files = [study.save(out / f"{name}.npz"), table.to_csv(out / f"{name}_table.csv")]
-        pictures = _plots(args, study, name, marks, measured, table, out)
+        pictures = _plots(args, study, name, marks, measured, table, out, worker)
     raised = [w for w in caught if issubclass(w.category, MmshbmWarning)]
     for w in caught:
         if not issubclass(w.category, MmshbmWarning):
@@ -114,9 +119,11 @@ def _run_study(args):
     marks = common.DEFAULT_MARKS if args.figure2 else STUDY_MARKS
     marks = tuple(args.amplitudes) if args.amplitudes else marks
     executor = None if args.executor == "serial" else (args.executor or "process")
-    # the workers tabulate their runs for the table written below (Study.table)
+    # the workers tabulate their runs for the table written below (Study.table); this
+    # process imports the plots meanwhile
     shared = {"executor": executor, "workers": args.workers, "chunksize": args.chunksize,
-              "verbose": common.progress(args), "warn": False, "tabulate": (marks, "gap")}
+              "verbose": common.progress(args), "warn": False, "tabulate": (marks, "gap"),
+              "while_running": _import_plots}
     if args.max_amplitude is not None:
         shared.update(max_amplitude=args.max_amplitude, unit="gap")
     if args.max_steps is not None:
@@ -142,21 +149,44 @@ def _run_study(args):
     return study, name, marks, measured
 
 
-def _plots(args, study, name, marks, measured, table, out) -> list:
-    from ..plotting import plot_figure2, plot_study
-    from ..plotting.grids import plot_convergence, plot_family_grid
-
+def _plots(args, study, name, marks, measured, table, out, worker) -> list:
     png = out / f"{name}.png"
     files = [png]
+    if not args.figure2 and common.has_grid(study):
+        files.append(out / f"{name}_convergence.png")
+        # the child draws the family grid (it reads the branches' arrays only), this process
+        # the convergence plot meanwhile
+        worker.draw([("plot_family_grid", (_arrays_only(study),), {"amplitudes": marks, "path": png})],
+                    here=[("plot_convergence", (study,), {"amplitudes": marks, "table": table,
+                                                           "path": files[-1]})])
+        return files
+    worker.close()
+    from ..plotting import plot_figure2, plot_study
+
     if args.figure2:
         plot_figure2(study, marks=marks, measured=measured, path=png)
-    elif common.has_grid(study):
-        plot_family_grid(study, amplitudes=marks, path=png)
-        files.append(out / f"{name}_convergence.png")
-        plot_convergence(study, amplitudes=marks, table=table, path=files[-1])
     else:
         plot_study(study, measured=measured, path=png)
     return files
+
+
+def _import_plots() -> None:
+    """Import matplotlib and the study plots (~0.3 s)."""
+    from ..plotting import grids, studies  # noqa: F401
+
+
+def _arrays_only(study):
+    """``study`` with its branches' arrays and metadata, without models or solvers (cheap
+    to send to the plot worker)."""
+    import copy
+
+    branches = []
+    for b in study.branches:
+        b = copy.copy(b)
+        b.model = None
+        b.solver = None
+        branches.append(b)
+    return type(study)(runs=study.runs, branches=branches, metadata=study.metadata)
 
 
 def _throughput(args) -> int:
