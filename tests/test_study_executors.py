@@ -113,3 +113,26 @@ def test_spawned_and_forked_workers_give_identical_numbers():
         for a, b in zip(serial.branches, study.branches, strict=True):
             assert a.states.tobytes() == b.states.tobytes() and a.frequency.tobytes() == b.frequency.tobytes()
         _same_tables(serial.table(AMPS), study.table(AMPS))
+
+
+def test_auto_chunks_shrink_to_single_runs_for_large_studies():
+    gaps = list(np.linspace(1e-3, 2e-3, 1000))
+    specs = studies.grid_specs(harmonics=(3,), elements=(8,), samples={"gap": gaps})
+    for workers in (2, 16):
+        chunks = executors.plan_chunks(specs, workers)
+        flat = [s.index for c in chunks for s in c]
+        assert flat == [s.index for s in executors.longest_first(specs)]  # every spec once, in order
+        sizes = [len(c) for c in chunks]
+        assert sizes == sorted(sizes, reverse=True) and sizes[-workers:] == [1] * workers
+        assert sizes[0] == 1000 // (2 * workers)  # half the work spread over the workers first
+        # few tasks: about 2 workers ln(n / 2 workers) + 2 workers
+        assert len(chunks) <= 2 * workers * (np.log(1000 / (2 * workers)) + 2)
+        assert executors.auto_chunksize(1000, workers) == round(1000 / len(chunks))
+    # small studies (runs of unequal cost): one run per task; an integer: chunks of that many
+    assert [len(c) for c in executors.plan_chunks(specs[:63], 2)] == [1] * 63
+    assert executors.auto_chunksize(63, 2) == 1
+    assert [len(c) for c in executors.plan_chunks(specs[:10], 2, 4)] == [4, 4, 2]
+    # unequal costs: the guided chunks hold about equal shares of the cost left, not of the count
+    mixed = studies.grid_specs(harmonics=(1, 9), elements=(8,), samples={"gap": gaps[:40]})
+    chunks = executors.plan_chunks(mixed, 2)
+    assert len(chunks[0]) == 10 and {s.harmonics for s in chunks[0]} == {9}  # 40 H9 of cost 243: 1/4 of it

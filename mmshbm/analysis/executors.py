@@ -7,7 +7,9 @@ queues or Dask's scheduler: of the order of 0.1–1 ms per task for a process po
 ms for Dask) is paid once per chunk instead of once per backbone. Every spec is executed
 by the same function whatever the executor and chunk, so the numbers are identical.
 
-Specs go to the pool longest first (:func:`longest_first`, by an estimate of their cost
+A large study's chunks shrink as the study goes (:func:`plan_chunks`): few tasks, and
+single runs at the end, where a long chunk would keep one worker busy while the others
+idle. Specs go to the pool longest first (:func:`longest_first`, by an estimate of their cost
 from H and the model's size): a study's wall time is set by its longest runs, and a long
 run sent last keeps one worker busy while the others idle.
 
@@ -35,8 +37,8 @@ import time
 from .. import _validate as check
 from .runspec import execute
 
-__all__ = ["open_executor", "run_specs", "auto_chunksize", "estimated_cost", "longest_first", "start_method",
-           "process_pool", "preload"]
+__all__ = ["open_executor", "run_specs", "auto_chunksize", "plan_chunks", "estimated_cost", "longest_first",
+           "start_method", "process_pool", "preload"]
 
 log = logging.getLogger(__name__)
 
@@ -96,11 +98,66 @@ def process_pool(workers: int, method: str | None = None) -> cf.ProcessPoolExecu
                                   initializer=_worker_init)
 
 
+#: studies with fewer runs per worker than this go one run per task ("auto")
+SMALL_PER_WORKER = 32
+#: "auto" chunks of a large study: each takes this share of the estimated cost not yet
+#: handed out, divided by the workers
+GUIDED_SHARE = 0.5
+
+
 def auto_chunksize(n_runs: int, workers: int) -> int:
-    """Specs per task when ``chunksize="auto"``: about 16 tasks per worker (a straggling
-    last chunk then costs a worker at most ~1/16 of its share), and one spec per task for
-    small studies (fewer than 32 runs per worker), whose runs differ widely in cost."""
-    return max(1, n_runs // (16 * max(1, workers)))
+    """The typical specs per task of ``chunksize="auto"`` (for sizing a task's payload):
+    one for small studies (fewer than :data:`SMALL_PER_WORKER` runs per worker), else the
+    mean chunk of :func:`plan_chunks`'s guided plan for runs of equal cost."""
+    workers = max(1, workers)
+    if n_runs < SMALL_PER_WORKER * workers:
+        return 1
+    return max(1, round(n_runs / len(_guided([1.0] * n_runs, workers))))
+
+
+def plan_chunks(specs: list, workers: int, chunksize="auto") -> list[list]:
+    """The tasks of a pool: ``specs`` longest first (:func:`longest_first`), cut into chunks.
+
+    An integer ``chunksize`` cuts chunks of that many specs. ``"auto"`` sends small
+    studies (fewer than :data:`SMALL_PER_WORKER` runs per worker, whose runs differ widely
+    in cost) one spec per task, and *guides* large ones: each chunk holds about
+    ``GUIDED_SHARE / workers`` of the estimated cost not yet handed out, so chunks shrink
+    from about n/(2·workers) specs to one. A large study then costs few tasks (about
+    2·workers·ln(n/workers): the executor's per-task cost, a pickled round trip through
+    the pool's queues, stays negligible however many workers there are) and ends with
+    single specs (a worker waits at most about one run for the others at the end)."""
+    ordered = longest_first(specs)
+    if chunksize == "auto":
+        if len(ordered) < SMALL_PER_WORKER * max(1, workers):
+            sizes = [1] * len(ordered)
+        else:
+            sizes = _guided([estimated_cost(s) for s in ordered], workers)
+    else:
+        sizes = [chunksize] * -(-len(ordered) // chunksize)
+    chunks, start = [], 0
+    for size in sizes:
+        if start >= len(ordered):
+            break
+        chunks.append(ordered[start:start + size])
+        start += size
+    return chunks
+
+
+def _guided(costs: list[float], workers: int) -> list[int]:
+    """Chunk sizes over ``costs`` (in order): each chunk's cost about GUIDED_SHARE/workers of
+    the cost left, at least one item."""
+    left = float(sum(costs))
+    sizes, i = [], 0
+    while i < len(costs):
+        target = GUIDED_SHARE * left / max(1, workers) * (1 + 1e-9)  # equal costs: no rounding loss
+        size, cost = 0, 0.0
+        while i + size < len(costs) and (size == 0 or cost + costs[i + size] <= target):
+            cost += costs[i + size]
+            size += 1
+        sizes.append(size)
+        left -= cost
+        i += size
+    return sizes
 
 
 def estimated_cost(spec) -> float:
@@ -177,7 +234,7 @@ def run_specs(specs: list, executor, workers: int, *, chunksize="auto", verbose:
     executor, workers
         As in :func:`mmshbm.analysis.studies.run_study`.
     chunksize : int or "auto"
-        Specs per task (:func:`auto_chunksize` for "auto"); ignored in this process.
+        Specs per task, or "auto" (:func:`plan_chunks`); ignored in this process.
     verbose : bool
         Progress bar (tqdm; hidden when not on a terminal).
     tabulate : (amplitudes, unit), optional
@@ -199,13 +256,11 @@ def run_specs(specs: list, executor, workers: int, *, chunksize="auto", verbose:
         rows in spec order (None where a row raised).
     """
     workers = check.integer("workers", workers, minimum=1)
-    if chunksize == "auto":
-        chunksize = auto_chunksize(len(specs), workers)
-    chunksize = check.integer("chunksize", chunksize, minimum=1)
+    if chunksize != "auto":
+        chunksize = check.integer("chunksize", chunksize, minimum=1)
     t0 = time.perf_counter()
     pool, close, kind = open_executor(executor, workers)
-    info = {"chunksize": chunksize if pool is not None else 1, "open_s": time.perf_counter() - t0,
-            "busy_s": 0.0}
+    info = {"chunksize": 1, "open_s": time.perf_counter() - t0, "busy_s": 0.0}
     out: list = [None] * len(specs)
     rows: list = [None] * len(specs)
     if tabulate is not None:  # the package's log level here, for the workers' records
@@ -224,9 +279,9 @@ def run_specs(specs: list, executor, workers: int, *, chunksize="auto", verbose:
                     rows[spec.index] = chunk_rows[0]
                 _progress(bar, spec, out[spec.index])
         else:
-            ordered = longest_first(specs)
-            chunks = [ordered[i:i + chunksize] for i in range(0, len(ordered), chunksize)]
+            chunks = plan_chunks(specs, workers, chunksize)
             info["tasks"] = len(chunks)
+            info["chunksize"] = max(len(c) for c in chunks) if chunks else 1
             futures = {pool.submit(execute_chunk, chunk, tabulate): chunk for chunk in chunks}
             if while_running is not None:
                 while_running()
@@ -251,7 +306,7 @@ def run_specs(specs: list, executor, workers: int, *, chunksize="auto", verbose:
             close()
     if tabulate is not None:
         info["rows"] = rows
-    log.debug("%d runs in %d tasks of up to %d (%s)", len(specs), info["tasks"], chunksize, kind)
+    log.debug("%d runs in %d tasks of up to %d (%s)", len(specs), info["tasks"], info["chunksize"], kind)
     return out, kind, info
 
 
