@@ -69,33 +69,61 @@ def test_worker_switch(monkeypatch):
     assert not _plot_worker.enabled()
 
 
-def test_worker_and_this_process_draw_at_once(branch, tmp_path):
-    """``draw(jobs, here)``: the child draws ``jobs`` while this process draws ``here``;
-    the child reads one pickle, so a write end of its stdin held elsewhere (a process
-    forked after it started) does not keep it waiting."""
-    import os
+def test_forked_child_draws_the_same_files_and_falls_back(branch, tmp_path, monkeypatch):
+    """``draw_forked(jobs, here)``: a forked child draws ``jobs`` while this process draws
+    ``here``; the warnings of the child's figures are issued here; a job that fails in
+    the child is drawn again here, where it raises as usual."""
+    import threading
+    import warnings
 
     data = BranchData.of(branch)
-    with _plot_worker.PlotWorker(start=True, modules=("backbones",)) as worker:
-        held = os.dup(worker._proc.stdin.fileno())  # as a forked pool worker would hold it
-        try:
-            assert worker.draw([("plot_frequency_energy", (data,), {"path": tmp_path / "child.png"})],
-                               here=[("plot_frequency_energy", (data,), {"path": tmp_path / "here.png"})])
-        finally:
-            os.close(held)
+    energy = "plot_frequency_energy"
+    # (a thread another test left behind would turn forking off; this test forks anyway)
+    monkeypatch.setattr(_plot_worker, "fork_enabled", lambda: True)
+    assert _plot_worker.draw_forked([(energy, (data,), {"path": tmp_path / "child.png"})],
+                                    here=[(energy, (data,), {"path": tmp_path / "here.png"})])
     assert (tmp_path / "child.png").read_bytes() == (tmp_path / "here.png").read_bytes()
-    with _plot_worker.PlotWorker(start=False) as worker:  # no child: both drawn here
-        assert not worker.draw([("plot_frequency_energy", (data,), {"path": tmp_path / "a.png"})],
-                               here=[("plot_frequency_energy", (data,), {"path": tmp_path / "b.png"})])
-    assert (tmp_path / "a.png").read_bytes() == (tmp_path / "b.png").read_bytes()
+
+    def warns(*args, path):
+        warnings.warn("drawn in the child", mmshbm.BranchWarning, stacklevel=1)
+        path.write_text("figure")
+
+    plotting.warns_in_test = warns
+    try:
+        with pytest.warns(mmshbm.BranchWarning, match="drawn in the child"):
+            assert _plot_worker.draw_forked([("warns_in_test", (), {"path": tmp_path / "w.txt"})])
+    finally:
+        del plotting.warns_in_test
+    assert (tmp_path / "w.txt").read_text() == "figure"
+    bad = [("plot_backbone", (data,), {"labels": ["one", "two"], "path": tmp_path / "x.png"})]
+    with pytest.raises(ValueError, match="2 labels for 1"):
+        _plot_worker.draw_forked(bad)  # fails in the child, raises here
+    # another thread running: no fork, both drawn here
+    stop = threading.Event()
+    other = threading.Thread(target=stop.wait)
+    other.start()
+    monkeypatch.undo()
+    try:
+        assert not _plot_worker.fork_enabled()
+        assert not _plot_worker.draw_forked([(energy, (data,), {"path": tmp_path / "a.png"})],
+                                            here=[(energy, (data,), {"path": tmp_path / "b.png"})])
+    finally:
+        stop.set()
+        other.join()
+    assert (tmp_path / "a.png").read_bytes() == (tmp_path / "here.png").read_bytes()
 
 
-def test_study_figures_drawn_by_the_worker_equal_those_drawn_here(tmp_path, monkeypatch):
+def test_study_figures_drawn_by_the_forked_child_equal_those_drawn_here(tmp_path, monkeypatch):
     from mmshbm.cli import main
 
     argv = ["study", "-H", "3", "5", "--elements", "4", "6", "--max-amplitude", "3", "--amplitudes", "2.3"]
-    for flag in ("1", "0"):
-        monkeypatch.setenv("MMSHBM_PLOT_WORKER", flag)
-        assert main([*argv, "--out", str(tmp_path / flag)]) == 0
+    drawn = []
+    forked = _plot_worker.draw_forked
+    monkeypatch.setattr(_plot_worker, "draw_forked", lambda *a, **k: drawn.append(forked(*a, **k)))
+    monkeypatch.setattr(_plot_worker, "fork_enabled", lambda: True)
+    assert main([*argv, "--out", str(tmp_path / "forked")]) == 0
+    assert drawn == [True]  # the family grid was drawn by the child
+    monkeypatch.setattr(_plot_worker, "fork_enabled", lambda: False)
+    assert main([*argv, "--out", str(tmp_path / "here")]) == 0
     for name in ("study.png", "study_convergence.png", "study_table.csv"):
-        assert (tmp_path / "1" / name).read_bytes() == (tmp_path / "0" / name).read_bytes(), name
+        assert (tmp_path / "forked" / name).read_bytes() == (tmp_path / "here" / name).read_bytes(), name

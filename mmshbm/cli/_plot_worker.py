@@ -8,8 +8,9 @@ waits for its jobs on stdin; the parent sends the figures to draw, as
 :class:`~mmshbm.plotting.data.BranchData` (no solver, no model: unpickling them
 imports nothing heavy), and waits for the files.
 
-``mmshbm study`` draws its two figures at once: the child draws one while the parent
-draws the other (:meth:`PlotWorker.draw` with ``here``).
+``mmshbm study`` draws its two figures at once, one in a child forked after the runs
+(:func:`draw_forked`: it has matplotlib and the study already, nothing to import or send)
+and one in the parent.
 
 The figures are the same as drawn in the parent (same code, same matplotlib and
 matplotlibrc). Whatever goes wrong in the child (it cannot start, dies, times out,
@@ -28,13 +29,13 @@ import os
 import pickle
 import subprocess
 import sys
+import threading
+import warnings
 
 log = logging.getLogger(__name__)
 
 #: seconds the parent waits for the child's figures before drawing them itself
 TIMEOUT_S = 120.0
-#: the modules of mmshbm.plotting the child imports before its jobs come (the backbone figures)
-MODULES = ("backbones", "signals", "response")
 
 
 def _cores() -> int:
@@ -74,16 +75,15 @@ class PlotWorker:
             worker.draw([("plot_backbone", (data,), {"path": "out/b.png"})])
     """
 
-    def __init__(self, start: bool | None = None, modules: tuple[str, ...] = MODULES):
+    def __init__(self, start: bool | None = None):
         self._proc = None
         if not (enabled() if start is None else start):
             return
         # the child imports exactly as this process does: same interpreter, same sys.path
         code = ("import sys, json; sys.path[:] = json.loads(sys.argv[1]); "
-                "from mmshbm.cli._plot_worker import _main; _main(json.loads(sys.argv[2]))")
+                "from mmshbm.cli._plot_worker import _main; _main()")
         try:
-            self._proc = subprocess.Popen([sys.executable, "-c", code, json.dumps(sys.path),
-                                           json.dumps(list(modules))],
+            self._proc = subprocess.Popen([sys.executable, "-c", code, json.dumps(sys.path)],
                                           stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
                                           stderr=subprocess.PIPE)
         except OSError as err:  # pragma: no cover - no way to start a process
@@ -93,36 +93,29 @@ class PlotWorker:
     def running(self) -> bool:
         return self._proc is not None and self._proc.poll() is None
 
-    def draw(self, jobs: list[tuple[str, tuple, dict]], here: list[tuple[str, tuple, dict]] = ()) -> bool:
+    def draw(self, jobs: list[tuple[str, tuple, dict]]) -> bool:
         """Draw ``jobs``: (name of a function of :mod:`mmshbm.plotting`, args, kwargs with
-        ``path``), in the child when it is running, else (or when it fails) here; and
-        ``here`` (same form) in this process meanwhile. Returns True when the child drew
-        ``jobs``."""
+        ``path``), in the child when it is running, else (or when it fails) here. Returns
+        True when the child drew them."""
         if not jobs:
             self.close()
-            _draw(here)
             return False
         if self._proc is not None:
             try:
-                self._proc.stdin.write(pickle.dumps(jobs, protocol=pickle.HIGHEST_PROTOCOL))
-                self._proc.stdin.flush()  # communicate() closes it
-            except (OSError, ValueError, pickle.PicklingError) as err:
+                _, err = self._proc.communicate(pickle.dumps(jobs, protocol=pickle.HIGHEST_PROTOCOL),
+                                                timeout=TIMEOUT_S)
+                if self._proc.returncode == 0:
+                    self._proc = None
+                    return True
+                log.info("plot worker failed (exit %s): drawing in this process\n%s", self._proc.returncode,
+                         err.decode(errors="replace").strip())
+            except (OSError, ValueError, pickle.PicklingError, subprocess.TimeoutExpired) as err:
                 log.info("plot worker failed (%s): drawing in this process", err)
-            else:
-                _draw(here)  # meanwhile (a plot that raises here ends the child on exit)
-                here = ()
-                try:
-                    _, err = self._proc.communicate(timeout=TIMEOUT_S)
-                    if self._proc.returncode == 0:
-                        self._proc = None
-                        return True
-                    log.info("plot worker failed (exit %s): drawing in this process\n%s",
-                             self._proc.returncode, err.decode(errors="replace").strip())
-                except (OSError, ValueError, subprocess.TimeoutExpired) as err:
-                    log.info("plot worker failed (%s): drawing in this process", err)
             self.close()
-        _draw(here)
-        _draw(jobs)
+        from .. import plotting
+
+        for name, args, kwargs in jobs:
+            getattr(plotting, name)(*args, **kwargs)
         return False
 
     def close(self) -> None:
@@ -141,37 +134,83 @@ class PlotWorker:
         self.close()
 
 
+def fork_enabled() -> bool:
+    """Can :func:`draw_forked` fork? On Linux with more than one core, when no other
+    Python thread runs (a forked child would inherit the locks they hold)."""
+    return (sys.platform.startswith("linux") and hasattr(os, "fork") and _cores() > 1
+            and threading.active_count() == 1)
+
+
+def draw_forked(jobs: list[tuple[str, tuple, dict]], here: list[tuple[str, tuple, dict]] = ()) -> bool:
+    """Draw ``jobs`` (as :meth:`PlotWorker.draw` takes them) in a child forked from this
+    process while this process draws ``here``. The child starts with everything this
+    process imported and computed (matplotlib, the study): nothing to import, nothing to
+    send. The warnings the child's figures raise are issued again here. When the child
+    cannot be forked (:func:`fork_enabled`) or fails, ``jobs`` are drawn here. Returns
+    True when the child drew them."""
+    if not jobs or not fork_enabled():
+        _draw(here)
+        _draw(jobs)
+        return False
+    read, write = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # pragma: no cover - the child
+        code = 1
+        try:
+            os.close(read)
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                _draw(jobs)
+            raised = [(str(w.message), w.category, w.filename, w.lineno) for w in caught]
+            with os.fdopen(write, "wb") as pipe:
+                pickle.dump(raised, pipe)
+            code = 0
+        finally:
+            os._exit(code)
+    os.close(write)
+    try:
+        _draw(here)
+    finally:
+        with os.fdopen(read, "rb") as pipe:
+            data = pipe.read()
+        _, status = os.waitpid(pid, 0)
+    if os.waitstatus_to_exitcode(status) == 0 and data:
+        for message, category, filename, lineno in pickle.loads(data):
+            warnings.warn_explicit(message, category, filename, lineno)
+        return True
+    log.info("forked plot child failed (exit %s): drawing in this process", os.waitstatus_to_exitcode(status))
+    _draw(jobs)
+    return False
+
+
 def _draw(jobs) -> None:
     """Draw ``jobs`` in this process."""
-    if not jobs:
-        return
     from .. import plotting
 
     for name, args, kwargs in jobs:
         getattr(plotting, name)(*args, **kwargs)
 
 
-def _serve(modules=MODULES) -> int:
-    """The child: import the plots, then draw the jobs read from stdin (none on EOF).
-    One pickle is read, not up to EOF: processes forked by the parent after this child
-    started hold the write end of its stdin too."""
+def _serve() -> int:
+    """The child: import the plots, then draw the jobs read from stdin (none on EOF)."""
     import importlib
 
     from .. import plotting
 
-    for module in modules:  # matplotlib: the point of running ahead
+    for module in ("backbones", "signals", "response"):  # matplotlib: the point of running ahead
         importlib.import_module(f"{plotting.__name__}.{module}")
-    try:
-        jobs = pickle.load(sys.stdin.buffer)
-    except EOFError:
+
+    data = sys.stdin.buffer.read()
+    if not data:
         return 0
-    _draw(jobs)
+    for name, args, kwargs in pickle.loads(data):
+        getattr(plotting, name)(*args, **kwargs)
     return 0
 
 
-def _main(modules=MODULES) -> None:  # pragma: no cover - runs in the child
+def _main() -> None:  # pragma: no cover - runs in the child
     import gc
 
-    code = _serve(tuple(modules))
+    code = _serve()
     gc.freeze()  # a fast exit, as the mmshbm program's
     sys.exit(code)

@@ -62,12 +62,7 @@ def run(args) -> int:
         from .friction_study import run_normal_load
 
         return run_normal_load(args, params)
-    from ._plot_worker import PlotWorker
-
-    # a grid study's two figures are drawn at once: one by a child that imports matplotlib
-    # while the runs go on (when a core is about idle, see _plot_worker.enabled), one here
-    with warnings.catch_warnings(record=True) as caught, \
-            PlotWorker(start=None if not args.figure2 else False, modules=("grids",)) as worker:
+    with warnings.catch_warnings(record=True) as caught:
         # the package's warnings (the runs' checks, a model's truncation, ...) go to the
         # report file, one count on the terminal, every line with -v
         warnings.simplefilter("always", MmshbmWarning)
@@ -76,7 +71,7 @@ def run(args) -> int:
         table = study.table(marks, unit="gap")
         report = study.report(marks, unit="gap")
         files = [study.save(out / f"{name}.npz"), table.to_csv(out / f"{name}_table.csv")]
-        pictures = _plots(args, study, name, marks, measured, table, out, worker)
+        pictures = _plots(args, study, name, marks, measured, table, out)
     raised = [w for w in caught if issubclass(w.category, MmshbmWarning)]
     for w in caught:
         if not issubclass(w.category, MmshbmWarning):
@@ -149,18 +144,18 @@ def _run_study(args):
     return study, name, marks, measured
 
 
-def _plots(args, study, name, marks, measured, table, out, worker) -> list:
+def _plots(args, study, name, marks, measured, table, out) -> list:
     png = out / f"{name}.png"
     files = [png]
     if not args.figure2 and common.has_grid(study):
+        from ._plot_worker import draw_forked
+
+        # the two figures at once: the family grid in a forked child, the convergence here
         files.append(out / f"{name}_convergence.png")
-        # the child draws the family grid (it reads the branches' arrays only), this process
-        # the convergence plot meanwhile
-        worker.draw([("plot_family_grid", (_arrays_only(study),), {"amplitudes": marks, "path": png})],
+        draw_forked([("plot_family_grid", (study,), {"amplitudes": marks, "path": png})],
                     here=[("plot_convergence", (study,), {"amplitudes": marks, "table": table,
                                                            "path": files[-1]})])
         return files
-    worker.close()
     from ..plotting import plot_figure2, plot_study
 
     if args.figure2:
@@ -173,20 +168,6 @@ def _plots(args, study, name, marks, measured, table, out, worker) -> list:
 def _import_plots() -> None:
     """Import matplotlib and the study plots (~0.3 s)."""
     from ..plotting import grids, studies  # noqa: F401
-
-
-def _arrays_only(study):
-    """``study`` with its branches' arrays and metadata, without models or solvers (cheap
-    to send to the plot worker)."""
-    import copy
-
-    branches = []
-    for b in study.branches:
-        b = copy.copy(b)
-        b.model = None
-        b.solver = None
-        branches.append(b)
-    return type(study)(runs=study.runs, branches=branches, metadata=study.metadata)
 
 
 def _throughput(args) -> int:
