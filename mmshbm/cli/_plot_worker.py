@@ -141,15 +141,15 @@ def fork_enabled() -> bool:
             and threading.active_count() == 1)
 
 
-def draw_forked(jobs: list[tuple[str, tuple, dict]], here: list[tuple[str, tuple, dict]] = ()) -> bool:
+def draw_forked(jobs: list[tuple[str, tuple, dict]], here=()) -> bool:
     """Draw ``jobs`` (as :meth:`PlotWorker.draw` takes them) in a child forked from this
-    process while this process draws ``here``. The child starts with everything this
-    process imported and computed (matplotlib, the study): nothing to import, nothing to
-    send. The warnings the child's figures raise are issued again here. When the child
+    process while this process draws ``here`` (jobs too) or calls it (a callable). The
+    child starts with everything this process imported and computed (matplotlib, the
+    study): nothing to import, nothing to send. The warnings the child's figures raise are issued again here. When the child
     cannot be forked (:func:`fork_enabled`) or fails, ``jobs`` are drawn here. Returns
     True when the child drew them."""
     if not jobs or not fork_enabled():
-        _draw(here)
+        _here(here)
         _draw(jobs)
         return False
     read, write = os.pipe()
@@ -169,7 +169,7 @@ def draw_forked(jobs: list[tuple[str, tuple, dict]], here: list[tuple[str, tuple
             os._exit(code)
     os.close(write)
     try:
-        _draw(here)
+        _here(here)
     finally:
         with os.fdopen(read, "rb") as pipe:
             data = pipe.read()
@@ -181,6 +181,13 @@ def draw_forked(jobs: list[tuple[str, tuple, dict]], here: list[tuple[str, tuple
     log.info("forked plot child failed (exit %s): drawing in this process", os.waitstatus_to_exitcode(status))
     _draw(jobs)
     return False
+
+
+def _here(here) -> None:
+    if callable(here):
+        here()
+    else:
+        _draw(here)
 
 
 def _draw(jobs) -> None:

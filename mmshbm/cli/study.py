@@ -70,8 +70,12 @@ def run(args) -> int:
         out = common.out_dir(args)
         table = study.table(marks, unit="gap")
         report = study.report(marks, unit="gap")
-        files = [study.save(out / f"{name}.npz"), table.to_csv(out / f"{name}_table.csv")]
-        pictures = _plots(args, study, name, marks, measured, table, out)
+        files = []
+
+        def write_files():
+            files.extend([study.save(out / f"{name}.npz"), table.to_csv(out / f"{name}_table.csv")])
+
+        pictures = _plots(args, study, name, marks, measured, table, out, write_files)
     raised = [w for w in caught if issubclass(w.category, MmshbmWarning)]
     for w in caught:
         if not issubclass(w.category, MmshbmWarning):
@@ -144,18 +148,24 @@ def _run_study(args):
     return study, name, marks, measured
 
 
-def _plots(args, study, name, marks, measured, table, out) -> list:
+def _plots(args, study, name, marks, measured, table, out, write_files) -> list:
+    """Write the files (``write_files``) and draw the figures; returns the figures' paths."""
     png = out / f"{name}.png"
     files = [png]
     if not args.figure2 and common.has_grid(study):
+        from ..plotting import plot_convergence
         from ._plot_worker import draw_forked
 
-        # the two figures at once: the family grid in a forked child, the convergence here
+        # the family grid in a forked child; the files and the convergence plot here meanwhile
         files.append(out / f"{name}_convergence.png")
-        draw_forked([("plot_family_grid", (study,), {"amplitudes": marks, "path": png})],
-                    here=[("plot_convergence", (study,), {"amplitudes": marks, "table": table,
-                                                           "path": files[-1]})])
+
+        def here():
+            write_files()
+            plot_convergence(study, amplitudes=marks, table=table, path=files[-1])
+
+        draw_forked([("plot_family_grid", (study,), {"amplitudes": marks, "path": png})], here=here)
         return files
+    write_files()
     from ..plotting import plot_figure2, plot_study
 
     if args.figure2:
