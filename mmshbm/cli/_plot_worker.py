@@ -145,9 +145,9 @@ def draw_forked(jobs: list[tuple[str, tuple, dict]], here=()) -> bool:
     """Draw ``jobs`` (as :meth:`PlotWorker.draw` takes them) in a child forked from this
     process while this process draws ``here`` (jobs too) or calls it (a callable). The
     child starts with everything this process imported and computed (matplotlib, the
-    study): nothing to import, nothing to send. The warnings the child's figures raise are issued again here. When the child
-    cannot be forked (:func:`fork_enabled`) or fails, ``jobs`` are drawn here. Returns
-    True when the child drew them."""
+    study): nothing to import, nothing to send. The warnings the child's figures raise
+    are issued again here. When the child cannot be forked (:func:`fork_enabled`) or
+    fails, ``jobs`` are drawn here. Returns True when the child drew them."""
     if not jobs or not fork_enabled():
         _here(here)
         _draw(jobs)
