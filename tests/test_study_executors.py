@@ -86,7 +86,9 @@ def test_rows_keep_their_warnings_and_log_records_for_the_parent(monkeypatch, ca
 def test_start_method_forks_only_without_other_threads(monkeypatch):
     monkeypatch.delenv("MMSHBM_START_METHOD", raising=False)
     monkeypatch.setattr(executors.sys, "platform", "linux")
-    assert executors.start_method() == "fork"
+    with monkeypatch.context() as m:  # (threads other tests left behind do not count here)
+        m.setattr(executors.threading, "active_count", lambda: 1)
+        assert executors.start_method() == "fork"
     stop = threading.Event()
     other = threading.Thread(target=stop.wait)
     other.start()
