@@ -211,7 +211,7 @@ def open_executor(executor, workers: int):
 def execute_chunk(specs: list, tabulate: tuple | None = None) -> tuple[list, float, list | None]:
     """Run the specs of one task in order (what a worker executes); returns their
     branches (without solvers), the seconds the worker spent on them, and with
-    ``tabulate`` = (amplitudes, unit, log level) their table rows
+    ``tabulate`` = (amplitudes, unit) their table rows
     (:func:`mmshbm.analysis.table_rows.tabulate`), else None."""
     t0 = time.perf_counter()
     branches = [execute(spec) for spec in specs]
@@ -263,8 +263,6 @@ def run_specs(specs: list, executor, workers: int, *, chunksize="auto", verbose:
     info = {"chunksize": 1, "open_s": time.perf_counter() - t0, "busy_s": 0.0}
     out: list = [None] * len(specs)
     rows: list = [None] * len(specs)
-    if tabulate is not None:  # the package's log level here, for the workers' records
-        tabulate = (*tabulate, logging.getLogger("mmshbm").getEffectiveLevel())
     bar = None
     try:
         if pool is None:

@@ -348,10 +348,10 @@ def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
     tabulate : (amplitudes, unit), optional
         The :meth:`Study.table` that will be asked for: each worker computes its runs'
         rows right after them (:mod:`mmshbm.analysis.table_rows`), instead of this
-        process rebuilding every run's solver once all have finished; the table, its
-        warnings and log messages are the same (they are issued when :meth:`Study.table`
-        is called). Any other table, and the table of a user ``model``, is computed here
-        as usual.
+        process rebuilding every run's solver once all have finished; the table and its
+        warnings are the same (they are issued when :meth:`Study.table` is called; log
+        messages go where the workers' logging sends them, as their runs' do). Any other
+        table, and the table of a user ``model``, is computed here as usual.
     while_running : callable, optional
         Called without arguments in this process once the runs are sent to the workers,
         so that work of the caller's overlaps them (the ``mmshbm study`` command imports

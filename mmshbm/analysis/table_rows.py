@@ -7,14 +7,14 @@ of every run after all of them have finished (~30 ms a run on the project's mach
 the kernels to load), one after the other. :func:`tabulate` computes the row in the worker
 right after its run instead, on the branch as the worker returns it (no solver, no model:
 both are rebuilt from the branch's metadata exactly as the parent rebuilds them), so the
-values are those the parent would compute. What the computation warns or logs is kept in
-the row and issued again on the parent side when the table is assembled
-(:func:`replay`), in the table's row order, as if the parent had computed it.
+values are those the parent would compute. What the computation warns is kept in the row
+and issued again on the parent side when the table is assembled (:func:`replay`), in the
+table's row order, as if the parent had computed it (the study's report lists those
+warnings). Log records go where the worker's logging sends them, as those of its runs do.
 """
 
 from __future__ import annotations
 
-import logging
 import warnings
 from dataclasses import dataclass, field
 
@@ -36,8 +36,6 @@ class TableRow:
     notes : list of str, shape (n_amplitudes,)
     warnings : list of (message, category, filename, lineno)
         The warnings raised while computing the row.
-    logs : list of logging.LogRecord
-        The package's log records at or above the level asked for.
     model : bool
         The computation attached the branch's model (rebuilt from its metadata: a solve
         between two stored points needs the solver), as it would have on the parent
@@ -50,7 +48,6 @@ class TableRow:
     partner: list
     notes: list
     warnings: list = field(default_factory=list)
-    logs: list = field(default_factory=list)
     model: bool = False
 
 
@@ -73,17 +70,11 @@ def row_values(branch, amplitudes: np.ndarray, unit: str) -> tuple[list, list, l
     return f, share, partner, notes
 
 
-def tabulate(branch, amplitudes, unit: str, log_level: int = logging.WARNING) -> TableRow | None:
-    """The row of ``branch`` (:func:`row_values`) with the warnings and the package's log
-    records (at ``log_level`` and above) it raised, or None when it raises (the parent
-    then computes it, and raises there as it would have). The branch is left as it was
-    given: no solver, no model."""
+def tabulate(branch, amplitudes, unit: str) -> TableRow | None:
+    """The row of ``branch`` (:func:`row_values`) with the warnings it raised, or None
+    when it raises (the parent then computes it, and raises there as it would have). The
+    branch is left as it was given: no solver, and the model it had."""
     model = branch.model
-    package = logging.getLogger("mmshbm")
-    handlers, propagate, level = package.handlers, package.propagate, package.level
-    capture = _Capture()
-    package.handlers, package.propagate = [capture], False
-    package.setLevel(log_level)
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
@@ -92,35 +83,19 @@ def tabulate(branch, amplitudes, unit: str, log_level: int = logging.WARNING) ->
     except Exception:  # the parent computes the row again and raises there
         return None
     finally:
-        package.handlers, package.propagate = handlers, propagate
-        package.setLevel(level)
         branch.solver = None
         branch.model = model
     raised = [(str(w.message), w.category, w.filename, w.lineno) for w in caught]
-    return TableRow(*values, warnings=raised, logs=capture.records, model=attached)
+    return TableRow(*values, warnings=raised, model=attached)
 
 
 def replay(row: TableRow, branch) -> None:
-    """Issue the warnings and log records of ``row`` in this process, and attach the
-    model of ``branch`` (its row's branch) where computing the row attached it."""
+    """Issue the warnings of ``row`` in this process, and attach the model of ``branch``
+    (its row's branch) where computing the row attached it."""
     if row.model and branch.model is None:
         branch.get_model()
     for message, category, filename, lineno in row.warnings:
         warnings.warn_explicit(message, category, filename, lineno)
-    for record in row.logs:
-        logging.getLogger(record.name).handle(record)
-
-
-class _Capture(logging.Handler):
-    """Keeps the records, with their message formatted (so that they pickle)."""
-
-    def __init__(self):
-        super().__init__(logging.NOTSET)
-        self.records: list = []
-
-    def emit(self, record: logging.LogRecord) -> None:
-        record.msg, record.args, record.exc_info, record.exc_text = record.getMessage(), None, None, None
-        self.records.append(record)
 
 
 def _gap(branch) -> float:
