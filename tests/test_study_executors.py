@@ -100,11 +100,14 @@ def test_start_method_forks_only_without_other_threads(monkeypatch):
         executors.start_method()
 
 
-def test_spawned_and_forked_workers_give_identical_numbers():
+def test_spawned_forked_and_thread_workers_give_identical_numbers():
+    import concurrent.futures as cf
+
     kw = {**GRID, "harmonics": (5,)}
     serial = studies.run_study(executor="serial", **kw)
-    for method in ("spawn", "fork"):
-        with executors.process_pool(2, method) as pool:
+    for method in ("spawn", "fork", "thread"):
+        pool = cf.ThreadPoolExecutor(2) if method == "thread" else executors.process_pool(2, method)
+        with pool:
             study = studies.run_study(executor=pool, tabulate=(AMPS, "gap"), **kw)
         for a, b in zip(serial.branches, study.branches, strict=True):
             assert a.states.tobytes() == b.states.tobytes() and a.frequency.tobytes() == b.frequency.tobytes()
