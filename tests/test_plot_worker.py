@@ -67,3 +67,63 @@ def test_worker_switch(monkeypatch):
     assert _plot_worker.enabled()
     monkeypatch.setattr(_plot_worker, "_cores", lambda: 1)
     assert not _plot_worker.enabled()
+
+
+def test_forked_child_draws_the_same_files_and_falls_back(branch, tmp_path, monkeypatch):
+    """``draw_forked(jobs, here)``: a forked child draws ``jobs`` while this process draws
+    ``here``; the warnings of the child's figures are issued here; a job that fails in
+    the child is drawn again here, where it raises as usual."""
+    import threading
+    import warnings
+
+    data = BranchData.of(branch)
+    energy = "plot_frequency_energy"
+    # (a thread another test left behind would turn forking off; this test forks anyway)
+    monkeypatch.setattr(_plot_worker, "fork_enabled", lambda: True)
+    assert _plot_worker.draw_forked([(energy, (data,), {"path": tmp_path / "child.png"})],
+                                    here=[(energy, (data,), {"path": tmp_path / "here.png"})])
+    assert (tmp_path / "child.png").read_bytes() == (tmp_path / "here.png").read_bytes()
+
+    def warns(*args, path):
+        warnings.warn("drawn in the child", mmshbm.BranchWarning, stacklevel=1)
+        path.write_text("figure")
+
+    plotting.warns_in_test = warns
+    try:
+        with pytest.warns(mmshbm.BranchWarning, match="drawn in the child"):
+            assert _plot_worker.draw_forked([("warns_in_test", (), {"path": tmp_path / "w.txt"})])
+    finally:
+        del plotting.warns_in_test
+    assert (tmp_path / "w.txt").read_text() == "figure"
+    bad = [("plot_backbone", (data,), {"labels": ["one", "two"], "path": tmp_path / "x.png"})]
+    with pytest.raises(ValueError, match="2 labels for 1"):
+        _plot_worker.draw_forked(bad)  # fails in the child, raises here
+    # another thread running: no fork, both drawn here
+    stop = threading.Event()
+    other = threading.Thread(target=stop.wait)
+    other.start()
+    monkeypatch.undo()
+    try:
+        assert not _plot_worker.fork_enabled()
+        assert not _plot_worker.draw_forked([(energy, (data,), {"path": tmp_path / "a.png"})],
+                                            here=[(energy, (data,), {"path": tmp_path / "b.png"})])
+    finally:
+        stop.set()
+        other.join()
+    assert (tmp_path / "a.png").read_bytes() == (tmp_path / "here.png").read_bytes()
+
+
+def test_study_figures_drawn_by_the_forked_child_equal_those_drawn_here(tmp_path, monkeypatch):
+    from mmshbm.cli import main
+
+    argv = ["study", "-H", "3", "5", "--elements", "4", "6", "--max-amplitude", "3", "--amplitudes", "2.3"]
+    drawn = []
+    forked = _plot_worker.draw_forked
+    monkeypatch.setattr(_plot_worker, "draw_forked", lambda *a, **k: drawn.append(forked(*a, **k)))
+    monkeypatch.setattr(_plot_worker, "fork_enabled", lambda: True)
+    assert main([*argv, "--out", str(tmp_path / "forked")]) == 0
+    assert drawn == [True]  # the family grid was drawn by the child
+    monkeypatch.setattr(_plot_worker, "fork_enabled", lambda: False)
+    assert main([*argv, "--out", str(tmp_path / "here")]) == 0
+    for name in ("study.png", "study_convergence.png", "study_table.csv"):
+        assert (tmp_path / "forked" / name).read_bytes() == (tmp_path / "here" / name).read_bytes(), name

@@ -223,9 +223,10 @@ def _weights(branch, amplitude: float):
     (interpolated); None where the front has no value."""
     front = branch.family_front()
     A = np.asarray(branch.amplitude, dtype=float)
-    for i in front:
-        if np.isclose(A[i], amplitude, rtol=1e-9, atol=0):
-            return int(i), int(i), 0.0
+    hit = np.flatnonzero(np.isclose(A[front], amplitude, rtol=1e-9, atol=0))  # a stored point, the first
+    if len(hit):
+        i = int(front[hit[0]])
+        return i, i, 0.0
     jumps = {int(p[1]) for p in branch.special_points if p[0] == "jump"}
     share = branch.records.get("mode_share")
     for i, j in zip(front[:-1], front[1:], strict=False):

@@ -40,11 +40,11 @@ from ..results.branch import (
     versions,
     write_archive,
 )
-from ..results.family_points import frequency_at
 from .convergence import ConvergenceFit, format_convergence
 from .executors import run_specs
 from .runspec import RunSpec, build_model, execute
 from .study_grid import _AXES, _unit, grid_specs, monte_carlo
+from .table_rows import replay, row_values
 from .tables import (
     FrequencyTable,
     findings_count,
@@ -86,6 +86,8 @@ class Study:
     metadata: dict = field(default_factory=dict)
     # tables already computed: (amplitudes, unit, branch ids) -> FrequencyTable
     _tables: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    # rows computed by the workers: (amplitudes, unit) -> {run index: TableRow}
+    _rows: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __len__(self) -> int:
         return len(self.runs)
@@ -137,28 +139,28 @@ class Study:
             ``mode_share`` is the starting mode's share of the kinetic energy there and
             ``partner`` the strongest other mode (k, j, share).
         """
-        from .skips import explain, mode_share_at, partner_at, skips
-
         amps = _amplitudes(amplitudes)
         unit = _unit(unit)
         # the report, the CSV and the convergence plot ask for the same table: solved once
         key = (tuple(amps.tolist()), unit, tuple(map(id, self.branches)), tuple(map(id, self.runs)))
         if key in self._tables:
             return self._tables[key]
+        # rows the workers computed after their runs (run_study(tabulate=...)), used once
+        done = self._rows.pop(key[:2], {})
         n = len(self)
         f = np.full((n, len(amps)), np.nan)
         share = np.full((n, len(amps)), np.nan)
         notes, partner = [], []
         for i, b in enumerate(self.branches):
-            scale = _gap(b) if unit == "gap" else 1.0
-            intervals = skips(b)
-            notes.append([])
-            partner.append([])
-            for j, a in enumerate(amps):
-                f[i, j] = frequency_at(b, a * scale)  # no warning beyond the branch: notes say why
-                share[i, j] = mode_share_at(b, a * scale)
-                partner[i].append(partner_at(b, a * scale))
-                notes[i].append(explain(b, a * scale, f[i, j], intervals))
+            row = done.get(i)
+            if row is not None:
+                replay(row, b)
+                values = row.frequency, row.mode_share, row.partner, row.notes
+            else:
+                values = row_values(b, amps, unit)
+            f[i], share[i] = values[0], values[1]
+            partner.append(list(values[2]))
+            notes.append(list(values[3]))
         table = FrequencyTable(axes=self.axes, runs=[dict(r) for r in self.runs], amplitudes=amps, unit=unit,
                                frequency=f, status=[b.status for b in self.branches], notes=notes,
                                mode_share=share, partner=partner)
@@ -294,7 +296,7 @@ def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
               params: Mapping[str, Sequence] | None = None, samples: Mapping[str, Sequence] | None = None,
               grading: float = 10.0, max_amplitude: float | None = None, unit: str = "m",
               executor="process", workers: int = 2, chunksize="auto", verbose: bool = False,
-              warn: bool = True, **options) -> Study:
+              warn: bool = True, tabulate: tuple | None = None, while_running=None, **options) -> Study:
     """Run :func:`mmshbm.backbone` over a grid and collect the branches.
 
     Parameters
@@ -343,6 +345,17 @@ def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
         Issue one :class:`~mmshbm.BranchWarning` summarising what the checks of the runs
         found (counts; :meth:`Study.findings` gives a row per run, :meth:`Study.report`
         every message), rather than a warning per finding.
+    tabulate : (amplitudes, unit), optional
+        The :meth:`Study.table` that will be asked for: each worker computes its runs'
+        rows right after them (:mod:`mmshbm.analysis.table_rows`), instead of this
+        process rebuilding every run's solver once all have finished; the table and its
+        warnings are the same (they are issued when :meth:`Study.table` is called; log
+        messages go where the workers' logging sends them, as their runs' do). Any other
+        table, and the table of a user ``model``, is computed here as usual.
+    while_running : callable, optional
+        Called without arguments in this process once the runs are sent to the workers,
+        so that work of the caller's overlaps them (the ``mmshbm study`` command imports
+        matplotlib there).
     **options
         Passed to every :func:`mmshbm.backbone` call (continuation and method options).
 
@@ -361,9 +374,16 @@ def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
                        params=params, samples=samples, grading=grading, max_amplitude=max_amplitude,
                        unit=unit, **options)
     workers = check.integer("workers", workers, minimum=1)
+    if model is not None:  # the table of a user model is solved on the parent's models (_parent_models)
+        tabulate = None
+    if tabulate is not None:
+        amps, table_unit = tabulate
+        tabulate = (tuple(_amplitudes(amps).tolist()), _unit(table_unit))
     t0 = time.perf_counter()
-    branches, kind, info = run_specs(specs, executor, workers, chunksize=chunksize, verbose=verbose)
+    branches, kind, info = run_specs(specs, executor, workers, chunksize=chunksize, verbose=verbose,
+                                     tabulate=tabulate, while_running=while_running)
     elapsed = time.perf_counter() - t0
+    rows = info.pop("rows", None)
     parent_models = _parent_models(model, specs)
     for spec, branch in zip(specs, branches, strict=True):
         if parent_models is not None:
@@ -379,6 +399,8 @@ def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
     study = Study(runs=[dict(s.coords) for s in specs], branches=branches,
                   metadata={"grid": grid, "executor": kind, "workers": workers, "elapsed_s": elapsed, **info,
                             "model_file": str(model) if isinstance(model, str | Path) else None})
+    if rows is not None:
+        study._rows[tabulate] = {i: row for i, row in enumerate(rows) if row is not None}
     if warn:
         flagged = sum(bool(b.findings or b.metadata.get("run_warnings")) for b in branches)
         if flagged:
@@ -416,13 +438,6 @@ def _parent_models(model, specs: list[RunSpec]):
             cache[key] = build_model(s.source)
         out[s.index] = cache[key]
     return out
-
-
-def _gap(branch: Branch) -> float:
-    gap = branch.gap
-    if gap is None or not gap > 0:
-        raise ValueError("amplitudes in gaps need a model with a positive gap; use unit='m'")
-    return float(gap)
 
 
 def _amplitudes(amplitudes) -> np.ndarray:

@@ -167,11 +167,10 @@ def machine_ceiling(workers: int = 2, seconds: float = 0.3) -> float:
     perfectly parallel work: t(one copy alone) / t(``workers`` copies at once in a warm
     process pool). 1 on idle cores; about 2/3 when one other busy process shares two
     cores. An upper bound for the efficiency of any study measured at the same time."""
-    import concurrent.futures as cf
-    import multiprocessing
+    from .executors import process_pool
 
     n = max(1, int(seconds * 2e7))
-    with cf.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+    with process_pool(workers) as pool:
         list(pool.map(_spin, [1000] * workers))  # start the workers
         alone = min(_spin(n) for _ in range(2))
         t0 = time.perf_counter()
@@ -219,11 +218,8 @@ def measure_throughput(n: int = 1000, *, harmonics: int = 3, elements: int = 8, 
     -------
     Throughput
     """
-    import concurrent.futures as cf
-    import multiprocessing
-
     from .._warnings import BranchWarning
-    from .executors import auto_chunksize
+    from .executors import auto_chunksize, process_pool
     from .runspec import execute
     from .studies import grid_specs, monte_carlo
     from .studies import run_study as _run_study
@@ -291,8 +287,7 @@ def measure_throughput(n: int = 1000, *, harmonics: int = 3, elements: int = 8, 
             record(name, False, run_study(executor=name, workers=workers, chunksize=chunksize, **grid))
         if warm:
             if name == "process":
-                spawn = multiprocessing.get_context("spawn")
-                pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=spawn)
+                pool = process_pool(workers)
                 try:
                     list(pool.map(_warm_worker, [specs[0]] * workers, [0.5] * workers))
                     record(name, True, run_study(executor=pool, workers=workers, chunksize=chunksize, **grid))

@@ -8,6 +8,10 @@ waits for its jobs on stdin; the parent sends the figures to draw, as
 :class:`~mmshbm.plotting.data.BranchData` (no solver, no model: unpickling them
 imports nothing heavy), and waits for the files.
 
+``mmshbm study`` draws its two figures at once, one in a child forked after the runs
+(:func:`draw_forked`: it has matplotlib and the study already, nothing to import or send)
+and one in the parent.
+
 The figures are the same as drawn in the parent (same code, same matplotlib and
 matplotlibrc). Whatever goes wrong in the child (it cannot start, dies, times out,
 a plot raises) makes the parent draw the figures itself, so the result never depends
@@ -25,6 +29,8 @@ import os
 import pickle
 import subprocess
 import sys
+import threading
+import warnings
 
 log = logging.getLogger(__name__)
 
@@ -126,6 +132,70 @@ class PlotWorker:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+def fork_enabled() -> bool:
+    """Can :func:`draw_forked` fork? On Linux with more than one core, when no other
+    Python thread runs (a forked child would inherit the locks they hold)."""
+    return (sys.platform.startswith("linux") and hasattr(os, "fork") and _cores() > 1
+            and threading.active_count() == 1)
+
+
+def draw_forked(jobs: list[tuple[str, tuple, dict]], here=()) -> bool:
+    """Draw ``jobs`` (as :meth:`PlotWorker.draw` takes them) in a child forked from this
+    process while this process draws ``here`` (jobs too) or calls it (a callable). The
+    child starts with everything this process imported and computed (matplotlib, the
+    study): nothing to import, nothing to send. The warnings the child's figures raise
+    are issued again here. When the child cannot be forked (:func:`fork_enabled`) or
+    fails, ``jobs`` are drawn here. Returns True when the child drew them."""
+    if not jobs or not fork_enabled():
+        _here(here)
+        _draw(jobs)
+        return False
+    read, write = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # pragma: no cover - the child
+        code = 1
+        try:
+            os.close(read)
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                _draw(jobs)
+            raised = [(str(w.message), w.category, w.filename, w.lineno) for w in caught]
+            with os.fdopen(write, "wb") as pipe:
+                pickle.dump(raised, pipe)
+            code = 0
+        finally:
+            os._exit(code)
+    os.close(write)
+    try:
+        _here(here)
+    finally:
+        with os.fdopen(read, "rb") as pipe:
+            data = pipe.read()
+        _, status = os.waitpid(pid, 0)
+    if os.waitstatus_to_exitcode(status) == 0 and data:
+        for message, category, filename, lineno in pickle.loads(data):
+            warnings.warn_explicit(message, category, filename, lineno)
+        return True
+    log.info("forked plot child failed (exit %s): drawing in this process", os.waitstatus_to_exitcode(status))
+    _draw(jobs)
+    return False
+
+
+def _here(here) -> None:
+    if callable(here):
+        here()
+    else:
+        _draw(here)
+
+
+def _draw(jobs) -> None:
+    """Draw ``jobs`` in this process."""
+    from .. import plotting
+
+    for name, args, kwargs in jobs:
+        getattr(plotting, name)(*args, **kwargs)
 
 
 def _serve() -> int:

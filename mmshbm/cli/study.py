@@ -70,8 +70,12 @@ def run(args) -> int:
         out = common.out_dir(args)
         table = study.table(marks, unit="gap")
         report = study.report(marks, unit="gap")
-        files = [study.save(out / f"{name}.npz"), table.to_csv(out / f"{name}_table.csv")]
-        pictures = _plots(args, study, name, marks, measured, table, out)
+        files = []
+
+        def write_files():
+            files.extend([study.save(out / f"{name}.npz"), table.to_csv(out / f"{name}_table.csv")])
+
+        pictures = _plots(args, study, name, marks, measured, table, out, write_files)
     raised = [w for w in caught if issubclass(w.category, MmshbmWarning)]
     for w in caught:
         if not issubclass(w.category, MmshbmWarning):
@@ -111,9 +115,14 @@ def _run_study(args):
 
         check_beam_elements(max(args.elements))  # before any run assembles a model
     measured = common.measured(args)
+    marks = common.DEFAULT_MARKS if args.figure2 else STUDY_MARKS
+    marks = tuple(args.amplitudes) if args.amplitudes else marks
     executor = None if args.executor == "serial" else (args.executor or "process")
+    # the workers tabulate their runs for the table written below (Study.table); this
+    # process imports the plots meanwhile
     shared = {"executor": executor, "workers": args.workers, "chunksize": args.chunksize,
-              "verbose": common.progress(args), "warn": False}
+              "verbose": common.progress(args), "warn": False, "tabulate": (marks, "gap"),
+              "while_running": _import_plots}
     if args.max_amplitude is not None:
         shared.update(max_amplitude=args.max_amplitude, unit="gap")
     if args.max_steps is not None:
@@ -136,26 +145,39 @@ def _run_study(args):
             study = studies.run_study(beam, elements=args.elements or (8, 21), grading=args.grading, **grid,
                                       **shared)
         name = "study"
-    marks = common.DEFAULT_MARKS if args.figure2 else STUDY_MARKS
-    marks = tuple(args.amplitudes) if args.amplitudes else marks
     return study, name, marks, measured
 
 
-def _plots(args, study, name, marks, measured, table, out) -> list:
-    from ..plotting import plot_figure2, plot_study
-    from ..plotting.grids import plot_convergence, plot_family_grid
-
+def _plots(args, study, name, marks, measured, table, out, write_files) -> list:
+    """Write the files (``write_files``) and draw the figures; returns the figures' paths."""
     png = out / f"{name}.png"
     files = [png]
+    if not args.figure2 and common.has_grid(study):
+        from ..plotting import plot_convergence
+        from ._plot_worker import draw_forked
+
+        # the family grid in a forked child; the files and the convergence plot here meanwhile
+        files.append(out / f"{name}_convergence.png")
+
+        def here():
+            write_files()
+            plot_convergence(study, amplitudes=marks, table=table, path=files[-1])
+
+        draw_forked([("plot_family_grid", (study,), {"amplitudes": marks, "path": png})], here=here)
+        return files
+    write_files()
+    from ..plotting import plot_figure2, plot_study
+
     if args.figure2:
         plot_figure2(study, marks=marks, measured=measured, path=png)
-    elif common.has_grid(study):
-        plot_family_grid(study, amplitudes=marks, path=png)
-        files.append(out / f"{name}_convergence.png")
-        plot_convergence(study, amplitudes=marks, table=table, path=files[-1])
     else:
         plot_study(study, measured=measured, path=png)
     return files
+
+
+def _import_plots() -> None:
+    """Import matplotlib and the study plots (~0.3 s)."""
+    from ..plotting import grids, studies  # noqa: F401
 
 
 def _throughput(args) -> int:

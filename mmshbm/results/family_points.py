@@ -72,9 +72,10 @@ def family_point(branch, amplitude: float, *, interpolate: bool = False,
     a = float(amplitude)
     front = family_front(branch)
     A = branch.amplitude
-    for i in front:
-        if np.isclose(A[i], a, rtol=1e-9, atol=0):
-            return float(branch.frequency[i]), np.asarray(branch.states[i])
+    hit = np.flatnonzero(np.isclose(np.asarray(A)[front], a, rtol=1e-9, atol=0))  # a stored point, the first
+    if len(hit):
+        i = front[hit[0]]
+        return float(branch.frequency[i]), np.asarray(branch.states[i])
     jumps = {int(s[1]) for s in branch.special_points if s[0] == "jump"}
     for i, j in zip(front[:-1], front[1:], strict=False):
         if not (min(A[i], A[j]) <= a <= max(A[i], A[j])) or A[i] == A[j]:
