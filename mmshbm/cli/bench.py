@@ -34,7 +34,7 @@ def register(sub) -> None:
                    help="compare the default backbone with the exact single-contact orbit on N random "
                         "chains of 1-4 masses (mmshbm.analysis.corpus_exact: gap 1 cm, 1.3 gaps, H = 31) "
                         "and report agreement and why each miss differs instead")
-    p.add_argument("--contact-decades", type=float, nargs=2, default=None, metavar=("LO", "HI"),
+    p.add_argument("--contact-decades", type=common.finite_float, nargs=2, default=None, metavar=("LO", "HI"),
                    help="with --corpus-exact: draw the contact spring as 10**U(LO, HI) N/m (default: the "
                         "corpus's, up to 100 times stiffer than the other springs)")
     p.add_argument("--seed", type=common.non_negative_int, default=0,
@@ -97,6 +97,8 @@ def _corpus_exact(args) -> int:
 
     from ..analysis import corpus_exact
 
+    if args.contact_decades and not args.contact_decades[0] < args.contact_decades[1]:
+        raise ValueError(f"--contact-decades: LO must be below HI, got {args.contact_decades}")
     cases = corpus_exact.chains(args.corpus_exact, seed=args.seed,
                                 contact_decades=tuple(args.contact_decades) if args.contact_decades else None)
     results = []

@@ -87,6 +87,11 @@ def non_negative_int(text: str) -> int:
     return _number(text, int, "an integer >= 0", lambda v: v >= 0)
 
 
+def finite_float(text: str) -> float:
+    """argparse type: any finite number (e.g. a decimal exponent)."""
+    return _number(text, float, "a finite number", lambda v: True)
+
+
 def non_negative_float(text: str) -> float:
     """argparse type: a finite number >= 0 (for options where 0 means something, e.g. no
     damping)."""
