@@ -230,6 +230,12 @@ class _OffFamily(PinnedFailure):
     Newton goes from the same start, which is rare for a solve that converged."""
 
 
+#: relative margin above the problem's ``family_frequency_limit`` within which a landing
+#: is still accepted: the backbone tends to that frequency far above the gaps and stays
+#: below it (rigid stops stiffen the structure at most that far); the margin covers the
+#: harmonics' truncation, and a landing further above lies on another mode's branch
+_LIMIT_SLACK = 0.01
+
 #: largest ratio between consecutive targets of the far search beyond the near targets
 _FAR_RATIO = 1.1
 
@@ -306,7 +312,8 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     ``family_frequency_limit``. A landing counts when Newton converges, the point is on
     the family, and its frequency is within 15 % of the predicted one or at or above the
     frontier's (a backbone with rigid stops only stiffens), inside the frequency window
-    (else it found another branch). ``coexisting`` checks a landing nearer the frontier
+    and at most ``_LIMIT_SLACK`` above ``family_frequency_limit`` (else it found another
+    branch). ``coexisting`` checks a landing nearer the frontier
     than a filtered passage's (:func:`_nearer_landing`). When all of these fail, the
     problem's ``harmonic_landing`` (if any) gives the orbit at each target continued in
     the harmonics from a low-harmonic family (:func:`_harmonic_search`).
@@ -335,6 +342,8 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
 
     f_lo, f_hi = _frequency_window(recs, guard, targets[-1])
     window = {"hi": f_hi}  # the far search below widens it to its own targets
+    limit = problem.family_frequency_limit
+    f_limit = limit() if limit is not None else math.inf
     frequency_of = problem.frequency_of
     admissible = None
     if frequency_of is not None and math.isfinite(f_lo) and f_lo > 0:
@@ -370,6 +379,8 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
         if math.isfinite(f_lo) and not 0.7 * f_lo <= f <= 1.3 * f_hi:
             raise PinnedFailure(f"landed on another branch ({f:.4g} Hz, the family was at "
                                 f"{f_frontier:.4g} Hz, expected up to {f_hi:.4g} Hz)")
+        if f > f_limit * (1.0 + _LIMIT_SLACK):
+            raise PinnedFailure(f"landed above the family's frequency limit ({f:.4g} > {f_limit:.4g} Hz)")
         return u, nit, hist, rec, t
 
     if landing is not None:  # the problem's own landing (MMS-HBM: filtering the resonant harmonic)
@@ -416,8 +427,7 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
             far.append(far[-1] * _FAR_RATIO)
         if target > far[-1] * (1 + 1e-12):
             far.append(target)
-    limit = problem.family_frequency_limit
-    window["hi"] = max(_frequency_window(recs, guard, far[-1])[1], limit() if limit is not None else 0.0)
+    window["hi"] = max(_frequency_window(recs, guard, far[-1])[1], f_limit if math.isfinite(f_limit) else 0.0)
     solves[:] = [0, _MAX_FAR_SOLVES]
     try:
         return _search(problem, us, recs, guard, origins, far, amplitude_max, accept, frequency_of,
