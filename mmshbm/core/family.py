@@ -231,9 +231,10 @@ class _OffFamily(PinnedFailure):
 
 
 #: relative margin above the problem's ``family_frequency_limit`` within which a landing
-#: is still accepted: the backbone tends to that frequency far above the gaps and stays
-#: below it (rigid stops stiffen the structure at most that far); the margin covers the
-#: harmonics' truncation, and a landing further above lies on another mode's branch
+#: of the harmonic search is still accepted: the backbone tends to that frequency far
+#: above the gaps (rigid stops stiffen the structure at most that far). The limit of one
+#: one-sided contact, 2/(1/f_open + 1/f_held), is exact for one DOF only, so the other
+#: stages, whose landings came first, keep the window's wider margin
 _LIMIT_SLACK = 0.01
 
 #: largest ratio between consecutive targets of the far search beyond the near targets
@@ -312,8 +313,7 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     ``family_frequency_limit``. A landing counts when Newton converges, the point is on
     the family, and its frequency is within 15 % of the predicted one or at or above the
     frontier's (a backbone with rigid stops only stiffens), inside the frequency window
-    and at most ``_LIMIT_SLACK`` above ``family_frequency_limit`` (else it found another
-    branch). ``coexisting`` checks a landing nearer the frontier
+    (else it found another branch). ``coexisting`` checks a landing nearer the frontier
     than a filtered passage's (:func:`_nearer_landing`). When all of these fail, the
     problem's ``harmonic_landing`` (if any) gives the orbit at each target continued in
     the harmonics from a low-harmonic family (:func:`_harmonic_search`).
@@ -379,8 +379,6 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
         if math.isfinite(f_lo) and not 0.7 * f_lo <= f <= 1.3 * f_hi:
             raise PinnedFailure(f"landed on another branch ({f:.4g} Hz, the family was at "
                                 f"{f_frontier:.4g} Hz, expected up to {f_hi:.4g} Hz)")
-        if f > f_limit * (1.0 + _LIMIT_SLACK):
-            raise PinnedFailure(f"landed above the family's frequency limit ({f:.4g} > {f_limit:.4g} Hz)")
         return u, nit, hist, rec, t
 
     if landing is not None:  # the problem's own landing (MMS-HBM: filtering the resonant harmonic)
@@ -441,7 +439,7 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
             solves[:] = [0, _MAX_LADDERS]
             u, nit, hist, rec, t, target = _harmonic_search(
                 ladder, guard, far, amplitude_max, newton_tol, max_newton, admissible, accept, frequency_of,
-                monitor, problem)
+                monitor, problem, f_limit)
             return u, nit, hist, rec, t, target, guard.frontier_index
         except PinnedFailure as err:
             far_error += f"; in the harmonics: {err}"
@@ -490,14 +488,15 @@ _MAX_LADDERS = 8
 
 
 def _harmonic_search(ladder, guard, targets, amplitude_max, newton_tol, max_newton, admissible, accept,
-                     frequency_of, monitor, problem) -> tuple:
+                     frequency_of, monitor, problem, f_limit: float) -> tuple:
     """The last resort of a jump: the starting mode's orbit at each target above the
     frontier (increasing, at most ``_MAX_LADDERS``) continued in the harmonics from a
     low-harmonic family (``problem.harmonic_landing``), which reaches orbits that no
     predictor taken from the family below a tongue converges to. The ladder must start
     on the family (the fundamental's share at its low H at least ``family_share``); its
     orbit at H is then accepted as any other landing (``accept``: on the family, in the
-    frequency window). Returns (u, iterations, history, record, tangent, target); raises
+    frequency window) that lies at most ``_LIMIT_SLACK`` above ``f_limit``, the problem's
+    ``family_frequency_limit``. Returns (u, iterations, history, record, tangent, target); raises
     PinnedFailure with the last reason."""
     last_error = "no attempt"
     tried = 0
@@ -516,6 +515,9 @@ def _harmonic_search(ladder, guard, targets, amplitude_max, newton_tol, max_newt
             f_pred = frequency_of(u0) if frequency_of is not None else \
                 monitor(problem, u0).get("frequency", math.nan)
             u, nit, hist, rec, t = accept(u0, target, f_pred)
+            f = float(rec.get("frequency", math.nan))
+            if f > f_limit * (1.0 + _LIMIT_SLACK):
+                raise PinnedFailure(f"landed above the family's frequency limit ({f:.4g} > {f_limit:.4g} Hz)")
         except (PinnedFailure, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as err:
             last_error = str(err)
             log.debug("harmonic ladder at %.4g: %s", target, last_error)
