@@ -30,7 +30,9 @@ three predictors in turn (``problem.family_predictor`` along an auxiliary branch
 quadratic through the last clean family points, the frontier point scaled to the
 target), and accepts the result only if it is on the family; otherwise it tries further
 out (amplitude steps 2, 4, 8, ... % beyond the frontier), at most 40 pinned solves, then
-in a far search up to the bound (30 more). The
+in a far search up to the bound (30 more), and last by continuing the orbit in the
+harmonics (``problem.harmonic_landing``: a low-harmonic family's orbit at the target,
+solved again with more and more harmonics; at most 8 targets). The
 continuation goes on from there; the skipped interval is recorded as a ``"jump"``
 special point. Points of the excursion stay on the branch with
 ``record["on_family"] = 0``.
@@ -228,6 +230,13 @@ class _OffFamily(PinnedFailure):
     Newton goes from the same start, which is rare for a solve that converged."""
 
 
+#: relative margin above the problem's ``family_frequency_limit`` within which a landing
+#: of the harmonic search is still accepted: the backbone tends to that frequency far
+#: above the gaps (rigid stops stiffen the structure at most that far). The limit of one
+#: one-sided contact, 2/(1/f_open + 1/f_held), is exact for one DOF only, so the other
+#: stages, whose landings came first, keep the window's wider margin
+_LIMIT_SLACK = 0.01
+
 #: largest ratio between consecutive targets of the far search beyond the near targets
 _FAR_RATIO = 1.1
 
@@ -305,7 +314,9 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     the family, and its frequency is within 15 % of the predicted one or at or above the
     frontier's (a backbone with rigid stops only stiffens), inside the frequency window
     (else it found another branch). ``coexisting`` checks a landing nearer the frontier
-    than a filtered passage's (:func:`_nearer_landing`).
+    than a filtered passage's (:func:`_nearer_landing`). When all of these fail, the
+    problem's ``harmonic_landing`` (if any) gives the orbit at each target continued in
+    the harmonics from a low-harmonic family (:func:`_harmonic_search`).
 
     Returns
     -------
@@ -331,6 +342,8 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
 
     f_lo, f_hi = _frequency_window(recs, guard, targets[-1])
     window = {"hi": f_hi}  # the far search below widens it to its own targets
+    limit = problem.family_frequency_limit
+    f_limit = limit() if limit is not None else math.inf
     frequency_of = problem.frequency_of
     admissible = None
     if frequency_of is not None and math.isfinite(f_lo) and f_lo > 0:
@@ -412,8 +425,7 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
             far.append(far[-1] * _FAR_RATIO)
         if target > far[-1] * (1 + 1e-12):
             far.append(target)
-    limit = problem.family_frequency_limit
-    window["hi"] = max(_frequency_window(recs, guard, far[-1])[1], limit() if limit is not None else 0.0)
+    window["hi"] = max(_frequency_window(recs, guard, far[-1])[1], f_limit if math.isfinite(f_limit) else 0.0)
     solves[:] = [0, _MAX_FAR_SOLVES]
     try:
         return _search(problem, us, recs, guard, origins, far, amplitude_max, accept, frequency_of,
@@ -421,6 +433,16 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     except PinnedFailure as err:
         far_error = str(err)
         log.debug("far jump from %.4g: %s", frontier, far_error)
+    ladder = problem.harmonic_landing
+    if ladder is not None:
+        try:
+            solves[:] = [0, _MAX_LADDERS]
+            u, nit, hist, rec, t, target = _harmonic_search(
+                ladder, guard, far, amplitude_max, newton_tol, max_newton, admissible, accept, frequency_of,
+                monitor, problem, f_limit)
+            return u, nit, hist, rec, t, target, guard.frontier_index
+        except PinnedFailure as err:
+            far_error += f"; in the harmonics: {err}"
     raise PinnedFailure(f"jump from amplitude {frontier:.4g} failed{reason}{last_error}; the far search "
                         f"up to {far[-1]:.4g}: {far_error}")
 
@@ -458,6 +480,49 @@ def _search(problem, us, recs, guard, origins, targets, amplitude_max, accept, f
                     last_error = str(err)
                 log.debug("jump attempt from %d (%.4g) to %.4g by the %s predictor: %s", origin, A_o, target,
                           name, last_error)
+    raise PinnedFailure(last_error)
+
+
+#: targets of the harmonic search (each a ladder of pinned solves from the low H to H)
+_MAX_LADDERS = 8
+
+
+def _harmonic_search(ladder, guard, targets, amplitude_max, newton_tol, max_newton, admissible, accept,
+                     frequency_of, monitor, problem, f_limit: float) -> tuple:
+    """The last resort of a jump: the starting mode's orbit at each target above the
+    frontier (increasing, at most ``_MAX_LADDERS``) continued in the harmonics from a
+    low-harmonic family (``problem.harmonic_landing``), which reaches orbits that no
+    predictor taken from the family below a tongue converges to. The ladder must start
+    on the family (the fundamental's share at its low H at least ``family_share``); its
+    orbit at H is then accepted as any other landing (``accept``: on the family, in the
+    frequency window) that lies at most ``_LIMIT_SLACK`` above ``f_limit``, the problem's
+    ``family_frequency_limit``. Returns (u, iterations, history, record, tangent, target); raises
+    PinnedFailure with the last reason."""
+    last_error = "no attempt"
+    tried = 0
+    for target in targets:
+        if target <= float(guard.frontier) * (1 + 1e-12):
+            continue
+        if tried >= _MAX_LADDERS:
+            break
+        tried += 1
+        try:
+            u0, share_ref = ladder(target, amplitude_max, tol=newton_tol, max_iter=3 * max_newton,
+                                   admissible=admissible)
+            if share_ref < guard.family_share:
+                raise PinnedFailure(f"the low-harmonic orbit at {target:.4g} is off the family "
+                                    f"(fundamental share {share_ref:.3f})")
+            f_pred = frequency_of(u0) if frequency_of is not None else \
+                monitor(problem, u0).get("frequency", math.nan)
+            u, nit, hist, rec, t = accept(u0, target, f_pred)
+            f = float(rec.get("frequency", math.nan))
+            if f > f_limit * (1.0 + _LIMIT_SLACK):
+                raise PinnedFailure(f"landed above the family's frequency limit ({f:.4g} > {f_limit:.4g} Hz)")
+        except (PinnedFailure, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as err:
+            last_error = str(err)
+            log.debug("harmonic ladder at %.4g: %s", target, last_error)
+            continue
+        return u, nit, hist, rec, t, target
     raise PinnedFailure(last_error)
 
 

@@ -43,8 +43,9 @@ runners call them directly and never probe a problem for attributes.
     What the jumps over internal-resonance tongues use (:mod:`mmshbm.core.family`):
     ``frequency_of(u)`` (Hz, no evaluation), ``family_frequency_limit()`` (Hz),
     ``scaled_state(u, factor)``, ``family_predictor(u_from, A_from, A_to, A_max)``,
-    ``family_landing(u_from, rec_from, excursion, A_max, A_min)``. Each is None when not
-    offered.
+    ``family_landing(u_from, rec_from, excursion, A_max, A_min)``,
+    ``harmonic_landing(A, A_max, tol=, max_iter=, admissible=) -> (u, share_ref)``. Each is
+    None when not offered.
 :class:`AmplitudeStart` (backbones, :class:`BackboneProblemBase`)
     ``linear_mode_point(amplitude)`` (the linear mode at that amplitude, m),
     ``initial_tangent()``, ``open_amplitude()`` (the amplitude at which the linear mode
@@ -145,6 +146,7 @@ class FamilyEvents(Protocol):
     scaled_state: Callable[[np.ndarray, float], np.ndarray] | None
     family_predictor: Callable[[np.ndarray, float, float, float], np.ndarray] | None
     family_landing: Callable[..., tuple[np.ndarray, float]] | None
+    harmonic_landing: Callable[..., tuple[np.ndarray, float]] | None
 
 
 @runtime_checkable
@@ -233,6 +235,7 @@ class ContinuationProblemBase:
     scaled_state: Callable[[np.ndarray, float], np.ndarray] | None = None
     family_predictor: Callable[[np.ndarray, float, float, float], np.ndarray] | None = None
     family_landing: Callable[..., tuple[np.ndarray, float]] | None = None
+    harmonic_landing: Callable[..., tuple[np.ndarray, float]] | None = None
     # AmplitudeStart
     open_amplitude: Callable[[], float] | None = None
     # BranchRecords
