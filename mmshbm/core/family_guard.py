@@ -1,0 +1,167 @@
+"""The family guard: which points of a branch belong to the starting mode's family, and
+when the branch must jump (see :mod:`mmshbm.core.family` for the whole picture and
+docs/resonances.md for why the fundamental harmonic's share of the kinetic energy decides)."""
+
+from __future__ import annotations
+
+import math
+
+__all__ = ["FAMILY_RECORD", "FamilyGuard", "family_value"]
+
+#: the record that decides membership of the family: the fundamental harmonic's share of
+#: the motion (MMS-HBM's ``fundamental_share``; see docs/resonances.md)
+FAMILY_RECORD = "fundamental_share"
+
+
+def family_value(rec: dict) -> float | None:
+    """The family measure of a point's record: ``rec["fundamental_share"]``, or the
+    starting mode's share ``rec["mode_share"]`` for records without it (branches saved by
+    earlier versions); None when the record has neither."""
+    value = rec.get(FAMILY_RECORD)
+    if value is None:
+        value = rec.get("mode_share")
+    return None if value is None else float(value)
+
+
+#: a branch that left the family and comes back onto it this far (relative) below the
+#: frontier is going back down the family: a loop (a passage may dip less than this)
+_LOOP_DROP = 0.05
+
+
+#: a stretch of the branch above the frontier whose amplitude grows by this factor while
+#: its frequency grows by less than _LOCK_FREQUENCY (relative) is locked onto ω_j/k: a
+#: tongue climbing without folding
+_LOCK_AMPLITUDE = 1.5
+_LOCK_FREQUENCY = 0.005
+
+
+class FamilyGuard:
+    """Bookkeeping of the family's frontier along a branch (see the module docstring).
+
+    A point is on the family when the fundamental harmonic carries at least
+    ``family_share`` of the kinetic energy (:func:`family_value`), or when it continues the
+    family from its frontier without folding: amplitude and frequency still growing,
+    the frequency not locked (a *pending* stretch, where higher harmonics hold most of the
+    kinetic energy while the backbone keeps rising). A pending stretch that folds back
+    (amplitude or frequency turning) or locks its frequency was the climb into a tongue:
+    its points
+    are marked off the family after the fact and the frontier goes back to where the
+    stretch began.
+
+    Parameters
+    ----------
+    family_share : float
+        Share of the kinetic energy in the fundamental harmonic above which a point is
+        on the family.
+    max_excursion : int
+        Steps allowed off the family (or on it below the frontier) before a jump.
+    """
+
+    def __init__(self, family_share: float, max_excursion: int):
+        self.family_share = family_share
+        self.max_excursion = max_excursion
+        self.frontier = -math.inf  # largest amplitude on the family so far
+        self.frontier_frequency = math.nan
+        self.frontier_index = -1
+        self.away = 0  # steps since the frontier last moved
+        self.left = False  # the branch left the family since the frontier moved
+        self.clean = []  # indices of frontier points (for extrapolation)
+        self.shares = {}  # family measure of the frontier points
+        self.pending = []  # (index, amplitude, frequency, record) of a pending stretch
+        self.active = False  # the problem records the family measure
+
+    def observe(self, index: int, rec: dict) -> str | None:
+        """Register the accepted point ``index`` with record ``rec``; sets
+        ``rec["on_family"]`` (and resets it on the points of a pending stretch that
+        turns out to be a tongue) and returns ``"jump"`` when a jump is due, else None."""
+        share = family_value(rec)
+        if share is None:
+            return None
+        self.active = True
+        amplitude = float(rec["amplitude"])
+        frequency = float(rec.get("frequency", math.nan))
+        on = bool(share >= self.family_share)
+        if self.pending:
+            _, a_last, f_last, _ = self.pending[-1]
+            # a fold turns the frequency back, or the amplitude with the frequency no
+            # longer rising (a tongue's tip); an amplitude that wavers while the frequency
+            # keeps rising is the backbone's own S-bend, not a tongue
+            advancing = not frequency < f_last * (1 - 1e-9) and (
+                amplitude >= a_last * (1 - 1e-9) or frequency > f_last * (1 + 1e-9))
+            if advancing and not self._locked(amplitude, frequency):
+                if not on:
+                    self.pending.append((index, amplitude, frequency, rec))
+                    rec["on_family"] = 1.0
+                    return None
+                self._confirm()
+            else:
+                self._revert()
+        ahead = amplitude >= self.frontier * (1 - 1e-9)
+        if on and ahead:
+            self._advance(index, rec, share)
+            return None
+        if (not on and ahead and self.away == 0 and not self.left and self.frontier_index >= 0
+                and not frequency < self.frontier_frequency * (1 - 1e-9)):
+            self.pending = [(index, amplitude, frequency, rec)]
+            rec["on_family"] = 1.0
+            return None
+        rec["on_family"] = 1.0 if on else 0.0
+        self.away += 1
+        if not on:
+            self.left = True
+        elif self.left and amplitude < self.frontier * (1 - _LOOP_DROP):
+            return "jump"  # back on the family well below the frontier: a loop
+        if self.away > self.max_excursion:
+            return "jump"
+        return None
+
+    def _advance(self, index: int, rec: dict, share: float) -> None:
+        rec["on_family"] = 1.0
+        self.frontier = float(rec["amplitude"])
+        self.frontier_frequency = float(rec.get("frequency", math.nan))
+        self.frontier_index = index
+        self.away = 0
+        self.left = False
+        self.clean.append(index)
+        self.shares[index] = float(share)
+
+    def _locked(self, amplitude: float, frequency: float) -> bool:
+        _, a0, f0, _ = self.pending[0]
+        return amplitude >= _LOCK_AMPLITUDE * a0 and frequency <= f0 * (1 + _LOCK_FREQUENCY)
+
+    def _confirm(self) -> None:
+        """The pending stretch came back to a fundamental majority without folding: it is
+        the family (its last point becomes the frontier)."""
+        for index, _, _, rec in self.pending:
+            self._advance(index, rec, family_value(rec))
+        self.pending = []
+
+    def _revert(self) -> None:
+        """The pending stretch folded or locked: it was a tongue's climb."""
+        for _, _, _, rec in self.pending:
+            rec["on_family"] = 0.0
+        self.away = len(self.pending)
+        self.left = True
+        self.pending = []
+
+    def jumped(self, index: int, rec: dict) -> None:
+        """Register the point a jump landed on (a new frontier)."""
+        self.pending = []
+        share = family_value(rec)
+        self._advance(index, rec, 1.0 if share is None else share)
+
+    def origins(self, amplitudes) -> list[int]:
+        """Frontier points to jump from, best first: in each of the amplitude windows
+        [0.8, 1], [0.6, 0.8) and [0.4, 0.6) times the frontier, the point where the
+        starting mode's share is largest (before an internal resonance drew energy from
+        it), then the frontier itself. ``amplitudes`` maps a point index to its amplitude."""
+        out = []
+        for lo, hi in ((0.8, 1.0 + 1e-12), (0.6, 0.8), (0.4, 0.6)):
+            window = [i for i in self.clean if lo * self.frontier <= amplitudes(i) < hi * self.frontier]
+            if window:
+                best = max(window, key=lambda i: (self.shares[i], i))
+                if best not in out:
+                    out.append(best)
+        if self.frontier_index >= 0 and self.frontier_index not in out:
+            out.append(self.frontier_index)
+        return out
