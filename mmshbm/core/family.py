@@ -285,8 +285,32 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
             return u, nit, hist, rec, t, target, guard.frontier_index
         except PinnedFailure as err:
             far_error += f"; in the harmonics: {err}"
+    beyond = _beyond_bound(problem, us, recs, guard, origins, amplitude_max, far[-1], accept, frequency_of,
+                           monitor, settled, window, solves) if far[-1] >= amplitude_max * (1 - 1e-12) else ""
     raise PinnedFailure(f"jump from amplitude {frontier:.4g} failed{reason}{last_error}; the far search "
-                        f"up to {far[-1]:.4g}: {far_error}")
+                        f"up to {far[-1]:.4g}: {far_error}{beyond}")
+
+
+#: pinned solves of the search above the bound (where the family resumes, for the message)
+_MAX_BEYOND_SOLVES = 15
+
+
+def _beyond_bound(problem, us, recs, guard, origins, amplitude_max, top, accept, frequency_of, monitor,
+                  settled, window, solves) -> str:
+    """Where the family resumes above the bound, when the searches, capped by the bound,
+    found nothing: a tongue can cover the bound. Up to twice the bound in steps of
+    _FAR_RATIO; the landing is not kept (it lies outside the bounds). Returns the
+    sentence that says so, or "" when nothing lands there either."""
+    above = [amplitude_max * _FAR_RATIO ** i for i in range(1, 8)]
+    window["hi"] = max(window["hi"], _frequency_window(recs, guard, above[-1])[1])
+    solves[:] = [0, _MAX_BEYOND_SOLVES]
+    try:
+        _, _, _, rec, _, target, _ = _search(problem, us, recs, guard, origins, above, above[-1], accept,
+                                             frequency_of, monitor, settled)
+    except PinnedFailure:
+        return ""
+    return (f"; the family resumes above the bound, at amplitude {target:.4g} "
+            f"({rec.get('frequency', math.nan):.4g} Hz): the bound lies inside a tongue")
 
 
 def _search(problem, us, recs, guard, origins, targets, amplitude_max, accept, frequency_of, monitor,
