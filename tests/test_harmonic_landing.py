@@ -50,7 +50,7 @@ def _fundamental_share(model, orbit) -> float:
 
 
 def test_a_landing_above_the_zero_gap_frequency_is_refused():
-    """A 3-mass chain (one-sided, H = 9; f1 = 0.0934 Hz, f2 = 0.1931 Hz) meets 2Ω = f2:
+    """A 7-mass chain (one-sided, H = 9; f1 = 0.0934 Hz, f2 = 0.1931 Hz) meets 2Ω = f2:
     its exact orbit (continued from the linear mode in steps of 0.05 gaps) has lost the
     fundamental's majority at the branch's frontier, 1.62 gaps (measured share 0.45, the
     second harmonic 1.2 times the fundamental's energy), and loses more beyond it. The
