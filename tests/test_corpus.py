@@ -263,3 +263,26 @@ def test_cli_corpus_exact(tmp_path, capsys):
     assert "on the first mode's orbit" in out
     rows = (tmp_path / "corpus_exact.csv").read_text().splitlines()
     assert len(rows) == 3 and rows[2].split(",")[8] == "1"
+
+
+def test_the_time_limit_holds_inside_a_jump(monkeypatch):
+    """A jump's pinned solves call no continuation callback, so a limit checked at the
+    points alone lets a slow jump run on. Each pinned solve made to burn 2 s of processor
+    time: with a 0.5 s limit the case is interrupted inside the first one, not after it."""
+    import time
+
+    import mmshbm.core.family as family
+
+    original = family.solve_at_amplitude
+
+    def slow(*args, **kwargs):
+        t0 = time.process_time()
+        while time.process_time() - t0 < 2.0:
+            pass
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(family, "solve_at_amplitude", slow)
+    case = corpus.generate(14, seed=0)[13]  # a tree whose branch jumps twice in 0.03 s
+    r = corpus.run_case(case, time_limit=0.5)
+    assert not r.completed and r.status.startswith("interrupted")
+    assert r.cpu_seconds < 1.9  # stopped inside the first slow solve

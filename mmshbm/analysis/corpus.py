@@ -15,8 +15,11 @@ and :func:`summary` tabulates them (``mmshbm bench --corpus N``).
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
+import signal
+import threading
 import time
 import warnings
 from collections.abc import Iterable
@@ -244,6 +247,28 @@ def _limited(seconds: float):
     return callback
 
 
+@contextlib.contextmanager
+def _hard_limit(seconds: float):
+    """Interrupt whatever runs after ``seconds`` of the process's processor time (a
+    profiling timer, SIGPROF): also inside a jump's pinned solves, which call no
+    continuation callback. Only in the main thread of a process with ``setitimer``
+    (elsewhere the callback alone limits the run, at its points)."""
+    if not hasattr(signal, "setitimer") or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def interrupt(signum, frame):
+        raise _TimeLimit()
+
+    previous = signal.signal(signal.SIGPROF, interrupt)
+    signal.setitimer(signal.ITIMER_PROF, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_PROF, 0.0)
+        signal.signal(signal.SIGPROF, previous)
+
+
 def run_case(case: CorpusCase, *, time_limit: float = 30.0, compare_path: bool = False,
              max_gaps: float = 10.0) -> CaseResult:
     """Run the default backbone of ``case`` to ``max_gaps`` gaps (never raises: an
@@ -254,10 +279,13 @@ def run_case(case: CorpusCase, *, time_limit: float = 30.0, compare_path: bool =
     t0, c0 = time.perf_counter(), time.process_time()
     try:
         model = case.model()
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), _hard_limit(time_limit):
             warnings.simplefilter("ignore")
             b = backbone(model, harmonics=case.harmonics, max_amplitude=max_gaps * model.gap,
                          callback=_limited(time_limit))
+    except _TimeLimit:  # outside the continuation (setup, the branch's checks)
+        return CaseResult(case, False, f"interrupted: past {time_limit:g} s of processor time",
+                          time.perf_counter() - t0, cpu_seconds=time.process_time() - c0)
     except Exception as err:  # noqa: BLE001 - an exception is what the corpus counts
         return CaseResult(case, False, f"exception: {type(err).__name__}: {err}", time.perf_counter() - t0,
                           cpu_seconds=time.process_time() - c0)
@@ -269,13 +297,13 @@ def run_case(case: CorpusCase, *, time_limit: float = 30.0, compare_path: bool =
                      float(b.frequency[-1]) if len(b) else math.nan, cpu_seconds=cpu)
     if compare_path:
         try:
-            with warnings.catch_warnings():
+            with warnings.catch_warnings(), _hard_limit(time_limit):
                 warnings.simplefilter("ignore")
                 p = backbone(model, harmonics=case.harmonics, max_amplitude=max_gaps * model.gap,
                              follow="path", callback=_limited(time_limit))
             clean = p.status == "bound:amplitude" and not [
                 f for f in p.metadata.get("checks", []) if f["kind"] == "left_family"]
-        except Exception:  # noqa: BLE001
+        except (Exception, _TimeLimit):  # noqa: BLE001
             clean = False
         out.path_completed = bool(clean)
         if clean:
