@@ -133,3 +133,20 @@ def test_projections_shared_between_condensations_project_the_recovery(beam):
     Ql = c2.recover(omega, Qc)
     ref = P @ np.column_stack([Ql[:, 0], Ql[:, 1::2]])
     np.testing.assert_allclose(again, ref, rtol=1e-9, atol=1e-12 * np.abs(ref).max())
+
+
+def test_monitor_in_one_call_is_its_three_kernels(beam):
+    """The monitor's kernels fused into one compiled call give, bit for bit, the records of
+    the three separate calls (contact measures, starting mode's share, family records)."""
+    b = mmshbm.backbone(beam, harmonics=5, max_amplitude=10 * beam.gap)
+    fused, apart = MMSHBMProblem(beam, harmonics=5), MMSHBMProblem(beam, harmonics=5)
+    apart._monitor_point = ()  # the three calls
+    fused._fast_setup()
+    apart._fast_setup()
+    if not fused._monitor_point_setup():
+        pytest.skip("NUMBA_DISABLE_JIT")
+    for u in b.states[::7]:
+        one, three = fused.monitor(u), apart.monitor(u)
+        assert one.keys() == three.keys()
+        np.testing.assert_array_equal(np.array(list(one.values())), np.array(list(three.values())))
+    assert np.any(b.contact_force_max > 0) and np.any(np.isfinite(b.records["resonance_detuning"]))
