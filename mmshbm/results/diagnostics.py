@@ -126,9 +126,11 @@ class Finding:
     value: float = float("nan")
 
     def to_dict(self) -> dict:
-        d = asdict(self)
-        d["value"] = None if not np.isfinite(d["value"]) else float(d["value"])
-        return d
+        """The fields as a dict (``asdict``'s, its fields being plain values), ``value``
+        None when not finite."""
+        value = self.value
+        return {"kind": self.kind, "message": self.message, "first": self.first, "last": self.last,
+                "value": None if not np.isfinite(value) else float(value)}
 
     @classmethod
     def from_dict(cls, d: dict) -> Finding:

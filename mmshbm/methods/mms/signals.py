@@ -121,10 +121,21 @@ class SignalsMixin:
             F[:, k] -= self._pole_b[p][None, :] * eta[:, p:p + 1]
         F = F[:, :, self.cdof]
         F = np.where(np.isfinite(self.hi)[None, None, :], -F, F)
-        C = np.cos(np.outer(np.arange(self.H + 1), np.asarray(tau, dtype=float)))
+        C = self._cosines(tau)
         q = np.einsum("nkc,kt->nct", a[:, :, self.cdof], C)
         lam = np.einsum("nkc,kt->nct", F, C)
         return q, lam
+
+    def _cosines(self, tau) -> np.ndarray:
+        """cos kτ, shape (H+1, len(tau)), k = 0..H; the last grid's kept (read only)."""
+        tau = np.asarray(tau, dtype=float)
+        kept = getattr(self, "_cosines_kept", None)
+        if kept is not None and kept[0].shape == tau.shape and np.array_equal(kept[0], tau):
+            return kept[1]
+        C = np.cos(np.outer(np.arange(self.H + 1), tau))
+        C.flags.writeable = False
+        self._cosines_kept = (tau.copy(), C)
+        return C
 
     def coefficients(self, u: np.ndarray) -> np.ndarray:
         """NLvib-ordered coefficients of all DOFs, shape (n_dof, 2H+1) (sines are zero)."""
