@@ -135,15 +135,15 @@ def test_projections_shared_between_condensations_project_the_recovery(beam):
     np.testing.assert_allclose(again, ref, rtol=1e-9, atol=1e-12 * np.abs(ref).max())
 
 
-def test_monitor_in_one_call_is_its_three_kernels(beam):
-    """The monitor's kernels fused into one compiled call give, bit for bit, the records of
-    the three separate calls (contact measures, starting mode's share, family records)."""
+def test_monitor_share_records_in_one_call_are_the_separate_calls(beam):
+    """The monitor's share records in one compiled call (starting mode's share and family
+    records) are, bit for bit, those of the separate calls."""
     b = mmshbm.backbone(beam, harmonics=5, max_amplitude=10 * beam.gap)
     fused, apart = MMSHBMProblem(beam, harmonics=5), MMSHBMProblem(beam, harmonics=5)
-    apart._monitor_point = ()  # the three calls
+    apart._point_records = ()  # the separate calls
     fused._fast_setup()
     apart._fast_setup()
-    if not fused._monitor_point_setup():
+    if not fused._point_records_setup():
         pytest.skip("NUMBA_DISABLE_JIT")
     for u in b.states[::7]:
         one, three = fused.monitor(u), apart.monitor(u)

@@ -19,9 +19,6 @@ import math
 import numpy as np
 from numba import njit
 
-from ...core.contact_kernels import _mmshbm_monitor_multi
-from ...core.corrector_kernels import _start_mode_share
-
 __all__ = ["harmonic_energies", "family_records"]
 
 _JIT = dict(cache=True, nogil=True)  # exact IEEE arithmetic: no fast-math flags
@@ -122,22 +119,6 @@ def _family_records(a, dD, eta, pole_k, omega, freqs, energies, out, two):
         out[1] = k
         out[2] = j + 1
         out[3] = f / freqs[j] - 1.0
-
-
-@njit(**_JIT)
-def _monitor_point(D, dD, a, eta, pole_k, pole_b, cdof, lo, hi, r, omega, amp_row, amp_sign, cos_table,
-                   sin_table, c_w, s_w, y_t, out, pole_j, pole_w2, B, w2, keep, s0, s, sv, freqs, energies,
-                   records, two):
-    """A backbone point's monitor in one call: out (3,) as
-    :func:`~mmshbm.core.contact_kernels._mmshbm_monitor_multi` (its arguments up to
-    ``out``), records (5,) = the starting mode's share
-    (:func:`~mmshbm.core.corrector_kernels._start_mode_share`, arguments pole_j .. sv)
-    then the four family records of :func:`_family_records` (freqs, energies, two).
-    Each kernel is compiled with its own flags: the same numbers as three calls."""
-    _mmshbm_monitor_multi(D, dD, a, eta, pole_k, pole_b, cdof, lo, hi, r, omega, amp_row, amp_sign, cos_table,
-                          sin_table, c_w, s_w, y_t, out)
-    records[0] = _start_mode_share(a, eta, omega, dD, pole_k, pole_j, pole_w2, B, w2, keep, s0, s, sv)
-    _family_records(a, dD, eta, pole_k, omega, freqs, energies, records[1:], two)
 
 
 def harmonic_energies(a: np.ndarray, dD: np.ndarray, eta: np.ndarray, pole_k: np.ndarray,

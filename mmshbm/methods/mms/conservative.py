@@ -61,7 +61,6 @@ from ...core.problem import BackboneProblemBase, OneEvaluation
 from ...model.contact import admissible_intervals
 from ...model.model import Model
 from . import _family_kernels
-from ._family_kernels import _monitor_point
 from .family import FamilyMixin
 from .signals import SignalsMixin
 
@@ -226,7 +225,7 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         # work arrays of the monitor's kernel (its last four arguments; out (3,) last)
         self._monitor_work = (np.empty(H + 1), np.empty(H + 1), np.empty(N), np.empty(3))
         self._monitor_call = None
-        self._monitor_point = None  # (entry, arguments, records) of the fused monitor, () where none
+        self._point_records = None  # the share records' compiled overloads and arguments, () where none
         # the condensed stiffness of the last Ω (the monitor of a converged point reuses
         # the one of Newton's last evaluation)
         self._cached = (None, None, None)
@@ -465,20 +464,6 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         D, dD = self._condensed(omega, True)
         a = np.ascontiguousarray(a)
         eta = self.unpack_eta(u)
-        point = self._monitor_point
-        if point is None:
-            point = self._monitor_point_setup()
-        if point:  # the compiled corrector's problems: the monitor's three kernels in one call
-            call, extra, records = point
-            out = self._monitor_work[-1]
-            call(D, dD, a, eta, self._pole_k, self._pole_b, self.cdof, self.lo, self.hi, self.r_each, omega,
-                 self._amplitude_row(a, omega, eta), self._amp_sign, self._cos_table, self._sin_table,
-                 *self._monitor_work, *extra)
-            amplitude, energy, force = out.tolist()
-            share, fundamental, harmonic, mode, detuning = records.tolist()
-            return {"frequency": omega / (2 * np.pi), "amplitude": amplitude, "energy": energy,
-                    "contact_force_max": force, "mode_share": share, "fundamental_share": fundamental,
-                    "resonance_harmonic": harmonic, "resonance_mode": mode, "resonance_detuning": detuning}
         args = (D, dD, a, eta, self._pole_k, self._pole_b, self.cdof, self.lo, self.hi, self.r_each, omega,
                 self._amplitude_row(a, omega, eta), self._amp_sign, self._cos_table, self._sin_table,
                 *self._monitor_work)
@@ -492,6 +477,17 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
                 call = self._monitor_call = compiled_entry(_mmshbm_monitor_multi, args)
         call(*args)
         amplitude, energy, force = self._monitor_work[-1].tolist()
+        shares = self._point_records
+        if shares is None:
+            shares = self._point_records_setup()
+        if shares:  # the compiled corrector's problems: the share kernels' overloads typed once
+            share_call, share_args, family_call, family_args, records = shares
+            share = share_call(a, eta, omega, dD, self._pole_k, *share_args)
+            family_call(a, dD, eta, self._pole_k, omega, *family_args)
+            fundamental, harmonic, mode, detuning = records.tolist()
+            return {"frequency": omega / (2 * np.pi), "amplitude": amplitude, "energy": energy,
+                    "contact_force_max": force, "mode_share": float(share), "fundamental_share": fundamental,
+                    "resonance_harmonic": harmonic, "resonance_mode": mode, "resonance_detuning": detuning}
         return {
             "frequency": omega / (2 * np.pi),
             "amplitude": amplitude,
@@ -501,28 +497,29 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
             **self._family_records_at(a, omega, eta, dD),
         }
 
-
-    def _monitor_point_setup(self):
-        """(entry, arguments after the monitor's work arrays, records (5,)) of
-        :func:`._family_kernels._monitor_point` for the compiled corrector's problems (modal
-        back end, H up to the compiled family records'); () for the others."""
-        point = ()
+    def _point_records_setup(self):
+        """(entry, arguments after pole_k, entry, arguments after Ω, records (4,)): the
+        compiled overloads of the starting mode's share (``_start_mode_share``) and of the
+        family records (``_family_kernels._family_records``) for the compiled corrector's
+        problems (modal back end, H up to the compiled family records'); () for the others."""
+        shares = ()
         fast = self._fast_setup()
-        if fast and self.H <= _family_kernels._MAX_H and hasattr(_monitor_point, "compile"):
+        if fast and self.H <= _family_kernels._MAX_H and hasattr(ck._start_mode_share, "compile"):
             _, s0, s, sv, pole_j = self._share_setup()
             _, B, w2, _, keep, _, _ = fast["cond"]
-            records = np.empty(5)
+            records = np.empty(4)
+            share_args = (pole_j, self._pole_w2, B, w2, keep, s0, s, sv)
             # 2.0 passed at run time (see _family_kernels._harmonic_energies)
-            extra = (pole_j, self._pole_w2, B, w2, keep, s0, s, sv,
-                     np.ascontiguousarray(self._modal_basis()[0], dtype=float), np.empty(self.H + 1), records,
-                     2.0)
-            D, a = np.zeros((self.H + 1, self.n_c, self.n_c)), np.zeros((self.H + 1, self.n_c))  # their types
-            args = (D, D, a, np.zeros(self.n_poles), self._pole_k, self._pole_b, self.cdof, self.lo, self.hi,
-                    self.r_each, 0.0, a[:, 0].copy(), self._amp_sign, self._cos_table, self._sin_table,
-                    *self._monitor_work, *extra)
-            point = (compiled_entry(_monitor_point, args), extra, records)
-        self._monitor_point = point
-        return point
+            family_args = (np.ascontiguousarray(self._modal_basis()[0], dtype=float), np.empty(self.H + 1),
+                           records, 2.0)
+            a = np.zeros((self.H + 1, self.n_c))  # arguments of the monitor's types
+            dD, eta = np.zeros((self.H + 1, self.n_c, self.n_c)), np.zeros(self.n_poles)
+            share = compiled_entry(ck._start_mode_share, (a, eta, 0.0, dD, self._pole_k, *share_args))
+            family = compiled_entry(_family_kernels._family_records,
+                                    (a, dD, eta, self._pole_k, 0.0, *family_args))
+            shares = (share, share_args, family, family_args, records)
+        self._point_records = shares
+        return shares
 
 
 def _tables(H: int, N: int) -> tuple[np.ndarray, ...]:
