@@ -229,8 +229,9 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         # the condensed stiffness of the last Ω (the monitor of a converged point reuses
         # the one of Newton's last evaluation)
         self._cached = (None, None, None)
-        #: Ω (rad/s) -> (D, dD) computed by :meth:`_condensed` (read only): what
-        #: :meth:`condensed_many` takes instead of computing it again
+        #: Ω (rad/s) -> (D, dD) computed by :meth:`_condensed` or at a point the compiled
+        #: corrector converged to (read only): what :meth:`condensed_many` takes instead of
+        #: computing it again
         self._by_omega = {}
         self._by_omega_max = max(16, min(_BY_OMEGA, _BY_OMEGA_BYTES // (16 * (H + 1) * self.n_c ** 2)))
         #: residual (+ Jacobian) evaluations so far, the compiled corrector's included
@@ -368,8 +369,12 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         self.evaluations += it if status == ck.SKIPPED else it + 1
         self._solved_tangent = None
         if status == ck.CONVERGED or status == ck.SKIPPED:  # SKIPPED: D, J of the iterate before
-            if status == ck.CONVERGED:
-                self._cached = (float(u[-1] * self.colscale[-1]), D.copy(), dD.copy())
+            if status == ck.CONVERGED:  # the point's stiffness: its monitor's, and the branch's records'
+                omega, D, dD = float(u[-1] * self.colscale[-1]), D.copy(), dD.copy()
+                self._cached = (omega, D, dD)
+                if len(self._by_omega) >= self._by_omega_max:
+                    self._by_omega.clear()
+                self._by_omega[omega] = (D, dD)
             J = J.copy()
             if len(work.tx) and work.t_info[0] == 0:
                 self._solved_tangent = (J, tangent, work.tx.copy(), float(work.t_sign[0]))
