@@ -241,11 +241,16 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
     # ------------------------------------------------------------------ unknowns
     def unpack(self, u: np.ndarray) -> tuple[np.ndarray, float]:
         """Scaled unknowns -> (cosine coefficients a (H+1, n_c) in m/rad, Ω in rad/s)."""
+        return self._unpack_all(u)[:2]
+
+    def _unpack_all(self, u: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
+        """(a, Ω) of :meth:`unpack` and η (n_p,) of :meth:`unpack_eta` from one product
+        (``colscale`` holds ``eta_scale`` at the pole unknowns: the same numbers)."""
         if np.shape(u) != (self.n_unknowns,):
             raise ValueError(f"u must have shape ({self.n_unknowns},), got {np.shape(u)}")
         x = u * self.colscale
         n_a = (self.H + 1) * self.n_c
-        return x[:n_a].reshape(self.H + 1, self.n_c), float(x[-1])
+        return x[:n_a].reshape(self.H + 1, self.n_c), float(x[-1]), x[n_a:n_a + self.n_poles]
 
     def states_from_force_scaling(self, states: np.ndarray) -> np.ndarray:
         """Scaled unknowns (n_points, n_unknowns) of a branch saved when the pole unknowns
@@ -463,12 +468,11 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         starting mode's family, rather than an internal resonance). The
         table of every tracked mode and harmonic, ``modal_shares``, is added for the whole
         branch at the end (:meth:`branch_records`)."""
-        a, omega = self.unpack(u)
+        a, omega, eta = self._unpack_all(u)
         if self.cond.backend == "modal":
             self.cond.check_range(omega, self.H)  # warns once past the modes kept
         D, dD = self._condensed(omega, True)
         a = np.ascontiguousarray(a)
-        eta = self.unpack_eta(u)
         args = (D, dD, a, eta, self._pole_k, self._pole_b, self.cdof, self.lo, self.hi, self.r_each, omega,
                 self._amplitude_row(a, omega, eta), self._amp_sign, self._cos_table, self._sin_table,
                 *self._monitor_work)
