@@ -489,30 +489,25 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         shares = self._point_records
         if shares is None:
             shares = self._point_records_setup()
-        if shares:  # the compiled corrector's problems: the share kernels' overloads typed once
-            share_call, share_args, family_call, family_args, records = shares
-            share = share_call(a, eta, omega, dD, self._pole_k, *share_args)
-            family_call(a, dD, eta, self._pole_k, omega, *family_args)
-            fundamental, harmonic, mode, detuning = records.tolist()
+        if not shares:
             return {"frequency": omega / (2 * np.pi), "amplitude": amplitude, "energy": energy,
-                    "contact_force_max": force, "mode_share": float(share), "fundamental_share": fundamental,
-                    "resonance_harmonic": harmonic, "resonance_mode": mode, "resonance_detuning": detuning}
-        return {
-            "frequency": omega / (2 * np.pi),
-            "amplitude": amplitude,
-            "energy": energy,
-            "contact_force_max": force,
-            "mode_share": self._mode_share_at(u, a, omega, eta, dD),
-            **self._family_records_at(a, omega, eta, dD),
-        }
+                    "contact_force_max": force, "mode_share": self._mode_share_at(u, a, omega, eta, dD),
+                    **self._family_records_at(a, omega, eta, dD)}
+        # the compiled corrector's problems: the share kernels' overloads typed once
+        share_call, share_args, family_call, family_args, records = shares
+        share = share_call(a, eta, omega, dD, self._pole_k, *share_args)
+        family_call(a, dD, eta, self._pole_k, omega, *family_args)
+        fundamental, harmonic, mode, detuning = records.tolist()
+        return {"frequency": omega / (2 * np.pi), "amplitude": amplitude, "energy": energy,
+                "contact_force_max": force, "mode_share": float(share), "fundamental_share": fundamental,
+                "resonance_harmonic": harmonic, "resonance_mode": mode, "resonance_detuning": detuning}
 
     def _point_records_setup(self):
         """(entry, arguments after pole_k, entry, arguments after Ω, records (4,)): the
         compiled overloads of the starting mode's share (``_start_mode_share``) and of the
         family records (``_family_kernels._family_records``) for the compiled corrector's
         problems (modal back end, H up to the compiled family records'); () for the others."""
-        shares = ()
-        fast = self._fast_setup()
+        shares, fast = (), self._fast_setup()
         if fast and self.H <= _family_kernels._MAX_H and hasattr(ck._start_mode_share, "compile"):
             _, s0, s, sv, pole_j = self._share_setup()
             _, B, w2, _, keep, _, _ = fast["cond"]

@@ -15,6 +15,9 @@ __all__ = ["SignalsMixin"]
 class SignalsMixin:
     """Signals of an MMS-HBM point (needs the attributes of ``MMSHBMProblem``)."""
 
+    #: (τ, cos kτ) of the last grid of :meth:`_cosines`
+    _cosines_kept = None
+
     def _fast_setup(self):
         """Data of the compiled corrector, or False: none by default (the host overrides)."""
         return False
@@ -135,7 +138,7 @@ class SignalsMixin:
     def _cosines(self, tau) -> np.ndarray:
         """cos kτ, shape (H+1, len(tau)), k = 0..H; the last grid's kept (read only)."""
         tau = np.asarray(tau, dtype=float)
-        kept = getattr(self, "_cosines_kept", None)
+        kept = self._cosines_kept
         if kept is not None and kept[0].shape == tau.shape and np.array_equal(kept[0], tau):
             return kept[1]
         C = np.cos(np.outer(np.arange(self.H + 1), tau))
