@@ -11,12 +11,15 @@ from ...core.measures import _cosine_peak, check_dof, harmonic_content
 
 __all__ = ["SignalsMixin"]
 
+#: (H, τ as bytes) -> cos kτ (read only) of :meth:`SignalsMixin._cosines`: at most
+#: _COSINES_KEPT grids, each of at most _COSINES_SAMPLES samples
+_COSINES: dict = {}
+_COSINES_KEPT = 16
+_COSINES_SAMPLES = 4096
+
 
 class SignalsMixin:
     """Signals of an MMS-HBM point (needs the attributes of ``MMSHBMProblem``)."""
-
-    #: (τ, cos kτ) of the last grid of :meth:`_cosines`
-    _cosines_kept = None
 
     def _fast_setup(self):
         """Data of the compiled corrector, or False: none by default (the host overrides)."""
@@ -136,14 +139,18 @@ class SignalsMixin:
         return q, lam
 
     def _cosines(self, tau) -> np.ndarray:
-        """cos kτ, shape (H+1, len(tau)), k = 0..H; the last grid's kept (read only)."""
+        """cos kτ, shape (H+1, len(tau)), k = 0..H (read only); kept per (H, τ) for grids of
+        up to :data:`_COSINES_SAMPLES` samples (every branch check asks for the same)."""
         tau = np.asarray(tau, dtype=float)
-        kept = self._cosines_kept
-        if kept is not None and kept[0].shape == tau.shape and np.array_equal(kept[0], tau):
-            return kept[1]
-        C = np.cos(np.outer(np.arange(self.H + 1), tau))
-        C.flags.writeable = False
-        self._cosines_kept = (tau.copy(), C)
+        key = (self.H, tau.tobytes()) if tau.ndim == 1 and len(tau) <= _COSINES_SAMPLES else None
+        C = _COSINES.get(key)
+        if C is None:
+            C = np.cos(np.outer(np.arange(self.H + 1), tau))
+            C.flags.writeable = False
+            if key is not None:
+                if len(_COSINES) >= _COSINES_KEPT:
+                    _COSINES.clear()
+                _COSINES[key] = C
         return C
 
     def coefficients(self, u: np.ndarray) -> np.ndarray:
