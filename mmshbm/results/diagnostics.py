@@ -53,7 +53,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import warnings
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -199,7 +199,7 @@ def check_branch(branch, thresholds: CheckThresholds | None = None, *, warn: boo
     if Status.parse(branch.status).kind != Status.BOUND:
         out.append(_incomplete(branch))
     branch.metadata["checks"] = [f.to_dict() for f in out]
-    branch.metadata["check_thresholds"] = asdict(th)
+    branch.metadata["check_thresholds"] = {f.name: getattr(th, f.name) for f in fields(th)}  # asdict(th)
     if warn:
         for message in _warnings(branch, out):
             warnings.warn(message, BranchWarning, stacklevel=stacklevel + 1)
