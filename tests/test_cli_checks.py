@@ -119,6 +119,23 @@ def test_memory_limit_environment(monkeypatch):
         mmshbm.backbone(model, harmonics=3)
 
 
+def test_small_run_fits_without_asking_the_system(monkeypatch):
+    from mmshbm.methods import limits
+
+    model = mmshbm.default_beam().model(21)
+    est = limits.estimate_memory(model, "mmshbm", 5)
+    assert est <= limits._SMALL_RUN_BYTES
+
+    def unavailable():
+        raise AssertionError("memory_limit read")
+
+    monkeypatch.setattr(limits, "memory_limit", unavailable)
+    assert limits.check_resources(model, "mmshbm", {"harmonics": 5}) == est
+    monkeypatch.setenv("MMSHBM_MEMORY_LIMIT", str(est // 2))  # the user's limit applies to every run
+    with pytest.raises(AssertionError, match="memory_limit read"):
+        limits.check_resources(model, "mmshbm", {"harmonics": 5})
+
+
 def test_large_run_is_announced(caplog):
     from mmshbm.methods.limits import check_resources
 

@@ -133,3 +133,20 @@ def test_projections_shared_between_condensations_project_the_recovery(beam):
     Ql = c2.recover(omega, Qc)
     ref = P @ np.column_stack([Ql[:, 0], Ql[:, 1::2]])
     np.testing.assert_allclose(again, ref, rtol=1e-9, atol=1e-12 * np.abs(ref).max())
+
+
+def test_monitor_share_records_in_one_call_are_the_separate_calls(beam):
+    """The monitor's share records in one compiled call (starting mode's share and family
+    records) are, bit for bit, those of the separate calls."""
+    b = mmshbm.backbone(beam, harmonics=5, max_amplitude=10 * beam.gap)
+    fused, apart = MMSHBMProblem(beam, harmonics=5), MMSHBMProblem(beam, harmonics=5)
+    apart._point_records = ()  # the separate calls
+    fused._fast_setup()
+    apart._fast_setup()
+    if not fused._point_records_setup():
+        pytest.skip("NUMBA_DISABLE_JIT")
+    for u in b.states[::7]:
+        one, three = fused.monitor(u), apart.monitor(u)
+        assert one.keys() == three.keys()
+        np.testing.assert_array_equal(np.array(list(one.values())), np.array(list(three.values())))
+    assert np.any(b.contact_force_max > 0) and np.any(np.isfinite(b.records["resonance_detuning"]))

@@ -154,9 +154,10 @@ def _tangent_sign(J, t_prev: np.ndarray, problem=None) -> tuple[np.ndarray, floa
         rhs = np.zeros(len(t_prev))
         rhs[-1] = 1.0
         t, sign = _bordered_solve_sign(J, t_prev, rhs)
-    if not np.isfinite(t).all():
+    norm2 = float(t.dot(t))  # finite when every entry is (and the norm does not overflow)
+    if not math.isfinite(norm2):
         raise _Failure("singular Jacobian at the tangent")
-    t /= math.sqrt(t.dot(t))  # np.linalg.norm(t), without its checks
+    t /= math.sqrt(norm2)  # np.linalg.norm(t), without its checks
     return (t, sign) if t @ t_prev >= 0 else (-t, sign)
 
 

@@ -35,6 +35,9 @@ log = logging.getLogger(__name__)
 #: estimates above this (bytes) are logged as a warning: expect a long run
 LARGE_RUN_BYTES = 1 << 30
 _DOUBLE = 8
+#: estimates up to this (bytes) are not compared with the memory the system reports (reading
+#: it costs more than such a run's setup); ``MMSHBM_MEMORY_LIMIT`` applies to every run
+_SMALL_RUN_BYTES = 64 << 20
 
 
 def memory_limit() -> int:
@@ -112,7 +115,8 @@ def estimate_memory(model, method: str, harmonics: int = 5, n_samples: int | Non
 
 
 def check_resources(model, method: str, options: dict) -> int:
-    """Raise ``ValueError`` when a run would not fit in :func:`memory_limit`.
+    """Raise ``ValueError`` when a run would not fit in :func:`memory_limit` (a run
+    estimated at most ``_SMALL_RUN_BYTES`` fits, unless ``MMSHBM_MEMORY_LIMIT`` is set).
 
     ``options`` are the method options of :func:`mmshbm.backbone` (``harmonics``,
     ``n_samples``, ``steps_per_period``, ``penalty_stiffness``). Returns the estimate
@@ -120,6 +124,8 @@ def check_resources(model, method: str, options: dict) -> int:
     """
     H = options.get("harmonics", 5)
     est = estimate_memory(model, method, H, options.get("n_samples"), options.get("steps_per_period"))
+    if est <= _SMALL_RUN_BYTES and not os.environ.get("MMSHBM_MEMORY_LIMIT"):
+        return est
     limit = memory_limit()
     what = (f"steps_per_period = {options.get('steps_per_period')}" if method == "shooting"
             else f"harmonics = {H}" + (f", n_samples = {options['n_samples']}"

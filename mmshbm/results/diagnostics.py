@@ -53,7 +53,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import warnings
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -126,9 +126,11 @@ class Finding:
     value: float = float("nan")
 
     def to_dict(self) -> dict:
-        d = asdict(self)
-        d["value"] = None if not np.isfinite(d["value"]) else float(d["value"])
-        return d
+        """The fields as a dict (``asdict``'s, its fields being plain values), ``value``
+        None when not finite."""
+        value = self.value
+        return {"kind": self.kind, "message": self.message, "first": self.first, "last": self.last,
+                "value": None if not np.isfinite(value) else float(value)}
 
     @classmethod
     def from_dict(cls, d: dict) -> Finding:
@@ -197,7 +199,7 @@ def check_branch(branch, thresholds: CheckThresholds | None = None, *, warn: boo
     if Status.parse(branch.status).kind != Status.BOUND:
         out.append(_incomplete(branch))
     branch.metadata["checks"] = [f.to_dict() for f in out]
-    branch.metadata["check_thresholds"] = asdict(th)
+    branch.metadata["check_thresholds"] = {f.name: getattr(th, f.name) for f in fields(th)}  # asdict(th)
     if warn:
         for message in _warnings(branch, out):
             warnings.warn(message, BranchWarning, stacklevel=stacklevel + 1)
@@ -382,13 +384,14 @@ def _contact(branch, solver, th: CheckThresholds) -> list[Finding]:
     # the signals of every point first, the reductions over points and samples at once
     # (numpy calls per point cost more than the signals of a small model)
     n_pts, n_k = len(branch), len(dofs)
-    Q = np.empty((n_pts, n_k, n))
-    L = np.zeros((n_pts, n_k, n))  # the force of each stop, > 0 when it pushes
     amp = np.maximum(np.asarray(branch.amplitude, dtype=float), 1e-300)[:, None, None]
     scale = np.where(gaps[None] > 0, gaps[None], amp)  # (n_pts, n_k, 1)
-    many = cheap and hasattr(solver, "contact_signals_many")
-    if many and n_pts:  # every point's contact DOF and force at once
-        Q[:], L[:] = solver.contact_signals_many(np.asarray(branch.states, dtype=float), tau)
+    many = cheap and hasattr(solver, "contact_signals_many") and n_pts
+    if many:  # every point's contact DOF and force at once, (n_pts, n_k, n) each
+        Q, L = solver.contact_signals_many(np.asarray(branch.states, dtype=float), tau)
+    else:
+        Q = np.empty((n_pts, n_k, n))
+        L = np.zeros((n_pts, n_k, n))  # the force of each stop, > 0 when it pushes
     for i, u in enumerate(() if many else branch.states):
         if cheap:  # the contact DOF and the force without recovering every DOF
             _, Q[i, 0], L[i, 0] = solver.contact_signals(u, tau)
@@ -397,14 +400,21 @@ def _contact(branch, solver, th: CheckThresholds) -> list[Finding]:
             # the force right after the motion: a solver may cache the last point's orbit
             if np.max((sides * Q[i] - gaps) / scale[i]) >= -th.penetration:
                 L[i] = _stop_forces(model, Q[i], np.atleast_2d(solver.contact_force(u, n)[1]))
-    depth = (sides[None] * Q - gaps[None]) / scale  # (n_pts, n_k, n) gaps past the stop
-    pen = depth.max(axis=(1, 2)) if n_pts else np.zeros(0)
+    # the deepest sample past each stop, (n_pts, n_k) gaps: (s·q − gap)/scale of the extreme
+    # sample of s·q (the largest q for s >= 0, the smallest for s < 0), the same number as the
+    # largest of every sample's depth (each operation is monotone in q, the scale positive)
+    depth = np.zeros((n_pts, n_k))
+    if n_pts:
+        s = sides[None, :, 0]
+        reach = np.where(s >= 0, s * Q.max(axis=2), s * Q.min(axis=2))
+        depth = (reach - gaps[None, :, 0]) / scale[:, :, 0]
+    pen = depth.max(axis=1) if n_pts else np.zeros(0)
     # a contact that never comes near its stop carries no force but Newton's residual
     need_force = pen >= -th.penetration
     neg = np.zeros(n_pts)
     if n_pts:  # per stop: its pull against its own peak push
         floor = th.force_floor * f_scale
-        near = depth.max(axis=2) >= -th.penetration  # (n_pts, n_k)
+        near = depth >= -th.penetration  # (n_pts, n_k)
         peak = np.maximum(L.max(axis=2), floor)
         lo = L.min(axis=2)
         ratio = np.where(near & (peak > 0) & (lo < -floor), -lo / peak, 0.0)

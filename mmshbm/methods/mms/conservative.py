@@ -60,6 +60,7 @@ from ...core.measures import refined_max as _refined_max  # noqa: F401
 from ...core.problem import BackboneProblemBase, OneEvaluation
 from ...model.contact import admissible_intervals
 from ...model.model import Model
+from . import _family_kernels
 from .family import FamilyMixin
 from .signals import SignalsMixin
 
@@ -224,11 +225,13 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         # work arrays of the monitor's kernel (its last four arguments; out (3,) last)
         self._monitor_work = (np.empty(H + 1), np.empty(H + 1), np.empty(N), np.empty(3))
         self._monitor_call = None
+        self._point_records = None  # the share records' compiled overloads and arguments, () where none
         # the condensed stiffness of the last Ω (the monitor of a converged point reuses
         # the one of Newton's last evaluation)
         self._cached = (None, None, None)
-        #: Ω (rad/s) -> (D, dD) computed by :meth:`_condensed` (read only): what
-        #: :meth:`condensed_many` takes instead of computing it again
+        #: Ω (rad/s) -> (D, dD) computed by :meth:`_condensed` or at a point the compiled
+        #: corrector converged to (read only): what :meth:`condensed_many` takes instead of
+        #: computing it again
         self._by_omega = {}
         self._by_omega_max = max(16, min(_BY_OMEGA, _BY_OMEGA_BYTES // (16 * (H + 1) * self.n_c ** 2)))
         #: residual (+ Jacobian) evaluations so far, the compiled corrector's included
@@ -238,11 +241,16 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
     # ------------------------------------------------------------------ unknowns
     def unpack(self, u: np.ndarray) -> tuple[np.ndarray, float]:
         """Scaled unknowns -> (cosine coefficients a (H+1, n_c) in m/rad, Ω in rad/s)."""
+        return self._unpack_all(u)[:2]
+
+    def _unpack_all(self, u: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
+        """(a, Ω) of :meth:`unpack` and η (n_p,) of :meth:`unpack_eta` from one product
+        (``colscale`` holds ``eta_scale`` at the pole unknowns: the same numbers)."""
         if np.shape(u) != (self.n_unknowns,):
             raise ValueError(f"u must have shape ({self.n_unknowns},), got {np.shape(u)}")
         x = u * self.colscale
         n_a = (self.H + 1) * self.n_c
-        return x[:n_a].reshape(self.H + 1, self.n_c), float(x[-1])
+        return x[:n_a].reshape(self.H + 1, self.n_c), float(x[-1]), x[n_a:n_a + self.n_poles]
 
     def states_from_force_scaling(self, states: np.ndarray) -> np.ndarray:
         """Scaled unknowns (n_points, n_unknowns) of a branch saved when the pole unknowns
@@ -366,8 +374,12 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         self.evaluations += it if status == ck.SKIPPED else it + 1
         self._solved_tangent = None
         if status == ck.CONVERGED or status == ck.SKIPPED:  # SKIPPED: D, J of the iterate before
-            if status == ck.CONVERGED:
-                self._cached = (float(u[-1] * self.colscale[-1]), D.copy(), dD.copy())
+            if status == ck.CONVERGED:  # the point's stiffness: its monitor's, and the branch's records'
+                omega, D, dD = float(u[-1] * self.colscale[-1]), D.copy(), dD.copy()
+                self._cached = (omega, D, dD)
+                if len(self._by_omega) >= self._by_omega_max:
+                    self._by_omega.clear()
+                self._by_omega[omega] = (D, dD)
             J = J.copy()
             if len(work.tx) and work.t_info[0] == 0:
                 self._solved_tangent = (J, tangent, work.tx.copy(), float(work.t_sign[0]))
@@ -456,12 +468,11 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         starting mode's family, rather than an internal resonance). The
         table of every tracked mode and harmonic, ``modal_shares``, is added for the whole
         branch at the end (:meth:`branch_records`)."""
-        a, omega = self.unpack(u)
+        a, omega, eta = self._unpack_all(u)
         if self.cond.backend == "modal":
             self.cond.check_range(omega, self.H)  # warns once past the modes kept
         D, dD = self._condensed(omega, True)
         a = np.ascontiguousarray(a)
-        eta = self.unpack_eta(u)
         args = (D, dD, a, eta, self._pole_k, self._pole_b, self.cdof, self.lo, self.hi, self.r_each, omega,
                 self._amplitude_row(a, omega, eta), self._amp_sign, self._cos_table, self._sin_table,
                 *self._monitor_work)
@@ -475,14 +486,44 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
                 call = self._monitor_call = compiled_entry(_mmshbm_monitor_multi, args)
         call(*args)
         amplitude, energy, force = self._monitor_work[-1].tolist()
-        return {
-            "frequency": omega / (2 * np.pi),
-            "amplitude": amplitude,
-            "energy": energy,
-            "contact_force_max": force,
-            "mode_share": self._mode_share_at(u, a, omega, eta, dD),
-            **self._family_records_at(a, omega, eta, dD),
-        }
+        shares = self._point_records
+        if shares is None:
+            shares = self._point_records_setup()
+        if not shares:
+            return {"frequency": omega / (2 * np.pi), "amplitude": amplitude, "energy": energy,
+                    "contact_force_max": force, "mode_share": self._mode_share_at(u, a, omega, eta, dD),
+                    **self._family_records_at(a, omega, eta, dD)}
+        # the compiled corrector's problems: the share kernels' overloads typed once
+        share_call, share_args, family_call, family_args, records = shares
+        share = share_call(a, eta, omega, dD, self._pole_k, *share_args)
+        family_call(a, dD, eta, self._pole_k, omega, *family_args)
+        fundamental, harmonic, mode, detuning = records.tolist()
+        return {"frequency": omega / (2 * np.pi), "amplitude": amplitude, "energy": energy,
+                "contact_force_max": force, "mode_share": float(share), "fundamental_share": fundamental,
+                "resonance_harmonic": harmonic, "resonance_mode": mode, "resonance_detuning": detuning}
+
+    def _point_records_setup(self):
+        """(entry, arguments after pole_k, entry, arguments after Ω, records (4,)): the
+        compiled overloads of the starting mode's share (``_start_mode_share``) and of the
+        family records (``_family_kernels._family_records``) for the compiled corrector's
+        problems (modal back end, H up to the compiled family records'); () for the others."""
+        shares, fast = (), self._fast_setup()
+        if fast and self.H <= _family_kernels._MAX_H and hasattr(ck._start_mode_share, "compile"):
+            _, s0, s, sv, pole_j = self._share_setup()
+            _, B, w2, _, keep, _, _ = fast["cond"]
+            records = np.empty(4)
+            share_args = (pole_j, self._pole_w2, B, w2, keep, s0, s, sv)
+            # 2.0 passed at run time (see _family_kernels._harmonic_energies)
+            family_args = (np.ascontiguousarray(self._modal_basis()[0], dtype=float), np.empty(self.H + 1),
+                           records, 2.0)
+            a = np.zeros((self.H + 1, self.n_c))  # arguments of the monitor's types
+            dD, eta = np.zeros((self.H + 1, self.n_c, self.n_c)), np.zeros(self.n_poles)
+            share = compiled_entry(ck._start_mode_share, (a, eta, 0.0, dD, self._pole_k, *share_args))
+            family = compiled_entry(_family_kernels._family_records,
+                                    (a, dD, eta, self._pole_k, 0.0, *family_args))
+            shares = (share, share_args, family, family_args, records)
+        self._point_records = shares
+        return shares
 
 
 def _tables(H: int, N: int) -> tuple[np.ndarray, ...]:

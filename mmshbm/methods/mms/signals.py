@@ -11,6 +11,12 @@ from ...core.measures import _cosine_peak, check_dof, harmonic_content
 
 __all__ = ["SignalsMixin"]
 
+#: (H, τ as bytes) -> cos kτ (read only) of :meth:`SignalsMixin._cosines`: at most
+#: _COSINES_KEPT grids, each of at most _COSINES_SAMPLES samples
+_COSINES: dict = {}
+_COSINES_KEPT = 16
+_COSINES_SAMPLES = 4096
+
 
 class SignalsMixin:
     """Signals of an MMS-HBM point (needs the attributes of ``MMSHBMProblem``)."""
@@ -76,7 +82,13 @@ class SignalsMixin:
             from ...core.condense import SingularDynamicStiffness
 
             D0, B, w2, Rs, keep, static, rtol = fast["cond"]
-            known = self._by_omega  # those _condensed computed (the same numbers)
+            known = self._by_omega  # those computed before (the same numbers)
+            hits = [known.get(omega) for omega in omegas.tolist()]
+            if len(hits) and None not in hits:  # every one computed before: copied in one call each
+                np.concatenate([hit[0] for hit in hits], out=D.reshape(-1, self.n_c, self.n_c))
+                if derivative:
+                    np.concatenate([hit[1] for hit in hits], out=dD.reshape(-1, self.n_c, self.n_c))
+                return D, dD
             for i, omega in enumerate(omegas):
                 omega = float(omega)
                 hit = known.get(omega)
@@ -121,10 +133,25 @@ class SignalsMixin:
             F[:, k] -= self._pole_b[p][None, :] * eta[:, p:p + 1]
         F = F[:, :, self.cdof]
         F = np.where(np.isfinite(self.hi)[None, None, :], -F, F)
-        C = np.cos(np.outer(np.arange(self.H + 1), np.asarray(tau, dtype=float)))
+        C = self._cosines(tau)
         q = np.einsum("nkc,kt->nct", a[:, :, self.cdof], C)
         lam = np.einsum("nkc,kt->nct", F, C)
         return q, lam
+
+    def _cosines(self, tau) -> np.ndarray:
+        """cos kτ, shape (H+1, len(tau)), k = 0..H (read only); kept per (H, τ) for grids of
+        up to :data:`_COSINES_SAMPLES` samples (every branch check asks for the same)."""
+        tau = np.asarray(tau, dtype=float)
+        key = (self.H, tau.tobytes()) if tau.ndim == 1 and len(tau) <= _COSINES_SAMPLES else None
+        C = _COSINES.get(key)
+        if C is None:
+            C = np.cos(np.outer(np.arange(self.H + 1), tau))
+            C.flags.writeable = False
+            if key is not None:
+                if len(_COSINES) >= _COSINES_KEPT:
+                    _COSINES.clear()
+                _COSINES[key] = C
+        return C
 
     def coefficients(self, u: np.ndarray) -> np.ndarray:
         """NLvib-ordered coefficients of all DOFs, shape (n_dof, 2H+1) (sines are zero)."""
