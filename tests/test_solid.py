@@ -163,10 +163,10 @@ def test_large_model_is_never_densified(beam, monkeypatch):
 def test_held_frequency_sparse_equals_dense(beam, monkeypatch):
     """MMS-HBM's upper frequency (every contact DOF held) by the sparse path equals the dense one."""
     import mmshbm.model.linear_modes as mm
-    from mmshbm.methods.mms.conservative import _held_frequency
+    from mmshbm.methods.mms.held import _held_frequency_solve
 
     model = beam.solid_model(24, 1, 1)
-    sparse = _held_frequency(model, model.contact_dofs, 1)
+    sparse = _held_frequency_solve(model, model.contact_dofs, 1)
     monkeypatch.setattr(mm, "_DENSE_EIG_LIMIT", 10**6)
-    dense = _held_frequency(model, model.contact_dofs, 1)
+    dense = _held_frequency_solve(model, model.contact_dofs, 1)
     assert sparse == pytest.approx(dense, rel=1e-7)

@@ -41,16 +41,12 @@ those scales produce.
 
 from __future__ import annotations
 
-import functools
-import weakref
-
 import numpy as np
 
 from ... import _validate as check
 from ...core import corrector_kernels as ck
 from ...core._entry import compiled_entry
 from ...core._modal_kernels import _modal_dynamic_stiffness
-from ...core.bordered import _SMALL_DENSE
 from ...core.condense import SingularDynamicStiffness, make_condensation
 from ...core.contact_kernels import _mmshbm_eval, _mmshbm_monitor_multi
 from ...core.harmonics import check_harmonics
@@ -62,7 +58,10 @@ from ...model.contact import admissible_intervals
 from ...model.model import Model
 from . import _family_kernels
 from .family import FamilyMixin
+from .fast import fast_data
+from .held import _HELD, _held_frequency, _held_frequency_solve  # noqa: F401  (earlier home)
 from .signals import SignalsMixin
+from .tables import _TABLES_KEPT, _compute_tables, _kept_tables, _tables  # noqa: F401  (earlier home)
 
 __all__ = ["MMSHBMProblem"]
 
@@ -71,8 +70,6 @@ _PROJECTIONS = ("exact", "sampled")
 #: the most bytes they may take (fewer Ω for many contact DOFs)
 _BY_OMEGA = 4096
 _BY_OMEGA_BYTES = 64 << 20
-#: model -> {(held DOFs, mode): frequency (Hz)} of :func:`_held_frequency`
-_HELD: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBase):
@@ -313,40 +310,7 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         fast = self._fast
         if fast is not None:
             return fast
-        cond = self.cond
-        if cond.backend != "modal":
-            self._fast = False
-            return False
-        from ...core.modal import _POLE_RTOL
-
-        H, n_c, m = self.H, self.n_c, cond.n_modes
-        keep = np.ones((H + 1, m), dtype=np.uint8)
-        static = np.zeros((H + 1, n_c, n_c))
-        if self.n_poles:
-            for p, (k, j) in enumerate(self.pole_set.pairs):
-                keep[k, j] = 0
-                static[k] += np.outer(self.pole_set.b[p], self.pole_set.b[p]) / self.pole_set.omega2[p]
-        n = self.n_unknowns
-        # the arguments of the compiled corrector, grouped as its named tuples (built here only)
-        self._fast = {
-            "cond": ck.ModalCondensation(np.ascontiguousarray(cond.D0), np.ascontiguousarray(cond.b_j),
-                                         np.ascontiguousarray(cond._w2), np.ascontiguousarray(cond.Rs), keep,
-                                         static, float(_POLE_RTOL)),
-            "scale": ck.Scaling(self.colscale, self.rowscale),
-            "poles": ck.PoleTerms(self._pole_k, self._pole_b, self._pole_w2),
-            "law": ck.ContactLaw(self.cdof, self.lo, self.hi, self.r_each, self.projection == "exact"),
-            "samples": ck.Sampling(self._cos_table, self._sin_table, self._tau),
-            "work": ck.NewtonWork(np.empty((H + 1, n_c, n_c)), np.empty((H + 1, n_c, n_c)), np.empty(n - 1),
-                                  np.empty((n - 1, n)), np.empty((n, n)), np.empty(n), np.empty((n, n)),
-                                  np.empty(n), np.empty((H + 1, n_c)), np.empty(self.n_poles), np.zeros(1),
-                                  # the tangent solve where the continuation's is the same LU
-                                  np.empty(n if n <= _SMALL_DENSE else 0), np.zeros(1), np.zeros(1)),
-            "ework": ck.EvalWork(*self._work),
-        }
-        fast = self._fast
-        # the arguments after (u, u_pred, t, tol, step_tol, max_iter) that do not change
-        fast["fixed"] = (int(self.n_c), int(self.H))
-        fast["data"] = tuple(fast[k] for k in ("scale", "cond", "poles", "law", "samples", "work", "ework"))
+        self._fast = fast = fast_data(self)
         return fast
 
     def fast_newton(self, u0, u_pred, tangent, tol: float, max_iter: int, step_tol: float):
@@ -524,77 +488,3 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
             shares = (share, share_args, family, family_args, records)
         self._point_records = shares
         return shares
-
-
-def _tables(H: int, N: int) -> tuple[np.ndarray, ...]:
-    """(τ (N,), cos kτ (2H+1, N), sin kτ (H+1, N), fine τ (n_fine,), cos kτ (H+1, n_fine) on
-    it) of an MMS-HBM problem, n_fine = max(512, 8N); kept per (H, N) up to
-    :data:`_TABLES_KEPT` numbers (read only: a problem takes copies)."""
-    if (3 * H + 2) * N + (H + 2) * max(512, 8 * N) <= _TABLES_KEPT:
-        return _kept_tables(H, N)
-    return _compute_tables(H, N)
-
-
-#: the largest tables (numbers) :func:`_tables` keeps (8 MB)
-_TABLES_KEPT = 1 << 20
-
-
-@functools.lru_cache(maxsize=32)
-def _kept_tables(H: int, N: int) -> tuple[np.ndarray, ...]:
-    return _compute_tables(H, N)
-
-
-def _compute_tables(H: int, N: int) -> tuple[np.ndarray, ...]:
-    tau = 2 * np.pi * np.arange(N) / N
-    n_fine = max(512, 8 * N)
-    tau_fine = 2 * np.pi * np.arange(n_fine) / n_fine
-    return (tau, np.cos(np.outer(np.arange(2 * H + 1), tau)), np.sin(np.outer(np.arange(H + 1), tau)),
-            tau_fine, np.cos(np.outer(np.arange(H + 1), tau_fine)))
-
-
-def _held_frequency(model: Model, dofs, mode: int) -> float:
-    """Frequency (Hz) of linear mode ``mode`` with the DOFs ``dofs`` held fixed (all
-    contacts closed at once: the upper end of a backbone's frequency range); kept per
-    model (immutable) and (dofs, mode).
-
-    Up to ``_DENSE_EIG_LIMIT`` DOFs with mass a dense eigen-solve; above, the sparse path
-    of :meth:`Model.linear_modes` (static condensation of the other massless DOFs,
-    shift-invert ARPACK at 0 with a minimum-degree LU): nothing of size n_dof² is formed.
-    """
-    memo = _HELD.setdefault(model, {})
-    key = (tuple(int(d) for d in np.atleast_1d(dofs)), int(mode))
-    if key not in memo:
-        memo[key] = _held_frequency_solve(model, dofs, mode)
-    return memo[key]
-
-
-def _held_frequency_solve(model: Model, dofs, mode: int) -> float:
-    import scipy.linalg as la
-    import scipy.sparse as sp
-    import scipy.sparse.linalg as spla
-
-    from ...model.linear_modes import _DENSE_EIG_LIMIT
-
-    keep = np.setdiff1d(np.arange(model.n_dof), np.asarray(dofs))
-    M = sp.csr_matrix(model.M)[keep][:, keep]
-    K = sp.csr_matrix(model.K)[keep][:, keep]
-    massless = np.asarray(abs(M).sum(axis=1)).ravel() == 0
-    l, c = np.flatnonzero(~massless), np.flatnonzero(massless)
-    if len(l) <= _DENSE_EIG_LIMIT:
-        Kd = K.toarray()
-        K_red = Kd[np.ix_(l, l)]
-        if len(c):
-            K_red = K_red - Kd[np.ix_(l, c)] @ np.linalg.solve(Kd[np.ix_(c, c)], Kd[np.ix_(c, l)])
-        w2 = la.eigh(K_red, M.toarray()[np.ix_(l, l)], eigvals_only=True,
-                     subset_by_index=(mode - 1, mode - 1))
-        return float(np.sqrt(max(w2[0], 0.0)) / (2 * np.pi))
-    K_red = K[l][:, l].tocsc()
-    if len(c):
-        K_lc = K[l][:, c].tocsc()
-        X = spla.splu(K[c][:, c].tocsc()).solve(K_lc.T.toarray())  # (n_c', n_l): massless DOFs only
-        K_red = (K_red - K_lc @ sp.csr_matrix(X)).tocsc()
-    lu = spla.splu(K_red, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
-    op = spla.LinearOperator(K_red.shape, matvec=lu.solve, dtype=float)
-    w2 = spla.eigsh(K_red, k=mode, M=M[l][:, l].tocsc(), sigma=0.0, which="LM", v0=np.ones(len(l)), OPinv=op,
-                    return_eigenvectors=False)
-    return float(np.sqrt(max(np.sort(w2)[mode - 1], 0.0)) / (2 * np.pi))

@@ -45,8 +45,8 @@ from ... import _validate as check
 from ...core.measures import check_dof, harmonic_content, mean_energy, refined_argmax
 from ...core.problem import BackboneProblemBase, OneEvaluation
 from ...model.model import Model
-from .conservative import _held_frequency
 from .damped import DampedHBMBase, fine_samples, synthesis_matrix
+from .held import _held_frequency
 
 __all__ = ["EPMCProblem", "fundamental_share"]
 
