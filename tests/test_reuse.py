@@ -150,3 +150,32 @@ def test_monitor_share_records_in_one_call_are_the_separate_calls(beam):
         assert one.keys() == three.keys()
         np.testing.assert_array_equal(np.array(list(one.values())), np.array(list(three.values())))
     assert np.any(b.contact_force_max > 0) and np.any(np.isfinite(b.records["resonance_detuning"]))
+
+
+def test_start_mode_projections_kept_per_model_are_the_projections(beam):
+    """The starting mode's row of Φᵀ M is one object per (model, H, mode), so its projections
+    are built once; they are, bit for bit, the row applied to Z_0, φ_j and Ṽ_i."""
+    p, q = MMSHBMProblem(beam, harmonics=5), MMSHBMProblem(beam, harmonics=5)
+    if p.cond.backend != "modal":
+        pytest.skip("modal back end only")
+    row = p._start_row()
+    assert q._start_row() is row
+    assert np.array_equal(row, p._modal_basis()[2][p.mode - 1:p.mode])
+    first = p._share_setup()
+    kept = p.cond._projections[id(row)]
+    second = q._share_setup()
+    assert q.cond._projections[id(row)] is kept  # not built again
+    cond = q.cond
+    cond._static_recovery()
+    np.testing.assert_array_equal(second[1], (row @ cond._Z0)[0])
+    np.testing.assert_array_equal(second[2], (row @ cond.phi_j)[0])
+    if not cond.complete:
+        np.testing.assert_array_equal(second[3], np.array([(row @ V)[0] for V in cond._V[1:]]))
+    for x, y in zip(first, second):
+        np.testing.assert_array_equal(x, y)
+    b = mmshbm.backbone(beam, harmonics=5, max_amplitude=3 * beam.gap)
+    shares = q._modal_shares_all(b.states)  # projections of Φᵀ M kept: the same as a fresh store's
+    MPhiT = q._modal_basis()[2]
+    cond._projections.pop(id(MPhiT), None)
+    np.testing.assert_array_equal(shares, q._modal_shares_all(b.states))
+    assert np.all(shares[:, q.mode - 1, 1] > 0)

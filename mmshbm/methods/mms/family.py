@@ -258,6 +258,17 @@ class FamilyMixin:
             self._modal = memo[self.H, self.mode] = (freqs, Phi, np.ascontiguousarray((M_ll @ Phi).T), M_ll)
         return self._modal
 
+    def _start_row(self) -> np.ndarray:
+        """The starting mode's row of Φᵀ M, shape (1, n_l): one object per model, H and mode
+        (the key of its projections in the condensation's store)."""
+        basis = self._modal_basis()
+        memo = _BASES.setdefault(self.model, {})
+        key = ("row", self.H, self.mode)
+        row = memo.get(key)
+        if row is None or row[0] is not basis:
+            row = memo[key] = (basis, np.ascontiguousarray(basis[2][self.mode - 1:self.mode]))
+        return row[1]
+
     def _upper_frequency(self) -> float:
         """First eigenfrequency (Hz) of the structure with its massless DOFs clamped: the modal
         reduction's first fixed-interface mode when the condensation has one."""
@@ -357,9 +368,8 @@ class FamilyMixin:
         data = self._share_data
         if data is None:
             cond = self.cond
-            row = np.ascontiguousarray(self._modal_basis()[2][self.mode - 1:self.mode])
-            cond.projected_cosine_recovery(0.0, np.zeros((2, self.n_c)), row)  # builds the projections
-            _, S0, S, SV = cond._projections[id(row)]
+            row = self._start_row()
+            _, S0, S, SV = _projections(cond, row)
             sv = np.zeros((0, self.n_c)) if cond.complete else np.array([V[0] for V in SV[1:]])
             pole_j = np.array([j for _, j in self.pole_set.pairs], dtype=np.int64) if self.n_poles \
                 else np.zeros(0, dtype=np.int64)
@@ -382,8 +392,7 @@ class FamilyMixin:
         """:meth:`_modal_shares_projected` for many points at once, shape (n, n_t, H+1)."""
         freqs, Phi, MPhiT, M_ll = self._modal_basis()
         cond, H, n_c = self.cond, self.H, self.n_c
-        cond.projected_cosine_recovery(0.0, np.zeros((2, n_c)), MPhiT)  # builds the projections
-        _, S0, S, SV = cond._projections[id(MPhiT)]
+        _, S0, S, SV = _projections(cond, MPhiT)
         X = states * self.colscale[None, :]
         n_a = (H + 1) * n_c
         a = X[:, :n_a].reshape(len(states), H + 1, n_c)
@@ -439,6 +448,17 @@ class FamilyMixin:
         if total > 0:
             shares[:, 1:] = 0.25 * x[None, 1:] * Y[:, 1:] ** 2 / total
         return shares
+
+
+def _projections(cond, projector: np.ndarray) -> tuple:
+    """(projector, P Z_0, P φ_j, [P Ṽ_i]) of the modal condensation ``cond`` for
+    ``projector`` P (n_p, n_l): its kept projections, built (by a recovery of zero motion)
+    when it has none for that object."""
+    cached = cond._projections.get(id(projector))
+    if cached is None or cached[0] is not projector:
+        cond.projected_cosine_recovery(0.0, np.zeros((2, cond.n_c)), projector)  # builds them
+        cached = cond._projections[id(projector)]
+    return cached
 
 
 def _raised(low, u: np.ndarray, high) -> np.ndarray:
