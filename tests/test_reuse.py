@@ -171,7 +171,7 @@ def test_start_mode_projections_kept_per_model_are_the_projections(beam):
     np.testing.assert_array_equal(second[2], (row @ cond.phi_j)[0])
     if not cond.complete:
         np.testing.assert_array_equal(second[3], np.array([(row @ V)[0] for V in cond._V[1:]]))
-    for x, y in zip(first, second):
+    for x, y in zip(first, second, strict=True):
         np.testing.assert_array_equal(x, y)
     b = mmshbm.backbone(beam, harmonics=5, max_amplitude=3 * beam.gap)
     shares = q._modal_shares_all(b.states)  # projections of Φᵀ M kept: the same as a fresh store's
