@@ -179,3 +179,27 @@ def test_start_mode_projections_kept_per_model_are_the_projections(beam):
     cond._projections.pop(id(MPhiT), None)
     np.testing.assert_array_equal(shares, q._modal_shares_all(b.states))
     assert np.all(shares[:, q.mode - 1, 1] > 0)
+
+
+@pytest.mark.parametrize("mode", [1, 2])
+def test_fixed_numbers_kept_per_model_are_the_computed_ones(beam, mode):
+    """A problem whose contact, mode and scaling numbers come from the per-model store has,
+    bit for bit, those a problem computes afresh, in arrays of its own."""
+    from mmshbm.methods.mms.fixed import _FIXED, _FIXED_CONTACTS, _FIXED_SCALING
+
+    _FIXED.pop(beam, None)
+    fresh = MMSHBMProblem(beam, harmonics=5, mode=mode)
+    assert (5, fresh.N, mode, "auto", "exact", True) in _FIXED[beam]
+    kept = MMSHBMProblem(beam, harmonics=5, mode=mode)
+    given_r = MMSHBMProblem(beam, harmonics=5, mode=mode, r=fresh.r_each)  # not from the store
+    for name in _FIXED_CONTACTS + _FIXED_SCALING + ("n_unknowns", "n_poles", "_pole_w2"):
+        a, b = getattr(fresh, name), getattr(kept, name)
+        if isinstance(a, np.ndarray):
+            assert a.dtype == b.dtype and not np.shares_memory(a, b)
+            np.testing.assert_array_equal(a, b)
+            np.testing.assert_array_equal(a, getattr(given_r, name))
+        else:
+            assert type(a) is type(b) and a == b
+    u = kept.linear_mode_point(0.5 * beam.gap)
+    np.testing.assert_array_equal(u, fresh.linear_mode_point(0.5 * beam.gap))
+    np.testing.assert_array_equal(kept.evaluate(u, True)[1], fresh.evaluate(u, True)[1])

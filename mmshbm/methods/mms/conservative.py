@@ -54,11 +54,11 @@ from ...core.measures import condensed_energy as _condensed_energy  # noqa: F401
 from ...core.measures import mean_energy as _mean_energy  # noqa: F401
 from ...core.measures import refined_max as _refined_max  # noqa: F401
 from ...core.problem import BackboneProblemBase, OneEvaluation
-from ...model.contact import admissible_intervals
 from ...model.model import Model
 from . import _family_kernels
 from .family import FamilyMixin
 from .fast import fast_data
+from .fixed import _FIXED, _FIXED_CONTACTS, _FIXED_SCALING, _own, fixed_contacts, fixed_scaling
 from .held import _HELD, _held_frequency, _held_frequency_solve  # noqa: F401  (earlier home)
 from .signals import SignalsMixin
 from .tables import _TABLES_KEPT, _compute_tables, _kept_tables, _tables  # noqa: F401  (earlier home)
@@ -133,46 +133,16 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         self.projection = projection
         self.cond = make_condensation(model, backend, harmonics=self.H, mode=self.mode)
         self.n_c = len(model.c)
-        c_list = model.c.tolist()
-        dofs, lo, hi = admissible_intervals(model.contacts)
-        self.contact_dofs = dofs
-        self.cdof = np.array([c_list.index(d) for d in dofs], dtype=np.int64)
-        self.lo, self.hi = lo, hi
-        D0inv = np.linalg.inv(self.cond.D0)
-        self.contact_stiffness_each = 1.0 / np.diag(D0inv)[self.cdof]
-        if r is None:
-            self.r_each = self.contact_stiffness_each.copy()
+        # the numbers fixed by (model, H, N, mode, back end, projection, poles) with the default
+        # r: computed once per model, each problem its own copies
+        memo = _FIXED.setdefault(model, {}) if r is None else None
+        key = (self.H, self.N, self.mode, backend, projection, bool(poles))
+        fixed = memo.get(key) if memo is not None else None
+        if fixed is None:
+            fixed_contacts(self, model, r)
         else:
-            r_arr = np.atleast_1d(np.asarray(r, dtype=float))
-            if r_arr.ndim != 1 or len(r_arr) not in (1, len(dofs)):
-                raise ValueError(f"r must be a number or one per contact DOF ({len(dofs)}), got {r!r}")
-            for v in r_arr:
-                check.positive("r", float(v))
-            self.r_each = np.broadcast_to(r_arr, (len(dofs),)).astype(float).copy()
-        # the 0.1 names of a single contact
-        self.contact_stiffness = float(self.contact_stiffness_each[0])
-        self.r = float(self.r_each[0])
-        self.gap = model.gap
-
-        freqs, modes = model.linear_modes(self.mode)
-        self.linear_frequency = float(freqs[-1])
-        self.omega_ref = 2 * np.pi * self.linear_frequency
-        phi = modes[:, -1]
-        self.amplitude_dof = model.amplitude_dof
-        ref = phi[self.amplitude_dof]
-        if abs(ref) < 1e-12 * np.max(np.abs(phi)):
-            raise ValueError(f"linear mode {self.mode} does not move the amplitude DOF {self.amplitude_dof}")
-        # unit motion of the amplitude DOF at τ = 0 (linear_modes orients the modes so that
-        # the first contact DOF moves toward its stop)
-        self.mode_shape_c = phi[model.c] / abs(ref)
-        contact_motion = np.abs(self.mode_shape_c[self.cdof]).max()
-        if contact_motion < 1e-12 * np.abs(phi).max():
-            raise ValueError(f"linear mode {self.mode} does not move any contact DOF: no impact")
-        # amplitude: excursion away from the stop of a single one-sided contact, else |q|
-        single = len(model.contacts) == 1 and model.contacts[0].dof == self.amplitude_dof
-        self._amp_sign = float(-model.contacts[0].side) if single else 0.0
-        self._amp_in_c = self.amplitude_dof in c_list
-        self._amp_index = c_list.index(self.amplitude_dof) if self._amp_in_c else -1
+            for name in _FIXED_CONTACTS:
+                setattr(self, name, _own(fixed[name]))
 
         self.pole_set = None
         if poles:
@@ -185,29 +155,13 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         self._pole_b = self.pole_set.b if n_p else np.zeros((0, self.n_c))
         self._pole_w2 = self.pole_set.omega2 if n_p else np.zeros(0)
 
-        length = self.gap if self.gap > 0 else 1.0
-        shape = np.abs(self.mode_shape_c)
-        self.xscale = length * np.maximum(shape, 1e-3 * shape.max())
-        fscale = np.abs(self.cond.D0) @ self.xscale
-        fscale[self.cdof] = self.contact_stiffness_each * length
-        # η_jk gives the force b_j η and moves the DOFs with mass by −φ_j η: scale it by the
-        # larger of the η that gives the force scale and the η that moves them by the length
-        # scale (by the force alone, a stiff contact spring makes the scaled η, and the
-        # pole row's sensitivity to Ω, grow with the spring; by the motion alone, a mode
-        # that barely touches the contact makes η a free direction that the arclength
-        # spends itself on)
-        bnorm = np.abs(self._pole_b).max(axis=1) if n_p else np.zeros(0)
-        by_force = np.where(bnorm > 0, fscale.max() / np.maximum(bnorm, 1e-300), 1.0)
-        phimax = (np.abs(self.pole_set.phi[:, [j for _, j in self.pole_set.pairs]]).max(axis=0)
-                  if n_p else np.zeros(0))
-        by_motion = np.where(phimax > 0, length / np.maximum(phimax, 1e-300), 1.0)
-        self.eta_scale = np.maximum(by_force, by_motion)
-        #: how the pole unknowns are scaled (recorded with a branch: results saved before it
-        #: scaled them by the force alone, :meth:`states_from_force_scaling`)
-        self.pole_scaling = "force-or-motion"
-        self._eta_scale_force = by_force
-        self.colscale = np.concatenate([np.tile(self.xscale, self.H + 1), self.eta_scale, [self.omega_ref]])
-        self.rowscale = np.concatenate([np.tile(fscale, self.H + 1), self._pole_w2 * self.eta_scale])
+        if fixed is None:
+            fixed_scaling(self, n_p)
+            if memo is not None:
+                memo[key] = {name: _own(getattr(self, name)) for name in _FIXED_CONTACTS + _FIXED_SCALING}
+        else:
+            for name in _FIXED_SCALING:
+                setattr(self, name, _own(fixed[name]))
         self.n_unknowns = (self.H + 1) * self.n_c + n_p + 1
 
         H, N = self.H, self.N
@@ -488,3 +442,4 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
             shares = (share, share_args, family, family_args, records)
         self._point_records = shares
         return shares
+
