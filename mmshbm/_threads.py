@@ -26,6 +26,7 @@ __all__ = ["blas_limit", "user_chose", "single_thread_env", "BLAS_ENV"]
 #: environment variables that set the threads of the BLAS libraries numpy/scipy load
 BLAS_ENV = ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "OMP_NUM_THREADS", "BLIS_NUM_THREADS")
 
+#: the BLAS libraries' threadpoolctl controllers (None until the first blas_limit)
 _controller = None
 
 
@@ -50,7 +51,7 @@ def _limit() -> int | None:
 def blas_limit():
     """A context manager that runs its block with the package's BLAS thread limit (one
     thread by default, see the module docstring); a no-op when the user chose the threads
-    or threadpoolctl is missing. Entering and leaving costs ~20 µs."""
+    or threadpoolctl is missing. Entering and leaving costs a few µs."""
     global _controller
     n = _limit()
     if n is None:
@@ -61,8 +62,33 @@ def blas_limit():
             from threadpoolctl import ThreadpoolController
         except ImportError:  # pragma: no cover - threadpoolctl is a dependency
             return contextlib.nullcontext()
-        _controller = ThreadpoolController()
-    return _controller.limit(limits=n, user_api="blas")
+        # the BLAS libraries' own controllers: set and restored directly (threadpoolctl's
+        # limit() selects and describes them on every call)
+        _controller = [lc for lc in ThreadpoolController().lib_controllers if lc.user_api == "blas"]
+    return _Limit(_controller, n)
+
+
+class _Limit:
+    """Sets each BLAS library's threads to ``n`` on entering (where they differ) and
+    restores them on leaving."""
+
+    __slots__ = ("libs", "n", "before")
+
+    def __init__(self, libs, n: int):
+        self.libs, self.n, self.before = libs, n, []
+
+    def __enter__(self):
+        self.before = [(lc, lc.get_num_threads()) for lc in self.libs]
+        for lc, threads in self.before:
+            if threads != self.n:
+                lc.set_num_threads(self.n)
+        return self
+
+    def __exit__(self, *exc):
+        for lc, threads in self.before:
+            if threads != self.n:
+                lc.set_num_threads(threads)
+        return False
 
 
 def single_thread_env() -> None:
