@@ -52,10 +52,16 @@ def model_fingerprint(model) -> str:
     return model.fingerprint()
 
 
+#: the types :func:`_plain` returns as they are, without looking further
+_LEAVES = frozenset({float, int, str, bool, type(None)})
+
+
 def _plain(x):
     """JSON-ready copy of ``x``: arrays to lists, NumPy scalars to Python numbers; a complex
     number or array (a forced response's Floquet multipliers) to ``{"complex": [re, im]}``,
     which :func:`_restore` reads back."""
+    if type(x) in _LEAVES:  # the common case first
+        return x
     if isinstance(x, dict):
         return {str(k): _plain(v) for k, v in x.items()}
     if isinstance(x, list | tuple):
