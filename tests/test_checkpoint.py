@@ -272,3 +272,20 @@ def test_baselines_resume_point_for_point_with_their_records(tmp_path, method, o
         np.testing.assert_array_equal(resumed.records[name], values)
     if method == "shooting":
         assert "floquet_max" in full.records and len(full.records["floquet_max"]) == len(full)
+
+
+def test_plain_gives_python_numbers_and_json_types():
+    """The JSON conversion turns NumPy scalars (a subclass of float among them) into
+    Python numbers and keeps Python leaves as they are; complex values tagged."""
+    import numpy as np
+
+    from mmshbm.core.checkpoint import _plain, _restore
+
+    x = {"a": np.float64(0.1), "b": np.int64(3), "c": [True, None, "s", 2.5, 7], "d": np.arange(3.0),
+         1: (np.bool_(True), 1e300), "z": np.array([1 + 2j])}
+    out = _plain(x)
+    assert out == {"a": 0.1, "b": 3, "c": [True, None, "s", 2.5, 7], "d": [0.0, 1.0, 2.0],
+                   "1": [True, 1e300], "z": {"complex": [[1.0], [2.0]]}}
+    assert type(out["a"]) is float and type(out["b"]) is int and type(out["1"][0]) is bool
+    assert json.loads(json.dumps(out)) == out
+    np.testing.assert_array_equal(_restore(out["z"]), x["z"])
