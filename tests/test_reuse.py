@@ -189,7 +189,7 @@ def test_fixed_numbers_kept_per_model_are_the_computed_ones(beam, mode):
 
     _FIXED.pop(beam, None)
     fresh = MMSHBMProblem(beam, harmonics=5, mode=mode)
-    assert (5, fresh.N, mode, "auto", "exact", True) in _FIXED[beam]
+    assert (MMSHBMProblem, 5, fresh.N, mode, "auto", "exact", True) in _FIXED[beam]
     kept = MMSHBMProblem(beam, harmonics=5, mode=mode)
     given_r = MMSHBMProblem(beam, harmonics=5, mode=mode, r=fresh.r_each)  # not from the store
     for name in _FIXED_CONTACTS + _FIXED_SCALING + ("n_unknowns", "n_poles", "_pole_w2"):

@@ -136,7 +136,7 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         # the numbers fixed by (model, H, N, mode, back end, projection, poles) with the default
         # r: computed once per model, each problem its own copies
         memo = _FIXED.setdefault(model, {}) if r is None else None
-        key = (self.H, self.N, self.mode, backend, projection, bool(poles))
+        key = (type(self), self.H, self.N, self.mode, backend, projection, bool(poles))
         fixed = memo.get(key) if memo is not None else None
         if fixed is None:
             fixed_contacts(self, model, r)

@@ -15,7 +15,7 @@ from ...model.model import Model
 
 __all__ = ["fixed_contacts", "fixed_scaling"]
 
-#: model -> {(H, N, mode, backend, projection, poles): the attributes below} of the
+#: model -> {(class, H, N, mode, backend, projection, poles): the attributes below} of the
 #: problems with the default r (:func:`fixed_contacts`, :func:`fixed_scaling`)
 _FIXED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 _FIXED_CONTACTS = ("contact_dofs", "cdof", "lo", "hi", "contact_stiffness_each", "r_each",
