@@ -45,11 +45,16 @@ import csv
 import logging
 import math
 import time
-import tracemalloc
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from .backbone_timing import REACH_RTOL as _REACH_RTOL  # noqa: F401
+from .backbone_timing import backbone_with as _backbone
+from .backbone_timing import measure as _measure
+from .backbone_timing import reached_frequency as _reached_frequency
+from .element_scaling import element_scaling, format_scaling
 
 __all__ = ["compare_methods", "format_table", "write_results", "element_scaling", "format_scaling",
            "METHOD_NAMES", "load_model", "DEFAULT_AMPLITUDE_GAPS", "default_amplitude"]
@@ -113,19 +118,6 @@ class _Run:
         return bool(np.isfinite(self.error))
 
 
-def _backbone(model, method: str, amplitude: float, options: dict):
-    import mmshbm
-
-    opts = dict(options)
-    harmonics = opts.pop("harmonics", 5)
-    factor = opts.pop("penalty_factor", None)
-    if factor is not None:
-        from ..methods.penalty.hbm import _condensed_contact_stiffness
-
-        opts["penalty_stiffness"] = factor * _condensed_contact_stiffness(model)
-    return mmshbm.backbone(model, harmonics=harmonics, method=method, max_amplitude=amplitude, **opts)
-
-
 def _run(model, method, amplitude, options, f_ref) -> _Run:
     t0 = time.perf_counter()
     try:
@@ -138,33 +130,6 @@ def _run(model, method, amplitude, options, f_ref) -> _Run:
     err = abs(f - f_ref) / f_ref if np.isfinite(f) else math.nan
     log.info("%s %s: f = %.9g Hz, error %.3g, %.3f s", method, options, f, err, seconds)
     return _Run(method, dict(options), f, err, seconds, branch)
-
-
-#: a branch "reaches" an amplitude when it gets this close (relative): the continuation
-#: refines its last point onto the amplitude bound only to a few 1e-9
-_REACH_RTOL = 1e-6
-
-
-def _reached_frequency(branch, amplitude: float) -> float:
-    """Frequency (Hz) at ``amplitude`` if the branch reached it, else NaN.
-
-    Within :data:`_REACH_RTOL` of the amplitude (a bound refined to a few 1e-9, which
-    ``Branch.frequency_at`` does not accept), the frequency of the point of largest
-    amplitude (the error is the backbone's slope times that offset: far below any target).
-    """
-    if len(branch) == 0:
-        return math.nan
-    top = int(np.nanargmax(branch.amplitude))
-    if not branch.amplitude[top] >= amplitude * (1 - _REACH_RTOL):
-        return math.nan
-    import warnings
-
-    from .._warnings import BranchWarning
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", BranchWarning)  # just past the end the top point answers
-        f = float(branch.frequency_at(amplitude))
-    return f if math.isfinite(f) else float(branch.frequency[top])
 
 
 def _meets(run: _Run, target: float) -> bool:
@@ -275,22 +240,6 @@ def _setting(method: str, options: dict) -> str:
 
 
 # ---------------------------------------------------------------------- measurement
-def _measure(model, method, amplitude, options, repeats):
-    """(fastest time (s) of ``repeats`` whole backbones, peak tracemalloc MiB, last branch)."""
-    best, branch = math.inf, None
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        branch = _backbone(model, method, amplitude, options)
-        best = min(best, time.perf_counter() - t0)
-    tracemalloc.start()
-    try:
-        _backbone(model, method, amplitude, options)
-        _, peak = tracemalloc.get_traced_memory()
-    finally:
-        tracemalloc.stop()
-    return best, peak / 2**20, branch
-
-
 #: amplitude of the comparison (gaps) per model kind. The oscillator: 2 gaps (closed form
 #: everywhere). The beam: 1.5 gaps, below the 5:1 internal resonance (5 x 54.75 Hz, 4 %
 #: below f2 = 286.1 Hz); at 2 gaps the H = 5 branch sits on that resonance (57.06 Hz:
@@ -440,78 +389,3 @@ def write_results(rows: list[dict], out_dir) -> list[Path]:
             writer.writerow({k: (repr(v) if isinstance(v, float) else v) for k, v in r.items()})
     md_path.write_text(format_table(rows) + "\n")
     return [csv_path, md_path]
-
-
-# ---------------------------------------------------------------------- scaling
-def element_scaling(elements=(8, 21, 100, 1000), harmonics: int = 5, amplitude_gaps: float = 2.0,
-                    repeats: int = 3) -> tuple[list[dict], float]:
-    """Cost of MMS-HBM against the number of beam elements.
-
-    For each element count: the whole backbone up to ``amplitude_gaps`` (fastest of
-    ``repeats``), its Newton iterations, and the time of one residual + Jacobian
-    evaluation (fastest of 20). The branches differ between meshes (more points where a
-    finer mesh meets more internal resonances), so the exponent is fitted to the time
-    **per Newton iteration** (whole backbone time / Newton iterations), which is the
-    cost the mesh size controls; each row also has the raw times.
-
-    Returns
-    -------
-    rows : list of dict
-        ``elements, n_dof, unknowns, time_s, newton_iterations, continuation_steps,
-        time_per_iteration_s, evaluate_s, frequency_hz``.
-    exponent : float
-        Least-squares slope of log(time per Newton iteration) against log(elements).
-    """
-    import mmshbm
-
-    from .. import _validate as check
-    from ..methods.backbone import make_problem
-
-    elements = [check.integer("elements", n, minimum=1) for n in elements]
-    if len(elements) < 2:
-        raise ValueError(f"need at least two element counts, got {elements}")
-    beam = mmshbm.default_beam()
-    rows = []
-    for n in elements:
-        model = beam.model(n)
-        amplitude = amplitude_gaps * model.gap
-        seconds, _, branch = _measure(model, "mmshbm", amplitude, {"harmonics": harmonics}, repeats)
-        problem = make_problem(model, "mmshbm", harmonics=harmonics)
-        u = branch.states[-1]
-        # alternate two states whose Ω differ in the last digits: MMS-HBM reuses the
-        # condensation at an unchanged Ω, and a Newton iteration always changes Ω
-        states = [u, u.copy()]
-        states[1][-1] *= 1 + 1e-12
-        problem.residual_and_jacobian(u)
-        ev = math.inf
-        for i in range(20):
-            t0 = time.perf_counter()
-            problem.residual_and_jacobian(states[(i + 1) % 2])
-            ev = min(ev, time.perf_counter() - t0)
-        nit = int(np.sum(branch.newton_iterations))
-        rows.append({"elements": n, "n_dof": model.n_dof, "unknowns": problem.n_unknowns, "time_s": seconds,
-                     "newton_iterations": nit, "continuation_steps": len(branch) - 1,
-                     "time_per_iteration_s": seconds / max(nit, 1), "evaluate_s": ev,
-                     "frequency_hz": _reached_frequency(branch, amplitude)})
-    x = np.log([r["elements"] for r in rows])
-    y = np.log([r["time_per_iteration_s"] for r in rows])
-    exponent = float(np.polyfit(x, y, 1)[0])
-    return rows, exponent
-
-
-def format_scaling(rows: list[dict], exponent: float) -> str:
-    """Markdown table of :func:`element_scaling`."""
-    lines = ["| elements | DOFs | time (ms) | Newton it. | steps | ms / iteration | evaluate (µs) | f (Hz) |",
-             "|" + "---|" * 8]
-    for r in rows:
-        lines.append(f"| {r['elements']} | {r['n_dof']} | {1e3 * r['time_s']:.1f} | {r['newton_iterations']} "
-                     f"| {r['continuation_steps']} | {1e3 * r['time_per_iteration_s']:.3f} "
-                     f"| {1e6 * r['evaluate_s']:.0f} | {r['frequency_hz']:.6g} |")
-    x = np.log([r["elements"] for r in rows])
-    y = np.log([r["time_s"] for r in rows])
-    whole = float(np.polyfit(x, y, 1)[0])
-    evaluate = float(np.polyfit(x, np.log([r["evaluate_s"] for r in rows]), 1)[0])
-    lines.append("")
-    lines.append(f"Cost exponent (time ∝ elements^p): per Newton iteration p = {exponent:.2f}; "
-                 f"one residual + Jacobian evaluation p = {evaluate:.2f}; whole backbone p = {whole:.2f}.")
-    return "\n".join(lines)
