@@ -175,22 +175,10 @@ class FamilyMixin:
             return cached
         if self.H == 1:
             return None
-        from ...core.continuation import ContinuationOptions, continue_branch
-
-        aux = self._rung(1)
-        start = 0.5 * self.gap if self.gap > 0 else 0.01 * amplitude_max
-        res = continue_branch(aux, aux.linear_mode_point(start), aux.initial_tangent(),
-                              ContinuationOptions(bounds={"amplitude": (0.0, amplitude_max)}, follow="path",
-                                                  max_steps=400), catch_interrupt=False)
-        A = res.records.get("amplitude", np.empty(0))
-        keep, best = [], -np.inf
-        for i, a in enumerate(A):
-            if a > best:
-                keep.append(i)
-                best = a
-        if len(keep) < 2:
+        front = _rising_front(self._rung(1), self.gap, amplitude_max)
+        if front is None:
             return None
-        self._fundamental = (aux, A[keep], res.u[keep])
+        self._fundamental = front
         return self._fundamental
 
     def _rung(self, h: int):
@@ -212,27 +200,16 @@ class FamilyMixin:
         cached = self._reference
         if cached is not None and cached[1][-1] >= amplitude_max * (1 - 1e-9):
             return cached
-        from ...core.continuation import ContinuationOptions, continue_branch
-
         H_ref = 3 if self.H > 3 else 1
         if H_ref >= self.H:
             return None
         aux = type(self)(self.model, H_ref, r=self.r_each, mode=self.mode, backend=self.cond.backend,
                             projection=self.projection)
         aux._modal = self._modal
-        start = 0.5 * self.gap if self.gap > 0 else 0.01 * amplitude_max
-        res = continue_branch(aux, aux.linear_mode_point(start), aux.initial_tangent(),
-                              ContinuationOptions(bounds={"amplitude": (0.0, amplitude_max)}, follow="path",
-                                                  max_steps=400), catch_interrupt=False)
-        A = res.records.get("amplitude", np.empty(0))
-        keep, best = [], -np.inf
-        for i, a in enumerate(A):
-            if a > best:
-                keep.append(i)
-                best = a
-        if len(keep) < 2:
+        front = _rising_front(aux, self.gap, amplitude_max)
+        if front is None:
             return None
-        self._reference = (aux, A[keep], res.u[keep])
+        self._reference = front
         return self._reference
 
     # ------------------------------------------------------------------ modal energy
@@ -478,3 +455,24 @@ def _raised(low, u: np.ndarray, high) -> np.ndarray:
             if (int(k), int(j)) in index:
                 out[n_a + p] = eta[index[int(k), int(j)]] / high.eta_scale[p]
     return out
+
+
+def _rising_front(aux, gap: float, amplitude_max: float):
+    """(``aux``, amplitudes ascending, scaled unknowns) of the points of ``aux``'s branch,
+    continued by plain path following from its linear mode at half a gap up to
+    ``amplitude_max``, that each reach a new largest amplitude; None with fewer than two."""
+    from ...core.continuation import ContinuationOptions, continue_branch
+
+    start = 0.5 * gap if gap > 0 else 0.01 * amplitude_max
+    res = continue_branch(aux, aux.linear_mode_point(start), aux.initial_tangent(),
+                          ContinuationOptions(bounds={"amplitude": (0.0, amplitude_max)}, follow="path",
+                                              max_steps=400), catch_interrupt=False)
+    A = res.records.get("amplitude", np.empty(0))
+    keep, best = [], -np.inf
+    for i, a in enumerate(A):
+        if a > best:
+            keep.append(i)
+            best = a
+    if len(keep) < 2:
+        return None
+    return aux, A[keep], res.u[keep]
