@@ -31,7 +31,13 @@ import numpy as np
 
 from .corpus import CorpusCase, generate
 
-__all__ = ["ExactComparison", "chains", "compare", "report"]
+__all__ = ["ExactComparison", "chains", "compare", "name", "report"]
+
+
+def name(case: CorpusCase) -> str:
+    """``#index chain of m masses (seed s)``: the case without the corpus's own H (the
+    comparison runs at its own number of harmonics)."""
+    return f"#{case.index} chain of {len(case.params['masses'])} masses (seed {case.seed})"
 
 
 def chains(n: int, seed: int = 0, max_masses: int = 4, gap: float = 0.01,
@@ -243,7 +249,8 @@ def report(results: list[ExactComparison], tol: float = 1e-3) -> str:
     errs = np.array([r.error for r in clean])
     good = np.sum(errs <= tol)
     lines = [f"{len(results)} models, {len(clean)} with a clean exact orbit; within {tol:g}: {good} "
-             f"({100 * good / max(len(clean), 1):.1f} %), median error {np.nanmedian(errs):.2e}"]
+             f"({100 * good / max(len(clean), 1):.1f} %), median error "
+             f"{np.nanmedian(errs) if np.any(np.isfinite(errs)) else math.nan:.2e}"]
     bad = [r for r in clean if not r.error <= tol]
     coexist = [r for r in bad if r.coexisting]
     trunc = [r for r in bad if not r.coexisting and r.truncation]
@@ -267,7 +274,7 @@ def report(results: list[ExactComparison], tol: float = 1e-3) -> str:
     for r in bad:
         kind = "coexisting" if r.coexisting else "truncation" if r.truncation else "OTHER"
         why = "; ".join(r.reasons(tol)) or "not reported"
-        lines.append(f"  {kind} [{why}] (estimate {r.estimate:.2e} {r.estimate_note}): {r.case.label}: "
+        lines.append(f"  {kind} [{why}] (estimate {r.estimate:.2e} {r.estimate_note}): {name(r.case)}: "
                      f"exact {r.exact:.6g} Hz, "
                      f"continued exact "
                      f"{r.continued:.6g} Hz, branch {r.branch:.6g} Hz (error {r.error:.2e}, at 2H "

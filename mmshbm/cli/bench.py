@@ -105,7 +105,7 @@ def _corpus_exact(args) -> int:
     for case in cases:
         r = corpus_exact.compare(case)
         results.append(r)
-        print(f"{case.label:<34} {r.seconds:7.2f} s  {'clean' if r.clean else 'not clean':9} "
+        print(f"{corpus_exact.name(case):<34} {r.seconds:7.2f} s  {'clean' if r.clean else 'not clean':9} "
               f"error {r.error:.2e}  {r.status[:60]}", flush=True)
     print(corpus_exact.report(results))
     path = common.out_dir(args) / "corpus_exact.csv"
