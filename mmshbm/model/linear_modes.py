@@ -1,6 +1,7 @@
 """Linear modes of a model with its contacts open: the massless DOFs statically condensed,
-dense eigen-solves on small models and shift-invert Lanczos on large ones, and the
-positive-definiteness checks of the model's blocks."""
+dense eigen-solves on small models and shift-invert Lanczos on large ones, the
+positive-definiteness checks of the model's blocks, and the model's modes and frequencies
+kept with it (:class:`ModesMixin`, a mixin of :class:`~mmshbm.model.Model`)."""
 
 from __future__ import annotations
 
@@ -110,3 +111,48 @@ def _require_positive_definite(A, what: str) -> None:
         kind = "singular" if abs(worst) <= 1e-13 * scale else "indefinite"
         raise ValueError(f"{what} is {kind} (smallest pivot {worst:.3e}, largest {scale:.3e}): "
                          "is the structure fixed, and are M and K positive (semi)definite?")
+
+
+class ModesMixin:
+    """Linear modes and frequencies of a model with its contacts open, kept with the model
+    (needs the attributes of :class:`~mmshbm.model.Model`)."""
+
+    def linear_modes(self, n: int = 1) -> tuple[np.ndarray, np.ndarray]:
+        """The ``n`` lowest modes with the contact open (see :meth:`_linear_modes`); the
+        result for each ``n`` is kept with the model (immutable), so a repeated call costs a
+        copy. (Not sliced from a larger solve: the same call gives the same bits whatever was
+        asked before.)"""
+        n = check.integer("n", n, minimum=1)
+        memo = self.__dict__.setdefault("_memo_modes", {})
+        if n not in memo:
+            memo[n] = self._linear_modes(n)
+        freqs, modes = memo[n]
+        return freqs.copy(), modes.copy()
+
+    def _linear_modes(self, n: int = 1) -> tuple[np.ndarray, np.ndarray]:
+        """The ``n`` lowest modes with the contact open
+        (:func:`~mmshbm.model.linear_modes.open_contact_modes`)."""
+        return open_contact_modes(self, n)
+
+    def linear_frequencies(self, n: int = 1) -> np.ndarray:
+        """The ``n`` lowest natural frequencies (Hz) with the contact open."""
+        return self.linear_modes(n)[0]
+
+    def zero_gap_frequency(self) -> float:
+        """Frequency (Hz) of the first mode's bilinear limit (gap → 0 or amplitude → ∞):
+        half a period open, half a period with the contact DOF held at the stop,
+        f = 2 / (1/f_open + 1/f_closed). Kept with the model after the first call."""
+        memo = self.__dict__.get("_memo_zero_gap")
+        if memo is None:
+            memo = self._zero_gap_frequency()
+            self.__dict__["_memo_zero_gap"] = memo
+        return memo
+
+    def _zero_gap_frequency(self) -> float:
+        contact = self._single("zero-gap limit")
+        f_open = self.linear_frequencies(1)[0]
+        closed = np.setdiff1d(np.arange(self.n_dof), [contact.dof])
+        sub = type(self)(self.M[closed][:, closed], self.K[closed][:, closed], (Contact(0, 0.0, 1),))
+        f_closed = sub.linear_frequencies(1)[0]  # sparse eigen-solve on large models
+        return 2.0 / (1.0 / f_open + 1.0 / f_closed)
+

@@ -22,22 +22,24 @@ force's magnitude (N), pushing the structure away from the stop. The damping ``C
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from functools import cached_property
 
 import numpy as np
-import scipy.linalg as la
 import scipy.sparse as sp
 
 from .. import _validate as check
-from .contact import Contact, contacts_from
+from .contact import Contact, contacts_from  # noqa: F401 - Contact: importable from here as before
 from .friction import no_contacts
-from .linear_modes import _require_positive_definite, open_contact_modes
+from .linear_modes import ModesMixin, _require_positive_definite, open_contact_modes  # noqa: F401
+from .partition import PartitionMixin
+from .stops import StopsMixin
 
 __all__ = ["Model"]
 
 
+# the stops (single-contact names, amplitude DOF), the DOF partition and the linear modes
+# are mixins of their own modules; the class holds the data, its builders and its identity
 @dataclass(frozen=True, eq=False)
-class Model:
+class Model(StopsMixin, PartitionMixin, ModesMixin):
     """A linear structure with rigid stops.
 
     Build it with :meth:`from_matrices` (or a beam's ``.model()``); the constructor
@@ -241,186 +243,7 @@ class Model:
 
         return with_massless_contact(self, dofs)
 
-    # ------------------------------------------------------------------ contacts
-    @property
-    def n_contacts(self) -> int:
-        """Number of contacts (stops)."""
-        return len(self.contacts)
-
-    def _single(self, what: str) -> Contact:
-        if len(self.contacts) != 1:
-            raise ValueError(f"the model has {len(self.contacts)} contacts, so it has no single {what}: "
-                             "use model.contacts")
-        return self.contacts[0]
-
-    @property
-    def contact_dof(self) -> int:
-        """The contact DOF of a single-contact model (ValueError with several)."""
-        return self._single("contact_dof").dof
-
-    @property
-    def stop_side(self) -> int:
-        """The stop side (±1) of a single-contact model (ValueError with several)."""
-        return self._single("stop_side").side
-
-    @property
-    def gap(self) -> float:
-        """The gap (m) of a single-contact model; with several, the smallest positive one
-        (the unit of amplitudes "in gaps"; 0 if all are 0)."""
-        gaps = [c.gap for c in self.contacts]
-        positive = [g for g in gaps if g > 0]
-        return min(positive) if positive else 0.0
-
-    @property
-    def contact_dofs(self) -> tuple:
-        """The DOF of each contact (a DOF appears twice in a clearance)."""
-        return tuple(c.dof for c in self.contacts)
-
-    @property
-    def amplitude_dof(self) -> int:
-        """The DOF whose largest excursion is the amplitude of a branch: the one given, the
-        contact DOF of a single-contact model, or, with several contacts (a clearance: a
-        massless DOF between two stops never passes them), the DOF with mass most strongly
-        coupled to the contacts (:attr:`_coupled_dof`)."""
-        if self._amplitude_dof is not None:
-            return self._amplitude_dof
-        if len(self.contacts) == 1:
-            return self.contacts[0].dof
-        return self._coupled_dof
-
-    @property
-    def amplitude_limit(self) -> float:
-        """The largest amplitude (m) the amplitude DOF can have: +inf, except for a massless
-        DOF between two stops (it never passes them: the farther stop's distance)."""
-        dof = self.amplitude_dof
-        gaps = {ct.side: ct.gap for ct in self.contacts if ct.dof == dof}
-        if len(gaps) < 2 or dof not in set(self.c.tolist()):
-            return float("inf")
-        return float(max(gaps.values()))
-
-    def check_amplitude_reach(self, max_amplitude: float) -> None:
-        """Raise a ValueError when the amplitude DOF cannot reach ``max_amplitude`` (m)."""
-        limit = self.amplitude_limit
-        if max_amplitude > limit * (1 + 1e-9):
-            dof = self.amplitude_dof
-            raise ValueError(
-                f"amplitude_dof {dof} is massless and held between two stops: its amplitude never exceeds "
-                f"{limit:g} m, so max_amplitude = {max_amplitude:g} m cannot be reached; measure the "
-                f"amplitude at a DOF with mass (model.with_amplitude_dof(dof), e.g. DOF {self._coupled_dof}, "
-                "the default with several contacts)")
-
-    @cached_property
-    def _coupled_dof(self) -> int:
-        """The DOF with mass most strongly coupled to the contacts: the largest
-        √M_ii·|z_i| over the DOFs with mass, z the static displacement of those DOFs when
-        every contact DOF moves by one unit toward its stop with the other massless DOFs
-        free (√M_ii·|z_i| is that DOF's share of the root kinetic energy, comparable
-        across translations and rotations)."""
-        l, c = self.l, self.c
-        if not len(l):
-            raise ValueError("the model has no DOF with mass to measure the amplitude at")
-        dofs = sorted({ct.dof for ct in self.contacts})
-        K = self.K.tocsr()
-        free = np.array([i for i in c if i not in dofs] + list(l), dtype=int)
-        K_ff = K[free][:, free].toarray()
-        K_fd = K[free][:, dofs].toarray()
-        # every contact DOF displaced by one unit (its stop's side): the others follow statically
-        side = np.array([next(ct.side for ct in self.contacts if ct.dof == d) for d in dofs], dtype=float)
-        z = -np.linalg.lstsq(K_ff, K_fd @ side, rcond=None)[0]
-        mass = np.asarray(self.M.tocsr().diagonal())[free]
-        score = np.where(mass > 0, np.sqrt(np.abs(mass)) * np.abs(z), -1.0)
-        return int(free[int(np.argmax(score))])
-
-    @property
-    def massless_contacts(self) -> bool:
-        """True when every contact DOF is massless (what MMS-HBM and the exact reference
-        need)."""
-        c = set(self.c.tolist())
-        return all(ct.dof in c for ct in self.contacts)
-
-    def require_massless_contacts(self, who: str) -> None:
-        """Raise a ValueError naming the conversions unless every contact DOF is massless.
-
-        ``who`` names the method that needs it (e.g. ``"MMS-HBM"``)."""
-        c = set(self.c.tolist())
-        heavy = sorted({ct.dof for ct in self.contacts if ct.dof not in c})
-        if heavy:
-            many = len(heavy) > 1
-            raise ValueError(
-                f"contact DOF{'s' if many else ''} {heavy} carr{'y' if many else 'ies'} mass, "
-                f"but {who} needs massless contact DOFs (their equations are static): convert the model "
-                "with model.with_contact_layer(stiffness) (a massless contact node joined by a spring, the "
-                "mass kept) or model.with_massless_contact() (the contact node's mass removed), or use "
-                "method='penalty'")
-
-    # ------------------------------------------------------------------ partition
-    @property
-    def n_dof(self) -> int:
-        """Number of DOFs of the whole model."""
-        return self.M.shape[0]
-
-    @cached_property
-    def c(self) -> np.ndarray:
-        """Indices of the massless DOFs, sorted; shape (n_c,)."""
-        row_mass = np.asarray(abs(self.M).sum(axis=1)).ravel()
-        return np.flatnonzero(row_mass == 0.0)
-
-    @cached_property
-    def l(self) -> np.ndarray:  # noqa: E743 - the DOF set's name in the literature
-        """Indices of the DOFs carrying mass (the linear subsystem); shape (n_l,)."""
-        return np.setdiff1d(np.arange(self.n_dof), self.c)
-
-    @property
-    def contact_index(self) -> int:
-        """Position of ``contact_dof`` inside ``c`` (single massless contact)."""
-        dof = self.contact_dof
-        i = int(np.searchsorted(self.c, dof))
-        if i >= len(self.c) or self.c[i] != dof:
-            raise ValueError(f"contact_dof {dof} carries mass: it is not among the massless DOFs")
-        return i
-
-    @cached_property
-    def w_c(self) -> np.ndarray:
-        """Contact direction restricted to ``c``: g_N = gap + w_c · q_c; shape (n_c,)
-        (single massless contact)."""
-        w = np.zeros(len(self.c))
-        w[self.contact_index] = -self.stop_side
-        return w
-
-    @cached_property
-    def blocks(self) -> dict:
-        """The partitioned matrices: ``M_ll``, ``K_ll`` (CSC), ``K_lc`` (dense (n_l, n_c)),
-        ``K_cc`` (dense (n_c, n_c)), and ``C_ll`` (CSC, or None without damping)."""
-        l, c = self.l, self.c
-        K = self.K.tocsr()
-        return {
-            "M_ll": self.M[l][:, l].tocsc(),
-            "K_ll": K[l][:, l].tocsc(),
-            "K_lc": K[l][:, c].toarray(),
-            "K_cc": K[c][:, c].toarray(),
-            "C_ll": None if self.damping is None else self.damping.tocsr()[l][:, l].tocsc(),
-        }
-
-    def _check_partition(self) -> None:
-        c, l = self.c, self.l
-        if len(l) == 0:
-            raise ValueError("the model has no DOF with mass")
-        M_lc = self.M[l][:, c]
-        if M_lc.nnz and abs(M_lc).max() > 0:
-            raise ValueError("massless DOFs must have zero mass rows and columns (M_lc != 0)")
-        if self.damping is not None and len(c):
-            C = self.damping.tocsr()
-            rows = np.asarray(abs(C[c]).sum(axis=1)).ravel()
-            cols = np.asarray(abs(C[:, c]).sum(axis=0)).ravel()
-            coupled = (rows > 0) | (cols > 0)
-            if np.any(coupled):
-                raise ValueError(f"damping acts on the massless DOFs {c[coupled].tolist()}: massless DOFs "
-                                 "are static, so their rows and columns of C must be zero")
-        b = self.blocks
-        _require_positive_definite(b["K_cc"], "K restricted to the massless DOFs")
-        _require_positive_definite(b["M_ll"], "M restricted to the DOFs with mass")
-        _require_positive_definite(self.reduced_stiffness, "K statically condensed on the DOFs with mass")
-
+    # ------------------------------------------------------------------ identity
     def fingerprint(self) -> str:
         """SHA-256 of the matrices (CSR parts), contacts, damping and amplitude DOF: equal
         fingerprints mean the same model (a checkpoint can only be resumed on it). A
@@ -463,57 +286,6 @@ class Model:
         if self.damping is not None:
             pairs.append((self.damping, other.damping))
         return all((sp.csr_matrix(A) != sp.csr_matrix(B)).nnz == 0 for A, B in pairs)
-
-    # ------------------------------------------------------------------ linear modes
-    @cached_property
-    def reduced_stiffness(self) -> sp.csc_matrix:
-        """Exact static condensation of the massless DOFs:
-        K_ll - K_lc K_cc⁻¹ K_cl, sparse (n_l, n_l)."""
-        b = self.blocks
-        if not len(self.c):
-            return b["K_ll"]
-        K_lc = sp.csr_matrix(b["K_lc"])
-        correction = K_lc @ sp.csr_matrix(la.solve(b["K_cc"], b["K_lc"].T))
-        return (b["K_ll"] - correction).tocsc()
-
-    def linear_modes(self, n: int = 1) -> tuple[np.ndarray, np.ndarray]:
-        """The ``n`` lowest modes with the contact open (see :meth:`_linear_modes`); the
-        result for each ``n`` is kept with the model (immutable), so a repeated call costs a
-        copy. (Not sliced from a larger solve: the same call gives the same bits whatever was
-        asked before.)"""
-        n = check.integer("n", n, minimum=1)
-        memo = self.__dict__.setdefault("_memo_modes", {})
-        if n not in memo:
-            memo[n] = self._linear_modes(n)
-        freqs, modes = memo[n]
-        return freqs.copy(), modes.copy()
-
-    def _linear_modes(self, n: int = 1) -> tuple[np.ndarray, np.ndarray]:
-        """The ``n`` lowest modes with the contact open
-        (:func:`~mmshbm.model.linear_modes.open_contact_modes`)."""
-        return open_contact_modes(self, n)
-
-    def linear_frequencies(self, n: int = 1) -> np.ndarray:
-        """The ``n`` lowest natural frequencies (Hz) with the contact open."""
-        return self.linear_modes(n)[0]
-
-    def zero_gap_frequency(self) -> float:
-        """Frequency (Hz) of the first mode's bilinear limit (gap → 0 or amplitude → ∞):
-        half a period open, half a period with the contact DOF held at the stop,
-        f = 2 / (1/f_open + 1/f_closed). Kept with the model after the first call."""
-        memo = self.__dict__.get("_memo_zero_gap")
-        if memo is None:
-            memo = self._zero_gap_frequency()
-            self.__dict__["_memo_zero_gap"] = memo
-        return memo
-
-    def _zero_gap_frequency(self) -> float:
-        contact = self._single("zero-gap limit")
-        f_open = self.linear_frequencies(1)[0]
-        closed = np.setdiff1d(np.arange(self.n_dof), [contact.dof])
-        sub = Model(self.M[closed][:, closed], self.K[closed][:, closed], (Contact(0, 0.0, 1),))
-        f_closed = sub.linear_frequencies(1)[0]  # sparse eigen-solve on large models
-        return 2.0 / (1.0 / f_open + 1.0 / f_closed)
 
     def __repr__(self) -> str:
         if len(self.contacts) == 1:

@@ -59,9 +59,9 @@ on the one-DOF oscillator and the default beam (docs/penalty.md). The default
 k_p = 10³ k_c, with k_c = (w_cᵀ D_0⁻¹ w_c)⁻¹ the condensed static contact stiffness,
 gives errors ~10⁻⁴..3·10⁻³. Larger k_p is more accurate, but the penalty force becomes a
 steeper function of the displacement: its harmonics decay more slowly, its pulses get
-shorter (N must grow: :func:`penalty_n_samples`), the Jacobian's condition number grows
-like k_p/k_c, and Newton's semismooth iteration has to resolve an active set within a
-penetration of only λ/k_p.
+shorter (N must grow: :func:`~mmshbm.methods.penalty.defaults.penalty_n_samples`), the
+Jacobian's condition number grows like k_p/k_c, and Newton's semismooth iteration has to
+resolve an active set within a penetration of only λ/k_p.
 
 The penalty limit is a different truncation. At fixed H, f_penalty(∞) is *not* the
 MMS-HBM frequency at the same H: a degree-H contact displacement can only touch the stop,
@@ -79,7 +79,6 @@ to zero as k_p → ∞ (it is of order λ²/k_p).
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
@@ -93,122 +92,21 @@ from ...contact.table import (
     start_mode,
     static_contact_stiffness,
 )
-from ...core.harmonics import check_harmonics, default_n_samples, transform
-from ...core.measures import (
-    amplitude_peak,
-    amplitude_sign,
-    check_dof,
-    harmonic_content,
-    mean_energy,
-    refined_max,
-)
+from ...core.harmonics import check_harmonics, transform
+from ...core.measures import amplitude_sign
 from ...core.problem import BackboneProblemBase
 from ...model.model import Model
 from ._kernels import _penalty_contacts, _penalty_hbm_jacobian
+from .assembly import _jacobian_pattern, _Pattern  # noqa: F401 - _Pattern: importable from here as before
+from .defaults import _condensed_contact_stiffness, penalty_n_samples  # noqa: F401
+from .signals import PenaltySignalsMixin
 
 __all__ = ["PenaltyHBMProblem", "DEFAULT_PENALTY_FACTOR", "penalty_n_samples"]
 
 log = logging.getLogger(__name__)
 
 
-
-@dataclass(frozen=True)
-class _Pattern:
-    """Fixed CSR pattern of the Jacobian and where each kind of entry sits in it.
-
-    Attributes
-    ----------
-    indices, indptr : ndarray of int32
-        CSR column indices (nnz,) and row pointers (n_rows + 1,).
-    shape : tuple of int
-        (n(H+1), n(H+1) + 1).
-    K_data, M_data : ndarray, shape (nnz_A,)
-        K and M on the union pattern A of one harmonic block.
-    block_pos : ndarray of int64, shape (H+1, nnz_A)
-        CSR position of entry e of block k.
-    coupling_pos : ndarray of int64, shape (n_d, H+1, H+1)
-        CSR position of (row m·n + d, column k·n + d) for each distinct contact DOF d.
-    omega_rows : ndarray of int64, shape (n_l,)
-        DOFs with mass: the rows of the Ω column in each harmonic k >= 1.
-    omega_pos : ndarray of int64, shape (H, n_l)
-        CSR position of (row k·n + omega_rows[r], Ω column), k = 1..H.
-    """
-
-    indices: np.ndarray
-    indptr: np.ndarray
-    shape: tuple
-    K_data: np.ndarray
-    M_data: np.ndarray
-    block_pos: np.ndarray
-    coupling_pos: np.ndarray
-    omega_rows: np.ndarray
-    omega_pos: np.ndarray
-
-    @property
-    def rows(self) -> np.ndarray:
-        """Row index of every stored entry, shape (nnz,)."""
-        return np.repeat(np.arange(self.shape[0]), np.diff(self.indptr))
-
-
-def _jacobian_pattern(K: sp.csr_matrix, M: sp.csr_matrix, harmonics: int, contact_dofs,
-                      mass_dofs: np.ndarray) -> _Pattern:
-    """Build the CSR pattern of the penalty-HBM Jacobian once.
-
-    Rows and columns are numbered k·n + i (harmonic k, DOF i); the last column is Ω.
-    ``contact_dofs`` (n_d,) are the distinct DOFs with a penalty spring: each couples its
-    harmonics in its own row and column.
-    """
-    n, H1 = K.shape[0], harmonics + 1
-    contact_dofs = np.atleast_1d(np.asarray(contact_dofs, dtype=np.int64))
-    n_d = len(contact_dofs)
-    A = (abs(K) + abs(M)).tocsr()
-    A.sum_duplicates()
-    A.sort_indices()
-    a_rows = np.repeat(np.arange(n), np.diff(A.indptr))
-    a_cols = A.indices.astype(np.int64)
-    K_data = np.asarray(K[a_rows, a_cols]).ravel()
-    M_data = np.asarray(M[a_rows, a_cols]).ravel()
-    diag = np.empty(n_d, dtype=np.int64)
-    for j, d in enumerate(contact_dofs):
-        where = np.flatnonzero((a_rows == d) & (a_cols == d))
-        if len(where) != 1:  # pragma: no cover - K is positive definite, its diagonal is stored
-            raise ValueError(f"K has no stored diagonal entry at the contact DOF {d}")
-        diag[j] = where[0]
-
-    k = np.arange(H1)
-    blk_r = (k[:, None] * n + a_rows[None, :]).ravel()
-    blk_c = (k[:, None] * n + a_cols[None, :]).ravel()
-    m_, k_ = np.nonzero(~np.eye(H1, dtype=bool))
-    cpl_r = (m_[None, :] * n + contact_dofs[:, None]).ravel()
-    cpl_c = (k_[None, :] * n + contact_dofs[:, None]).ravel()
-    mass_dofs = np.asarray(mass_dofs, dtype=np.int64)
-    om_r = ((k[1:, None]) * n + mass_dofs[None, :]).ravel()
-    om_c = np.full(om_r.shape, H1 * n)
-
-    rows = np.concatenate([blk_r, cpl_r, om_r])
-    cols = np.concatenate([blk_c, cpl_c, om_c])
-    order = np.lexsort((cols, rows))  # CSR order
-    position = np.empty_like(order)
-    position[order] = np.arange(len(order))
-    n_blk, n_cpl = len(blk_r), len(cpl_r)
-    block_pos = position[:n_blk].reshape(H1, len(a_rows))
-    coupling_pos = np.empty((n_d, H1, H1), dtype=np.int64)
-    off = position[n_blk : n_blk + n_cpl].reshape(n_d, len(m_))
-    for j in range(n_d):
-        coupling_pos[j, m_, k_] = off[j]
-        coupling_pos[j, k, k] = block_pos[k, diag[j]]
-    omega_pos = position[n_blk + n_cpl :].reshape(harmonics, len(mass_dofs))
-    n_rows = H1 * n
-    indptr = np.zeros(n_rows + 1, dtype=np.int64)
-    np.cumsum(np.bincount(rows, minlength=n_rows), out=indptr[1:])
-    itype = np.int32 if max(len(rows), n_rows + 1) < np.iinfo(np.int32).max else np.int64
-    return _Pattern(indices=cols[order].astype(itype), indptr=indptr.astype(itype),
-                    shape=(n_rows, n_rows + 1), K_data=K_data, M_data=M_data,
-                    block_pos=np.ascontiguousarray(block_pos), coupling_pos=coupling_pos,
-                    omega_rows=mass_dofs, omega_pos=np.ascontiguousarray(omega_pos))
-
-
-class PenaltyHBMProblem(BackboneProblemBase):
+class PenaltyHBMProblem(PenaltySignalsMixin, BackboneProblemBase):
     """Penalty harmonic balance on all DOFs of a :class:`Model`, as a continuation problem.
 
     Parameters
@@ -220,9 +118,10 @@ class PenaltyHBMProblem(BackboneProblemBase):
         Highest harmonic H >= 1.
     n_samples : int, optional
         Time samples per period N >= 2H+1 for the contact DOFs' AFT. Default
-        :func:`penalty_n_samples`: MMS-HBM's :func:`~mmshbm.core.harmonics.default_n_samples`
-        up to k_p = 10³ k_c, doubled per further decade of k_p (the penetration window
-        narrows as k_p grows and must stay resolved by the samples).
+        :func:`~mmshbm.methods.penalty.defaults.penalty_n_samples`: MMS-HBM's
+        :func:`~mmshbm.core.harmonics.default_n_samples` up to k_p = 10³ k_c, doubled per
+        further decade of k_p (the penetration window narrows as k_p grows and must stay
+        resolved by the samples).
     penalty_stiffness : float or sequence of float, optional
         k_p (N/m), > 0: one for all contacts or one per contact. Default
         ``DEFAULT_PENALTY_FACTOR`` (10³) times each contact's static stiffness k_c
@@ -407,111 +306,3 @@ class PenaltyHBMProblem(BackboneProblemBase):
         _penalty_hbm_jacobian(p.K_data, p.M_data, omega, self._kp_ref, self._P, np.ascontiguousarray(MQ),
                               p.block_pos, p.coupling_pos, p.omega_rows, p.omega_pos, self._entry_scale, data)
         return sp.csr_matrix((data, p.indices, p.indptr), shape=p.shape, copy=False)
-
-    # ------------------------------------------------------------------ results
-    def _cosines(self, tau):
-        if tau is None:
-            return self._tau_fine, self._cos_fine
-        tau = np.asarray(tau, dtype=float)
-        return tau, np.cos(np.outer(np.arange(self.H + 1), tau))
-
-    def contact_signals(self, u: np.ndarray, tau: np.ndarray | None = None):
-        """Contact DOF displacements q(τ) (m) and penalty forces λ(τ) (N) on a grid.
-
-        Returns (tau, q_contact, lam): ``tau`` (n_tau,) defaults to a fine grid over one
-        period; with one contact ``q_contact`` and ``lam`` have shape (n_tau,), with
-        several (n_contacts, n_tau) (one row per contact, in ``model.contacts`` order).
-        """
-        Q, _ = self.unpack(u)
-        tau, C = self._cosines(tau)
-        ct = self.contacts
-        q = np.array([Q[:, d] @ C for d in ct.dof])
-        pen = ct.side[:, None] * q - ct.gap[:, None]
-        lam = self.penalty_stiffnesses[:, None] * np.maximum(0.0, pen)
-        if ct.n == 1:
-            return tau, q[0], lam[0]
-        return tau, q, lam
-
-    def coefficients(self, u: np.ndarray) -> np.ndarray:
-        """NLvib-ordered coefficients of all DOFs, shape (n_dof, 2H+1) (sines are zero)."""
-        Q, _ = self.unpack(u)
-        out = np.zeros((self.n, 2 * self.H + 1))
-        out[:, 0] = Q[0]
-        out[:, 1::2] = Q[1:].T
-        return out
-
-    def time_signals(self, u: np.ndarray, dofs=None, n_samples: int = 256):
-        """(t (n_samples,) in s, q (n_dofs, n_samples)) over one period for ``dofs``
-        (all DOFs when None)."""
-        Q, omega = self.unpack(u)
-        if dofs is not None:
-            dofs = np.atleast_1d(np.asarray(dofs))
-            if dofs.dtype.kind not in "iu" or np.any((dofs < -self.n) | (dofs >= self.n)):
-                raise ValueError(f"dofs must be integer indices in [0, {self.n - 1}], got {dofs}")
-            Q = Q[:, dofs]
-        tau = 2 * np.pi * np.arange(n_samples) / n_samples
-        q = Q.T @ np.cos(np.outer(np.arange(self.H + 1), tau))
-        return tau / omega, q
-
-    def contact_force(self, u: np.ndarray, n_samples: int = 256):
-        """(t (n_samples,) in s, λ in N) over one period; λ has shape (n_samples,) with one
-        contact, (n_contacts, n_samples) with several."""
-        _, omega = self.unpack(u)
-        tau = 2 * np.pi * np.arange(n_samples) / n_samples
-        _, _, lam = self.contact_signals(u, tau)
-        return tau / omega, lam
-
-    def harmonic_content(self, u: np.ndarray, dof: int | None = None) -> np.ndarray:
-        """|Q_k| for k = 0..H of ``dof`` (default the amplitude DOF); shape (H+1,)."""
-        dof = check_dof(dof, self.n, self.amplitude_dof)
-        return harmonic_content(self.coefficients(u)[dof])
-
-    def monitor(self, u: np.ndarray) -> dict:
-        """The per-point quantities of a backbone: frequency (Hz), amplitude (m, at
-        ``model.amplitude_dof``), energy (J, structure plus penalty springs, period
-        averages), contact_force_max (N, the largest over all contacts); with several
-        contacts also ``contact_force_max_<i>`` per contact i."""
-        Q, omega = self.unpack(u)
-        _, q, lam = self.contact_signals(u)
-        ct = self.contacts
-        q, lam = np.atleast_2d(q), np.atleast_2d(lam)
-        penetration = ct.side[:, None] * q - ct.gap[:, None]
-        spring = 0.5 * sum(float(kp * np.mean(np.maximum(0.0, pen) ** 2))
-                           for kp, pen in zip(self.penalty_stiffnesses, penetration, strict=True))
-        if self._amp_sign != 0 and ct.n == 1:
-            q_amp = q[0]
-        else:
-            q_amp = Q[:, self.amplitude_dof] @ self._cos_fine
-        peaks = [self.penalty_stiffnesses[i] * max(refined_max(penetration[i]), 0.0) for i in range(ct.n)]
-        rec = {
-            "frequency": omega / (2 * np.pi),
-            "amplitude": amplitude_peak(q_amp, self._amp_sign),
-            "energy": mean_energy(self.model, self.coefficients(u), omega) + spring,
-            "contact_force_max": float(max(peaks)),
-        }
-        if ct.n > 1:
-            rec.update({f"contact_force_max_{i}": float(v) for i, v in enumerate(peaks)})
-        return rec
-
-
-def penalty_n_samples(harmonics: int, penalty_factor: float) -> int:
-    """Default samples per period N for penalty HBM with k_p = ``penalty_factor`` · k_c.
-
-    ``default_n_samples(H)`` for k_p <= 10³ k_c, times 2 per further decade (rounded up).
-    In the k_p -> oo limit the penalty force concentrates into ever shorter pulses at the
-    instants the contact displacement touches the stop; unresolved by the samples, the
-    sampled residual jumps as single samples switch and the continuation stalls (on the
-    default beam at H = 10 and 20, k_p = 10⁴ k_c stopped at 1.1 gaps with the default N
-    and runs to 10 gaps with 2× N; docs/penalty.md).
-    """
-    H = check_harmonics(harmonics)[0]
-    factor = check.positive("penalty_factor", penalty_factor)
-    doublings = max(0, int(np.ceil(np.log10(factor / DEFAULT_PENALTY_FACTOR) - 1e-9)))
-    return default_n_samples(H) * 2**doublings
-
-
-def _condensed_contact_stiffness(model: Model) -> float:
-    """k_c (N/m): the static stiffness of the structure at the contact of a single-contact
-    model (with several contacts, the smallest over the contacts); see
-    :func:`~mmshbm.contact.table.static_contact_stiffness`."""
-    return float(static_contact_stiffness(model).min())

@@ -25,7 +25,7 @@ both. AFT by a cosine table inside one Numba kernel
 The default k_p is ``DEFAULT_PENALTY_FACTOR`` (10³) times the stiffest condensed static
 contact stiffness k_c,i = 1/(D_0⁻¹)_ii, so that every contact's penetration error is at most
 that of the single-contact baseline; N defaults to
-:func:`~mmshbm.methods.penalty.hbm.penalty_n_samples`.
+:func:`~mmshbm.methods.penalty.defaults.penalty_n_samples`.
 """
 
 from __future__ import annotations
@@ -42,7 +42,7 @@ from ...core.problem import BackboneProblemBase, OneEvaluation
 from ...model.contact import admissible_intervals
 from ...model.model import Model
 from ._reduced_kernels import _penalty_reduced_residual
-from .hbm import DEFAULT_PENALTY_FACTOR, penalty_n_samples
+from .defaults import DEFAULT_PENALTY_FACTOR, penalty_n_samples
 
 __all__ = ["ReducedPenaltyHBMProblem"]
 
@@ -60,7 +60,7 @@ class ReducedPenaltyHBMProblem(OneEvaluation, BackboneProblemBase):
         Highest harmonic H >= 1.
     n_samples : int, optional
         Time samples per period N >= 2H+1 (default
-        :func:`~mmshbm.methods.penalty.hbm.penalty_n_samples`).
+        :func:`~mmshbm.methods.penalty.defaults.penalty_n_samples`).
     penalty_stiffness : float, optional
         k_p (N/m), > 0; default 10³ × the stiffest condensed contact stiffness.
     mode : int
