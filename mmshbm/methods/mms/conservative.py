@@ -58,7 +58,7 @@ from ...model.model import Model
 from . import _family_kernels
 from .family import FamilyMixin
 from .fast import fast_data
-from .fixed import _FIXED, _FIXED_CONTACTS, _FIXED_SCALING, _own, fixed_contacts, fixed_scaling
+from .fixed import _FIXED, _FIXED_CONTACTS, _FIXED_SCALING, _own, fixed_contacts, fixed_scaling, kept_entries
 from .held import _HELD, _held_frequency, _held_frequency_solve  # noqa: F401  (earlier home)
 from .signals import SignalsMixin
 from .tables import _TABLES_KEPT, _compute_tables, _kept_tables, _tables  # noqa: F401  (earlier home)
@@ -143,6 +143,9 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         else:
             for name in _FIXED_CONTACTS:
                 setattr(self, name, _own(fixed[name]))
+        #: compiled overloads shared with the problems built from the same kept numbers (None:
+        #: this problem computed its own numbers and types its kernels' arguments itself)
+        self._entries = kept_entries(fixed)
 
         self.pole_set = None
         if poles:
@@ -287,7 +290,8 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         args = (u, u_pred, tangent, float(tol), float(step_tol), int(max_iter), *fast["fixed"], hist,
                 *fast["data"])
         if "call" not in fast:  # the compiled overload, without the dispatcher's per-call typing
-            fast["call"] = ck.newton_modal_entry(args)
+            fast["call"] = (compiled_entry(ck._newton_modal, args, self._entries)
+                            if hasattr(ck._newton_modal, "compile") else ck._newton_modal)
         status, it = fast["call"](*args)
         self.evaluations += it if status == ck.SKIPPED else it + 1
         self._solved_tangent = None
@@ -338,7 +342,7 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
             args = (D0, B, w2, Rs, float(omega), self.H, keep, rtol, D, out, bool(derivative))
             call = fast.get("stiffness")
             if call is None:  # the kernel's overload typed once (its arguments' types are fixed)
-                call = fast["stiffness"] = (compiled_entry(_modal_dynamic_stiffness, args)
+                call = fast["stiffness"] = (compiled_entry(_modal_dynamic_stiffness, args, self._entries)
                                             if hasattr(_modal_dynamic_stiffness, "compile")
                                             else _modal_dynamic_stiffness)
             info = call(*args)
@@ -401,7 +405,7 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
             # typed once; others go through the dispatcher
             call = _mmshbm_monitor_multi
             if self._fast and hasattr(_mmshbm_monitor_multi, "compile"):
-                call = self._monitor_call = compiled_entry(_mmshbm_monitor_multi, args)
+                call = self._monitor_call = compiled_entry(_mmshbm_monitor_multi, args, self._entries)
         call(*args)
         amplitude, energy, force = self._monitor_work[-1].tolist()
         shares = self._point_records
@@ -436,9 +440,10 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
                            records, 2.0)
             a = np.zeros((self.H + 1, self.n_c))  # arguments of the monitor's types
             dD, eta = np.zeros((self.H + 1, self.n_c, self.n_c)), np.zeros(self.n_poles)
-            share = compiled_entry(ck._start_mode_share, (a, eta, 0.0, dD, self._pole_k, *share_args))
+            share = compiled_entry(ck._start_mode_share, (a, eta, 0.0, dD, self._pole_k, *share_args),
+                                   self._entries)
             family = compiled_entry(_family_kernels._family_records,
-                                    (a, dD, eta, self._pole_k, 0.0, *family_args))
+                                    (a, dD, eta, self._pole_k, 0.0, *family_args), self._entries)
             shares = (share, share_args, family, family_args, records)
         self._point_records = shares
         return shares
