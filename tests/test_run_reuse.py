@@ -1,7 +1,7 @@
-"""The branch checks' shortcuts give what the plain computation gives: the kept sample
-grid and default thresholds, the contact check's depth and pull from the extreme samples
-(against every sample of every point, one point at a time), and the coexistence scan that
-stops where nothing is off the family front."""
+"""The shortcuts of a run's checks and options give what the plain computation gives: the
+kept sample grid and default thresholds, the contact check's depth and pull from the
+extreme samples (against every sample of every point), the coexistence scan that stops
+where nothing is off the family front, and the continuation options validated before."""
 
 import warnings
 
@@ -114,3 +114,40 @@ def test_coexistence_scan_stops_only_where_nothing_is_off_the_front():
     b.records["on_family"][len(b) // 2] = 0.0  # an excursion in the middle: the front covers it
     found = coexisting.coexisting_intervals(b)
     assert len(found) == 1 and found[0].points == (len(b) // 2,)
+
+
+def _fields(opts):
+    import dataclasses
+
+    return [(f.name, type(getattr(opts, f.name)), repr(getattr(opts, f.name))) for f in dataclasses.fields(opts)]
+
+
+@pytest.mark.parametrize("given", [{}, {"ds": 0.05, "max_steps": 7, "follow": "path"},
+                                   {"bounds": {"frequency": (0.0, 80.0)}, "newton_tol": 1e-9},
+                                   {"bounds": {"amplitude": (-0.0, 1.0)}}, {"ds_max": 1}])
+def test_validated_continuation_options_are_the_validated_ones(given):
+    """The continuation options of a run whose values were validated before are, field for
+    field (types, reprs, the bounds' order), those validated afresh, each run its own object
+    and bounds dict; values of other types (a list) are validated every time."""
+    from mmshbm.core.options import ContinuationOptions
+    from mmshbm.methods import runner
+
+    runner._VALIDATED.clear()
+    bounds = {"amplitude": (0.0, 2.0)}
+    first = runner.continuation_options({"harmonics": 5, **dict(given)}, bounds)
+    options = {"harmonics": 5, **dict(given)}
+    again = runner.continuation_options(options, bounds)
+    assert options == {"harmonics": 5}  # the continuation fields taken out, the method's left
+    fresh = ContinuationOptions(**{k: v for k, v in given.items() if k != "bounds"},
+                                bounds={**bounds, **dict(given.get("bounds", {}))})
+    assert _fields(again) == _fields(fresh) == _fields(first) and again == fresh
+    assert list(again.bounds) == list(fresh.bounds)
+    assert again is not first and again.bounds is not first.bounds
+    again.bounds["energy"] = (0.0, 1.0)  # a run's own dict: the next run's options do not see it
+    assert "energy" not in runner.continuation_options({**given}, bounds).bounds
+    assert runner._options_key({"bounds": {"amplitude": [0.0, 1.0]}}) is None
+    assert runner._options_key({"ds": np.float64(0.1)}) is None
+    with pytest.raises(ValueError, match="ds_min <= ds"):
+        runner.continuation_options({"ds": 5.0}, bounds)
+    with pytest.raises(ValueError, match="ds_min <= ds"):  # not kept: raises again
+        runner.continuation_options({"ds": 5.0}, bounds)
