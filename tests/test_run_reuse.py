@@ -119,7 +119,8 @@ def test_coexistence_scan_stops_only_where_nothing_is_off_the_front():
 def _fields(opts):
     import dataclasses
 
-    return [(f.name, type(getattr(opts, f.name)), repr(getattr(opts, f.name))) for f in dataclasses.fields(opts)]
+    values = [(f.name, getattr(opts, f.name)) for f in dataclasses.fields(opts)]
+    return [(name, type(v), repr(v)) for name, v in values]
 
 
 @pytest.mark.parametrize("given", [{}, {"ds": 0.05, "max_steps": 7, "follow": "path"},
@@ -151,3 +152,30 @@ def test_validated_continuation_options_are_the_validated_ones(given):
         runner.continuation_options({"ds": 5.0}, bounds)
     with pytest.raises(ValueError, match="ds_min <= ds"):  # not kept: raises again
         runner.continuation_options({"ds": 5.0}, bounds)
+
+
+def test_no_resonance_scan_where_the_starting_mode_is_the_only_one_tracked():
+    """With the first mode the only one tracked (the one-DOF oscillator) the scan can name
+    nothing: the special points are those the full scan gives (sorted the same way); a
+    second tracked mode (the beam) is scanned."""
+    from unittest import mock
+
+    from mmshbm.core.resonances import internal_resonances
+    from mmshbm.core.special_points import SpecialPoint
+    from mmshbm.methods import runner
+
+    model = mmshbm.OneDofOscillator(1.0, 1.0, 4.0, 1.0).model()
+    b = _branch(model, harmonics=13, max_amplitude=2 * model.gap)
+    p = b.solver
+    rec = {"frequency": b.frequency, **b.records}
+    assert rec["modal_shares"].shape[1] == 1 and p.mode == 1
+    special = [SpecialPoint("start", 0), SpecialPoint("grazing", 9), SpecialPoint("fold", 3),
+               SpecialPoint("endpoint", len(b) - 1), SpecialPoint("bound:amplitude", len(b) - 1)]
+    full = sorted(special + internal_resonances(rec["frequency"], rec["modal_shares"], p.tracked_frequencies,
+                                                p.mode), key=lambda s: (s[1], s[0] == "endpoint"))
+    with mock.patch("mmshbm.core.resonances.internal_resonances", side_effect=AssertionError):
+        assert runner.name_internal_resonances(p, rec, list(special)) == full
+    beam = mmshbm.default_beam().model(21)
+    bb = _branch(beam, harmonics=5, max_amplitude=3 * beam.gap)
+    assert bb.records["modal_shares"].shape[1] > 1
+    assert any(s.kind == "internal_resonance" for s in bb.special_points)

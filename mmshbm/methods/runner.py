@@ -336,8 +336,11 @@ def name_internal_resonances(problem, rec: dict, special: list) -> list:
     from ..core.resonances import internal_resonances
 
     if "modal_shares" in rec and problem.tracked_frequencies is not None:
-        named = internal_resonances(rec["frequency"], rec["modal_shares"], problem.tracked_frequencies,
-                                    problem.mode)
+        shares = rec["modal_shares"]
+        if np.ndim(shares) == 3 and np.shape(shares)[1] == 1 and problem.mode == 1:
+            named = []  # the starting mode is the only one tracked: no partner to resonate with
+        else:
+            named = internal_resonances(rec["frequency"], shares, problem.tracked_frequencies, problem.mode)
         special = sorted(special + named, key=lambda s: (s[1], s[0] == "endpoint"))
     return special
 
