@@ -179,3 +179,34 @@ def test_no_resonance_scan_where_the_starting_mode_is_the_only_one_tracked():
     bb = _branch(beam, harmonics=5, max_amplitude=3 * beam.gap)
     assert bb.records["modal_shares"].shape[1] > 1
     assert any(s.kind == "internal_resonance" for s in bb.special_points)
+
+
+def test_family_options_kept_are_the_validated_ones():
+    """The family following's options built (and validated) with the continuation options are
+    those built afresh from the same fields, for a replaced or copied object too."""
+    import dataclasses
+
+    from mmshbm.core.options import ContinuationOptions, FamilyOptions
+
+    opts = ContinuationOptions(family_share=0.4, max_excursion=7, jump_step=0.05, max_jumps=3)
+    fresh = FamilyOptions(family_share=0.4, max_excursion=7, jump_step=0.05, max_jumps=3)
+    assert opts.family == fresh and opts.family is opts.family
+    other = dataclasses.replace(opts, max_jumps=9)
+    assert other.family == FamilyOptions(family_share=0.4, max_excursion=7, jump_step=0.05, max_jumps=9)
+    assert dataclasses.replace(opts, follow="path").family is None
+    assert ContinuationOptions(follow="path").family is None
+
+
+def test_range_check_skipped_only_where_every_mode_is_kept():
+    """The monitor skips the modal truncation's range check where the condensation keeps
+    every mode: there the check passes at any frequency."""
+    model = mmshbm.OneDofOscillator(1.0, 1.0, 4.0, 1.0).model()
+    b = _branch(model, harmonics=13, max_amplitude=2 * model.gap)
+    cond = b.solver.cond
+    assert cond.backend == "modal" and cond.complete
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert all(cond.check_range(w, 40) for w in (1.0, 1e3, 1e9, 1e300))
+    beam = mmshbm.default_beam().model(21)
+    bb = _branch(beam, harmonics=5, max_amplitude=3 * beam.gap)
+    assert not bb.solver.cond.complete  # a truncated reduction: checked at every point

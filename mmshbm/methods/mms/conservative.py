@@ -391,8 +391,9 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         table of every tracked mode and harmonic, ``modal_shares``, is added for the whole
         branch at the end (:meth:`branch_records`)."""
         a, omega, eta = self._unpack_all(u)
-        if self.cond.backend == "modal":
-            self.cond.check_range(omega, self.H)  # warns once past the modes kept
+        cond = self.cond
+        if cond.backend == "modal" and not cond.complete:  # with every mode kept nothing is left out
+            cond.check_range(omega, self.H)  # warns once past the modes kept
         D, dD = self._condensed(omega, True)
         a = np.ascontiguousarray(a)
         args = (D, dD, a, eta, self._pole_k, self._pole_b, self.cdof, self.lo, self.hi, self.r_each, omega,
