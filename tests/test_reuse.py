@@ -256,3 +256,30 @@ def test_kept_entry_points_are_those_the_arguments_resolve_to(beam, name):
     for key, value in first.records.items():
         np.testing.assert_array_equal(second.records[key], value)
     assert second.metadata["checks"] == first.metadata["checks"]
+
+
+def test_fine_grid_copied_on_first_use_is_the_computed_one(beam):
+    """A backbone leaves the fine grid alone; its first use copies the kept table, which is,
+    bit for bit, the grid computed afresh (and for tables too large to keep, the problem's
+    own computed ones)."""
+    from mmshbm.methods.mms.tables import _compute_tables, _tables_kept
+
+    b = mmshbm.backbone(beam, harmonics=5, max_amplitude=3 * beam.gap)
+    p = b.solver
+    assert p._fine is None
+    tau, cos = p._tau_fine, p._cos_fine
+    n_fine = max(512, 8 * p.N)
+    np.testing.assert_array_equal(tau, 2 * np.pi * np.arange(n_fine) / n_fine)
+    np.testing.assert_array_equal(cos, np.cos(np.outer(np.arange(p.H + 1), tau)))
+    assert tau.flags.writeable and cos.flags.writeable and p._cos_fine is cos
+    q = MMSHBMProblem(beam, harmonics=5)
+    assert not np.shares_memory(q._cos_fine, cos)
+    u = b.states[len(b) // 2]
+    assert p.amplitude_value(u) == q.amplitude_value(u)  # the peak kernel on the copied grid
+    np.testing.assert_allclose(p.amplitude_value(u), b.amplitude[len(b) // 2], rtol=1e-12)
+    H, N = 200, 4096
+    assert not _tables_kept(H, N)
+    big = MMSHBMProblem(mmshbm.OneDofOscillator(1.0, 1.0, 4.0, 1.0).model(), harmonics=H, n_samples=N)
+    assert big._fine is not None
+    for x, y in zip(big._fine, _compute_tables(H, N)[3:], strict=True):
+        np.testing.assert_array_equal(x, y)

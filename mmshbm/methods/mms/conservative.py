@@ -61,7 +61,7 @@ from .fast import fast_data
 from .fixed import _FIXED, _FIXED_CONTACTS, _FIXED_SCALING, _own, fixed_contacts, fixed_scaling, kept_entries
 from .held import _HELD, _held_frequency, _held_frequency_solve  # noqa: F401  (earlier home)
 from .signals import SignalsMixin
-from .tables import _TABLES_KEPT, _compute_tables, _kept_tables, _tables  # noqa: F401  (earlier home)
+from .tables import _TABLES_KEPT, _compute_tables, _kept_tables, _tables, _tables_kept  # noqa: F401  (earlier home)
 
 __all__ = ["MMSHBMProblem"]
 
@@ -116,6 +116,8 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
     _solved_tangent = None
     #: the Floquet solver of :func:`~mmshbm.methods.mms.stability.conservative_multipliers`; None until built
     _floquet_solver = None
+    #: (fine τ, cos kτ on it) of :meth:`_fine_grid`; None until first used
+    _fine: tuple | None = None
 
     def __init__(self, model: Model, harmonics: int = 5, n_samples: int | None = None,
                  r=None, mode: int = 1, backend: str = "auto", projection: str = "exact", poles: bool = True):
@@ -168,10 +170,11 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         self.n_unknowns = (self.H + 1) * self.n_c + n_p + 1
 
         H, N = self.H, self.N
-        # sample grid, its cosine and sine tables, and the fine grid for amplitude and peak
-        # force (each problem its own copies: the kernels take them as writable arrays)
-        self._tau, self._cos_table, self._sin_table, self._tau_fine, self._cos_fine = (
-            t.copy() for t in _tables(H, N))
+        # sample grid, its cosine and sine tables (each problem its own copies: the kernels take
+        # them as writable arrays); the fine grid for amplitude peaks and signals on first use
+        tables = _tables(H, N)
+        self._tau, self._cos_table, self._sin_table = (t.copy() for t in tables[:3])
+        self._fine = None if _tables_kept(H, N) else tables[3:]  # computed for this problem: its own
         self._work = (np.empty((H + 1, self.n_c)), np.empty((H + 1, self.n_c)), np.empty(H + 1),
                       np.zeros(H + 1), np.empty(H + 1), np.empty(N), np.empty(N), np.empty(2 * N + 2),
                       np.empty(2 * H + 1), np.empty(2 * H + 1), np.empty(2 * H + 1), np.empty((H + 1, H + 1)))
@@ -191,6 +194,24 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         #: residual (+ Jacobian) evaluations so far, the compiled corrector's included
         self.evaluations = 0
         self._modal = None  # open-contact modes for the energy shares (built on first use)
+
+    @property
+    def _tau_fine(self) -> np.ndarray:
+        """The fine grid τ (n_fine,) rad, n_fine = max(512, 8N) (:func:`~.tables._tables`)."""
+        return self._fine_grid()[0]
+
+    @property
+    def _cos_fine(self) -> np.ndarray:
+        """cos kτ (H+1, n_fine) on the fine grid."""
+        return self._fine_grid()[1]
+
+    def _fine_grid(self) -> tuple[np.ndarray, np.ndarray]:
+        """(fine τ, cos kτ on it): copies of this problem's own, made on first use (a backbone
+        needs neither; the amplitude peak's kernel and the signals on the fine grid do)."""
+        fine = self._fine
+        if fine is None:
+            fine = self._fine = tuple(t.copy() for t in _tables(self.H, self.N)[3:])
+        return fine
 
     # ------------------------------------------------------------------ unknowns
     def unpack(self, u: np.ndarray) -> tuple[np.ndarray, float]:
