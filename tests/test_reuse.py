@@ -203,3 +203,83 @@ def test_fixed_numbers_kept_per_model_are_the_computed_ones(beam, mode):
     u = kept.linear_mode_point(0.5 * beam.gap)
     np.testing.assert_array_equal(u, fresh.linear_mode_point(0.5 * beam.gap))
     np.testing.assert_array_equal(kept.evaluate(u, True)[1], fresh.evaluate(u, True)[1])
+
+
+@pytest.mark.parametrize("name", ["oscillator", "beam"])
+def test_kept_entry_points_are_those_the_arguments_resolve_to(beam, name):
+    """The problems built from one set of kept numbers share their kernels' compiled entry
+    points; each is the one that describing that problem's own arguments resolves to, and
+    the branches they compute are, bit for bit, those of a problem that typed its own."""
+    from mmshbm.core import corrector_kernels as ck
+    from mmshbm.core._entry import _ENTRIES
+    from mmshbm.methods.mms.fixed import _FIXED
+
+    if not hasattr(ck._newton_modal, "compile"):
+        pytest.skip("NUMBA_DISABLE_JIT")
+    model = mmshbm.OneDofOscillator(1.0, 1.0, 4.0, 1.0).model() if name == "oscillator" else beam
+    H, top = (13, 2.0) if name == "oscillator" else (5, 3.0)
+    _FIXED.pop(model, None)
+    first = mmshbm.backbone(model, harmonics=H, max_amplitude=top * model.gap)
+    assert first.solver._entries is None  # computed its numbers: typed its own arguments
+    second = mmshbm.backbone(model, harmonics=H, max_amplitude=top * model.gap)
+    p = second.solver
+    kept = p._entries
+    assert kept is not None and len(kept) == 5
+    u = np.ascontiguousarray(second.states[len(second) // 2])
+    t = p.initial_tangent()
+    hist = np.empty(11)
+    fast = p._fast
+    newton_args = (u.copy(), u, t, 1e-10, 1e-8, 10, *fast["fixed"], hist, *fast["data"])
+    a, omega, eta = p._unpack_all(u)
+    a = np.ascontiguousarray(a)
+    D, dD = p._condensed(omega, True)
+    monitor_args = (D, dD, a, eta, p._pole_k, p._pole_b, p.cdof, p.lo, p.hi, p.r_each, omega,
+                    p._amplitude_row(a, omega, eta), p._amp_sign, p._cos_table, p._sin_table,
+                    *p._monitor_work)
+    D0, B, w2, Rs, keep, static, rtol = fast["cond"]
+    stiffness_args = (D0, B, w2, Rs, omega, p.H, keep, rtol, np.empty_like(D), np.empty_like(D), True)
+    _, share_args, _, family_args, _ = p._point_records
+    from mmshbm.core._modal_kernels import _modal_dynamic_stiffness
+    from mmshbm.core.contact_kernels import _mmshbm_monitor_multi
+    from mmshbm.methods.mms import _family_kernels
+
+    calls = {ck._newton_modal: newton_args, _mmshbm_monitor_multi: monitor_args,
+             _modal_dynamic_stiffness: stiffness_args,
+             ck._start_mode_share: (a, eta, omega, dD, p._pole_k, *share_args),
+             _family_kernels._family_records: (a, dD, eta, p._pole_k, omega, *family_args)}
+    for dispatcher, args in calls.items():
+        assert kept[dispatcher] is _ENTRIES[dispatcher, _type_key(args)]
+        assert kept[dispatcher] is compiled_entry(dispatcher, args)
+    for attr in ("states", "frequency", "amplitude", "energy", "contact_force_max", "newton_iterations",
+                 "step_size"):
+        np.testing.assert_array_equal(getattr(second, attr), getattr(first, attr))
+    for key, value in first.records.items():
+        np.testing.assert_array_equal(second.records[key], value)
+    assert second.metadata["checks"] == first.metadata["checks"]
+
+
+def test_fine_grid_copied_on_first_use_is_the_computed_one(beam):
+    """A backbone leaves the fine grid alone; its first use copies the kept table, which is,
+    bit for bit, the grid computed afresh (and for tables too large to keep, the problem's
+    own computed ones)."""
+    from mmshbm.methods.mms.tables import _compute_tables, _tables_kept
+
+    b = mmshbm.backbone(beam, harmonics=5, max_amplitude=3 * beam.gap)
+    p = b.solver
+    assert p._fine is None
+    tau, cos = p._tau_fine, p._cos_fine
+    n_fine = max(512, 8 * p.N)
+    np.testing.assert_array_equal(tau, 2 * np.pi * np.arange(n_fine) / n_fine)
+    np.testing.assert_array_equal(cos, np.cos(np.outer(np.arange(p.H + 1), tau)))
+    assert tau.flags.writeable and cos.flags.writeable and p._cos_fine is cos
+    q = MMSHBMProblem(beam, harmonics=5)
+    assert not np.shares_memory(q._cos_fine, cos)
+    u = b.states[len(b) // 2]
+    assert p.amplitude_value(u) == q.amplitude_value(u)  # the peak kernel on the copied grid
+    np.testing.assert_allclose(p.amplitude_value(u), b.amplitude[len(b) // 2], rtol=1e-12)
+    H, N = 200, 4096
+    assert not _tables_kept(H, N)
+    big = MMSHBMProblem(mmshbm.OneDofOscillator(1.0, 1.0, 4.0, 1.0).model(), harmonics=H, n_samples=N)
+    assert big._fine is not None
+    for x, y in zip(big._fine, _compute_tables(H, N)[3:], strict=True):
+        np.testing.assert_array_equal(x, y)

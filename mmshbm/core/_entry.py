@@ -7,7 +7,9 @@ costs ≈ 1 ms, once per problem, so once per backbone. :func:`compiled_entry` k
 overload on a cheap description of what Numba's ``typeof`` reads from each argument (an
 array's dtype, ndim, layout, writeability and alignment; the class of a scalar, an int's
 range; a tuple's class and fields) and keeps the entry point per kernel and key: a later
-problem whose arguments have the same types gets it from a dictionary.
+problem whose arguments have the same types gets it from a dictionary. Problems whose
+arguments agree in type by construction share their entry points without describing
+the arguments at all (``kept``).
 """
 
 from __future__ import annotations
@@ -43,18 +45,28 @@ def _type_key(value):
     return None
 
 
-def compiled_entry(dispatcher, args: tuple):
+def compiled_entry(dispatcher, args: tuple, kept: dict | None = None):
     """The compiled overload of ``dispatcher`` (a Numba dispatcher) for the types of
     ``args`` (its full argument tuple), as a plain callable: compiled, or taken from the
     disk cache, on first use; later calls with arguments of the same types get the same
     entry point without typing them again. Every call of the entry point must pass
-    arguments of the types it was resolved for."""
-    key = _type_key(args)
-    if key is not None:
-        entry = _ENTRIES.get((dispatcher, key))
+    arguments of the types it was resolved for.
+
+    ``kept`` (dispatcher -> entry point) is shared by callers whose arguments are made by
+    the same code from copies of the same arrays, so that their types agree by
+    construction (the MMS-HBM problems built from one set of kept numbers,
+    :mod:`mmshbm.methods.mms.fixed`): an entry found there is returned without describing
+    the arguments, and one resolved here is put there."""
+    if kept is not None:
+        entry = kept.get(dispatcher)
         if entry is not None:
             return entry
-    entry = dispatcher.compile(tuple(dispatcher.typeof_pyval(a) for a in args))
-    if key is not None:
-        _ENTRIES[dispatcher, key] = entry
+    key = _type_key(args)
+    entry = _ENTRIES.get((dispatcher, key)) if key is not None else None
+    if entry is None:
+        entry = dispatcher.compile(tuple(dispatcher.typeof_pyval(a) for a in args))
+        if key is not None:
+            _ENTRIES[dispatcher, key] = entry
+    if kept is not None:
+        kept[dispatcher] = entry
     return entry

@@ -140,7 +140,8 @@ class ContinuationOptions:
         check.positive("target_residual", self.target_residual)
         if self.follow not in ("family", "path"):
             raise ValueError(f"follow must be 'family' or 'path', got {self.follow!r}")
-        self._family_options()
+        # validated here, kept for :attr:`family` (a frozen object: the fields cannot change)
+        self.__dict__["_memo_family"] = self._family_options()
         angle = check.positive("max_angle", self.max_angle)
         if angle > math.pi:
             raise ValueError(f"max_angle must be <= pi, got {angle}")
@@ -159,7 +160,10 @@ class ContinuationOptions:
     @property
     def family(self) -> FamilyOptions | None:
         """The family following's options (None for ``follow="path"``)."""
-        return self._family_options() if self.follow == "family" else None
+        if self.follow != "family":
+            return None
+        family = self.__dict__.get("_memo_family")
+        return family if family is not None else self._family_options()
 
 
 @dataclass

@@ -115,7 +115,9 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     if default_start and gap > 0 and problem.open_amplitude is not None:
         # the linear mode is a solution only while every contact is open
         start_amplitude = min(start_amplitude, 0.5 * problem.open_amplitude())
-    header = runner.checkpoint_header(model, method, problem, options)
+    # what a checkpoint file records and a resumed run compares (nothing to build without either)
+    header = (runner.checkpoint_header(model, method, problem, options)
+              if checkpoint is not None or resume is not None else None)
 
     progress = None
     if verbose:

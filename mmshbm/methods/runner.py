@@ -124,7 +124,47 @@ def continuation_options(options: dict, bounds: Mapping,
     (lo, hi)) under the caller's own ``bounds`` option."""
     cont = {**dict(defaults or {}), **{k: options.pop(k) for k in list(options) if k in CONTINUATION_FIELDS}}
     cont["bounds"] = {**dict(bounds), **dict(cont.get("bounds", {}))}
-    return ContinuationOptions(**cont)
+    key = _options_key(cont)
+    if key is None:
+        return ContinuationOptions(**cont)
+    valid = _VALIDATED.get(key)
+    if valid is None:
+        valid = ContinuationOptions(**cont)
+        if len(_VALIDATED) >= _VALIDATED_KEPT:
+            _VALIDATED.clear()
+        _VALIDATED[key] = valid
+    # the validated fields of the same values, in an object of this run's own (its own bounds dict)
+    out = object.__new__(ContinuationOptions)
+    out.__dict__.update(valid.__dict__)
+    object.__setattr__(out, "bounds", dict(valid.bounds))
+    return out
+
+
+#: ContinuationOptions validated before, by :func:`_options_key` of the fields given
+_VALIDATED: dict = {}
+_VALIDATED_KEPT = 64
+#: the types of the field values (and of the bounds' pairs' entries) whose options are kept
+_KEYED = frozenset({float, int, str, bool})
+
+
+def _options_key(cont: dict) -> tuple | None:
+    """What fixes the :class:`ContinuationOptions` of the fields ``cont`` (the bounds in their
+    order, which sets the order they are tested in): each name with its value's type and
+    repr (-0.0 is not 0.0, 1 is not 1.0); None where a value is of another type (a list, an
+    array, a NumPy scalar: validated every time)."""
+    key = []
+    for name, value in cont.items():
+        if name == "bounds":
+            for bound, pair in value.items():
+                if type(bound) is not str or type(pair) is not tuple or len(pair) != 2 \
+                        or type(pair[0]) not in _KEYED or type(pair[1]) not in _KEYED:
+                    return None
+                key.append(("bounds", bound, type(pair[0]), repr(pair[0]), type(pair[1]), repr(pair[1])))
+        elif type(value) in _KEYED:
+            key.append((name, type(value), repr(value)))
+        else:
+            return None
+    return tuple(key)
 
 
 # ---------------------------------------------------------------------- checkpoints
@@ -296,8 +336,11 @@ def name_internal_resonances(problem, rec: dict, special: list) -> list:
     from ..core.resonances import internal_resonances
 
     if "modal_shares" in rec and problem.tracked_frequencies is not None:
-        named = internal_resonances(rec["frequency"], rec["modal_shares"], problem.tracked_frequencies,
-                                    problem.mode)
+        shares = rec["modal_shares"]
+        if np.ndim(shares) == 3 and np.shape(shares)[1] == 1 and problem.mode == 1:
+            named = []  # the starting mode is the only one tracked: no partner to resonate with
+        else:
+            named = internal_resonances(rec["frequency"], shares, problem.tracked_frequencies, problem.mode)
         special = sorted(special + named, key=lambda s: (s[1], s[0] == "endpoint"))
     return special
 
@@ -321,10 +364,21 @@ def name_bifurcations(rec: dict, special: list, n: int) -> tuple[np.ndarray, lis
 def _options_record(copts: ContinuationOptions) -> dict:
     """``jsonable(dataclasses.asdict(copts))``: its fields read once (the same dict when no
     field holds a dataclass, as none does: asdict would copy what jsonable copies again)."""
-    values = {f.name: getattr(copts, f.name) for f in dataclasses.fields(copts)}
-    if any(dataclasses.is_dataclass(v) for v in values.values()):
+    exact = type(copts) is ContinuationOptions
+    names = _OPTION_NAMES if exact else [f.name for f in dataclasses.fields(copts)]
+    values = {name: getattr(copts, name) for name in names}
+    if any(type(v) not in _PLAIN and dataclasses.is_dataclass(v) for v in values.values()):
         return jsonable(dataclasses.asdict(copts))
     return jsonable(values)
+
+
+#: the field names of ContinuationOptions, in order; the types no dataclass has
+_OPTION_NAMES = tuple(f.name for f in dataclasses.fields(ContinuationOptions))
+_PLAIN = frozenset({float, int, str, bool, dict, tuple, list, type(None)})
+
+
+#: the interpreter's version (as ``platform.python_version()`` gives it, once)
+_PYTHON = platform.python_version()
 
 
 def run_metadata(model: Model, method: str, problem, options: dict, copts: ContinuationOptions, done: Run,
@@ -335,5 +389,5 @@ def run_metadata(model: Model, method: str, problem, options: dict, copts: Conti
     return {"model": model.description, "method": method, "harmonics": int(problem.H),
             "n_samples": int(problem.N), **fields, "method_options": jsonable(options),
             "continuation": _options_record(copts), "elapsed_s": done.elapsed_s,
-            "python": platform.python_version(), "numpy": np.__version__, **done.metadata(),
+            "python": _PYTHON, "numpy": np.__version__, **done.metadata(),
             **({"pole_scaling": problem.pole_scaling} if problem.pole_scaling else {})}

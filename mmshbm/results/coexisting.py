@@ -68,6 +68,8 @@ def coexisting_intervals(branch) -> list[Coexistence]:
     if "on_family" not in branch.records or len(branch) < 2:
         return []
     front = family_front(branch)
+    if len(front) == len(branch) and not any(s[0] == "jump" for s in branch.special_points):
+        return []  # every point on the front and no jump: nothing off it, nothing landed
     off_mask = np.ones(len(branch), dtype=bool)
     off_mask[front] = False
     off = np.flatnonzero(off_mask)  # np.setdiff1d(np.arange(len(branch)), front)

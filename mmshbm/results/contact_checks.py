@@ -4,6 +4,8 @@ runs them)."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .findings import CheckThresholds, Finding
@@ -20,13 +22,15 @@ def contact_findings(branch, solver, th: CheckThresholds) -> list[Finding]:
     dofs = [c.dof for c in model.contacts]
     sides = np.array([c.side for c in model.contacts], dtype=float)[:, None]
     gaps = np.array([c.gap for c in model.contacts], dtype=float)[:, None]
-    f_all = np.asarray(branch.contact_force_max, dtype=float)
-    f_scale = float(np.nanmax(np.abs(f_all))) if len(f_all) and np.any(np.isfinite(f_all)) else 0.0
+    f_abs = np.abs(np.asarray(branch.contact_force_max, dtype=float))
+    # np.nanmax of the finite-holding array is np.fmax.reduce (what nanmax computes for an ndarray)
+    f_scale = float(np.fmax.reduce(f_abs)) if len(f_abs) and np.isfinite(f_abs).any() else 0.0
     k_c = getattr(solver, "contact_stiffness", None)  # a number, or one per contact DOF
-    k_c = None if k_c is None else float(np.max(np.atleast_1d(np.asarray(k_c, dtype=float))))
-    if k_c is not None and np.isfinite(k_c):
+    if k_c is not None and type(k_c) is not float:
+        k_c = float(np.max(np.atleast_1d(np.asarray(k_c, dtype=float))))
+    if k_c is not None and math.isfinite(k_c):
         f_scale = max(f_scale, k_c * float(np.max(gaps)))
-    tau = 2 * np.pi * np.arange(n) / n
+    tau = _grid(n)
     cheap = model.n_contacts == 1 and hasattr(solver, "contact_signals")
     # the signals of every point first, the reductions over points and samples at once
     # (numpy calls per point cost more than the signals of a small model)
@@ -53,7 +57,10 @@ def contact_findings(branch, solver, th: CheckThresholds) -> list[Finding]:
     depth = np.zeros((n_pts, n_k))
     if n_pts:
         s = sides[None, :, 0]
-        reach = np.where(s >= 0, s * Q.max(axis=2), s * Q.min(axis=2))
+        if (s >= 0).all():  # only upper stops (the common case): np.where's first choice everywhere
+            reach = s * Q.max(axis=2)
+        else:
+            reach = np.where(s >= 0, s * Q.max(axis=2), s * Q.min(axis=2))
         depth = (reach - gaps[None, :, 0]) / scale[:, :, 0]
     pen = depth.max(axis=1) if n_pts else np.zeros(0)
     # a contact that never comes near its stop carries no force but Newton's residual
@@ -92,6 +99,21 @@ def contact_findings(branch, solver, th: CheckThresholds) -> list[Finding]:
                "frequency's error at amplitude A)" if branch.harmonics else ""),
             int(bad[0]), int(bad[-1]), float(-neg[worst])))
     return out
+
+
+#: n -> τ = 2π·arange(n)/n (read only) of the checks' sample grids
+_GRIDS: dict = {}
+
+
+def _grid(n: int) -> np.ndarray:
+    """The check's sample grid ``2 * np.pi * np.arange(n) / n`` (rad), kept per n (read only)."""
+    tau = _GRIDS.get(n)
+    if tau is None:
+        tau = 2 * np.pi * np.arange(n) / n
+        tau.flags.writeable = False
+        if len(_GRIDS) < 16:
+            _GRIDS[n] = tau
+    return tau
 
 
 def _stop_forces(model, q: np.ndarray, lam: np.ndarray) -> np.ndarray:

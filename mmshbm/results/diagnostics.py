@@ -98,7 +98,7 @@ def check_branch(branch, thresholds: CheckThresholds | None = None, *, warn: boo
     -------
     list of Finding
     """
-    th = CheckThresholds() if thresholds is None else thresholds
+    th = _DEFAULT_THRESHOLDS if thresholds is None else thresholds
     if not isinstance(th, CheckThresholds):
         raise TypeError(f"thresholds must be a CheckThresholds, got {type(th).__name__}")
     out: list[Finding] = []
@@ -128,11 +128,18 @@ def check_branch(branch, thresholds: CheckThresholds | None = None, *, warn: boo
     if Status.parse(branch.status).kind != Status.BOUND:
         out.append(_incomplete(branch))
     branch.metadata["checks"] = [f.to_dict() for f in out]
-    branch.metadata["check_thresholds"] = {f.name: getattr(th, f.name) for f in fields(th)}  # asdict(th)
+    branch.metadata["check_thresholds"] = (dict(_DEFAULT_RECORD) if th is _DEFAULT_THRESHOLDS
+                                           else {f.name: getattr(th, f.name) for f in fields(th)})
     if warn:
         for message in _warnings(branch, out):
             warnings.warn(message, BranchWarning, stacklevel=stacklevel + 1)
     return out
+
+
+#: the thresholds of a check that names none (frozen: one instance serves every check) and
+#: their record in ``metadata["check_thresholds"]`` (each branch gets its own copy)
+_DEFAULT_THRESHOLDS = CheckThresholds()
+_DEFAULT_RECORD = {f.name: getattr(_DEFAULT_THRESHOLDS, f.name) for f in fields(_DEFAULT_THRESHOLDS)}
 
 
 def _coexisting(branch) -> list[Finding]:

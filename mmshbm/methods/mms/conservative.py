@@ -58,10 +58,10 @@ from ...model.model import Model
 from . import _family_kernels
 from .family import FamilyMixin
 from .fast import fast_data
-from .fixed import _FIXED, _FIXED_CONTACTS, _FIXED_SCALING, _own, fixed_contacts, fixed_scaling
+from .fixed import _FIXED, _FIXED_CONTACTS, _FIXED_SCALING, _own, fixed_contacts, fixed_scaling, kept_entries
 from .held import _HELD, _held_frequency, _held_frequency_solve  # noqa: F401  (earlier home)
 from .signals import SignalsMixin
-from .tables import _TABLES_KEPT, _compute_tables, _kept_tables, _tables  # noqa: F401  (earlier home)
+from .tables import _TABLES_KEPT, _compute_tables, _kept_tables, _tables, _tables_kept  # noqa: F401  (earlier home)
 
 __all__ = ["MMSHBMProblem"]
 
@@ -116,6 +116,8 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
     _solved_tangent = None
     #: the Floquet solver of :func:`~mmshbm.methods.mms.stability.conservative_multipliers`; None until built
     _floquet_solver = None
+    #: (fine τ, cos kτ on it) of :meth:`_fine_grid`; None until first used
+    _fine: tuple | None = None
 
     def __init__(self, model: Model, harmonics: int = 5, n_samples: int | None = None,
                  r=None, mode: int = 1, backend: str = "auto", projection: str = "exact", poles: bool = True):
@@ -143,6 +145,9 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         else:
             for name in _FIXED_CONTACTS:
                 setattr(self, name, _own(fixed[name]))
+        #: compiled overloads shared with the problems built from the same kept numbers (None:
+        #: this problem computed its own numbers and types its kernels' arguments itself)
+        self._entries = kept_entries(fixed)
 
         self.pole_set = None
         if poles:
@@ -165,10 +170,11 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         self.n_unknowns = (self.H + 1) * self.n_c + n_p + 1
 
         H, N = self.H, self.N
-        # sample grid, its cosine and sine tables, and the fine grid for amplitude and peak
-        # force (each problem its own copies: the kernels take them as writable arrays)
-        self._tau, self._cos_table, self._sin_table, self._tau_fine, self._cos_fine = (
-            t.copy() for t in _tables(H, N))
+        # sample grid, its cosine and sine tables (each problem its own copies: the kernels take
+        # them as writable arrays); the fine grid for amplitude peaks and signals on first use
+        tables = _tables(H, N)
+        self._tau, self._cos_table, self._sin_table = (t.copy() for t in tables[:3])
+        self._fine = None if _tables_kept(H, N) else tables[3:]  # computed for this problem: its own
         self._work = (np.empty((H + 1, self.n_c)), np.empty((H + 1, self.n_c)), np.empty(H + 1),
                       np.zeros(H + 1), np.empty(H + 1), np.empty(N), np.empty(N), np.empty(2 * N + 2),
                       np.empty(2 * H + 1), np.empty(2 * H + 1), np.empty(2 * H + 1), np.empty((H + 1, H + 1)))
@@ -188,6 +194,24 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         #: residual (+ Jacobian) evaluations so far, the compiled corrector's included
         self.evaluations = 0
         self._modal = None  # open-contact modes for the energy shares (built on first use)
+
+    @property
+    def _tau_fine(self) -> np.ndarray:
+        """The fine grid τ (n_fine,) rad, n_fine = max(512, 8N) (:func:`~.tables._tables`)."""
+        return self._fine_grid()[0]
+
+    @property
+    def _cos_fine(self) -> np.ndarray:
+        """cos kτ (H+1, n_fine) on the fine grid."""
+        return self._fine_grid()[1]
+
+    def _fine_grid(self) -> tuple[np.ndarray, np.ndarray]:
+        """(fine τ, cos kτ on it): copies of this problem's own, made on first use (a backbone
+        needs neither; the amplitude peak's kernel and the signals on the fine grid do)."""
+        fine = self._fine
+        if fine is None:
+            fine = self._fine = tuple(t.copy() for t in _tables(self.H, self.N)[3:])
+        return fine
 
     # ------------------------------------------------------------------ unknowns
     def unpack(self, u: np.ndarray) -> tuple[np.ndarray, float]:
@@ -287,7 +311,8 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         args = (u, u_pred, tangent, float(tol), float(step_tol), int(max_iter), *fast["fixed"], hist,
                 *fast["data"])
         if "call" not in fast:  # the compiled overload, without the dispatcher's per-call typing
-            fast["call"] = ck.newton_modal_entry(args)
+            fast["call"] = (compiled_entry(ck._newton_modal, args, self._entries)
+                            if hasattr(ck._newton_modal, "compile") else ck._newton_modal)
         status, it = fast["call"](*args)
         self.evaluations += it if status == ck.SKIPPED else it + 1
         self._solved_tangent = None
@@ -338,7 +363,7 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
             args = (D0, B, w2, Rs, float(omega), self.H, keep, rtol, D, out, bool(derivative))
             call = fast.get("stiffness")
             if call is None:  # the kernel's overload typed once (its arguments' types are fixed)
-                call = fast["stiffness"] = (compiled_entry(_modal_dynamic_stiffness, args)
+                call = fast["stiffness"] = (compiled_entry(_modal_dynamic_stiffness, args, self._entries)
                                             if hasattr(_modal_dynamic_stiffness, "compile")
                                             else _modal_dynamic_stiffness)
             info = call(*args)
@@ -387,8 +412,9 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         table of every tracked mode and harmonic, ``modal_shares``, is added for the whole
         branch at the end (:meth:`branch_records`)."""
         a, omega, eta = self._unpack_all(u)
-        if self.cond.backend == "modal":
-            self.cond.check_range(omega, self.H)  # warns once past the modes kept
+        cond = self.cond
+        if cond.backend == "modal" and not cond.complete:  # with every mode kept nothing is left out
+            cond.check_range(omega, self.H)  # warns once past the modes kept
         D, dD = self._condensed(omega, True)
         a = np.ascontiguousarray(a)
         args = (D, dD, a, eta, self._pole_k, self._pole_b, self.cdof, self.lo, self.hi, self.r_each, omega,
@@ -401,7 +427,7 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
             # typed once; others go through the dispatcher
             call = _mmshbm_monitor_multi
             if self._fast and hasattr(_mmshbm_monitor_multi, "compile"):
-                call = self._monitor_call = compiled_entry(_mmshbm_monitor_multi, args)
+                call = self._monitor_call = compiled_entry(_mmshbm_monitor_multi, args, self._entries)
         call(*args)
         amplitude, energy, force = self._monitor_work[-1].tolist()
         shares = self._point_records
@@ -436,9 +462,10 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
                            records, 2.0)
             a = np.zeros((self.H + 1, self.n_c))  # arguments of the monitor's types
             dD, eta = np.zeros((self.H + 1, self.n_c, self.n_c)), np.zeros(self.n_poles)
-            share = compiled_entry(ck._start_mode_share, (a, eta, 0.0, dD, self._pole_k, *share_args))
+            share = compiled_entry(ck._start_mode_share, (a, eta, 0.0, dD, self._pole_k, *share_args),
+                                   self._entries)
             family = compiled_entry(_family_kernels._family_records,
-                                    (a, dD, eta, self._pole_k, 0.0, *family_args))
+                                    (a, dD, eta, self._pole_k, 0.0, *family_args), self._entries)
             shares = (share, share_args, family, family_args, records)
         self._point_records = shares
         return shares

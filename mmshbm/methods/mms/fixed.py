@@ -13,7 +13,7 @@ from ... import _validate as check
 from ...model.contact import admissible_intervals
 from ...model.model import Model
 
-__all__ = ["fixed_contacts", "fixed_scaling"]
+__all__ = ["fixed_contacts", "fixed_scaling", "kept_entries"]
 
 #: model -> {(class, H, N, mode, backend, projection, poles): the attributes below} of the
 #: problems with the default r (:func:`fixed_contacts`, :func:`fixed_scaling`)
@@ -22,6 +22,18 @@ _FIXED_CONTACTS = ("contact_dofs", "cdof", "lo", "hi", "contact_stiffness_each",
                    "contact_stiffness", "r", "gap", "linear_frequency", "omega_ref", "amplitude_dof",
                    "mode_shape_c", "_amp_sign", "_amp_in_c", "_amp_index")
 _FIXED_SCALING = ("xscale", "eta_scale", "pole_scaling", "_eta_scale_force", "colscale", "rowscale")
+
+
+def kept_entries(fixed: dict | None) -> dict | None:
+    """The compiled overloads (dispatcher -> entry point,
+    :func:`~mmshbm.core._entry.compiled_entry`) shared by the problems built from the kept
+    numbers ``fixed``; None for a problem that computed its own (``fixed`` None). Those
+    problems make their kernels' arguments by the same code from copies of the same arrays
+    (C-contiguous, writeable float64 or int64, the scalars' Python types), so the types
+    agree: the first of them types each kernel's arguments, the others take its entries."""
+    if fixed is None:
+        return None
+    return fixed.setdefault("_entries", {})
 
 
 def _own(value):

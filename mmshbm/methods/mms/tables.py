@@ -7,16 +7,21 @@ import functools
 
 import numpy as np
 
-__all__ = ["_tables"]
+__all__ = ["_tables", "_tables_kept"]
 
 
 def _tables(H: int, N: int) -> tuple[np.ndarray, ...]:
     """(τ (N,), cos kτ (2H+1, N), sin kτ (H+1, N), fine τ (n_fine,), cos kτ (H+1, n_fine) on
     it) of an MMS-HBM problem, n_fine = max(512, 8N); kept per (H, N) up to
     :data:`_TABLES_KEPT` numbers (read only: a problem takes copies)."""
-    if (3 * H + 2) * N + (H + 2) * max(512, 8 * N) <= _TABLES_KEPT:
+    if _tables_kept(H, N):
         return _kept_tables(H, N)
     return _compute_tables(H, N)
+
+
+def _tables_kept(H: int, N: int) -> bool:
+    """Whether :func:`_tables` keeps the tables of (H, N) (else it computes them at each call)."""
+    return (3 * H + 2) * N + (H + 2) * max(512, 8 * N) <= _TABLES_KEPT
 
 
 #: the largest tables (numbers) :func:`_tables` keeps (8 MB)
