@@ -119,7 +119,8 @@ def solve_at_amplitude(problem, u0: np.ndarray, amplitude: float, *, tol: float 
             raise PinnedFailure("singular system")
         du_norm = float(np.abs(du).max())
         # backtracking: halve the step while the residual grows (nonsmooth, and far from
-        # the solution a full step can land on another branch)
+        # the solution a full step can land on another branch); the last halving
+        # (λ = 1/32) is taken whatever its residual, so it is not evaluated
         lam = 1.0
         for _ in range(7):
             trial = u - lam * du
@@ -128,15 +129,23 @@ def solve_at_amplitude(problem, u0: np.ndarray, amplitude: float, *, tol: float 
                     raise PinnedFailure(f"Newton left the trust region (iteration {it + 1})")
                 lam *= 0.5
                 continue
-            try:
-                R_t = problem.residual(trial)
-                A_t = (problem.amplitude_value(trial) if problem.amplitude_value is not None
-                       else amplitude_and_gradient(problem, trial)[0])
-                n_t = max(float(np.abs(R_t).max()), abs(A_t / amplitude - 1.0))
-            except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError):
-                n_t = math.inf
-            if n_t < norm or lam < 0.05:
+            if lam < 0.05 or _decreases(problem, trial, amplitude, norm):
                 break
             lam *= 0.5
         u = u - lam * du
     raise PinnedFailure(f"no convergence in {max_iter} iterations (residual {history[-1]:.2e})")
+
+
+def _decreases(problem, u: np.ndarray, amplitude: float, norm: float) -> bool:
+    """Whether the scaled residual's norm at ``u`` is below ``norm`` (a failed evaluation:
+    no). The residual rows come first: when they alone reach ``norm`` (most rejected
+    trials) the amplitude is not evaluated, and the answer is that of the full norm."""
+    try:
+        r = float(np.abs(problem.residual(u)).max())
+        if not r < norm:
+            return False
+        A = (problem.amplitude_value(u) if problem.amplitude_value is not None
+             else amplitude_and_gradient(problem, u)[0])
+        return max(r, abs(A / amplitude - 1.0)) < norm
+    except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError):
+        return False
