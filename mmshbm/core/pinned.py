@@ -90,10 +90,11 @@ def solve_at_amplitude(problem, u0: np.ndarray, amplitude: float, *, tol: float 
         raise PinnedFailure("the start lies outside the trust region")
     history = []
     du_norm = math.inf
+    gradient = problem.amplitude_and_gradient or (lambda v: amplitude_and_gradient(problem, v))
     for it in range(max_iter + 1):
         try:
             R, J = problem.residual_and_jacobian(u)
-            A, g = amplitude_and_gradient(problem, u)
+            A, g = gradient(u)
         except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError) as err:
             raise PinnedFailure(f"evaluation failed: {err}") from None
         c = A / amplitude - 1.0
@@ -115,7 +116,7 @@ def solve_at_amplitude(problem, u0: np.ndarray, amplitude: float, *, tol: float 
         rhs[:-1] = R
         rhs[-1] = c
         du = solve(J, g / amplitude, rhs)
-        if not np.all(np.isfinite(du)):
+        if not np.isfinite(du).all():
             raise PinnedFailure("singular system")
         du_norm = float(np.abs(du).max())
         # backtracking: halve the step while the residual grows (nonsmooth, and far from
