@@ -11,6 +11,13 @@ Newton on this system gives the point of the branch at exactly that amplitude (w
 The amplitude is the largest excursion of a DOF over the period; problems that know its
 gradient provide ``amplitude_and_gradient(u) -> (A, ∇A)`` (MMS-HBM: envelope theorem);
 otherwise it is differenced from ``monitor(u)["amplitude"]``.
+
+A solve runs to its iteration limit unless it converges: no stagnation test stops it
+earlier. On the nonsmooth MMS-HBM residual a solve can creep for 20–28 iterations without
+lowering its best residual (steps cut to λ = 1/32 throughout) and then converge
+quadratically within the limit, once a step crosses a contact's kink. Over the solves of
+the beam's convergence study and of random corpus models, no test on the residual history
+or the step lengths separated such solves from those that fail.
 """
 
 from __future__ import annotations
