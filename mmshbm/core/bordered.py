@@ -107,12 +107,18 @@ def solve_bordered_sparse(J: sp.spmatrix, t: np.ndarray, rhs: np.ndarray) -> np.
 
 def bordered_solve(J, t: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     """Solve [J; tᵀ] x = rhs for dense or sparse J (all NaN when singular)."""
-    return bordered_solve_sign(J, t, rhs)[0]
+    return _solve(J, t, rhs, False)[0]
 
 
 def bordered_solve_sign(J, t: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, float]:
     """:func:`bordered_solve`, and the sign of det [J; tᵀ] (+1/−1; 0 when singular or for a
     sparse J, whose determinant is not tracked)."""
+    return _solve(J, t, rhs, True)
+
+
+def _solve(J, t: np.ndarray, rhs: np.ndarray, with_sign: bool) -> tuple[np.ndarray, float]:
+    """(x, sign) of :func:`bordered_solve_sign`; the LAPACK path leaves the sign (0)
+    uncomputed unless ``with_sign``."""
     if not isinstance(J, np.ndarray) and sp.issparse(J):
         return solve_bordered_sparse(J, t, rhs), 0.0  # block elimination, full LU fallback
     n = len(rhs)
@@ -125,18 +131,36 @@ def bordered_solve_sign(J, t: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, 
         if _small_dense_solver()(A, np.ascontiguousarray(rhs, dtype=float), np.empty((n, n)), x, sign):
             return np.full_like(rhs, np.nan), 0.0
         return x, float(sign[0])
-    import scipy.linalg as la
+    # LAPACK's getrf/getrs called directly: what scipy.linalg.lu_factor/lu_solve call,
+    # without their ~15 µs of argument handling per call
+    getrf, getrs = _lapack_lu()
+    lu, piv, info = getrf(A, overwrite_a=True)
+    if info < 0:
+        return np.full_like(rhs, np.nan), 0.0
+    d = lu.diagonal()
+    if (d == 0).any() or not np.isfinite(d).all():
+        return np.full_like(rhs, np.nan), 0.0
+    sign = 0.0
+    if with_sign:
+        swaps = np.count_nonzero(piv != np.arange(n))
+        sign = float(np.prod(np.sign(d))) * (-1.0 if swaps % 2 else 1.0)
+    x, info = getrs(lu, piv, np.asarray(rhs, dtype=float))
+    if info < 0:
+        return np.full_like(rhs, np.nan), 0.0
+    return x, sign
 
-    try:
-        lu, piv = la.lu_factor(A, check_finite=False)
-    except (la.LinAlgError, ValueError):
-        return np.full_like(rhs, np.nan), 0.0
-    d = np.diag(lu)
-    if np.any(d == 0) or not np.all(np.isfinite(d)):
-        return np.full_like(rhs, np.nan), 0.0
-    swaps = np.count_nonzero(piv != np.arange(n))
-    sign = float(np.prod(np.sign(d))) * (-1.0 if swaps % 2 else 1.0)
-    return la.lu_solve((lu, piv), rhs, check_finite=False), sign
+
+def _lapack_lu():
+    """(dgetrf, dgetrs) of scipy's LAPACK (looked up on first use)."""
+    global _getrf_getrs
+    if _getrf_getrs is None:
+        from scipy.linalg import lapack
+
+        _getrf_getrs = lapack.get_lapack_funcs(("getrf", "getrs"), (np.empty((1, 1)),))
+    return _getrf_getrs
+
+
+_getrf_getrs = None
 
 
 #: bordered systems up to this size are solved by a Numba LU (LAPACK's call overhead

@@ -11,6 +11,13 @@ Newton on this system gives the point of the branch at exactly that amplitude (w
 The amplitude is the largest excursion of a DOF over the period; problems that know its
 gradient provide ``amplitude_and_gradient(u) -> (A, ∇A)`` (MMS-HBM: envelope theorem);
 otherwise it is differenced from ``monitor(u)["amplitude"]``.
+
+A solve runs to its iteration limit unless it converges: no stagnation test stops it
+earlier. On the nonsmooth MMS-HBM residual a solve can creep for 20–28 iterations without
+lowering its best residual (steps cut to λ = 1/32 throughout) and then converge
+quadratically within the limit, once a step crosses a contact's kink. Over the solves of
+the beam's convergence study and of random corpus models, no test on the residual history
+or the step lengths separated such solves from those that fail.
 """
 
 from __future__ import annotations
@@ -90,10 +97,11 @@ def solve_at_amplitude(problem, u0: np.ndarray, amplitude: float, *, tol: float 
         raise PinnedFailure("the start lies outside the trust region")
     history = []
     du_norm = math.inf
+    gradient = problem.amplitude_and_gradient or (lambda v: amplitude_and_gradient(problem, v))
     for it in range(max_iter + 1):
         try:
             R, J = problem.residual_and_jacobian(u)
-            A, g = amplitude_and_gradient(problem, u)
+            A, g = gradient(u)
         except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError) as err:
             raise PinnedFailure(f"evaluation failed: {err}") from None
         c = A / amplitude - 1.0
@@ -115,11 +123,12 @@ def solve_at_amplitude(problem, u0: np.ndarray, amplitude: float, *, tol: float 
         rhs[:-1] = R
         rhs[-1] = c
         du = solve(J, g / amplitude, rhs)
-        if not np.all(np.isfinite(du)):
+        if not np.isfinite(du).all():
             raise PinnedFailure("singular system")
         du_norm = float(np.abs(du).max())
         # backtracking: halve the step while the residual grows (nonsmooth, and far from
-        # the solution a full step can land on another branch)
+        # the solution a full step can land on another branch); the last halving
+        # (λ = 1/32) is taken whatever its residual, so it is not evaluated
         lam = 1.0
         for _ in range(7):
             trial = u - lam * du
@@ -128,15 +137,23 @@ def solve_at_amplitude(problem, u0: np.ndarray, amplitude: float, *, tol: float 
                     raise PinnedFailure(f"Newton left the trust region (iteration {it + 1})")
                 lam *= 0.5
                 continue
-            try:
-                R_t = problem.residual(trial)
-                A_t = (problem.amplitude_value(trial) if problem.amplitude_value is not None
-                       else amplitude_and_gradient(problem, trial)[0])
-                n_t = max(float(np.abs(R_t).max()), abs(A_t / amplitude - 1.0))
-            except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError):
-                n_t = math.inf
-            if n_t < norm or lam < 0.05:
+            if lam < 0.05 or _decreases(problem, trial, amplitude, norm):
                 break
             lam *= 0.5
         u = u - lam * du
     raise PinnedFailure(f"no convergence in {max_iter} iterations (residual {history[-1]:.2e})")
+
+
+def _decreases(problem, u: np.ndarray, amplitude: float, norm: float) -> bool:
+    """Whether the scaled residual's norm at ``u`` is below ``norm`` (a failed evaluation:
+    no). The residual rows come first: when they alone reach ``norm`` (most rejected
+    trials) the amplitude is not evaluated, and the answer is that of the full norm."""
+    try:
+        r = float(np.abs(problem.residual(u)).max())
+        if not r < norm:
+            return False
+        A = (problem.amplitude_value(u) if problem.amplitude_value is not None
+             else amplitude_and_gradient(problem, u)[0])
+        return max(r, abs(A / amplitude - 1.0)) < norm
+    except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError):
+        return False
