@@ -48,7 +48,7 @@ import numpy as np
 from .family_guard import FAMILY_RECORD, FamilyGuard, family_value
 from .pinned import PinnedFailure, solve_at_amplitude
 
-__all__ = ["FAMILY_RECORD", "FamilyGuard", "family_value", "jump"]
+__all__ = ["FAMILY_RECORD", "FamilyEnded", "FamilyGuard", "family_value", "jump"]
 
 log = logging.getLogger(__name__)
 
@@ -56,6 +56,11 @@ log = logging.getLogger(__name__)
 _MAX_SOLVES = 40
 #: pinned solves of the far search (from one origin, up to the bound)
 _MAX_FAR_SOLVES = 30
+
+
+class FamilyEnded(PinnedFailure):
+    """A jump found nothing beyond a frontier where the starting mode's own orbit loses
+    the fundamental's majority (the message says where): the family ends there."""
 
 
 class _Exhausted(PinnedFailure):
@@ -146,7 +151,7 @@ def _nearer_landing(problem, u_front, frontier: float, u_land, landing: float, p
 
 
 def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, amplitude_max: float,
-         newton_tol: float, max_newton: int, monitor, coexisting=None) -> tuple:
+         newton_tol: float, max_newton: int, monitor, coexisting=None, descend=None) -> tuple:
     """Land on the family beyond the frontier.
 
     Tries the origins of :meth:`FamilyGuard.origins` and, from each, amplitudes
@@ -285,32 +290,115 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
             return u, nit, hist, rec, t, target, guard.frontier_index
         except PinnedFailure as err:
             far_error += f"; in the harmonics: {err}"
-    beyond = _beyond_bound(problem, us, recs, guard, origins, amplitude_max, far[-1], accept, frequency_of,
-                           monitor, settled, window, solves) if far[-1] >= amplitude_max * (1 - 1e-12) else ""
-    raise PinnedFailure(f"jump from amplitude {frontier:.4g} failed{reason}{last_error}; the far search "
-                        f"up to {far[-1]:.4g}: {far_error}{beyond}")
+    beyond = ""
+    if far[-1] >= amplitude_max * (1 - 1e-12):
+        beyond, down = _beyond_bound(problem, us, recs, guard, origins, amplitude_max, accept, frequency_of,
+                                     monitor, settled, window, solves, f_limit, descend)
+        if down is not None:
+            return down
+    message = (f"jump from amplitude {frontier:.4g} failed{reason}{last_error}; the far search "
+               f"up to {far[-1]:.4g}: {far_error}{beyond}")
+    end = "" if beyond else _end_of_family(recs, guard, problem)
+    if end:
+        raise FamilyEnded(f"{end}; no orbit on the family found beyond it up to {far[-1]:.4g} ({message})")
+    raise PinnedFailure(message)
 
 
-#: pinned solves of the search above the bound (where the family resumes, for the message)
+def _end_of_family(recs: list, guard: FamilyGuard, problem) -> str:
+    """Where the branch continued from the frontier loses the fundamental's majority,
+    said in a sentence, or "" when it does not. The point after the frontier on the
+    branch is the frontier's orbit continued (path following); when its fundamental holds
+    less than ``family_share`` of the kinetic energy, the starting mode's own orbit lost
+    the majority there: the family, as defined (docs/resonances.md), ends at the
+    frontier unless another orbit with the majority exists beyond, which the jump's
+    searches then did not find. The sentence names the crossing (interpolated linearly
+    in the share between the two points), the harmonic k >= 2 that holds the most
+    kinetic energy after it and the open-contact mode j nearest to kΩ (the point's
+    ``resonance_harmonic``, ``resonance_mode``, ``resonance_detuning`` records)."""
+    i = guard.frontier_index
+    if i < 0 or i + 1 >= len(recs):
+        return ""
+    rec0, rec1 = recs[i], recs[i + 1]
+    s0, s1 = family_value(rec0), family_value(rec1)
+    if s0 is None or s1 is None or not s1 < guard.family_share <= s0:
+        return ""
+    w = (s0 - guard.family_share) / (s0 - s1)
+    amp = (1 - w) * float(rec0["amplitude"]) + w * float(rec1["amplitude"])
+    f = (1 - w) * float(rec0.get("frequency", math.nan)) + w * float(rec1.get("frequency", math.nan))
+    lost = ("the fundamental's majority" if guard.family_share == 0.5 else
+            f"the family's fundamental share ({guard.family_share:g})")
+    text = (f"family ended at amplitude {amp:.4g} ({f:.4g} Hz): the starting mode's orbit loses {lost} "
+            f"there (fundamental share {s0:.3f} at {float(rec0['amplitude']):.4g}, "
+            f"{s1:.3f} at {float(rec1['amplitude']):.4g})")
+    k, j = int(rec1.get("resonance_harmonic", 0) or 0), int(rec1.get("resonance_mode", 0) or 0)
+    detuning = float(rec1.get("resonance_detuning", math.nan))
+    if k >= 2 and j >= 1 and math.isfinite(detuning):
+        freqs = problem.tracked_frequencies
+        f_j = float(freqs[j - 1]) if freqs is not None and j <= len(freqs) else math.nan
+        text += (f"; harmonic {k} holds the most energy of the higher harmonics, near mode {j} "
+                 f"({k}Ω/f_{j} = {1 + detuning:.4f}, f_{j} = {f_j:.4g} Hz)")
+    return text
+
+
+#: pinned solves of the search above the bound (where the family resumes)
 _MAX_BEYOND_SOLVES = 15
 
 
-def _beyond_bound(problem, us, recs, guard, origins, amplitude_max, top, accept, frequency_of, monitor,
-                  settled, window, solves) -> str:
+def _below_limit(accept, f_limit: float):
+    """``accept`` that also refuses a landing more than ``_LIMIT_SLACK`` above the
+    problem's ``family_frequency_limit`` (the first mode's backbone tends to it from
+    below far above the gaps; above it lies another mode's branch)."""
+    def checked(u0, target, f_pred):
+        u, nit, hist, rec, t = accept(u0, target, f_pred)
+        f = float(rec.get("frequency", math.nan))
+        if math.isfinite(f_limit) and f > f_limit * (1.0 + _LIMIT_SLACK):
+            raise PinnedFailure(f"landed above the family's frequency limit ({f:.4g} > {f_limit:.4g} Hz)")
+        return u, nit, hist, rec, t
+    return checked
+
+
+def _beyond_bound(problem, us, recs, guard, origins, amplitude_max, accept, frequency_of, monitor,
+                  settled, window, solves, f_limit: float, descend=None) -> tuple[str, tuple | None]:
     """Where the family resumes above the bound, when the searches, capped by the bound,
-    found nothing: a tongue can cover the bound. Up to twice the bound in steps of
-    _FAR_RATIO; the landing is not kept (it lies outside the bounds). Returns the
-    sentence that says so, or "" when nothing lands there either."""
+    found nothing: a tongue can cover the bound, or the searches, started from the
+    family below a stretch of tongues, missed the family at the bound, which a landing
+    above it reaches by following its branch back down (``descend(u, tangent, amplitude,
+    amplitude_max)``, as :func:`jump` takes it). Up to twice the bound in steps of
+    _FAR_RATIO, landings at most ``_LIMIT_SLACK`` above ``f_limit``
+    (:func:`_below_limit`); a landing whose branch does not come down to the bound on
+    the family (another orbit with the fundamental's majority, which folds back above
+    the bound) does not end the search. Returns (the sentence that says where the family
+    resumes, or "" when nothing lands there; the jump's tuple at the bound, or None)."""
     above = [amplitude_max * _FAR_RATIO ** i for i in range(1, 8)]
     window["hi"] = max(window["hi"], _frequency_window(recs, guard, above[-1])[1])
     solves[:] = [0, _MAX_BEYOND_SOLVES]
+    check = _below_limit(accept, f_limit)
+    seen = {}
+
+    def connected(u0, target, f_pred):
+        u, nit, hist, rec, t = check(u0, target, f_pred)
+        seen.setdefault("first", (rec, target))
+        if descend is not None:
+            down = descend(u, t, target, amplitude_max)
+            if down is None:
+                raise PinnedFailure(f"the branch through the landing at {target:.4g} does not come down to "
+                                    "the bound on the family")
+            seen["down"] = down
+        return u, nit, hist, rec, t
+
     try:
-        _, _, _, rec, _, target, _ = _search(problem, us, recs, guard, origins, above, above[-1], accept,
-                                             frequency_of, monitor, settled)
+        found = _search(problem, us, recs, guard, origins, above, above[-1], connected, frequency_of, monitor,
+                        settled)
     except PinnedFailure:
-        return ""
-    return (f"; the family resumes above the bound, at amplitude {target:.4g} "
-            f"({rec.get('frequency', math.nan):.4g} Hz): the bound lies inside a tongue")
+        found = None
+    if "first" not in seen:
+        return "", None
+    rec, target = seen["first"]
+    sentence = (f"; the family resumes above the bound, at amplitude {target:.4g} "
+                f"({rec.get('frequency', math.nan):.4g} Hz): the bound lies inside a tongue")
+    if found is None or "down" not in seen:
+        return sentence, None
+    return sentence, (*seen["down"], amplitude_max, found[-1])
 
 
 def _search(problem, us, recs, guard, origins, targets, amplitude_max, accept, frequency_of, monitor,
