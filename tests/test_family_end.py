@@ -60,3 +60,41 @@ def test_a_family_that_ends_in_a_2_to_1_resonance_says_where():
     assert abs(amplitude / (lost[0] * gap) - 1) < 0.1
     # and at the exact orbit's frequency there within the truncation's 1 %
     assert abs(frequency / np.interp(amplitude, ex.amplitude, ex.frequency) - 1) < 0.01
+
+
+def _tree_one_sided():
+    """A 3-mass tree (17.05, 0.112 and 3.857 kg; 1114.5, 38.8 and 102.3 N/m in a line,
+    the third mass also on 361.0 N/m to the ground) with a massless contact node on the
+    third mass through 2.2e5 N/m and a stop at −0.337 mm (corpus seed 14, index 97).
+    Open modes 1.2987, 1.5888, 5.685 Hz."""
+    m = [17.0483925127443, 0.11246969655670268, 3.8567845183354326]
+    k = [1114.5472227962791, 38.771770455930195, 102.31111267890847]
+    kg, kc = 360.95225897429225, 220681.52590074207
+    K = np.zeros((4, 4))
+    for a, b, s in ((0, -1, k[0]), (1, 0, k[1]), (2, 1, k[2]), (2, -1, kg), (3, 2, kc)):
+        K[a, a] += s
+        if b >= 0:
+            K[b, b] += s
+            K[a, b] -= s
+            K[b, a] -= s
+    return mmshbm.Model.from_matrices(np.diag(m + [0.0]), K, 3, 0.0003367466016382903, -1)
+
+
+def test_a_failed_jump_says_when_the_backbone_itself_turns_back():
+    """The backbone rises from 1.2987 Hz to 1.30297 Hz and turns back in amplitude at
+    7.35 gaps with the fundamental's whole share (0.997): no internal resonance takes the
+    energy. Plain path following turns back at the same amplitude and frequency. The jump
+    finds nothing beyond; its status says the branch turned back at the frontier with
+    the fundamental's majority (before: only the pinned solves' reasons)."""
+    model = _tree_one_sided()
+    b = mmshbm.backbone(model, harmonics=15, max_amplitude=10 * model.gap)
+    assert b.status.kind == Status.JUMP_FAILED
+    assert "the branch turns back in amplitude at the frontier" in b.status.detail
+    front = b.family_front()
+    top = front[int(np.argmax(b.amplitude[front]))]
+    path = mmshbm.backbone(model, harmonics=15, max_amplitude=10 * model.gap, follow="path", max_steps=60)
+    i = int(np.argmax(path.amplitude))
+    assert 0 < i < len(path) - 1 and path.amplitude[-1] < path.amplitude[i]
+    assert abs(path.amplitude[i] / b.amplitude[top] - 1) < 1e-3
+    assert abs(path.frequency[i] / b.frequency[top] - 1) < 1e-5
+    assert path.records["fundamental_share"][: i + 1].min() > 0.99

@@ -301,7 +301,23 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     end = "" if beyond else _end_of_family(recs, guard, problem)
     if end:
         raise FamilyEnded(f"{end}; no orbit on the family found beyond it up to {far[-1]:.4g} ({message})")
-    raise PinnedFailure(message)
+    raise PinnedFailure(_turned_back(recs, guard) + message)
+
+
+def _turned_back(recs: list, guard: FamilyGuard) -> str:
+    """A sentence (ending in "; ") when the branch, continued from the frontier, turns back
+    in amplitude there with the fundamental still holding ``family_share`` of the kinetic
+    energy (no internal resonance took the energy: the backbone itself folds in the
+    measured amplitude); "" otherwise."""
+    i = guard.frontier_index
+    if i < 0 or i + 1 >= len(recs):
+        return ""
+    rec0, rec1 = recs[i], recs[i + 1]
+    s1 = family_value(rec1)
+    if s1 is None or s1 < guard.family_share or not float(rec1["amplitude"]) < float(rec0["amplitude"]):
+        return ""
+    return (f"the branch turns back in amplitude at the frontier, {float(rec0['amplitude']):.4g} "
+            f"({float(rec0.get('frequency', math.nan)):.4g} Hz), with the fundamental's share at {s1:.3f}; ")
 
 
 def _end_of_family(recs: list, guard: FamilyGuard, problem) -> str:
