@@ -351,8 +351,9 @@ def _end_of_family(recs: list, guard: FamilyGuard, problem) -> str:
     if k >= 2 and j >= 1 and math.isfinite(detuning):
         freqs = problem.tracked_frequencies
         f_j = float(freqs[j - 1]) if freqs is not None and j <= len(freqs) else math.nan
+        at = f", f_{j} = {f_j:.4g} Hz" if math.isfinite(f_j) else ""
         text += (f"; harmonic {k} holds the most energy of the higher harmonics, near mode {j} "
-                 f"({k}Ω/f_{j} = {1 + detuning:.4f}, f_{j} = {f_j:.4g} Hz)")
+                 f"({k}Ω/f_{j} = {1 + detuning:.4f}{at})")
     return text
 
 
