@@ -32,7 +32,10 @@ target), and accepts the result only if it is on the family; otherwise it tries 
 out (amplitude steps 2, 4, 8, ... % beyond the frontier), at most 40 pinned solves, then
 in a far search up to the bound (30 more), and last by continuing the orbit in the
 harmonics (``problem.harmonic_landing``: a low-harmonic family's orbit at the target,
-solved again with more and more harmonics; at most 8 targets). The
+solved again with more and more harmonics; at most 8 targets), and last above the bound,
+followed back down onto it. When nothing lands and the starting mode's own orbit lost the
+fundamental's majority at the frontier, the family ended there
+(:class:`~mmshbm.core.family_end.FamilyEnded`). The
 continuation goes on from there; the skipped interval is recorded as a ``"jump"``
 special point. Points of the excursion stay on the branch with
 ``record["on_family"] = 0``.
@@ -45,6 +48,7 @@ import math
 
 import numpy as np
 
+from .family_end import FamilyEnded, end_of_family, turned_back
 from .family_guard import FAMILY_RECORD, FamilyGuard, family_value
 from .pinned import PinnedFailure, solve_at_amplitude
 
@@ -56,11 +60,6 @@ log = logging.getLogger(__name__)
 _MAX_SOLVES = 40
 #: pinned solves of the far search (from one origin, up to the bound)
 _MAX_FAR_SOLVES = 30
-
-
-class FamilyEnded(PinnedFailure):
-    """A jump found nothing beyond a frontier where the starting mode's own orbit loses
-    the fundamental's majority (the message says where): the family ends there."""
 
 
 class _Exhausted(PinnedFailure):
@@ -163,7 +162,10 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     (else it found another branch). ``coexisting`` checks a landing nearer the frontier
     than a filtered passage's (:func:`_nearer_landing`). When all of these fail, the
     problem's ``harmonic_landing`` (if any) gives the orbit at each target continued in
-    the harmonics from a low-harmonic family (:func:`_harmonic_search`).
+    the harmonics from a low-harmonic family (:func:`_harmonic_search`); when that fails
+    too, the family is sought above the bound and followed back down onto it by
+    ``descend(u, tangent, amplitude, amplitude_max)`` (None or the tuple (u, iterations,
+    history, record, tangent) at ``amplitude_max``; :func:`_beyond_bound`).
 
     Returns
     -------
@@ -171,8 +173,11 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
 
     Raises
     ------
+    FamilyEnded
+        If no attempt lands and the branch's point after the frontier has lost the
+        fundamental's share (:func:`~mmshbm.core.family_end.end_of_family`).
     PinnedFailure
-        If no attempt lands on the family.
+        If no attempt lands on the family otherwise.
     """
     if guard.frontier_index < 0:
         raise PinnedFailure("the branch has no family point to jump from")
@@ -298,63 +303,10 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
             return down
     message = (f"jump from amplitude {frontier:.4g} failed{reason}{last_error}; the far search "
                f"up to {far[-1]:.4g}: {far_error}{beyond}")
-    end = "" if beyond else _end_of_family(recs, guard, problem)
+    end = "" if beyond else end_of_family(recs, guard, problem)
     if end:
         raise FamilyEnded(f"{end}; no orbit on the family found beyond it up to {far[-1]:.4g} ({message})")
-    raise PinnedFailure(_turned_back(recs, guard) + message)
-
-
-def _turned_back(recs: list, guard: FamilyGuard) -> str:
-    """A sentence (ending in "; ") when the branch, continued from the frontier, turns back
-    in amplitude there with the fundamental still holding ``family_share`` of the kinetic
-    energy (no internal resonance took the energy: the backbone itself folds in the
-    measured amplitude); "" otherwise."""
-    i = guard.frontier_index
-    if i < 0 or i + 1 >= len(recs):
-        return ""
-    rec0, rec1 = recs[i], recs[i + 1]
-    s1 = family_value(rec1)
-    if s1 is None or s1 < guard.family_share or not float(rec1["amplitude"]) < float(rec0["amplitude"]):
-        return ""
-    return (f"the branch turns back in amplitude at the frontier, {float(rec0['amplitude']):.4g} "
-            f"({float(rec0.get('frequency', math.nan)):.4g} Hz), with the fundamental's share at {s1:.3f}; ")
-
-
-def _end_of_family(recs: list, guard: FamilyGuard, problem) -> str:
-    """Where the branch continued from the frontier loses the fundamental's majority,
-    said in a sentence, or "" when it does not. The point after the frontier on the
-    branch is the frontier's orbit continued (path following); when its fundamental holds
-    less than ``family_share`` of the kinetic energy, the starting mode's own orbit lost
-    the majority there: the family, as defined (docs/resonances.md), ends at the
-    frontier unless another orbit with the majority exists beyond, which the jump's
-    searches then did not find. The sentence names the crossing (interpolated linearly
-    in the share between the two points), the harmonic k >= 2 that holds the most
-    kinetic energy after it and the open-contact mode j nearest to kΩ (the point's
-    ``resonance_harmonic``, ``resonance_mode``, ``resonance_detuning`` records)."""
-    i = guard.frontier_index
-    if i < 0 or i + 1 >= len(recs):
-        return ""
-    rec0, rec1 = recs[i], recs[i + 1]
-    s0, s1 = family_value(rec0), family_value(rec1)
-    if s0 is None or s1 is None or not s1 < guard.family_share <= s0:
-        return ""
-    w = (s0 - guard.family_share) / (s0 - s1)
-    amp = (1 - w) * float(rec0["amplitude"]) + w * float(rec1["amplitude"])
-    f = (1 - w) * float(rec0.get("frequency", math.nan)) + w * float(rec1.get("frequency", math.nan))
-    lost = ("the fundamental's majority" if guard.family_share == 0.5 else
-            f"the family's fundamental share ({guard.family_share:g})")
-    text = (f"family ended at amplitude {amp:.4g} ({f:.4g} Hz): the starting mode's orbit loses {lost} "
-            f"there (fundamental share {s0:.3f} at {float(rec0['amplitude']):.4g}, "
-            f"{s1:.3f} at {float(rec1['amplitude']):.4g})")
-    k, j = int(rec1.get("resonance_harmonic", 0) or 0), int(rec1.get("resonance_mode", 0) or 0)
-    detuning = float(rec1.get("resonance_detuning", math.nan))
-    if k >= 2 and j >= 1 and math.isfinite(detuning):
-        freqs = problem.tracked_frequencies
-        f_j = float(freqs[j - 1]) if freqs is not None and j <= len(freqs) else math.nan
-        at = f", f_{j} = {f_j:.4g} Hz" if math.isfinite(f_j) else ""
-        text += (f"; harmonic {k} holds the most energy of the higher harmonics, near mode {j} "
-                 f"({k}Ω/f_{j} = {1 + detuning:.4f}{at})")
-    return text
+    raise PinnedFailure(turned_back(recs, guard) + message)
 
 
 #: pinned solves of the search above the bound (where the family resumes)
