@@ -357,6 +357,10 @@ def summary(results: list[CaseResult], slowest: int = 5) -> str:
             done = sum(r.completed for r in rs)
             lines.append(f"all    {contact:<10} {len(rs):>6} {done:>9} {100 * done / len(rs):>6.1f}%")
     n_exc = sum(r.status.startswith("exception") for r in results)
+    ended = sum(r.status.startswith("family ended") for r in results)
+    if ended:
+        lines.append(f"family ended (the starting mode's orbit loses the fundamental's majority, no orbit "
+                     f"with it found beyond): {ended}")
     over = sum(r.seconds > 30.0 for r in results)
     over_cpu = sum(r.cpu_seconds > 30.0 for r in results)
     total = sum(r.seconds for r in results)

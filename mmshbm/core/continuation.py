@@ -123,7 +123,7 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
         try:
             moved = events.relocate(problem, pts.us, pts.recs, reason, len(pts.us))
         except RelocationFailed as err:
-            return failed(str(err))
+            return Status(err.kind, str(err)) if err.kind else failed(str(err))
         for n, (u_p, nit_p, hist_p, rec_p, t_p) in enumerate(moved.points):
             events.register(len(pts.us), rec_p, n == 0)
             last = n == len(moved.points) - 1

@@ -35,7 +35,13 @@ __all__ = ["BranchEvents", "NoEvents", "Relocation", "RelocationFailed"]
 
 
 class RelocationFailed(ArithmeticError):
-    """A plug-in could not relocate the branch (the message says why)."""
+    """A plug-in could not relocate the branch (the message says why). ``kind``, when
+    given, is the status kind that ends the branch instead of the caller's (e.g.
+    ``Status.FAMILY_ENDED``)."""
+
+    def __init__(self, message: str = "", kind: str | None = None):
+        super().__init__(message)
+        self.kind = kind
 
 
 @dataclass

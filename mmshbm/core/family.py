@@ -32,7 +32,10 @@ target), and accepts the result only if it is on the family; otherwise it tries 
 out (amplitude steps 2, 4, 8, ... % beyond the frontier), at most 40 pinned solves, then
 in a far search up to the bound (30 more), and last by continuing the orbit in the
 harmonics (``problem.harmonic_landing``: a low-harmonic family's orbit at the target,
-solved again with more and more harmonics; at most 8 targets). The
+solved again with more and more harmonics; at most 8 targets), and last above the bound,
+followed back down onto it. When nothing lands and the starting mode's own orbit lost the
+fundamental's majority at the frontier, the family ended there
+(:class:`~mmshbm.core.family_end.FamilyEnded`). The
 continuation goes on from there; the skipped interval is recorded as a ``"jump"``
 special point. Points of the excursion stay on the branch with
 ``record["on_family"] = 0``.
@@ -45,10 +48,11 @@ import math
 
 import numpy as np
 
+from .family_end import FamilyEnded, end_of_family, turned_back
 from .family_guard import FAMILY_RECORD, FamilyGuard, family_value
 from .pinned import PinnedFailure, solve_at_amplitude
 
-__all__ = ["FAMILY_RECORD", "FamilyGuard", "family_value", "jump"]
+__all__ = ["FAMILY_RECORD", "FamilyEnded", "FamilyGuard", "family_value", "jump"]
 
 log = logging.getLogger(__name__)
 
@@ -146,7 +150,7 @@ def _nearer_landing(problem, u_front, frontier: float, u_land, landing: float, p
 
 
 def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, amplitude_max: float,
-         newton_tol: float, max_newton: int, monitor, coexisting=None) -> tuple:
+         newton_tol: float, max_newton: int, monitor, coexisting=None, descend=None) -> tuple:
     """Land on the family beyond the frontier.
 
     Tries the origins of :meth:`FamilyGuard.origins` and, from each, amplitudes
@@ -158,7 +162,10 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     (else it found another branch). ``coexisting`` checks a landing nearer the frontier
     than a filtered passage's (:func:`_nearer_landing`). When all of these fail, the
     problem's ``harmonic_landing`` (if any) gives the orbit at each target continued in
-    the harmonics from a low-harmonic family (:func:`_harmonic_search`).
+    the harmonics from a low-harmonic family (:func:`_harmonic_search`); when that fails
+    too, the family is sought above the bound and followed back down onto it by
+    ``descend(u, tangent, amplitude, amplitude_max)`` (None or the tuple (u, iterations,
+    history, record, tangent) at ``amplitude_max``; :func:`_beyond_bound`).
 
     Returns
     -------
@@ -166,8 +173,11 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
 
     Raises
     ------
+    FamilyEnded
+        If no attempt lands and the branch's point after the frontier has lost the
+        fundamental's share (:func:`~mmshbm.core.family_end.end_of_family`).
     PinnedFailure
-        If no attempt lands on the family.
+        If no attempt lands on the family otherwise.
     """
     if guard.frontier_index < 0:
         raise PinnedFailure("the branch has no family point to jump from")
@@ -285,32 +295,79 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
             return u, nit, hist, rec, t, target, guard.frontier_index
         except PinnedFailure as err:
             far_error += f"; in the harmonics: {err}"
-    beyond = _beyond_bound(problem, us, recs, guard, origins, amplitude_max, far[-1], accept, frequency_of,
-                           monitor, settled, window, solves) if far[-1] >= amplitude_max * (1 - 1e-12) else ""
-    raise PinnedFailure(f"jump from amplitude {frontier:.4g} failed{reason}{last_error}; the far search "
-                        f"up to {far[-1]:.4g}: {far_error}{beyond}")
+    beyond = ""
+    if far[-1] >= amplitude_max * (1 - 1e-12):
+        beyond, down = _beyond_bound(problem, us, recs, guard, origins, amplitude_max, accept, frequency_of,
+                                     monitor, settled, window, solves, f_limit, descend)
+        if down is not None:
+            return down
+    message = (f"jump from amplitude {frontier:.4g} failed{reason}{last_error}; the far search "
+               f"up to {far[-1]:.4g}: {far_error}{beyond}")
+    end = "" if beyond else end_of_family(recs, guard, problem)
+    if end:
+        raise FamilyEnded(f"{end}; no orbit on the family found beyond it up to {far[-1]:.4g} ({message})")
+    raise PinnedFailure(turned_back(recs, guard) + message)
 
 
-#: pinned solves of the search above the bound (where the family resumes, for the message)
+#: pinned solves of the search above the bound (where the family resumes)
 _MAX_BEYOND_SOLVES = 15
 
 
-def _beyond_bound(problem, us, recs, guard, origins, amplitude_max, top, accept, frequency_of, monitor,
-                  settled, window, solves) -> str:
+def _below_limit(accept, f_limit: float):
+    """``accept`` that also refuses a landing more than ``_LIMIT_SLACK`` above the
+    problem's ``family_frequency_limit`` (the first mode's backbone tends to it from
+    below far above the gaps; above it lies another mode's branch)."""
+    def checked(u0, target, f_pred):
+        u, nit, hist, rec, t = accept(u0, target, f_pred)
+        f = float(rec.get("frequency", math.nan))
+        if math.isfinite(f_limit) and f > f_limit * (1.0 + _LIMIT_SLACK):
+            raise PinnedFailure(f"landed above the family's frequency limit ({f:.4g} > {f_limit:.4g} Hz)")
+        return u, nit, hist, rec, t
+    return checked
+
+
+def _beyond_bound(problem, us, recs, guard, origins, amplitude_max, accept, frequency_of, monitor,
+                  settled, window, solves, f_limit: float, descend=None) -> tuple[str, tuple | None]:
     """Where the family resumes above the bound, when the searches, capped by the bound,
-    found nothing: a tongue can cover the bound. Up to twice the bound in steps of
-    _FAR_RATIO; the landing is not kept (it lies outside the bounds). Returns the
-    sentence that says so, or "" when nothing lands there either."""
+    found nothing: a tongue can cover the bound, or the searches, started from the
+    family below a stretch of tongues, missed the family at the bound, which a landing
+    above it reaches by following its branch back down (``descend(u, tangent, amplitude,
+    amplitude_max)``, as :func:`jump` takes it). Up to twice the bound in steps of
+    _FAR_RATIO, landings at most ``_LIMIT_SLACK`` above ``f_limit``
+    (:func:`_below_limit`); a landing whose branch does not come down to the bound on
+    the family (another orbit with the fundamental's majority, which folds back above
+    the bound) does not end the search. Returns (the sentence that says where the family
+    resumes, or "" when nothing lands there; the jump's tuple at the bound, or None)."""
     above = [amplitude_max * _FAR_RATIO ** i for i in range(1, 8)]
     window["hi"] = max(window["hi"], _frequency_window(recs, guard, above[-1])[1])
     solves[:] = [0, _MAX_BEYOND_SOLVES]
+    check = _below_limit(accept, f_limit)
+    seen = {}
+
+    def connected(u0, target, f_pred):
+        u, nit, hist, rec, t = check(u0, target, f_pred)
+        seen.setdefault("first", (rec, target))
+        if descend is not None:
+            down = descend(u, t, target, amplitude_max)
+            if down is None:
+                raise PinnedFailure(f"the branch through the landing at {target:.4g} does not come down to "
+                                    "the bound on the family")
+            seen["down"] = down
+        return u, nit, hist, rec, t
+
     try:
-        _, _, _, rec, _, target, _ = _search(problem, us, recs, guard, origins, above, above[-1], accept,
-                                             frequency_of, monitor, settled)
+        found = _search(problem, us, recs, guard, origins, above, above[-1], connected, frequency_of, monitor,
+                        settled)
     except PinnedFailure:
-        return ""
-    return (f"; the family resumes above the bound, at amplitude {target:.4g} "
-            f"({rec.get('frequency', math.nan):.4g} Hz): the bound lies inside a tongue")
+        found = None
+    if "first" not in seen:
+        return "", None
+    rec, target = seen["first"]
+    sentence = (f"; the family resumes above the bound, at amplitude {target:.4g} "
+                f"({rec.get('frequency', math.nan):.4g} Hz): the bound lies inside a tongue")
+    if found is None or "down" not in seen:
+        return sentence, None
+    return sentence, (*seen["down"], amplitude_max, found[-1])
 
 
 def _search(problem, us, recs, guard, origins, targets, amplitude_max, accept, frequency_of, monitor,

@@ -22,7 +22,7 @@ from collections.abc import Callable
 import numpy as np
 
 from .events import NoEvents, Relocation, RelocationFailed
-from .family import FAMILY_RECORD, FamilyGuard, family_value, jump
+from .family import FAMILY_RECORD, FamilyEnded, FamilyGuard, family_value, jump
 from .options import ContinuationOptions, FamilyOptions
 from .pinned import PinnedFailure
 from .special_points import SpecialPoint
@@ -100,7 +100,13 @@ class FamilyFollower:
                 problem, guard, points, records, step=self.family.jump_step, amplitude_max=self.amplitude_max,
                 newton_tol=opt.newton_tol, max_newton=opt.max_newton, monitor=_pinned_monitor,
                 coexisting=lambda u, t, a, rec: _coexisting(self.follow, problem, u, t, a, rec, opt,
-                                                            self.family, self.amplitude_max))
+                                                            self.family, self.amplitude_max),
+                descend=lambda u, t, a, a_to: _descend(self.follow, problem, u, t, a, a_to, opt, self.family))
+        except FamilyEnded as err:
+            text = str(err)
+            prefix = "family ended at "
+            raise RelocationFailed("at " + text[len(prefix):] if text.startswith(prefix) else text,
+                                   kind=Status.FAMILY_ENDED) from None
         except PinnedFailure as err:
             raise RelocationFailed(str(err)) from None
         A_from = float(records[i_from]["amplitude"])
@@ -212,3 +218,35 @@ def _backfill(follow: Callable, problem, u, t, frontier: float, landing: float, 
         tangent /= max(np.linalg.norm(tangent), 1e-300)
         out.append((res.u[i], int(res.newton_iterations[i]), res.residual_histories[i], rec, tangent))
     return out
+
+
+def _descend(follow: Callable, problem, u, t, amplitude: float, amplitude_to: float, opt: ContinuationOptions,
+             family: FamilyOptions):
+    """The family point at ``amplitude_to`` below a family point ``u`` (amplitude
+    ``amplitude``, tangent ``t`` oriented to growing amplitude) found above the bound:
+    the branch through it followed back down (plain path following, at most
+    ``max_excursion`` steps, the backfill's step rule) onto ``amplitude_to``, where the
+    driver refines its end onto the bound. Returns (u, iterations, history, record,
+    tangent oriented to growing amplitude) there, or None when the branch leaves the
+    family (its family measure below ``family_share``) or turns back first."""
+    down = dataclasses.replace(
+        opt, max_steps=family.max_excursion, follow="path", step_control="auto",
+        target_residual=_BACKFILL_TARGET_RESIDUAL,
+        bounds={"amplitude": (amplitude_to, amplitude * (1 + 1e-6)),
+                FAMILY_RECORD: (family.family_share, 2.0)})
+    try:
+        res = follow(problem, u, -t, down, catch_interrupt=False)
+    except (PinnedFailure, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
+        return None
+    if len(res.u) < 2:
+        return None
+    rec = {k: v[-1] for k, v in res.records.items()}
+    share = family_value(rec)
+    log.debug("descent from %.4g to %.4g: %s after %d points at %.4g (share %s)", amplitude, amplitude_to,
+              res.status, len(res.u), float(rec["amplitude"]), share)
+    if abs(float(rec["amplitude"]) / amplitude_to - 1.0) > 1e-6 or (
+            share is not None and share < family.family_share):
+        return None
+    tangent = res.u[-2] - res.u[-1]
+    tangent /= max(np.linalg.norm(tangent), 1e-300)
+    return res.u[-1], int(res.newton_iterations[-1]), res.residual_histories[-1], rec, tangent

@@ -185,8 +185,8 @@ class ContinuationResult:
         ("start", 0), ("fold", i), bound hits, and ("endpoint", last).
     status : Status
         Why the branch stopped (:class:`~mmshbm.core.status.Status`, a str):
-        "max_steps", "bound:<name>", "ds_min: ...", "jump failed: ...", "interrupted",
-        "start failed: ...", "start outside bounds".
+        "max_steps", "bound:<name>", "ds_min: ...", "jump failed: ...", "family ended: ...",
+        "interrupted", "start failed: ...", "start outside bounds".
     tangent : ndarray, shape (n,) or None
         Unit tangent at the last point (None if no point converged).
     next_ds : float

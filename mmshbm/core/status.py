@@ -17,6 +17,9 @@ kind                        text                                 detail
 ``"bound"``                 ``bound:<name>``                     the bounded record's name
 ``"ds_min"``                ``ds_min: <message>``                why the last step failed
 ``"jump failed"``           ``jump failed: <message>``           why the relocation failed
+``"family ended"``          ``family ended: <message>``          where the starting mode's
+                                                                 orbit lost the fundamental's
+                                                                 majority (nothing beyond)
 ``"start failed"``          ``start failed: <message>``          why the first point failed
 ``"start outside bounds"``  ``start outside bounds``             —
 ``"interrupted"``           ``interrupted``                      —
@@ -47,6 +50,7 @@ class Status(str):
     BOUND = "bound"
     DS_MIN = "ds_min"
     JUMP_FAILED = "jump failed"
+    FAMILY_ENDED = "family ended"
     START_FAILED = "start failed"
     START_OUTSIDE = "start outside bounds"
     INTERRUPTED = "interrupted"

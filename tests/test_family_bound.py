@@ -1,0 +1,40 @@
+"""A jump whose searches, capped by the amplitude bound, miss the family there: the
+family found above the bound and followed back down onto it (``mmshbm.core.family``'s
+search above the bound, ``family_events._descend``)."""
+
+import numpy as np
+
+import mmshbm
+
+
+def _chain_clearance():
+    """Two masses (13.19 and 6.06 kg; 25.7 N/m to the ground, 143.9 N/m between them)
+    and a massless contact node on the second through 188.4 N/m, held by a clearance of
+    ±1.052 mm (corpus seed 11, index 162)."""
+    m0, m1 = 13.194469974422018, 6.060209325732203
+    k0, k1, kc = 25.71047189101238, 143.93540716081057, 188.3655656087905
+    M = np.diag([m0, m1, 0.0])
+    K = np.array([[k0 + k1, -k1, 0.0], [-k1, k1 + kc, -kc], [0.0, -kc, kc]])
+    gap = 0.0010523912122768968
+    return mmshbm.Model.from_matrices(M, K, [2, 2], [gap, gap], [1, -1])
+
+
+def test_the_family_found_above_the_bound_comes_down_onto_it():
+    """At H = 3 the branch loops back at 8.53 gaps and every pinned solve between there
+    and the bound (10 gaps) misses the family: the run ended "jump failed" (the family
+    resumes above the bound at 14.6 gaps). The family lies there: a run with its bound at
+    12 gaps jumps from 8.53 gaps to 11.26 gaps, fills back down to 8.53 gaps and passes 10
+    gaps on the family. The search above the bound lands, the branch through the landing
+    is followed back down onto the bound, and the run reaches 10 gaps on that orbit (the
+    12-gap run's point at 10 gaps, solved by ``frequency_at``: the same to 1e-9) with
+    nothing skipped (the backfill reaches the frontier)."""
+    model = _chain_clearance()
+    gap = model.gap
+    b = mmshbm.backbone(model, harmonics=3, max_amplitude=10 * gap)
+    assert b.status == "bound:amplitude" and b.records["on_family"][-1] == 1.0
+    jumps = [s for s in b.special_points if s.kind == "jump"]
+    assert jumps and abs(jumps[-1].data["landing_amplitude"] / (10 * gap) - 1) < 1e-9
+    assert jumps[-1].data["amplitude_to"] <= jumps[-1].data["amplitude_frontier"] * (1 + 1e-9)
+    wider = mmshbm.backbone(model, harmonics=3, max_amplitude=12 * gap)
+    assert wider.status == "bound:amplitude"
+    assert abs(b.frequency[-1] / wider.frequency_at(10 * gap) - 1) < 1e-9

@@ -1,0 +1,100 @@
+"""Where the starting mode's own orbit loses the fundamental's majority, the family ends,
+and the run says so (status ``"family ended: ..."``), checked against the exact orbit."""
+
+import re
+
+import numpy as np
+
+import mmshbm
+from mmshbm.core.status import Status
+
+
+def _two_mass_chain():
+    """Two masses in a chain (1.167 and 1.080 kg on 365.9 and 109.9 N/m) and a massless
+    contact node on the second through a stiff spring (5.8e5 N/m), one stop at 0.194 mm
+    (corpus seed 13, index 10). Open modes 1.3607 and 3.324 Hz."""
+    m0, m1 = 1.167251569460881, 1.080052549456277
+    k0, k1, kc = 365.88039617557155, 109.85778151462809, 581982.3631472578
+    M = np.diag([m0, m1, 0.0])
+    K = np.array([[k0 + k1, -k1, 0.0], [-k1, k1 + kc, -kc], [0.0, -kc, kc]])
+    return mmshbm.Model.from_matrices(M, K, 2, 0.00019428500911325972, 1)
+
+
+def _fundamental_share(model, orbit) -> float:
+    """The fundamental's share of the period-mean kinetic energy of an exact orbit, from
+    its velocities sampled at 2048 instants (harmonics 1..1024)."""
+    M = np.asarray(model.blocks["M_ll"].toarray() if hasattr(model.blocks["M_ll"], "toarray")
+                   else model.blocks["M_ll"])
+    n = 2048
+    V = np.array([orbit.trajectory.v(t)[model.l] for t in np.arange(n) * orbit.period / n])
+    C = np.fft.rfft(V, axis=0) / n
+    E = np.einsum("ki,ij,kj->k", C.conj(), M, C).real
+    return float(E[1] / E[1:].sum())
+
+
+def test_a_family_that_ends_in_a_2_to_1_resonance_says_where():
+    """2Ω approaches the second mode (3.324 Hz) as the backbone stiffens towards 1.65 Hz:
+    the exact orbit, continued from the linear mode, holds the fundamental's majority up
+    to 1.5 gaps (share 0.513) and loses it from there on, its frequency locked below
+    f2/2 (share 0.42 at 1.6 gaps, 0.13 at 2.5 gaps): no first-mode orbit with the
+    fundamental's majority lies on that path. At H = 15 the branch loses the majority at
+    1.645 gaps (the truncation: its frequency is 0.6 % below the exact one at 1.5 gaps);
+    the run ends there with a status that says so (before: "jump failed")."""
+    model = _two_mass_chain()
+    gap = model.gap
+    b = mmshbm.backbone(model, harmonics=15, max_amplitude=10 * gap)
+    assert b.status.kind == Status.FAMILY_ENDED, b.status
+    found = re.search(r"at amplitude ([0-9.e+-]+) \(([0-9.e+-]+) Hz\)", b.status.detail)
+    amplitude, frequency = float(found.group(1)), float(found.group(2))
+    assert "harmonic 2" in b.status.detail and "mode 2" in b.status.detail
+    front = b.family_front()
+    assert b.amplitude[front].max() <= amplitude
+    steps = np.arange(0.9, 2.55, 0.1)
+    ex = mmshbm.exact.backbone(model, gap * steps)
+    assert ex.converged.all() and (ex.n_contacts[steps > 1.05] == 1).all()
+    shares = np.array([_fundamental_share(model, o) for o in ex.orbits])
+    lost = steps[shares < 0.5]
+    # the exact orbit loses the majority between 1.5 and 1.6 gaps and never regains it
+    assert 1.5 < lost[0] < 1.65 and (shares[steps >= lost[0] - 1e-9] < 0.5).all()
+    # where the run says the family ends: within the truncation's 10 % of the exact loss
+    assert abs(amplitude / (lost[0] * gap) - 1) < 0.1
+    # and at the exact orbit's frequency there within the truncation's 1 %
+    assert abs(frequency / np.interp(amplitude, ex.amplitude, ex.frequency) - 1) < 0.01
+
+
+def _tree_one_sided():
+    """A 3-mass tree (17.05, 0.112 and 3.857 kg; 1114.5, 38.8 and 102.3 N/m in a line,
+    the third mass also on 361.0 N/m to the ground) with a massless contact node on the
+    third mass through 2.2e5 N/m and a stop at −0.337 mm (corpus seed 14, index 97).
+    Open modes 1.2987, 1.5888, 5.685 Hz."""
+    m = [17.0483925127443, 0.11246969655670268, 3.8567845183354326]
+    k = [1114.5472227962791, 38.771770455930195, 102.31111267890847]
+    kg, kc = 360.95225897429225, 220681.52590074207
+    K = np.zeros((4, 4))
+    for a, b, s in ((0, -1, k[0]), (1, 0, k[1]), (2, 1, k[2]), (2, -1, kg), (3, 2, kc)):
+        K[a, a] += s
+        if b >= 0:
+            K[b, b] += s
+            K[a, b] -= s
+            K[b, a] -= s
+    return mmshbm.Model.from_matrices(np.diag(m + [0.0]), K, 3, 0.0003367466016382903, -1)
+
+
+def test_a_failed_jump_says_when_the_backbone_itself_turns_back():
+    """The backbone rises from 1.2987 Hz to 1.30297 Hz and turns back in amplitude at
+    7.35 gaps with the fundamental's whole share (0.997): no internal resonance takes the
+    energy. Plain path following turns back at the same amplitude and frequency. The jump
+    finds nothing beyond; its status says the branch turned back at the frontier with
+    the fundamental's majority (before: only the pinned solves' reasons)."""
+    model = _tree_one_sided()
+    b = mmshbm.backbone(model, harmonics=15, max_amplitude=10 * model.gap)
+    assert b.status.kind == Status.JUMP_FAILED
+    assert "the branch turns back in amplitude at the frontier" in b.status.detail
+    front = b.family_front()
+    top = front[int(np.argmax(b.amplitude[front]))]
+    path = mmshbm.backbone(model, harmonics=15, max_amplitude=10 * model.gap, follow="path", max_steps=60)
+    i = int(np.argmax(path.amplitude))
+    assert 0 < i < len(path) - 1 and path.amplitude[-1] < path.amplitude[i]
+    assert abs(path.amplitude[i] / b.amplitude[top] - 1) < 1e-3
+    assert abs(path.frequency[i] / b.frequency[top] - 1) < 1e-5
+    assert path.records["fundamental_share"][: i + 1].min() > 0.99
