@@ -38,3 +38,25 @@ def test_the_family_found_above_the_bound_comes_down_onto_it():
     wider = mmshbm.backbone(model, harmonics=3, max_amplitude=12 * gap)
     assert wider.status == "bound:amplitude"
     assert abs(b.frequency[-1] / wider.frequency_at(10 * gap) - 1) < 1e-9
+
+
+def test_a_branch_found_above_the_bound_on_another_mode_is_not_taken_for_the_family():
+    """A 7-mass chain with two stops (corpus seed 14, index 103; H = 3): mode 1's backbone
+    rises from 0.0404 Hz to 0.0549 Hz at 3.75 gaps, where harmonic 3 takes the majority
+    and no jump lands below the bound. Above the bound (14.6 gaps) an orbit with the
+    fundamental's majority lies at 0.1415 Hz, and its branch comes down onto the bound at
+    0.1387 Hz: linear mode 2's (0.1089 Hz open), which holds 88 % of the kinetic energy
+    there, in the fundamental, against mode 1's 0.6 % (the modal decomposition of the
+    orbit, not the family test). The run must not follow it down as mode 1's backbone:
+    every point it keeps on the family has mode 1 ahead of every other linear mode in the
+    fundamental, and it ends short of the bound saying why."""
+    from mmshbm.analysis import corpus
+
+    case = corpus.generate(104, seed=14)[103]
+    model = case.model()
+    b = mmshbm.backbone(model, harmonics=case.harmonics, max_amplitude=10 * model.gap)
+    assert not b.completed and b.status.startswith("jump failed")
+    on = np.asarray(b.records["on_family"]) == 1.0
+    fundamental = np.asarray(b.records["modal_shares"])[:, :, 1]  # (points, linear modes)
+    assert np.all(fundamental[on, 0] > fundamental[on, 1:].max(axis=1))
+    assert np.isnan(b.frequency_at(5 * model.gap))

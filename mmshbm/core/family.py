@@ -228,7 +228,7 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
         rising = math.isfinite(f_frontier) and f >= f_frontier * (1.0 - 1e-6)
         if math.isfinite(f_pred) and not (near or rising):
             raise PinnedFailure(f"landed on another branch ({f:.4g} instead of about {f_pred:.4g})")
-        if math.isfinite(f_lo) and not 0.7 * f_lo <= f <= 1.3 * f_hi:
+        if math.isfinite(f_lo) and not 0.7 * f_lo <= f <= _WINDOW_SLACK * f_hi:
             raise PinnedFailure(f"landed on another branch ({f:.4g} Hz, the family was at "
                                 f"{f_frontier:.4g} Hz, expected up to {f_hi:.4g} Hz)")
         return u, nit, hist, rec, t
@@ -312,6 +312,10 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
 #: pinned solves of the search above the bound (where the family resumes)
 _MAX_BEYOND_SOLVES = 15
 
+#: how far above the frequency window (the frontier's frequency raised along the
+#: steepest earlier secant, :func:`_frequency_window`) a landing may lie
+_WINDOW_SLACK = 1.3
+
 
 def _below_limit(accept, f_limit: float):
     """``accept`` that also refuses a landing more than ``_LIMIT_SLACK`` above the
@@ -344,14 +348,32 @@ def _beyond_bound(problem, us, recs, guard, origins, amplitude_max, accept, freq
     check = _below_limit(accept, f_limit)
     seen = {}
 
+    def within_reach(rec: dict, amplitude: float, what: str) -> None:
+        # the family's reach from its own rise (not widened to the frequency limit): a
+        # branch far above it with the fundamental's majority is another mode's
+        f = float(rec.get("frequency", math.nan))
+        reach = _WINDOW_SLACK * _frequency_window(recs, guard, amplitude)[1]
+        if math.isfinite(f) and math.isfinite(reach) and f > reach:
+            raise PinnedFailure(f"{what} at {amplitude:.4g} lies at {f:.4g} Hz, above the family's reach "
+                                f"there ({reach:.4g} Hz from its steepest rise): another mode's branch")
+
     def connected(u0, target, f_pred):
         u, nit, hist, rec, t = check(u0, target, f_pred)
-        seen.setdefault("first", (rec, target))
+        within_reach(rec, target, "the landing")
+        first = "first" not in seen
+        if first:
+            seen["first"] = (rec, target)
         if descend is not None:
             down = descend(u, t, target, amplitude_max)
             if down is None:
                 raise PinnedFailure(f"the branch through the landing at {target:.4g} does not come down to "
                                     "the bound on the family")
+            try:
+                within_reach(down[3], amplitude_max, "the branch through the landing comes down to the bound")
+            except PinnedFailure:
+                if first:  # not where the family resumes either
+                    del seen["first"]
+                raise
             seen["down"] = down
         return u, nit, hist, rec, t
 
