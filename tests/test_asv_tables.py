@@ -10,6 +10,7 @@ from mmshbm.analysis import asv_tables
 from mmshbm.cli import main
 
 COLUMNS = ["result", "params", "version", "started_at", "duration"]
+GRID = [["'1'", "'15'"], ["'8'", "'200'"]]  # H x elements of a grid benchmark
 
 
 def _results(tmp_path, date, time_10=0.0042, commit="abc1234def"):
@@ -26,6 +27,11 @@ def _results(tmp_path, date, time_10=0.0042, commit="abc1234def"):
         "bench_goals.EqualAccuracy.track_samples": [[0, 0, 256, 0, 0, 128], [models, methods], "v"],
         "bench_goals.EqualAccuracy.track_target_met": [[1, 1, 1, 1, 0, 0], [models, methods], "v"],
         "bench_goals.WholeProcess.track_warm_s": [[0.95, 1.2], [["'1'", "'0'"]], "v"],
+        # the grid's wall time, recorded once per cell: one figure
+        "bench_studies.ConvergenceGrid.track_grid_wall_time": [[2.5, 2.5, 2.5, 2.5], GRID, "v"],
+        "bench_studies.ConvergenceGrid.track_points": [[31, 37, 440, 369], GRID, "v"],
+        "bench_studies.StudyThroughput.track_busy_share": [[0.99, 0.963, 0.949],
+                                                           [["'serial'", "'process'", "'dask'"]], "v"],
     }
     folder = tmp_path / "results" / "vm"
     folder.mkdir(parents=True, exist_ok=True)
@@ -57,6 +63,11 @@ def test_tables_hold_the_recorded_numbers(tmp_path):
     assert "0.95 s / n/a" in text
     assert "| penalty-HBM | H = 25, k_p = 1e+04 k_c |" in text
     assert "| shooting | 128 steps/period |" in text
+    # the studies: one row per figure, not one per grid cell
+    grid = "| 35-cell grid (H 1–15 × 8–200 elements) to 10 gaps, wall time of the runs, 2 workers"
+    assert f"{grid} | 2.5 s | ≤ 4 s |" in text
+    assert "| Monte-Carlo study, busy share per worker | process 0.96, dask 0.95 | ≥ 0.95 |" in text
+    assert "track_points" not in text and text.count("2.5 s") == 1
 
 
 def test_update_replaces_the_block_only(tmp_path, capsys):
