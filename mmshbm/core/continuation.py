@@ -38,7 +38,8 @@ from .special_points import SpecialPoint
 from .status import Status
 from .steps import (
     SKIP_MIN_TOL,  # noqa: F401 (imported from here before the split)
-    _advance,
+    _advance,  # noqa: F401
+    _advance_turn,
     _corrector,
     _curvature,
     _Failure,
@@ -163,7 +164,7 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
         while step < opt.max_steps:
             try:
                 curv = curvature if opt.step_control == "residual" else None
-                u_new, nit, hist, J, t_new, sign, rec = _advance(problem, u, t, ds, opt, curv)
+                u_new, nit, hist, J, t_new, sign, rec, turn = _advance_turn(problem, u, t, ds, opt, curv)
             except _Failure as err:
                 ds *= 0.5
                 log.debug("step failed (%s); ds -> %g", err, ds)
@@ -208,7 +209,7 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
             ds = min(cap, _next_step(ds, nit, hist, opt))
             pts.accept(u_new, nit, ds_prev, hist, rec, t_new, ds, step, new_special)
             # κ ≈ dt/ds from the last step, for the next predictor (not across a fold's turn)
-            curvature = _curvature(t, t_new, ds_prev)
+            curvature = _curvature(t, t_new, ds_prev, turn)
             u, t = u_new, t_new
             if reason is not None:
                 stop = jump(reason, jump_failed)

@@ -74,7 +74,8 @@ class FamilyGuard:
         """Register the accepted point ``index`` with record ``rec``; sets
         ``rec["on_family"]`` (and resets it on the points of a pending stretch that
         turns out to be a tongue) and returns ``"jump"`` when a jump is due, else None."""
-        share = family_value(rec)
+        share = rec.get(FAMILY_RECORD)  # family_value(rec), its call saved for the usual record
+        share = family_value(rec) if share is None else float(share)
         if share is None:
             return None
         self.active = True

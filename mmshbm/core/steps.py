@@ -74,11 +74,14 @@ def newton(problem: ContinuationProblem, u: np.ndarray, tangent: np.ndarray, u_p
     raise _Failure(f"no convergence in {max_iter} iterations (residual {history[-1]:.2e})")
 
 
-def _curvature(t_old: np.ndarray, t_new: np.ndarray, ds: float):
+def _curvature(t_old: np.ndarray, t_new: np.ndarray, ds: float, turn: float | None = None):
     """dt/ds over the last step (the second-order predictor's κ), or None after a jump or a
-    refinement (ds = 0) or across a sharp turn (the tangents more than ~26° apart)."""
-    if ds > 0 and float(t_new @ t_old) > 0.9:
-        return (t_new - t_old) / ds
+    refinement (ds = 0) or across a sharp turn (the tangents more than ~26° apart).
+    ``turn``: t_new·t_old when the caller has it (the same number)."""
+    if ds > 0 and (float(t_new.dot(t_old)) if turn is None else turn) > 0.9:
+        kappa = t_new - t_old
+        kappa /= ds
+        return kappa
     return None
 
 
@@ -141,11 +144,17 @@ def _tangent(J, t_prev: np.ndarray, problem=None) -> np.ndarray:
 
 
 def _tangent_sign(J, t_prev: np.ndarray, problem=None) -> tuple[np.ndarray, float]:
-    """Unit tangent (oriented along ``t_prev``) and the sign of det [J; t] (0 if unknown):
-    det [J; t_prev] and det [J; t] share their sign when t·t_prev > 0, because both are the
-    cofactor vector of J (a multiple of t) dotted with the last row. A ``problem`` whose
-    corrector already solved [J; t_prevᵀ] x = e_n gives x (its ``solved_tangent(J, t_prev)``
-    capability, :mod:`mmshbm.core.problem`)."""
+    """:func:`_tangent_sign_turn` without t·t_prev."""
+    return _tangent_sign_turn(J, t_prev, problem)[:2]
+
+
+def _tangent_sign_turn(J, t_prev: np.ndarray, problem=None) -> tuple[np.ndarray, float, float]:
+    """(t, sign, t·t_prev): the unit tangent (oriented along ``t_prev``), the sign of
+    det [J; t] (0 if unknown) and t·t_prev (≥ 0). det [J; t_prev] and det [J; t] share
+    their sign when t·t_prev > 0, because both are the cofactor vector of J (a multiple of
+    t) dotted with the last row. A ``problem`` whose corrector already solved
+    [J; t_prevᵀ] x = e_n gives x (its ``solved_tangent(J, t_prev)`` capability,
+    :mod:`mmshbm.core.problem`)."""
     solved = problem.solved_tangent if problem is not None else None
     solved = solved(J, t_prev) if solved is not None else None
     if solved is not None:
@@ -158,7 +167,10 @@ def _tangent_sign(J, t_prev: np.ndarray, problem=None) -> tuple[np.ndarray, floa
     if not math.isfinite(norm2):
         raise _Failure("singular Jacobian at the tangent")
     t /= math.sqrt(norm2)  # np.linalg.norm(t), without its checks
-    return (t, sign) if t @ t_prev >= 0 else (-t, sign)
+    # t.dot: the BLAS dot t @ t_prev calls, without matmul's dispatch; (-t)·t_prev is -turn
+    # exactly (the same products and sums, negated)
+    turn = float(t.dot(t_prev))
+    return (t, sign, turn) if turn >= 0 else (-t, sign, -turn)
 
 
 def _orientation_safe(problem, u, t) -> float:
@@ -195,28 +207,37 @@ def _step(problem, u, t, ds, opt, curvature):
 
 
 def _advance(problem, u, t, ds, opt, curvature):
+    """:func:`_advance_turn` without t_new·t."""
+    return _advance_turn(problem, u, t, ds, opt, curvature)[:7]
+
+
+def _advance_turn(problem, u, t, ds, opt, curvature):
     """One continuation step (:func:`_step`) that refuses a tangent turned by more than
     ``opt.max_angle`` while the step is longer than ``opt.corner_ds``. For problems with
     ``corner_parameter`` set, a shorter step that turns sharply and reverses the parameter is
     a corner of a nonsmooth branch: the tangent is turned back along the new piece, and a
-    failed step is retried at fixed parameter (:func:`_corner_step`). Same returns as
-    :func:`_step`; raises ``_Failure``."""
+    failed step is retried at fixed parameter (:func:`_corner_step`). The returns of
+    :func:`_step` and t_new·t; raises ``_Failure``."""
     corner = problem.corner_parameter and ds <= opt.corner_ds
     try:
         # _step, with the monitor after the turn test (a refused step is not monitored)
         u_new, nit, hist, J = _corrector(problem, u, t, ds, opt, curvature=curvature)
-        t_new, sign = _tangent_sign(J, t, problem)
-        if t_new @ t < math.cos(opt.max_angle) and ds > opt.corner_ds:
+        t_new, sign, turn = _tangent_sign_turn(J, t, problem)
+        if turn < math.cos(opt.max_angle) and ds > opt.corner_ds:
             raise _Failure("tangent turned too far")
-        rec = _monitor(problem, u_new)
-        if corner and t_new @ t < math.cos(opt.max_angle) and t_new[-1] * t[-1] < 0:
+        try:  # _monitor(problem, u_new), without its call
+            rec = problem.monitor(u_new)
+        except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError) as err:
+            raise _Failure(f"monitor failed: {err}") from None
+        if corner and turn < math.cos(opt.max_angle) and t_new[-1] * t[-1] < 0:
             # at a corner the bordered tangent (oriented along t) points back along the new piece
-            t_new, sign = -t_new, -sign
+            t_new, sign, turn = -t_new, -sign, -turn
     except _Failure:
         if not corner:
             raise
-        return _corner_step(problem, u, t, ds, opt)
-    return u_new, nit, hist, J, t_new, sign, rec
+        out = _corner_step(problem, u, t, ds, opt)
+        return (*out, float(out[4] @ t))
+    return u_new, nit, hist, J, t_new, sign, rec, turn
 
 
 def _corner_step(problem, u, t, ds, opt):
@@ -245,9 +266,18 @@ def _corrector(problem, u, t, ds, opt, start=None, curvature=None):
     hyperplane; default the predictor)."""
     u_pred = u + ds * t
     if curvature is not None:
-        u_pred = u_pred + 0.5 * ds * ds * curvature
-    u_new, nit, hist, J = newton(problem, u_pred if start is None else start, t, u_pred, opt.newton_tol,
-                                 opt.max_newton, opt.step_tol)
+        u_pred += 0.5 * ds * ds * curvature
+    u0 = u_pred if start is None else start
+    fast = problem.fast_newton
+    out = None
+    if fast is not None:  # newton's compiled loop, without its call
+        try:
+            out = fast(u0, u_pred, t, opt.newton_tol, opt.max_newton, opt.step_tol)
+        except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError) as err:
+            raise _Failure(str(err)) from None
+    if out is None:
+        out = newton(problem, u0, t, u_pred, opt.newton_tol, opt.max_newton, opt.step_tol)
+    u_new, nit, hist, J = out
     d = u_new - u_pred
     if math.sqrt(d.dot(d)) > 2.0 * ds + 10 * opt.newton_tol:  # np.linalg.norm(d), without its checks
         raise _Failure("corrector left the predictor cone")

@@ -66,6 +66,10 @@ from .tables import _TABLES_KEPT, _compute_tables, _kept_tables, _tables, _table
 __all__ = ["MMSHBMProblem"]
 
 _PROJECTIONS = ("exact", "sampled")
+#: the compiled corrector's statuses read on every call
+_CONVERGED, _SKIPPED = ck.CONVERGED, ck.SKIPPED
+#: 2π, the factor from Ω (rad/s) to the frequency (Hz) of the records
+_TWO_PI = 2 * np.pi
 #: most Ω whose condensed stiffness a problem keeps (:attr:`MMSHBMProblem._by_omega`), and
 #: the most bytes they may take (fewer Ω for many contact DOFs)
 _BY_OMEGA = 4096
@@ -182,6 +186,7 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         # work arrays of the monitor's kernel (its last four arguments; out (3,) last)
         self._monitor_work = (np.empty(H + 1), np.empty(H + 1), np.empty(N), np.empty(3))
         self._monitor_call = None
+        self._monitor_args = None  # the monitor kernel's arguments fixed at construction, with its entry
         self._point_records = None  # the share records' compiled overloads and arguments, () where none
         # the condensed stiffness of the last Ω (the monitor of a converged point reuses
         # the one of Newton's last evaluation)
@@ -221,11 +226,13 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
     def _unpack_all(self, u: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
         """(a, Ω) of :meth:`unpack` and η (n_p,) of :meth:`unpack_eta` from one product
         (``colscale`` holds ``eta_scale`` at the pole unknowns: the same numbers)."""
-        if np.shape(u) != (self.n_unknowns,):
-            raise ValueError(f"u must have shape ({self.n_unknowns},), got {np.shape(u)}")
+        shape = u.shape if type(u) is np.ndarray else np.shape(u)
+        if shape != (self.n_unknowns,):
+            raise ValueError(f"u must have shape ({self.n_unknowns},), got {shape}")
         x = u * self.colscale
-        n_a = (self.H + 1) * self.n_c
-        return x[:n_a].reshape(self.H + 1, self.n_c), float(x[-1]), x[n_a:n_a + self.n_poles]
+        n_h, n_c = self.H + 1, self.n_c
+        n_a = n_h * n_c
+        return x[:n_a].reshape(n_h, n_c), float(x[-1]), x[n_a:n_a + self.n_poles]
 
     def states_from_force_scaling(self, states: np.ndarray) -> np.ndarray:
         """Scaled unknowns (n_points, n_unknowns) of a branch saved when the pole unknowns
@@ -304,29 +311,33 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
             return None
         u = np.array(u0, dtype=float)
         hist = np.empty(max_iter + 1)
-        work = fast["work"]
-        D, dD, J = work.D, work.dD, work.J
         u_pred = np.ascontiguousarray(u_pred, dtype=float)
         tangent = np.ascontiguousarray(tangent, dtype=float)
-        args = (u, u_pred, tangent, float(tol), float(step_tol), int(max_iter), *fast["fixed"], hist,
-                *fast["data"])
-        if "call" not in fast:  # the compiled overload, without the dispatcher's per-call typing
-            fast["call"] = (compiled_entry(ck._newton_modal, args, self._entries)
-                            if hasattr(ck._newton_modal, "compile") else ck._newton_modal)
-        status, it = fast["call"](*args)
-        self.evaluations += it if status == ck.SKIPPED else it + 1
+        call = fast.get("call")
+        if call is None:  # the compiled overload, without the dispatcher's per-call typing
+            args = (u, u_pred, tangent, float(tol), float(step_tol), int(max_iter), *fast["fixed"], hist,
+                    *fast["data"])
+            call = fast["call"] = (compiled_entry(ck._newton_modal, args, self._entries)
+                                   if hasattr(ck._newton_modal, "compile") else ck._newton_modal)
+        n_c, H = fast["fixed"]
+        scale, cond, poles, law, samples, work, ework = fast["data"]
+        status, it = call(u, u_pred, tangent, float(tol), float(step_tol), int(max_iter), n_c, H, hist,
+                          scale, cond, poles, law, samples, work, ework)
+        self.evaluations += it if status == _SKIPPED else it + 1
         self._solved_tangent = None
-        if status == ck.CONVERGED or status == ck.SKIPPED:  # SKIPPED: D, J of the iterate before
-            if status == ck.CONVERGED:  # the point's stiffness: its monitor's, and the branch's records'
-                omega, D, dD = float(u[-1] * self.colscale[-1]), D.copy(), dD.copy()
+        if status == _CONVERGED or status == _SKIPPED:  # SKIPPED: D, J of the iterate before
+            if status == _CONVERGED:  # the point's stiffness: its monitor's, and the branch's records'
+                omega, D, dD = float(u[-1] * self.colscale[-1]), work.D.copy(), work.dD.copy()
                 self._cached = (omega, D, dD)
-                if len(self._by_omega) >= self._by_omega_max:
-                    self._by_omega.clear()
-                self._by_omega[omega] = (D, dD)
-            J = J.copy()
-            if len(work.tx) and work.t_info[0] == 0:
-                self._solved_tangent = (J, tangent, work.tx.copy(), float(work.t_sign[0]))
-            return u, int(it), hist[: it + 1].copy(), J
+                by_omega = self._by_omega
+                if len(by_omega) >= self._by_omega_max:
+                    by_omega.clear()
+                by_omega[omega] = (D, dD)
+            J = work.J.copy()
+            tx = work.tx
+            if len(tx) and work.t_info[0] == 0:
+                self._solved_tangent = (J, tangent, tx.copy(), float(work.t_sign[0]))
+            return u, int(it), hist[: it + 1], J
         if status == ck.POLE:  # the condensation's own message names the harmonic and the mode
             self._condensed(float(u[-1] * self.colscale[-1]), True)
         reason = {ck.NO_CONVERGENCE: f"no convergence in {max_iter} iterations (residual {hist[it]:.2e})",
@@ -357,16 +368,18 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
             fast = self._fast_setup()
         if fast:  # the modal kernel with the poles' terms left out and their static part added
             D0, B, w2, Rs, keep, static, rtol = fast["cond"]
-            D = np.empty((self.H + 1, self.n_c, self.n_c))
-            dD = np.empty_like(D) if derivative else None
-            out = D if dD is None else dD
-            args = (D0, B, w2, Rs, float(omega), self.H, keep, rtol, D, out, bool(derivative))
+            H = self.H
+            shape = (H + 1, self.n_c, self.n_c)
+            D = np.empty(shape)
+            dD = np.empty(shape) if derivative else None
             call = fast.get("stiffness")
             if call is None:  # the kernel's overload typed once (its arguments' types are fixed)
+                args = (D0, B, w2, Rs, float(omega), H, keep, rtol, D, D, bool(derivative))
                 call = fast["stiffness"] = (compiled_entry(_modal_dynamic_stiffness, args, self._entries)
                                             if hasattr(_modal_dynamic_stiffness, "compile")
                                             else _modal_dynamic_stiffness)
-            info = call(*args)
+            info = call(D0, B, w2, Rs, float(omega), H, keep, rtol, D, D if dD is None else dD,
+                        bool(derivative))
             if info:
                 k, j = divmod(info - 1, len(w2))
                 raise SingularDynamicStiffness(
@@ -375,9 +388,10 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
             D += static
             self._cached = (omega, D, dD)
             if derivative:  # a converged point's (the monitor's): the branch's records use it again
-                if len(self._by_omega) >= self._by_omega_max:
-                    self._by_omega.clear()
-                self._by_omega[omega] = (D, dD)
+                by_omega = self._by_omega
+                if len(by_omega) >= self._by_omega_max:
+                    by_omega.clear()
+                by_omega[omega] = (D, dD)
             return D, dD
         if self.pole_set is not None and self.pole_set.n:
             D, dD = self.pole_set.dynamic_stiffness(omega, derivative)
@@ -417,19 +431,26 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
             cond.check_range(omega, self.H)  # warns once past the modes kept
         D, dD = self._condensed(omega, True)
         a = np.ascontiguousarray(a)
-        args = (D, dD, a, eta, self._pole_k, self._pole_b, self.cdof, self.lo, self.hi, self.r_each, omega,
-                self._amplitude_row(a, omega, eta), self._amp_sign, self._cos_table, self._sin_table,
-                *self._monitor_work)
+        work = self._monitor_work
+        row = self._amplitude_row(a, omega, eta)
         call = self._monitor_call
-        if call is None:
-            # the compiled corrector's problems (modal back end) pass arrays of fixed types
-            # (C-contiguous float64, made here or by the corrector): the compiled overload is
-            # typed once; others go through the dispatcher
+        if call is not None:  # the compiled overload with the arguments it was typed for
+            contacts, tables = self._monitor_args
+            call(D, dD, a, eta, *contacts, omega, row, *tables)
+        else:
+            contacts = (self._pole_k, self._pole_b, self.cdof, self.lo, self.hi, self.r_each)
+            tables = (self._amp_sign, self._cos_table, self._sin_table, *work)
+            args = (D, dD, a, eta, *contacts, omega, row, *tables)
             call = _mmshbm_monitor_multi
             if self._fast and hasattr(_mmshbm_monitor_multi, "compile"):
-                call = self._monitor_call = compiled_entry(_mmshbm_monitor_multi, args, self._entries)
-        call(*args)
-        amplitude, energy, force = self._monitor_work[-1].tolist()
+                # the compiled corrector's problems (modal back end) pass arrays of fixed types
+                # (C-contiguous float64, made here or by the corrector): the compiled overload
+                # is typed once, and the arguments fixed at construction are kept with it;
+                # others go through the dispatcher
+                self._monitor_call = compiled_entry(_mmshbm_monitor_multi, args, self._entries)
+                self._monitor_args = (contacts, tables)
+            call(*args)
+        amplitude, energy, force = work[-1].tolist()
         shares = self._point_records
         if shares is None:
             shares = self._point_records_setup()
@@ -442,7 +463,7 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         share = share_call(a, eta, omega, dD, self._pole_k, *share_args)
         family_call(a, dD, eta, self._pole_k, omega, *family_args)
         fundamental, harmonic, mode, detuning = records.tolist()
-        return {"frequency": omega / (2 * np.pi), "amplitude": amplitude, "energy": energy,
+        return {"frequency": omega / _TWO_PI, "amplitude": amplitude, "energy": energy,
                 "contact_force_max": force, "mode_share": float(share), "fundamental_share": fundamental,
                 "resonance_harmonic": harmonic, "resonance_mode": mode, "resonance_detuning": detuning}
 
