@@ -172,3 +172,24 @@ def test_rows_absent_when_not_recorded(tmp_path):
     solid = "modal reduction of the 3-D solid beam (≥ 10⁵ DOFs): time; peak memory of the process"
     assert f"| {solid} | n/a; n/a |  |" in lines
     assert not any("same, H" in line or "EPMC" in line or "10 000 / 21" in line for line in lines)
+
+
+def test_record_command_selects_what_the_tables_read():
+    """The ``--bench`` regex of the README's and the docs' record command selects the goal
+    and study suites and, besides, exactly the benchmarks the rows read (asv matches with
+    re.search, on ``name(params)`` for parameterized ones)."""
+    import re
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    regex = asv_tables.RECORD_BENCH
+    for doc in ("README.md", "docs/benchmarks.md"):
+        assert f'--bench "{regex}"' in (root / doc).read_text(), doc
+    described = json.loads((root / "benchmarks/results/benchmarks.json").read_text())
+    names = [k for k, v in described.items() if isinstance(v, dict) and "name" in v]
+    selected = {n for n in names if re.search(regex, n)}
+    suites = {n for n in names if n.startswith(("bench_goals.", "bench_studies."))}
+    needed = set(EXTRA) - {"bench_scale.ModalReductionScale.track_modes_kept",
+                           "bench_forced.ForcedHarmonics.track_points"}
+    assert needed <= set(names) and len(suites) > 20  # the rows' benchmarks exist under these names
+    assert selected == suites | needed

@@ -1,13 +1,18 @@
 """The benchmark tables of the README and of docs/benchmarks.md, from one recorded run of
-the airspeed-velocity suite (``benchmarks/bench_goals.py``).
+the airspeed-velocity suite (``benchmarks/bench_goals.py``, ``bench_studies.py`` and the
+model-size and forced benchmarks of :data:`RECORD_BENCH`).
 
 ``mmshbm bench --from-asv [RESULTS]`` prints them; ``--update README.md
 docs/benchmarks.md`` writes them between the markers :data:`BEGIN` and :data:`END` of
 each file, so that the published figures are those of one recorded run and say which
 (commit, machine, date)::
 
-    OPENBLAS_NUM_THREADS=1 asv run --python=same --bench bench_goals --set-commit-hash $(git rev-parse HEAD)
+    OPENBLAS_NUM_THREADS=1 asv run --python=same --set-commit-hash $(git rev-parse HEAD) \\
+        --bench "RECORD_BENCH"
     mmshbm bench --from-asv --update README.md docs/benchmarks.md
+
+with :data:`RECORD_BENCH` spelled out (README.md, docs/benchmarks.md). Rows of benchmarks
+the run did not record are left out.
 
 ``RESULTS`` is an asv results file (``.asv/results/<machine>/<commit>-<env>.json``) or a
 folder of them (default: the most recent file that holds the ``bench_goals`` figures
@@ -28,12 +33,17 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["AsvRun", "DEFAULT_FOLDERS", "find_results", "load_run", "goal_table", "equal_accuracy_table",
-           "tables", "update_file", "BEGIN", "END"]
+__all__ = ["AsvRun", "DEFAULT_FOLDERS", "RECORD_BENCH", "find_results", "load_run", "goal_table",
+           "equal_accuracy_table", "tables", "update_file", "BEGIN", "END"]
 
 #: markers of the generated block in a Markdown file
 BEGIN = "<!-- begin: tables from asv (mmshbm bench --from-asv --update) -->"
 END = "<!-- end: tables from asv -->"
+
+#: the ``asv run --bench`` regex of the recorded run: the goal and study suites and the
+#: model-size and forced benchmarks of the goal table
+RECORD_BENCH = (r"bench_goals|bench_studies|BackboneScaleRatios"
+                r"|(ModalReduction|Solid)Scale\.(time|peakmem)_reduction|ForcedHarmonics\.(time_response|track_end)|EPMCBudget\.(time|track_epmc_h20_max)")
 
 _PREFIX = "bench_goals."
 _METHODS = {"mmshbm": "MMS-HBM", "penalty": "penalty-HBM", "shooting": "shooting"}
