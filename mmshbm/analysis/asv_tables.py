@@ -1,13 +1,18 @@
 """The benchmark tables of the README and of docs/benchmarks.md, from one recorded run of
-the airspeed-velocity suite (``benchmarks/bench_goals.py``).
+the airspeed-velocity suite (``benchmarks/bench_goals.py``, ``bench_studies.py`` and the
+model-size and forced benchmarks of :data:`RECORD_BENCH`).
 
 ``mmshbm bench --from-asv [RESULTS]`` prints them; ``--update README.md
 docs/benchmarks.md`` writes them between the markers :data:`BEGIN` and :data:`END` of
 each file, so that the published figures are those of one recorded run and say which
 (commit, machine, date)::
 
-    OPENBLAS_NUM_THREADS=1 asv run --python=same --bench bench_goals --set-commit-hash $(git rev-parse HEAD)
+    OPENBLAS_NUM_THREADS=1 asv run --python=same --set-commit-hash $(git rev-parse HEAD) \\
+        --bench "RECORD_BENCH"
     mmshbm bench --from-asv --update README.md docs/benchmarks.md
+
+with :data:`RECORD_BENCH` spelled out (README.md, docs/benchmarks.md). Rows of benchmarks
+the run did not record are left out.
 
 ``RESULTS`` is an asv results file (``.asv/results/<machine>/<commit>-<env>.json``) or a
 folder of them (default: the most recent file that holds the ``bench_goals`` figures
@@ -28,12 +33,17 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["AsvRun", "DEFAULT_FOLDERS", "find_results", "load_run", "goal_table", "equal_accuracy_table",
-           "tables", "update_file", "BEGIN", "END"]
+__all__ = ["AsvRun", "DEFAULT_FOLDERS", "RECORD_BENCH", "find_results", "load_run", "goal_table",
+           "equal_accuracy_table", "tables", "update_file", "BEGIN", "END"]
 
 #: markers of the generated block in a Markdown file
 BEGIN = "<!-- begin: tables from asv (mmshbm bench --from-asv --update) -->"
 END = "<!-- end: tables from asv -->"
+
+#: the ``asv run --bench`` regex of the recorded run: the goal and study suites and the
+#: model-size and forced benchmarks of the goal table
+RECORD_BENCH = (r"bench_goals|bench_studies|BackboneScaleRatios"
+                r"|(ModalReduction|Solid)Scale\.(time|peakmem)_reduction|ForcedHarmonics\.(time_response|track_end)|EPMCBudget\.(time|track_epmc_h20_max)")
 
 _PREFIX = "bench_goals."
 _METHODS = {"mmshbm": "MMS-HBM", "penalty": "penalty-HBM", "shooting": "shooting"}
@@ -186,6 +196,7 @@ def goal_table(run: AsvRun) -> str:
          "≤ 5 ms"),
         ("residual + Jacobian evaluations per point (same branch)", _fmt(evals, ".2f"), "≤ 3"),
         ("branch checks of that branch", _fmt(1e3 * checks, ".2g", " ms"), ""),
+        *_scale_rows(run),
         ("equal accuracy vs penalty-HBM (oscillator, 2 gaps, 1e-4, closed form)", _fmt(pen, ".3g", "×"),
          "≥ 20×"),
         ("equal accuracy vs shooting (same)", _fmt(sho, ".3g", "×"), "≥ 300×"),
@@ -200,10 +211,87 @@ def goal_table(run: AsvRun) -> str:
                          f"nothing compiled ({what})",
                          " / ".join(_fmt(v, ".2f", " s") for v in (warm, first, cold)),
                          "≤ 1 s / ≤ 3 s / –"))
+    rows += _forced_rows(run)
     rows += _study_rows(run)
     lines = ["| figure | measured | goal |", "|---|---|---|"]
     lines += [f"| {a} | {b} | {c} |" for a, b, c in rows]
     return "\n".join(lines)
+
+
+def _recorded(run: AsvRun, *names: str) -> list[tuple]:
+    """The parameter combinations any of ``names`` (full benchmark names) was recorded
+    for, in the order of the results file."""
+    return list(dict.fromkeys(p for n, p in run.values if n in names))
+
+
+def _cells(run: AsvRun, name: str, params: list[tuple], spec: str, unit: str, scale: float = 1.0) -> str:
+    """``name``'s values at ``params`` joined by " / ", then ``unit`` ("n/a" when none is
+    recorded)."""
+    values = [scale * run.value(name, *p) for p in params]
+    if not any(math.isfinite(v) for v in values):
+        return "n/a"
+    return " / ".join(_fmt(v, spec) for v in values) + unit
+
+
+_SCALE = "bench_backbone_scale.BackboneScaleRatios."
+_REDUCTION = "bench_scale.ModalReductionScale."
+_SOLID = "bench_scale.SolidScale."
+_MIB = 1 / 2**20  # bytes -> MiB
+
+
+def _scale_rows(run: AsvRun) -> list[tuple[str, str, str]]:
+    """The model-size rows, where the run recorded them: the whole backbone on 10 000 /
+    21 elements (one process, after the reduction), the beam's one-time modal reduction
+    (time, peak memory of the process) per size, and the 3-D solid's (>= 1e5 DOFs)."""
+    rows = []
+    for track, label, goal in (
+            ("track_backbone_10000_over_21", "default backbone after the reduction, 10 000 / 21 elements, to "
+             "1.9 gaps (the same 31 points), in one process", "≤ 1.5×"),
+            ("track_backbone_2_gaps_10000_over_21", "same to 2 gaps (on 10 000 elements the family guard "
+             "also tries a jump over the 5:1 tongue)", "")):
+        if _recorded(run, _SCALE + track):
+            rows.append((label, _fmt(run.value(_SCALE + track), ".2f", "×"), goal))
+    sizes = _recorded(run, _REDUCTION + "time_reduction", _REDUCTION + "peakmem_reduction")
+    if sizes:
+        beams = " / ".join(p[0] for p in sizes)
+        rows.append((f"modal reduction of the beam (once per model), {beams} elements: time; peak memory of "
+                     "the process",
+                     _cells(run, _REDUCTION + "time_reduction", sizes, ".3g", " s") + "; "
+                     + _cells(run, _REDUCTION + "peakmem_reduction", sizes, ".0f", " MiB", _MIB), ""))
+    if _recorded(run, _SOLID + "time_reduction", _SOLID + "peakmem_reduction"):
+        rows.append(("modal reduction of the 3-D solid beam (≥ 10⁵ DOFs): time; peak memory of the process",
+                     f"{_fmt(run.value(_SOLID + 'time_reduction'), '.3g', ' s')}; "
+                     f"{_fmt(_MIB * run.value(_SOLID + 'peakmem_reduction'), '.0f', ' MiB')}", ""))
+    return rows
+
+
+_FORCED = "bench_forced.ForcedHarmonics."
+_EPMC = "bench_forced.EPMCBudget."
+#: the forced response's rows: harmonics shown together in one row, goal
+_FORCED_GROUPS = ((("5", "10", "20"), ""), (("30",), "≤ 2 s, to 62 Hz"), (("40",), "≤ 5 s, to 62 Hz"))
+
+
+def _forced_rows(run: AsvRun) -> list[tuple[str, str, str]]:
+    """The forced rows, where the run recorded them: the damped beam's frequency response
+    (time and where it ends) per H, and its EPMC backbone at H = 20 (amplitude reached
+    within the default step budget, time)."""
+    recorded = _recorded(run, _FORCED + "time_response", _FORCED + "track_end_frequency")
+    rows = []
+    for group, goal in _FORCED_GROUPS:
+        hs = [p for p in recorded if p and p[0] in group]
+        if not hs:
+            continue
+        what = ("forced response of the beam (0.5 % damping on mode 1, 5 % above; 5 N at the last node with "
+                "mass, 40–62 Hz, Floquet stability)" if not rows else "same")
+        rows.append((f"{what}, H = {' / '.join(p[0] for p in hs)}: time, where it ends",
+                     _cells(run, _FORCED + "time_response", hs, ".3g", " s") + ", ends at "
+                     + _cells(run, _FORCED + "track_end_frequency", hs, ".4g", " Hz"), goal))
+    if _recorded(run, _EPMC + "track_epmc_h20_max_gaps", _EPMC + "time_epmc_h20"):
+        rows.append(("EPMC backbone of the beam with 0.5 % / 5 % damping, H = 20, default step budget: "
+                     "amplitude reached, time",
+                     f"{_fmt(run.value(_EPMC + 'track_epmc_h20_max_gaps'), '.3g', ' gaps')}, "
+                     f"{_fmt(run.value(_EPMC + 'time_epmc_h20'), '.3g', ' s')}", "reaches 6 gaps"))
+    return rows
 
 
 #: the study figures of the goal table: (benchmark, label, format, goal); the grid's wall
