@@ -80,21 +80,38 @@ def _tree_one_sided():
     return mmshbm.Model.from_matrices(np.diag(m + [0.0]), K, 3, 0.0003367466016382903, -1)
 
 
-def test_a_failed_jump_says_when_the_backbone_itself_turns_back():
-    """The backbone rises from 1.2987 Hz to 1.30297 Hz and turns back in amplitude at
-    7.35 gaps with the fundamental's whole share (0.997): no internal resonance takes the
-    energy. Plain path following turns back at the same amplitude and frequency. The jump
-    finds nothing beyond; its status says the branch turned back at the frontier with
-    the fundamental's majority (before: only the pinned solves' reasons)."""
+def test_a_backbone_folded_by_its_truncation_resumes_on_the_exact_orbit():
+    """At H = 15 the backbone rises from 1.2987 Hz to 1.30297 Hz and turns back in
+    amplitude at 7.35 gaps with the fundamental's whole share (0.997): plain path following
+    turns back there too and returns to the linear mode. The exact orbit (two contacts per
+    period) goes on smoothly to 10 gaps between the two: the fold is the truncation's. The
+    H = 15 orbits beyond it lie below the fold's frequency, where no predictor taken from
+    the branch below converges; the homotopy from the fundamental's family reaches them
+    (before: "jump failed: the branch turns back in amplitude at the frontier"). Beyond
+    the landing the branch agrees with the exact orbit as well as it did below the fold."""
+    from mmshbm.methods.exact import orbits
+
     model = _tree_one_sided()
-    b = mmshbm.backbone(model, harmonics=15, max_amplitude=10 * model.gap)
-    assert b.status.kind == Status.JUMP_FAILED
-    assert "the branch turns back in amplitude at the frontier" in b.status.detail
-    front = b.family_front()
-    top = front[int(np.argmax(b.amplitude[front]))]
-    path = mmshbm.backbone(model, harmonics=15, max_amplitude=10 * model.gap, follow="path", max_steps=60)
+    gap = model.gap
+    b = mmshbm.backbone(model, harmonics=15, max_amplitude=10 * gap)
+    assert b.status.kind == Status.BOUND and b.completed
+    path = mmshbm.backbone(model, harmonics=15, max_amplitude=10 * gap, follow="path", max_steps=60)
     i = int(np.argmax(path.amplitude))
     assert 0 < i < len(path) - 1 and path.amplitude[-1] < path.amplitude[i]
-    assert abs(path.amplitude[i] / b.amplitude[top] - 1) < 1e-3
-    assert abs(path.frequency[i] / b.frequency[top] - 1) < 1e-5
     assert path.records["fundamental_share"][: i + 1].min() > 0.99
+    fold, f_fold = float(path.amplitude[i]), float(path.frequency[i])
+    jumps = [sp for sp in b.special_points if sp.kind == "jump"]
+    assert len(jumps) == 1
+    landing = float(jumps[0].data["landing_amplitude"])
+    assert fold < landing < 1.1 * fold  # the first targets above the fold
+    assert float(jumps[0].data["frequency_to"]) < f_fold  # below the fold's frequency
+
+    def error(gaps):
+        exact = orbits.periodic_orbit(model, gaps * gap)
+        assert exact.converged
+        return abs(b.frequency_at(gaps * gap) * exact.period - 1)
+
+    below = max(error(g) for g in (2.0, 5.0, 7.0))  # the truncation's error below the fold
+    assert below < 1e-3
+    for g in (8.0, 9.0, 10.0):
+        assert error(g) <= below

@@ -32,8 +32,10 @@ target), and accepts the result only if it is on the family; otherwise it tries 
 out (amplitude steps 2, 4, 8, ... % beyond the frontier), at most 40 pinned solves, then
 in a far search up to the bound (30 more), and last by continuing the orbit in the
 harmonics (``problem.harmonic_landing``: a low-harmonic family's orbit at the target,
-solved again with more and more harmonics; at most 8 targets), and last above the bound,
-followed back down onto it. When nothing lands and the starting mode's own orbit lost the
+solved again with more and more harmonics; at most 8 targets), then above the bound,
+followed back down onto it, and last by a homotopy from the orbit of the fundamental's
+family raised to H (``problem.homotopy_landing``, :mod:`mmshbm.core.family_homotopy`; at
+most 4 targets). When nothing lands and the starting mode's own orbit lost the
 fundamental's majority at the frontier, the family ended there
 (:class:`~mmshbm.core.family_end.FamilyEnded`). The
 continuation goes on from there; the skipped interval is recorded as a ``"jump"``
@@ -50,6 +52,7 @@ import numpy as np
 
 from .family_end import FamilyEnded, end_of_family, turned_back
 from .family_guard import FAMILY_RECORD, FamilyGuard, family_value
+from .family_homotopy import MAX_TARGETS, homotopy_search
 from .pinned import PinnedFailure, solve_at_amplitude
 
 __all__ = ["FAMILY_RECORD", "FamilyEnded", "FamilyGuard", "family_value", "jump"]
@@ -165,7 +168,9 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     the harmonics from a low-harmonic family (:func:`_harmonic_search`); when that fails
     too, the family is sought above the bound and followed back down onto it by
     ``descend(u, tangent, amplitude, amplitude_max)`` (None or the tuple (u, iterations,
-    history, record, tangent) at ``amplitude_max``; :func:`_beyond_bound`).
+    history, record, tangent) at ``amplitude_max``; :func:`_beyond_bound`), and last
+    ``homotopy_landing`` gives the orbit reached by a homotopy from the fundamental's
+    family (:func:`~mmshbm.core.family_homotopy.homotopy_search`).
 
     Returns
     -------
@@ -296,11 +301,23 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
         except PinnedFailure as err:
             far_error += f"; in the harmonics: {err}"
     beyond = ""
+    window_near = window["hi"]
     if far[-1] >= amplitude_max * (1 - 1e-12):
         beyond, down = _beyond_bound(problem, us, recs, guard, origins, amplitude_max, accept, frequency_of,
                                      monitor, settled, window, solves, f_limit, descend)
         if down is not None:
             return down
+    homotopy = problem.homotopy_landing
+    if homotopy is not None:
+        window["hi"] = window_near  # the far search's window, not the one above the bound
+        solves[:] = [0, MAX_TARGETS]
+        try:
+            u, nit, hist, rec, t, target = homotopy_search(
+                homotopy, guard, far, amplitude_max, accept, frequency_of, monitor, problem, tol=newton_tol,
+                max_iter=3 * max_newton, admissible=admissible)
+            return u, nit, hist, rec, t, target, guard.frontier_index
+        except PinnedFailure as err:
+            far_error += f"; by a homotopy from the fundamental's family: {err}"
     message = (f"jump from amplitude {frontier:.4g} failed{reason}{last_error}; the far search "
                f"up to {far[-1]:.4g}: {far_error}{beyond}")
     end = "" if beyond else end_of_family(recs, guard, problem)

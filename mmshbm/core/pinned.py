@@ -29,11 +29,15 @@ import numpy as np
 from .bordered import bordered_solve
 from .problem import as_problem
 
-__all__ = ["amplitude_and_gradient", "solve_at_amplitude", "PinnedFailure"]
+__all__ = ["amplitude_and_gradient", "solve_at_amplitude", "PinnedFailure", "StartOutside"]
 
 
 class PinnedFailure(ArithmeticError):
     """Newton on the pinned system did not converge (the message says why)."""
+
+
+class StartOutside(PinnedFailure):
+    """The start of a pinned solve lies outside its trust region (nothing was solved)."""
 
 
 def amplitude_and_gradient(problem, u: np.ndarray, h: float = 1e-7) -> tuple[float, np.ndarray]:
@@ -94,7 +98,7 @@ def solve_at_amplitude(problem, u0: np.ndarray, amplitude: float, *, tol: float 
     solve = solve or bordered_solve
     u = np.array(u0, dtype=float)
     if admissible is not None and not admissible(u):
-        raise PinnedFailure("the start lies outside the trust region")
+        raise StartOutside("the start lies outside the trust region")
     history = []
     du_norm = math.inf
     gradient = problem.amplitude_and_gradient or (lambda v: amplitude_and_gradient(problem, v))

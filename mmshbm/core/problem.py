@@ -44,8 +44,10 @@ runners call them directly and never probe a problem for attributes.
     ``frequency_of(u)`` (Hz, no evaluation), ``family_frequency_limit()`` (Hz),
     ``scaled_state(u, factor)``, ``family_predictor(u_from, A_from, A_to, A_max)``,
     ``family_landing(u_from, rec_from, excursion, A_max, A_min)``,
-    ``harmonic_landing(A, A_max, tol=, max_iter=, admissible=) -> (u, share_ref)``. Each is
-    None when not offered.
+    ``harmonic_landing(A, A_max, tol=, max_iter=, admissible=) -> (u, share_ref)``,
+    ``homotopy_landing(A, A_max, tol=, max_iter=, admissible=) -> (u, f_start)`` (the orbit
+    reached by a homotopy from another family's orbit of frequency f_start, Hz;
+    :mod:`mmshbm.core.family_homotopy`). Each is None when not offered.
 :class:`AmplitudeStart` (backbones, :class:`BackboneProblemBase`)
     ``linear_mode_point(amplitude)`` (the linear mode at that amplitude, m),
     ``initial_tangent()``, ``open_amplitude()`` (the amplitude at which the linear mode
@@ -147,6 +149,7 @@ class FamilyEvents(Protocol):
     family_predictor: Callable[[np.ndarray, float, float, float], np.ndarray] | None
     family_landing: Callable[..., tuple[np.ndarray, float]] | None
     harmonic_landing: Callable[..., tuple[np.ndarray, float]] | None
+    homotopy_landing: Callable[..., tuple[np.ndarray, float]] | None
 
 
 @runtime_checkable
@@ -236,6 +239,7 @@ class ContinuationProblemBase:
     family_predictor: Callable[[np.ndarray, float, float, float], np.ndarray] | None = None
     family_landing: Callable[..., tuple[np.ndarray, float]] | None = None
     harmonic_landing: Callable[..., tuple[np.ndarray, float]] | None = None
+    homotopy_landing: Callable[..., tuple[np.ndarray, float]] | None = None
     # AmplitudeStart
     open_amplitude: Callable[[], float] | None = None
     # BranchRecords

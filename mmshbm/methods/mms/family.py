@@ -167,6 +167,37 @@ class FamilyMixin:
             below = rung
         return u, share_ref
 
+    def homotopy_landing(self, amplitude: float, amplitude_max: float, *, tol: float, max_iter: int,
+                         admissible=None) -> tuple[np.ndarray, float]:
+        """The orbit at ``amplitude`` (m) reached from the family of the fundamental
+        alone (H = 1, which meets no internal resonance of a higher harmonic): its orbit
+        there, raised to H harmonics (the others zero), solved by the Newton homotopy
+        (:func:`mmshbm.core.homotopy.pinned_homotopy`). Where the H-harmonic family
+        resumes above a fold of the branch below, at a lower frequency (the branch below
+        can stiffen past the family's limit, e.g. a light DOF rattling against its stop,
+        or fold by its truncation), no predictor taken from the branch below converges
+        to it, nor does Newton from the raised orbit, whose basin on the nonsmooth
+        residual is small; the homotopy's curve does.
+
+        Returns (u, f_start): the scaled unknowns at H and the frequency (Hz) of the
+        fundamental family's orbit the homotopy started from. Raises ValueError without a
+        fundamental family that reaches ``amplitude``, PinnedFailure when the homotopy
+        or its final solve fails.
+        """
+        from ...core.homotopy import pinned_homotopy
+        from ...core.pinned import solve_at_amplitude
+
+        ref = self._fundamental_branch(amplitude_max)
+        if ref is None or not ref[1][0] <= amplitude <= ref[1][-1]:
+            raise ValueError("no fundamental family reaches the amplitude")
+        aux, A, U = ref
+        u0 = np.array([np.interp(amplitude, A, U[:, i]) for i in range(U.shape[1])])
+        u = solve_at_amplitude(aux, u0, amplitude, tol=tol, max_iter=max_iter, admissible=admissible)[0]
+        f_start = aux.frequency_of(u)
+        u = pinned_homotopy(self, _raised(aux, u, self), amplitude, tol=tol, max_iter=max_iter,
+                            admissible=admissible)[0]
+        return u, f_start
+
     def _fundamental_branch(self, amplitude_max: float):
         """(problem, amplitudes ascending, scaled unknowns) of the family with the
         fundamental alone (H = 1), as :meth:`reference_branch` builds its own (cached)."""

@@ -1,0 +1,70 @@
+"""The jumps' last search: the family reached by a homotopy from the fundamental's family.
+
+Where a backbone folds back without an internal resonance taking the energy (the turn is
+the truncation's or a light DOF's rattling stiffens the orbit past the family's limit),
+the starting mode's family resumes above the fold, often at a lower frequency. No
+predictor taken from the branch below converges to it; the problem's
+``homotopy_landing(A, A_max, tol=, max_iter=, admissible=) -> (u, f_start)`` reaches it
+from the orbit of the family of the fundamental alone at the same amplitude
+(:mod:`mmshbm.core.homotopy`). A landing counts as any other (``accept``: on the family,
+in the frequency window) and, since the homotopy continues the fundamental family's
+orbit, within ``_NEAR`` of that orbit's frequency ``f_start`` — a curve that wandered off
+to another mode's orbit lands far from it.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+
+from .pinned import PinnedFailure, StartOutside
+
+log = logging.getLogger(__name__)
+
+#: homotopies run (at targets increasing from the frontier; a target whose start lies
+#: outside the jump's trust region runs none): each takes up to a few hundred steps, so
+#: the search costs at most a few seconds where every evaluation is expensive
+MAX_TARGETS = 4
+#: largest relative distance of a landing from the frequency of the fundamental family's
+#: orbit it started from (the harmonics move a backbone by a few percent; the jumps'
+#: predictors are held to the same 15 %)
+_NEAR = 0.15
+
+
+def homotopy_search(landing, guard, targets, amplitude_max: float, accept, frequency_of, monitor, problem, *,
+                    tol: float, max_iter: int, admissible=None) -> tuple:
+    """Land at the first target above the frontier where ``landing`` converges onto the
+    family near its start's frequency (at most :data:`MAX_TARGETS` homotopies run).
+    Returns (u, iterations, history, record, tangent, target); raises PinnedFailure with
+    the last reason."""
+    last_error = "no attempt"
+    tried = 0
+    for target in targets:
+        if target <= float(guard.frontier) * (1 + 1e-12):
+            continue
+        if tried >= MAX_TARGETS:
+            break
+        try:
+            try:
+                u0, f_start = landing(target, amplitude_max, tol=tol, max_iter=max_iter,
+                                      admissible=admissible)
+            except StartOutside:
+                raise
+            except (PinnedFailure, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
+                tried += 1
+                raise
+            tried += 1
+            f0 = (frequency_of(u0) if frequency_of is not None
+                  else float(monitor(problem, u0).get("frequency", math.nan)))
+            if math.isfinite(f_start) and not abs(f0 - f_start) <= _NEAR * f_start:
+                raise PinnedFailure(f"the homotopy ended at {f0:.4g} Hz, far from the fundamental family's "
+                                    f"{f_start:.4g} Hz")
+            u, nit, hist, rec, t = accept(u0, target, f0)
+        except (PinnedFailure, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as err:
+            last_error = str(err)
+            log.debug("homotopy landing at %.4g: %s", target, last_error)
+            continue
+        return u, nit, hist, rec, t, target
+    raise PinnedFailure(last_error)
