@@ -115,3 +115,41 @@ def test_a_backbone_folded_by_its_truncation_resumes_on_the_exact_orbit():
     assert below < 1e-3
     for g in (8.0, 9.0, 10.0):
         assert error(g) <= below
+
+
+def _tree_clearance():
+    """A 1.071 kg mass on 71.9 N/m to a 7.397 kg mass (6990 N/m to the ground, 10728 N/m
+    to the ground beside it), a massless contact node on the light mass through 1.05e6
+    N/m between stops at +1.099 mm and −0.919 mm (corpus seed 17, index 299)."""
+    M = np.diag([1.0712918118682342, 7.397096416200371, 0.0])
+    K = np.array([[1053511.1069382997, -6990.413371954646, -1046448.7777371964],
+                  [-6990.413371954646, 17717.974448525834, 0.0],
+                  [-1046448.7777371964, 0.0, 1046448.7777371964]])
+    gaps = [0.001099011434298534, 0.0009185609204247609]
+    return mmshbm.Model.from_matrices(M, K, contact_dof=[2, 2], gap=gaps, stop_side=[1, -1], amplitude_dof=1)
+
+
+def test_a_failed_jump_says_when_the_backbone_itself_turns_back():
+    """At H = 15 the clearance's backbone turns back in amplitude at 2.36 gaps, 7.896 Hz,
+    with the fundamental's share at 0.75 (no internal resonance took the energy); plain
+    path following turns back at the same point. No search lands between it and the bound
+    (the homotopy's curve does not reach its end); above the bound the family resumes at
+    7.62 Hz. The status says all three."""
+    model = _tree_clearance()
+    bound = 10 * model.gap
+    b = mmshbm.backbone(model, harmonics=15, max_amplitude=bound)
+    assert b.status.kind == Status.JUMP_FAILED
+    detail = b.status.detail
+    assert detail.startswith("the branch turns back in amplitude at the frontier")
+    assert "by a homotopy from the fundamental's family" in detail
+    resumes = re.search(r"the family resumes above the bound, at amplitude ([0-9.e+-]+) \(([0-9.]+) Hz\)",
+                        detail)
+    assert resumes and float(resumes.group(1)) > bound
+    front = b.family_front()
+    top = front[int(np.argmax(b.amplitude[front]))]
+    path = mmshbm.backbone(model, harmonics=15, max_amplitude=bound, follow="path", max_steps=120)
+    i = int(np.argmax(path.amplitude))
+    assert 0 < i < len(path) - 1 and path.amplitude[-1] < path.amplitude[i]
+    assert abs(path.amplitude[i] / b.amplitude[top] - 1) < 1e-9
+    assert abs(path.frequency[i] / b.frequency[top] - 1) < 1e-9
+    assert path.records["fundamental_share"][: i + 1].min() > 0.5
