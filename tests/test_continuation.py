@@ -111,6 +111,7 @@ def test_start_failure_is_a_status_not_an_exception():
     ({"max_newton": 2.5}, "max_newton must be an integer"),
     ({"newton_tol": float("nan")}, "newton_tol must be finite"),
     ({"max_angle": 4.0}, "max_angle must be <= pi"),
+    ({"branch_point_ds": 0.0}, "branch_point_ds must be positive"),
     ({"bounds": {"amplitude": (1.0, 0.5)}}, "lo < hi"),
     ({"bounds": {"amplitude": 3.0}}, "pair"),
 ])
@@ -124,3 +125,37 @@ def test_angle_guard_rejects_jumps():
     res = continue_branch(Circle(), np.array([0.0, -1.0]), np.array([1.0, 0.0]), opts)
     # consecutive tangents on a unit circle differ by the arc angle = step length
     assert np.all(res.step_size[1:] <= math.radians(5) * 1.01)
+
+
+class Pitchfork:
+    """x (λ − x²) = 0 in (x, λ): the branch x = 0 meets x² = λ at a branch point at λ = 0,
+    where det [J; t] = λ (on x = 0, t = (0, 1)) changes sign."""
+
+    n_unknowns = 2
+
+    def evaluate(self, u, jacobian=True):
+        x, lam = u
+        R = np.array([x * (lam - x * x)])
+        if not jacobian:
+            return R
+        return R, np.array([[lam - 3 * x * x, x]])
+
+    def monitor(self, u):
+        return {"x": float(u[0]), "lam": float(u[1])}
+
+
+@pytest.mark.parametrize("limit", [None, 1e-3, 1e-5])
+def test_a_branch_point_is_kept_on_a_step_of_at_most_branch_point_ds(limit):
+    """A sign change of det [J; t] is accepted on the step that finds it (None), or after
+    the step has been halved down to ``branch_point_ds``: the branch point stays on the
+    branch, bracketed by the points on either side to within that step."""
+    res = continue_branch(Pitchfork(), np.array([0.0, -1.0]), np.array([0.0, 1.0]),
+                          ContinuationOptions(ds=0.1, ds_max=0.3, branch_point_ds=limit,
+                                              bounds={"lam": (-2.0, 1.0)}))
+    assert res.status == "bound:lam"
+    assert np.all(res.u[:, 0] == 0.0)  # the trivial branch throughout
+    points = [i for name, i in res.special_points if name == "branch_point"]
+    assert len(points) == 1
+    before, after = res.u[points[0] - 1, 1], res.u[points[0], 1]
+    assert before < 0.0 < after
+    assert after - before <= (0.3 if limit is None else limit) * (1 + 1e-12)  # 0.3: ds_max

@@ -180,6 +180,10 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
                     status = stop
                     break
                 continue  # the ds_min status stands until another replaces it
+            if _unconfirmed_flip(sign, det_last, ds, opt):
+                ds *= 0.5  # crossed a branch point, or jumped across a fold: a shorter step tells
+                log.debug("det [J; t] changed sign on a step longer than branch_point_ds; ds -> %g", ds)
+                continue
             step += 1
             crossed = _outside(rec, bounds)
             if crossed:
@@ -221,6 +225,13 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
             raise
         status = Status(Status.INTERRUPTED)
     return pts.result(status)
+
+
+def _unconfirmed_flip(sign: float, det_last: float, ds: float, opt: ContinuationOptions) -> bool:
+    """True when det [J; t] changed sign (``sign`` against ``det_last``; 0: not computed)
+    on a step longer than ``opt.branch_point_ds`` (see :class:`ContinuationOptions`)."""
+    limit = opt.branch_point_ds
+    return limit is not None and ds > limit and bool(sign) and bool(det_last) and sign != det_last
 
 
 def _with_step_control(opt: ContinuationOptions, rule) -> ContinuationOptions:

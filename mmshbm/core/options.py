@@ -90,6 +90,17 @@ class ContinuationOptions:
         Below this step the angle test is waived: the sampled (AFT) contact residual is
         piecewise smooth, so where a sample point changes its active set the branch
         has a genuine corner that no step size removes.
+    branch_point_ds : float or None
+        Longest step on which the sign of det [J; t] may change. The sign changes where
+        the step crosses a branch point, and also where a step longer than a fold's
+        radius of curvature jumps across the fold onto the piece beyond it (a thin Z of
+        two close folds): that piece runs the other way, so the tangent, oriented along
+        the old one, turns the branch back at the fold and retraces the points already
+        found. A step that changes the sign and is longer than this is retried at half
+        length, down to this length; there a branch point is accepted. None (the
+        default): every change is accepted on the step that finds it.
+        ``mmshbm.frequency_response`` sets it (a forced response has no symmetry that
+        makes branch points generic).
     bounds : Mapping[str, tuple[float, float]]
         Stop when a monitored quantity leaves [lo, hi]; the last point is refined onto
         the bound. E.g. ``{"amplitude": (0, 1e-2), "frequency": (0, 80)}``.
@@ -115,6 +126,7 @@ class ContinuationOptions:
     target_residual: float = 1e-3
     max_angle: float = math.radians(30.0)
     corner_ds: float = 1e-4
+    branch_point_ds: float | None = None
     bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
     follow: str = "family"
     family_share: float = 0.5
@@ -133,6 +145,8 @@ class ContinuationOptions:
         check.positive("step_tol", self.step_tol)
         check.integer("max_newton", self.max_newton, minimum=1)
         check.positive("corner_ds", self.corner_ds)
+        if self.branch_point_ds is not None:
+            check.positive("branch_point_ds", self.branch_point_ds)
         check.non_negative("growth", self.growth)
         if self.step_control not in ("auto", "residual", "effort"):
             raise ValueError(f"step_control must be 'auto', 'residual' or 'effort', "

@@ -32,8 +32,10 @@ FORCED_METHODS = {
     "shooting": "mmshbm.methods.shooting.forced:ShootingForcedProblem",
 }
 
-#: continuation defaults of a frequency response (scaled units: coefficients in gaps, Ω in ω_1)
-_DEFAULTS = {"ds": 0.02, "ds_max": 0.3, "max_steps": 3000, "max_newton": 12}
+#: continuation defaults of a frequency response (scaled units: coefficients in gaps, Ω in ω_1);
+#: branch_point_ds: a change of orientation on a longer step is a jump across a fold (a
+#: forced response's branch points are not generic), refined by halving the step
+_DEFAULTS = {"ds": 0.02, "ds_max": 0.3, "max_steps": 3000, "max_newton": 12, "branch_point_ds": 1e-3}
 
 
 def make_forced_problem(model: Model, force, method: str = "mmshbm", harmonics: int = 5,
@@ -96,7 +98,7 @@ def frequency_response(model: Model, force, frequency_range, harmonics: int = 5,
         may differ.
     **options
         Continuation options (``ds``, ``ds_max``, ``max_steps``, ...; defaults
-        ``ds=0.02, ds_max=0.3, max_steps=3000, max_newton=12``) and method options
+        ``ds=0.02, ds_max=0.3, max_steps=3000, max_newton=12, branch_point_ds=1e-3``) and method options
         (MMS-HBM: ``n_samples``, ``r``, ``backend``, ``stability``; penalty:
         ``penalty_stiffness``, ``n_samples``; shooting: ``steps_per_period``).
 
