@@ -361,6 +361,10 @@ def summary(results: list[CaseResult], slowest: int = 5) -> str:
     if ended:
         lines.append(f"family ended (the starting mode's orbit loses the fundamental's majority, no orbit "
                      f"with it found beyond): {ended}")
+    inside = sum("the bound lies inside a tongue" in r.status for r in results if not r.completed)
+    if inside:
+        lines.append(f"bound inside a tongue (the family found again only above the bound, its branch not "
+                     f"coming down onto it on the family): {inside}")
     over = sum(r.seconds > 30.0 for r in results)
     over_cpu = sum(r.cpu_seconds > 30.0 for r in results)
     total = sum(r.seconds for r in results)
