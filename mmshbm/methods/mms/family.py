@@ -147,9 +147,10 @@ class FamilyMixin:
         from ...core.pinned import PinnedFailure, solve_at_amplitude
 
         ref = self.reference_branch(amplitude_max)
-        if ref is None or not ref[1][0] <= amplitude <= ref[1][-1]:
+        # a branch that reaches the bound ends on it to round-off (its end refined onto it)
+        if ref is None or not ref[1][0] <= amplitude <= ref[1][-1] * (1 + 1e-9):
             ref = self._fundamental_branch(amplitude_max)
-        if ref is None or not ref[1][0] <= amplitude <= ref[1][-1]:
+        if ref is None or not ref[1][0] <= amplitude <= ref[1][-1] * (1 + 1e-9):
             raise ValueError("no low-harmonic branch reaches the amplitude")
         aux, A, U = ref
         u0 = np.array([np.interp(amplitude, A, U[:, i]) for i in range(U.shape[1])])
@@ -188,7 +189,7 @@ class FamilyMixin:
         from ...core.pinned import solve_at_amplitude
 
         ref = self._fundamental_branch(amplitude_max)
-        if ref is None or not ref[1][0] <= amplitude <= ref[1][-1]:
+        if ref is None or not ref[1][0] <= amplitude <= ref[1][-1] * (1 + 1e-9):  # as above
             raise ValueError("no fundamental family reaches the amplitude")
         aux, A, U = ref
         u0 = np.array([np.interp(amplitude, A, U[:, i]) for i in range(U.shape[1])])
