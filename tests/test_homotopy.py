@@ -93,3 +93,45 @@ def test_a_homotopy_that_cannot_end_says_so():
         pinned_homotopy(P, _raised(aux, u1, P), target, max_steps=2)
     with pytest.raises(ValueError, match="amplitude must be positive"):
         pinned_homotopy(P, _raised(aux, u1, P), 0.0)
+
+
+class _Cubic:
+    """R(u) = [x³ + x − w, y − 2x], amplitude A(u) = w + 1: pinned at A* = 11 the only
+    solution is (x, y, w) = (2, 4, 10). ``sparse``: J as a scipy.sparse matrix."""
+
+    n_unknowns = 3
+
+    def __init__(self, sparse: bool):
+        self.sparse = sparse
+
+    def residual(self, u):
+        x, y, w = u
+        return np.array([x**3 + x - w, y - 2 * x])
+
+    def residual_and_jacobian(self, u):
+        import scipy.sparse as sp
+
+        x = u[0]
+        J = np.array([[3 * x**2 + 1, 0.0, -1.0], [-2.0, 1.0, 0.0]])
+        return self.residual(u), (sp.csr_matrix(J) if self.sparse else J)
+
+    def amplitude_and_gradient(self, u):
+        return float(u[2] + 1.0), np.array([0.0, 0.0, 1.0])
+
+    def amplitude_value(self, u):
+        return float(u[2] + 1.0)
+
+    def monitor(self, u):
+        return {"amplitude": float(u[2] + 1.0)}
+
+
+@pytest.mark.parametrize("sparse", [False, True])
+def test_the_homotopy_solves_a_problem_of_any_jacobian_to_its_closed_form(sparse):
+    """A user problem (dense or sparse Jacobian) from a start far from its solution: the
+    homotopy's end is the closed-form solution (2, 4, 10): with the final Newton solve's
+    residual below 1e-13, x is within 1e-13 / (3x² + 1) = 7.7e-15 of 2, y twice that of
+    4, and w within 11e-13 of 10 (the amplitude row is relative to A* = 11)."""
+    u = pinned_homotopy(_Cubic(sparse), np.array([-3.0, 5.0, 0.0]), 11.0, tol=1e-13)[0]
+    assert abs(u[0] - 2.0) <= 1e-13 / 13 + 1e-15
+    assert abs(u[1] - 4.0) <= 2e-13 / 13 + 1e-15
+    assert abs(u[2] - 10.0) <= 11e-13 + 1e-14
