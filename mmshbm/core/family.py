@@ -34,7 +34,7 @@ in a far search up to the bound (30 more), and last by continuing the orbit in t
 harmonics (``problem.harmonic_landing``: a low-harmonic family's orbit at the target,
 solved again with more and more harmonics; at most 8 targets), then above the bound,
 followed back down onto it, and last by a homotopy from the orbit of the fundamental's
-family raised to H (``problem.homotopy_landing``, :mod:`mmshbm.core.family_homotopy`; at
+family raised to H (``problem.homotopy_landing``, :mod:`mmshbm.core.family_landings`; at
 most 4 targets). When nothing lands and the starting mode's own orbit lost the
 fundamental's majority at the frontier, the family ended there
 (:class:`~mmshbm.core.family_end.FamilyEnded`). The
@@ -52,7 +52,7 @@ import numpy as np
 
 from .family_end import FamilyEnded, end_of_family, turned_back
 from .family_guard import FAMILY_RECORD, FamilyGuard, family_value
-from .family_homotopy import MAX_TARGETS, homotopy_search
+from .family_landings import LIMIT_SLACK, MAX_LADDERS, MAX_TARGETS, harmonic_search, homotopy_search
 from .pinned import PinnedFailure, solve_at_amplitude
 
 __all__ = ["FAMILY_RECORD", "FamilyEnded", "FamilyGuard", "family_value", "jump"]
@@ -79,12 +79,6 @@ class _OffFamily(PinnedFailure):
     Newton goes from the same start, which is rare for a solve that converged."""
 
 
-#: relative margin above the problem's ``family_frequency_limit`` within which a landing
-#: of the harmonic search is still accepted: the backbone tends to that frequency far
-#: above the gaps (rigid stops stiffen the structure at most that far). The limit of one
-#: one-sided contact, 2/(1/f_open + 1/f_held), is exact for one DOF only, so the other
-#: stages, whose landings came first, keep the window's wider margin
-_LIMIT_SLACK = 0.01
 
 #: largest ratio between consecutive targets of the far search beyond the near targets
 _FAR_RATIO = 1.1
@@ -165,12 +159,13 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     (else it found another branch). ``coexisting`` checks a landing nearer the frontier
     than a filtered passage's (:func:`_nearer_landing`). When all of these fail, the
     problem's ``harmonic_landing`` (if any) gives the orbit at each target continued in
-    the harmonics from a low-harmonic family (:func:`_harmonic_search`); when that fails
-    too, the family is sought above the bound and followed back down onto it by
-    ``descend(u, tangent, amplitude, amplitude_max)`` (None or the tuple (u, iterations,
-    history, record, tangent) at ``amplitude_max``; :func:`_beyond_bound`), and last
+    the harmonics from a low-harmonic family
+    (:func:`~mmshbm.core.family_landings.harmonic_search`); when that fails too, the
+    family is sought above the bound and followed back down onto it by ``descend(u,
+    tangent, amplitude, amplitude_max)`` (None or the tuple (u, iterations, history,
+    record, tangent) at ``amplitude_max``; :func:`_beyond_bound`), and last
     ``homotopy_landing`` gives the orbit reached by a homotopy from the fundamental's
-    family (:func:`~mmshbm.core.family_homotopy.homotopy_search`).
+    family (:func:`~mmshbm.core.family_landings.homotopy_search`).
 
     Returns
     -------
@@ -293,8 +288,8 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     ladder = problem.harmonic_landing
     if ladder is not None:
         try:
-            solves[:] = [0, _MAX_LADDERS]
-            u, nit, hist, rec, t, target = _harmonic_search(
+            solves[:] = [0, MAX_LADDERS]
+            u, nit, hist, rec, t, target = harmonic_search(
                 ladder, guard, far, amplitude_max, newton_tol, max_newton, admissible, accept, frequency_of,
                 monitor, problem, f_limit)
             return u, nit, hist, rec, t, target, guard.frontier_index
@@ -335,13 +330,13 @@ _WINDOW_SLACK = 1.3
 
 
 def _below_limit(accept, f_limit: float):
-    """``accept`` that also refuses a landing more than ``_LIMIT_SLACK`` above the
+    """``accept`` that also refuses a landing more than ``LIMIT_SLACK`` above the
     problem's ``family_frequency_limit`` (the first mode's backbone tends to it from
     below far above the gaps; above it lies another mode's branch)."""
     def checked(u0, target, f_pred):
         u, nit, hist, rec, t = accept(u0, target, f_pred)
         f = float(rec.get("frequency", math.nan))
-        if math.isfinite(f_limit) and f > f_limit * (1.0 + _LIMIT_SLACK):
+        if math.isfinite(f_limit) and f > f_limit * (1.0 + LIMIT_SLACK):
             raise PinnedFailure(f"landed above the family's frequency limit ({f:.4g} > {f_limit:.4g} Hz)")
         return u, nit, hist, rec, t
     return checked
@@ -354,7 +349,7 @@ def _beyond_bound(problem, us, recs, guard, origins, amplitude_max, accept, freq
     family below a stretch of tongues, missed the family at the bound, which a landing
     above it reaches by following its branch back down (``descend(u, tangent, amplitude,
     amplitude_max)``, as :func:`jump` takes it). Up to twice the bound in steps of
-    _FAR_RATIO, landings at most ``_LIMIT_SLACK`` above ``f_limit``
+    _FAR_RATIO, landings at most ``LIMIT_SLACK`` above ``f_limit``
     (:func:`_below_limit`); a landing whose branch does not come down to the bound on
     the family (another orbit with the fundamental's majority, which folds back above
     the bound) does not end the search. Returns (the sentence that says where the family
@@ -442,49 +437,6 @@ def _search(problem, us, recs, guard, origins, targets, amplitude_max, accept, f
                     last_error = str(err)
                 log.debug("jump attempt from %d (%.4g) to %.4g by the %s predictor: %s", origin, A_o, target,
                           name, last_error)
-    raise PinnedFailure(last_error)
-
-
-#: targets of the harmonic search (each a ladder of pinned solves from the low H to H)
-_MAX_LADDERS = 8
-
-
-def _harmonic_search(ladder, guard, targets, amplitude_max, newton_tol, max_newton, admissible, accept,
-                     frequency_of, monitor, problem, f_limit: float) -> tuple:
-    """The last resort of a jump: the starting mode's orbit at each target above the
-    frontier (increasing, at most ``_MAX_LADDERS``) continued in the harmonics from a
-    low-harmonic family (``problem.harmonic_landing``), which reaches orbits that no
-    predictor taken from the family below a tongue converges to. The ladder must start
-    on the family (the fundamental's share at its low H at least ``family_share``); its
-    orbit at H is then accepted as any other landing (``accept``: on the family, in the
-    frequency window) that lies at most ``_LIMIT_SLACK`` above ``f_limit``, the problem's
-    ``family_frequency_limit``. Returns (u, iterations, history, record, tangent, target); raises
-    PinnedFailure with the last reason."""
-    last_error = "no attempt"
-    tried = 0
-    for target in targets:
-        if target <= float(guard.frontier) * (1 + 1e-12):
-            continue
-        if tried >= _MAX_LADDERS:
-            break
-        tried += 1
-        try:
-            u0, share_ref = ladder(target, amplitude_max, tol=newton_tol, max_iter=3 * max_newton,
-                                   admissible=admissible)
-            if share_ref < guard.family_share:
-                raise PinnedFailure(f"the low-harmonic orbit at {target:.4g} is off the family "
-                                    f"(fundamental share {share_ref:.3f})")
-            f_pred = frequency_of(u0) if frequency_of is not None else \
-                monitor(problem, u0).get("frequency", math.nan)
-            u, nit, hist, rec, t = accept(u0, target, f_pred)
-            f = float(rec.get("frequency", math.nan))
-            if f > f_limit * (1.0 + _LIMIT_SLACK):
-                raise PinnedFailure(f"landed above the family's frequency limit ({f:.4g} > {f_limit:.4g} Hz)")
-        except (PinnedFailure, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as err:
-            last_error = str(err)
-            log.debug("harmonic ladder at %.4g: %s", target, last_error)
-            continue
-        return u, nit, hist, rec, t, target
     raise PinnedFailure(last_error)
 
 

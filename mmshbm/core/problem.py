@@ -47,7 +47,7 @@ runners call them directly and never probe a problem for attributes.
     ``harmonic_landing(A, A_max, tol=, max_iter=, admissible=) -> (u, share_ref)``,
     ``homotopy_landing(A, A_max, tol=, max_iter=, admissible=) -> (u, f_start)`` (the orbit
     reached by a homotopy from another family's orbit of frequency f_start, Hz;
-    :mod:`mmshbm.core.family_homotopy`). Each is None when not offered.
+    :mod:`mmshbm.core.family_landings`). Each is None when not offered.
 :class:`AmplitudeStart` (backbones, :class:`BackboneProblemBase`)
     ``linear_mode_point(amplitude)`` (the linear mode at that amplitude, m),
     ``initial_tangent()``, ``open_amplitude()`` (the amplitude at which the linear mode

@@ -1,4 +1,9 @@
-"""The jumps' last search: the family reached by a homotopy from the fundamental's family.
+"""The jumps' last-resort searches, after the near and far searches from the branch below:
+the orbit continued in the harmonics from a low-harmonic family (:func:`harmonic_search`)
+and, last, the orbit reached by a homotopy from the fundamental's family
+(:func:`homotopy_search`).
+
+The homotopy search:
 
 Where a backbone folds back without an internal resonance taking the energy (the turn is
 the truncation's or a light DOF's rattling stiffens the orbit past the family's limit),
@@ -22,6 +27,56 @@ import numpy as np
 from .pinned import PinnedFailure, StartOutside
 
 log = logging.getLogger(__name__)
+
+#: relative margin above the problem's ``family_frequency_limit`` within which a landing
+#: of the harmonic search is still accepted: the backbone tends to that frequency far
+#: above the gaps (rigid stops stiffen the structure at most that far). The limit of one
+#: one-sided contact, 2/(1/f_open + 1/f_held), is exact for one DOF only, so the other
+#: stages, whose landings came first, keep the window's wider margin
+LIMIT_SLACK = 0.01
+
+#: targets of the harmonic search (each a ladder of pinned solves from the low H to H)
+MAX_LADDERS = 8
+
+
+def harmonic_search(ladder, guard, targets, amplitude_max, newton_tol, max_newton, admissible, accept,
+                     frequency_of, monitor, problem, f_limit: float) -> tuple:
+    """The last resort of a jump: the starting mode's orbit at each target above the
+    frontier (increasing, at most ``MAX_LADDERS``) continued in the harmonics from a
+    low-harmonic family (``problem.harmonic_landing``), which reaches orbits that no
+    predictor taken from the family below a tongue converges to. The ladder must start
+    on the family (the fundamental's share at its low H at least ``family_share``); its
+    orbit at H is then accepted as any other landing (``accept``: on the family, in the
+    frequency window) that lies at most ``LIMIT_SLACK`` above ``f_limit``, the problem's
+    ``family_frequency_limit``. Returns (u, iterations, history, record, tangent, target); raises
+    PinnedFailure with the last reason."""
+    last_error = "no attempt"
+    tried = 0
+    for target in targets:
+        if target <= float(guard.frontier) * (1 + 1e-12):
+            continue
+        if tried >= MAX_LADDERS:
+            break
+        tried += 1
+        try:
+            u0, share_ref = ladder(target, amplitude_max, tol=newton_tol, max_iter=3 * max_newton,
+                                   admissible=admissible)
+            if share_ref < guard.family_share:
+                raise PinnedFailure(f"the low-harmonic orbit at {target:.4g} is off the family "
+                                    f"(fundamental share {share_ref:.3f})")
+            f_pred = frequency_of(u0) if frequency_of is not None else \
+                monitor(problem, u0).get("frequency", math.nan)
+            u, nit, hist, rec, t = accept(u0, target, f_pred)
+            f = float(rec.get("frequency", math.nan))
+            if f > f_limit * (1.0 + LIMIT_SLACK):
+                raise PinnedFailure(f"landed above the family's frequency limit ({f:.4g} > {f_limit:.4g} Hz)")
+        except (PinnedFailure, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as err:
+            last_error = str(err)
+            log.debug("harmonic ladder at %.4g: %s", target, last_error)
+            continue
+        return u, nit, hist, rec, t, target
+    raise PinnedFailure(last_error)
+
 
 #: homotopies run (at targets increasing from the frontier; a target whose start lies
 #: outside the jump's trust region runs none): each takes up to a few hundred steps, so
