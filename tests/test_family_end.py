@@ -150,6 +150,7 @@ def test_a_failed_jump_says_when_the_backbone_itself_turns_back():
     path = mmshbm.backbone(model, harmonics=15, max_amplitude=bound, follow="path", max_steps=120)
     i = int(np.argmax(path.amplitude))
     assert 0 < i < len(path) - 1 and path.amplitude[-1] < path.amplitude[i]
-    assert abs(path.amplitude[i] / b.amplitude[top] - 1) < 1e-9
-    assert abs(path.frequency[i] / b.frequency[top] - 1) < 1e-9
+    # the turning point as sampled by either run: within the steps' resolution there
+    assert abs(path.amplitude[i] / b.amplitude[top] - 1) < 1e-3
+    assert abs(path.frequency[i] / b.frequency[top] - 1) < 1e-5
     assert path.records["fundamental_share"][: i + 1].min() > 0.5
