@@ -121,3 +121,28 @@ def test_plotting_never_imports_pyplot(tmp_path):
 def test_point_index_checks(branch):
     with pytest.raises(IndexError):
         plotting.plot_contact_force(branch, [len(branch)])
+
+
+def test_a_family_that_turns_back_in_amplitude_after_grazing_is_drawn_as_the_family():
+    """A chain whose contact-DOF amplitude falls after grazing (0.94 → 0.78 gaps while the
+    frequency rises from 1.177 to 1.19 Hz), on the family throughout: those points are
+    not on the family front (single-valued in amplitude) but are the family's, so the
+    backbone's line runs through them; only the tongue's excursion is drawn thin."""
+    import warnings
+
+    sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
+    from test_homotopy import _rattling_chain
+
+    model = _rattling_chain()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", mmshbm.BranchWarning)
+        b = mmshbm.backbone(model, harmonics=5, max_amplitude=10 * model.gap)
+    on = np.asarray(b.records["on_family"]) > 0.5
+    first = np.arange(int(np.argmin(on)))  # the stretch on the family from the start
+    A = np.asarray(b.amplitude)
+    turned = first[A[first] < np.maximum.accumulate(A[first]) * (1 - 1e-9)]
+    assert len(turned) >= 5 and not set(turned) & set(b.family_front().tolist())
+    line = plotting.plot_backbone(b).axes[0].get_lines()[0]
+    drawn = set(np.asarray(line.get_xdata())[np.isfinite(line.get_xdata())].tolist())
+    assert {float(b.frequency[i]) for i in first} <= drawn
+    assert not {float(b.frequency[i]) for i in np.flatnonzero(~on)} & drawn

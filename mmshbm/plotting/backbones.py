@@ -213,13 +213,23 @@ def _front(branch) -> np.ndarray | None:
 
 def _family_curve(branch, y=None) -> tuple[np.ndarray, np.ndarray]:
     """(frequency, ``y``) of the starting mode's backbone in ``branch`` (``y`` per point,
-    default the amplitude): its family front, broken (NaN) where the front skips points (a
-    tongue or a jump); the whole branch when it records no family or never leaves it."""
+    default the amplitude): its family front, and the branch's first stretch on the family
+    from its start (a backbone can turn back in the measured amplitude after grazing
+    without leaving the family: those points are not on the front, which is single-valued
+    in amplitude, yet they are the family's), broken (NaN) where the points skip (a tongue
+    or a jump); the whole branch when it records no family or never leaves it."""
     y = np.asarray(branch.amplitude if y is None else y, dtype=float)
     front = _front(branch)
     if front is None or len(front) == len(branch):
         return np.asarray(branch.frequency), y
     jumps = {int(sp[1]) for sp in branch.special_points if sp[0] == "jump"}
+    on = np.asarray((getattr(branch, "records", None) or {}).get("on_family", np.zeros(0)), dtype=float)
+    first = []
+    for i in range(min(len(on), len(branch))):
+        if on[i] <= 0.5 or (i and i in jumps):
+            break
+        first.append(i)
+    front = sorted(set(front.tolist()) | set(first))
     f, a = [], []
     for n, i in enumerate(front):
         if n and (i != front[n - 1] + 1 or i in jumps):
