@@ -398,7 +398,8 @@ def _beyond_bound(problem, us, recs, guard, origins, amplitude_max, accept, freq
         return "", None
     rec, target = seen["first"]
     sentence = (f"; the family resumes above the bound, at amplitude {target:.4g} "
-                f"({rec.get('frequency', math.nan):.4g} Hz): the bound lies inside a tongue")
+                f"({rec.get('frequency', math.nan):.4g} Hz): the bound lies inside a tongue (a run with its "
+                f"bound above {target:.4g} can pass it)")
     if found is None or "down" not in seen:
         return sentence, None
     return sentence, (*seen["down"], amplitude_max, found[-1])
