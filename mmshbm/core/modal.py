@@ -352,8 +352,11 @@ class ModalCondensation:
         x = (k * omega) ** 2
         den = self._w2[None, :] - x[:, None]
         excluded = np.zeros(den.shape, dtype=bool)
-        for kk, j in exclude:
-            excluded[k == kk, j] = True
+        if len(exclude):  # harmonic kk has the columns 2kk − 1 (cosine) and 2kk (sine)
+            kk, j = np.asarray(exclude, dtype=np.int64).reshape(-1, 2).T
+            excluded[0, j[kk == 0]] = True
+            inside = (kk >= 1) & (kk <= H)
+            excluded[2 * kk[inside] - 1, j[inside]] = excluded[2 * kk[inside], j[inside]] = True
         den = np.where(excluded, 1.0, den)
         if np.any(np.abs(den) <= _POLE_RTOL * self._w2[None, :]):
             raise SingularDynamicStiffness(f"a harmonic of Ω = {omega:.6g} rad/s sits on a fixed-interface "

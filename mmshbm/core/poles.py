@@ -37,6 +37,18 @@ from .kernels import _band_solve
 __all__ = ["PoleSet"]
 
 
+def groups_of_distinct_harmonics(k: np.ndarray) -> list[np.ndarray]:
+    """Indices of pole pairs (harmonics ``k``, shape (n_p,)) in groups of distinct
+    harmonics: the r-th pair of every harmonic in group r, groups in increasing r. Per
+    group, the pairs' harmonics can be written at once without two pairs on one column."""
+    rank = np.zeros(len(k), dtype=np.int64)
+    seen: dict[int, int] = {}
+    for p, kp in enumerate(k):
+        rank[p] = seen.get(int(kp), 0)
+        seen[int(kp)] = rank[p] + 1
+    return [np.flatnonzero(rank == r) for r in range(int(rank.max()) + 1 if len(k) else 0)]
+
+
 class PoleSet:
     """The pole pairs (harmonic k, clamped mode j) of a condensation over a frequency range.
 
@@ -84,6 +96,8 @@ class PoleSet:
         self._by_k = {}
         for k, j in pairs:
             self._by_k.setdefault(k, []).append(j)
+        self._j = np.array([j for _, j in pairs], dtype=np.int64)
+        self.groups = groups_of_distinct_harmonics(self.k)
 
     # ------------------------------------------------------------------ condensation
     def _solve(self, w2: float, rhs: np.ndarray) -> np.ndarray:
@@ -155,8 +169,10 @@ class PoleSet:
         H = (Qc.shape[1] - 1) // 2
         if self.modal:  # q_l,k = −Z_excl a_k − φ_j η_jk (kΩ)²/ω_j²
             Ql = c.recover(omega, Qc, exclude=self.pairs)
-            for p, (k, j) in enumerate(self.pairs):
-                Ql[:, 2 * k - 1] -= self.phi[:, j] * eta[p] * (k * omega) ** 2 / self.omega2[p]
+            # (kΩ)² as a scalar power per pair (an array's square may round differently)
+            k_omega2 = np.array([(k * omega) ** 2 for k, _ in self.pairs])
+            for g in self.groups:  # distinct harmonics in a group; each column's pairs in order
+                Ql[:, 2 * self.k[g] - 1] -= self.phi[:, self._j[g]] * eta[g] * k_omega2[g] / self.omega2[g]
             return Ql
         Ql = np.empty((c.n_l, 2 * H + 1))
         Ql[c.perm, 0] = -c._Z0 @ Qc[:, 0]

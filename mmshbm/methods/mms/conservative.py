@@ -161,6 +161,7 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         n_p = self.pole_set.n if self.pole_set is not None else 0
         self.n_poles = n_p
         self._pole_k = self.pole_set.k if n_p else np.zeros(0, dtype=np.int64)
+        self._pole_groups = self.pole_set.groups if n_p else []
         self._pole_b = self.pole_set.b if n_p else np.zeros((0, self.n_c))
         self._pole_w2 = self.pole_set.omega2 if n_p else np.zeros(0)
 

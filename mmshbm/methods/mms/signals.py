@@ -244,10 +244,13 @@ class SignalsMixin:
                 e[:, c] = 1.0
                 grad[c:n_a:self.n_c] = s * self._amplitude_row(e, omega, zero_eta) * cosk
             zero_a = np.zeros((self.H + 1, self.n_c))
-            for p in range(self.n_poles):
+            for group in self._pole_groups:  # η_p moves harmonic k_p of the row only
                 e_eta = np.zeros(self.n_poles)
-                e_eta[p] = 1.0
-                grad[n_a + p] = s * (self._amplitude_row(zero_a, omega, e_eta) @ cosk)
+                e_eta[group] = 1.0
+                row = self._amplitude_row(zero_a, omega, e_eta)
+                for p in group:
+                    k = self._pole_k[p]
+                    grad[n_a + p] = s * (row[k] * cosk[k])
             grad[:-1] *= self.colscale[:-1]
             h = 1e-7  # Ω by central differences (scaled unknown)
             e = np.zeros(self.n_unknowns)
