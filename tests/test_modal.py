@@ -180,6 +180,21 @@ def test_recover_satisfies_the_linear_equations(beam21, options):
         assert np.abs(res).max() < 1e-8 * np.abs(b["K_lc"] @ Qc[:, col]).max()
 
 
+def test_recover_reuses_its_factors_only_for_the_same_call_inputs(beam21):
+    """recover keeps the factors of its last (Ω, H, exclusions): any sequence of calls
+    gives what a fresh condensation gives for each call alone, bit for bit."""
+    rng = np.random.default_rng(4)
+    calls = [(2 * np.pi * 50.0, 3, ()), (2 * np.pi * 50.0, 3, ()), (2 * np.pi * 50.0, 3, [(2, 0)]),
+             (2 * np.pi * 50.0, 5, [(2, 0)]), (2 * np.pi * 61.0, 5, [(2, 0)]), (2 * np.pi * 50.0, 3, ())]
+    cond = ModalCondensation(beam21)
+    for omega, H, exclude in calls:
+        Qc = rng.normal(size=(cond.n_c, 2 * H + 1))
+        alone = ModalCondensation(beam21).recover(omega, Qc, exclude=exclude)
+        assert np.array_equal(cond.recover(omega, Qc, exclude=exclude), alone)
+    with pytest.raises(SingularDynamicStiffness):  # a pole met after a cached call still raises
+        cond.recover(cond.omega_j[0], rng.normal(size=(cond.n_c, 3)))
+
+
 def test_reduction_cache_on_disk(tmp_path, beam21, monkeypatch):
     """Saved once, loaded by the next run (nothing recomputed), shared across gaps, refused
     for another structure."""

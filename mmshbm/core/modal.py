@@ -238,6 +238,7 @@ class ModalCondensation:
         self._omega_next = math.inf if m >= red.n_modes else float(red.omega[m])
         self.cutoff = self._omega_next / (2 * np.pi)
         self._V = None  # recovery blocks, built on the first recover()
+        self._recovery_factors = None  # (Ω, H, exclusions) of the last recover() and its factors
         # projector id -> its projections (projected_cosine_recovery): shared by the
         # condensations of one reduction with the same modes (the same numbers)
         self._projections = _SHARED_PROJECTIONS.setdefault(red, {}).setdefault(m, {})
@@ -348,6 +349,22 @@ class ModalCondensation:
             raise ValueError(f"Qc must have shape ({self.n_c}, 2H+1), got {Qc.shape}")
         H = (Qc.shape[1] - 1) // 2
         omega = float(omega)
+        key = (H, omega, tuple(exclude))
+        last = self._recovery_factors
+        if last is not None and last[0] == key:
+            x, c = last[1]  # the same Ω, H and exclusions as the last call
+        else:
+            x, c = self._recovery_coefficients(H, omega, key[2])
+            self._recovery_factors = ((H, omega, tuple(map(tuple, exclude))), (x, c))
+        Z = self._Z0 @ Qc + self.phi_j @ ((self.b_j @ Qc) * c.T)
+        if not self.complete:
+            for i in range(1, KRYLOV_BLOCKS):
+                Z += (self._V[i] @ Qc) * x[None, :] ** i
+        return -Z
+
+    def _recovery_coefficients(self, H: int, omega: float, exclude: tuple) -> tuple[np.ndarray, np.ndarray]:
+        """((kΩ)² per column (2H+1,), the kept modes' factors (2H+1, m)) of :meth:`recover`;
+        raises :class:`SingularDynamicStiffness` where a kept term has its pole."""
         k = np.repeat(np.arange(H + 1), 2)[1:]  # harmonic of each column
         x = (k * omega) ** 2
         den = self._w2[None, :] - x[:, None]
@@ -362,12 +379,7 @@ class ModalCondensation:
             raise SingularDynamicStiffness(f"a harmonic of Ω = {omega:.6g} rad/s sits on a fixed-interface "
                                            "eigenfrequency: the DOFs with mass are unbounded there")
         self._static_recovery()
-        c = np.where(excluded, 0.0, x[:, None] / (self._w2[None, :] * den))  # (2H+1, m)
-        Z = self._Z0 @ Qc + self.phi_j @ ((self.b_j @ Qc) * c.T)
-        if not self.complete:
-            for i in range(1, KRYLOV_BLOCKS):
-                Z += (self._V[i] @ Qc) * x[None, :] ** i
-        return -Z
+        return x, np.where(excluded, 0.0, x[:, None] / (self._w2[None, :] * den))  # (2H+1, m)
 
     def _static_recovery(self) -> None:
         """Builds the left-out modes' share Ṽ_i(m) = Σ_{j>m} φ_j b_jᵀ/ω_j^{2i+2} and Z_0 once per
