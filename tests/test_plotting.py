@@ -146,3 +146,20 @@ def test_a_family_that_turns_back_in_amplitude_after_grazing_is_drawn_as_the_fam
     drawn = set(np.asarray(line.get_xdata())[np.isfinite(line.get_xdata())].tolist())
     assert {float(b.frequency[i]) for i in first} <= drawn
     assert not {float(b.frequency[i]) for i in np.flatnonzero(~on)} & drawn
+
+
+def test_amplitude_axis_names_what_the_amplitude_measures(branch):
+    """A user's chain is labelled by its amplitude DOF, not as a beam's tip; a beam and a
+    chain (models with different numbers of modes) drawn together."""
+    M = np.diag([1.0, 1.0, 0.0])
+    K = np.array([[2000.0, -1000, 0], [-1000, 6000, -5000], [0, -5000, 5000]])
+    on_contact = mmshbm.Model.from_matrices(M, K, contact_dof=2, gap=0.01, stop_side=1)
+    on_mass = mmshbm.Model.from_matrices(M, K, contact_dof=2, gap=0.01, stop_side=1, amplitude_dof=1)
+    chain = mmshbm.backbone(on_contact, harmonics=3, max_amplitude=0.03)
+    assert plotting.plot_backbone(branch).axes[0].get_ylabel() == "tip amplitude / gap"
+    assert plotting.plot_backbone(chain).axes[0].get_ylabel() == "contact DOF amplitude / gap"
+    by_mass = mmshbm.backbone(on_mass, harmonics=3, max_amplitude=0.03)
+    assert plotting.plot_backbone(by_mass).axes[0].get_ylabel() == "amplitude of q[1] / gap"
+    both = plotting.plot_backbone([branch, chain]).axes[0]
+    assert both.get_ylabel() == "amplitude / its gap"
+    assert len([t for t in both.get_legend().get_texts() if t.get_text().startswith("linear f")]) == 2

@@ -17,6 +17,7 @@ from .common import (
     _overlay_measured,
     _point_label,
     _reference_lines,
+    amplitude_name,
     branch_label,
     distinct_models,
     line_styles,
@@ -31,7 +32,7 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
                   max_order: int = 10,
                   ax=None, path=None, title: str | None = None, styles: Sequence[dict] | None = None,
                   legend_loc: str = "best", special: bool = True) -> Figure:
-    """Backbone curves: tip amplitude against frequency.
+    """Backbone curves: amplitude (a beam's tip, a model's amplitude DOF) against frequency.
 
     Parameters
     ----------
@@ -85,10 +86,12 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
     gaps = [_gap(b) for b in branches]
     per_gap = all(g > 0 for g in gaps)
     scales = gaps if per_gap else [1e-3] * len(branches)
+    names = {amplitude_name(b) for b in branches}
+    name = names.pop() if len(names) == 1 else "amplitude"
     if per_gap:
-        ylabel = "tip amplitude / gap" if len(set(gaps)) == 1 else "tip amplitude / its gap"
+        ylabel = f"{name} / gap" if len(set(gaps)) == 1 else f"{name} / its gap"
     else:
-        ylabel = "tip amplitude (mm)"
+        ylabel = f"{name} (mm)"
     labels = list(labels) if labels is not None else [branch_label(b) for b in branches]
     if len(labels) != len(branches):
         raise ValueError(f"{len(labels)} labels for {len(branches)} branches")
@@ -173,7 +176,8 @@ def _merge_reference(groups, modes) -> list[tuple[tuple, list[int]]]:
         if values is None:
             continue
         for known, idx in out:
-            if np.allclose(known[0], values[0], rtol=1e-9, atol=0) and (
+            same_modes = np.shape(known[0]) == np.shape(values[0])  # models with fewer modes differ
+            if same_modes and np.allclose(known[0], values[0], rtol=1e-9, atol=0) and (
                     (known[1] is None) == (values[1] is None)
                     and (known[1] is None or np.isclose(known[1], values[1], rtol=1e-9, atol=0))):
                 idx.extend(members)
