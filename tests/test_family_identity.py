@@ -96,6 +96,29 @@ def test_a_climb_that_keeps_rising_is_the_family():
     assert [r["on_family"] for r in recs] == [1] * 5 and guard.frontier_index == 4
 
 
+def test_a_branch_round_a_closed_loop_asks_for_a_jump():
+    """Off the family, the branch comes back onto it just above the frontier (a point the
+    loop passes with a fundamental majority), goes round and comes back there again: the
+    second return asks for a jump instead of moving the frontier by round-off each round
+    (the branch would go round until its step budget). A passage that comes back
+    somewhere new moves the frontier."""
+    family = ([1.0, 1.05], [0.30, 0.36], [1.0, 0.9])
+    loop = ([1.04, 0.9, 0.75, 0.9, 1.05, 1.0912], [0.3635, 0.3639, 0.3639, 0.3639, 0.3639, 0.36514],
+            [0.4, 0.0, 0.0, 0.0, 0.0, 0.53])
+    again = ([1.054, 0.9, 0.75, 0.9, 1.05, 1.0914], [0.36353, 0.3639, 0.3639, 0.3639, 0.3639, 0.365126],
+             [0.4, 0.0, 0.0, 0.0, 0.0, 0.53])
+    recs = _records(*(a + b + c for a, b, c in zip(family, loop, again, strict=True)))
+    guard = FamilyGuard(0.5, 60)
+    asked = [guard.observe(i, r) for i, r in enumerate(recs)]
+    assert asked[:-1] == [None] * (len(recs) - 1) and asked[-1] == "jump"
+    assert guard.frontier_index == 7 and recs[-1]["on_family"] == 0.0
+    elsewhere = _records(*(a + b + c for a, b, c in zip(family, loop, (
+        [1.054, 0.9, 1.2], [0.36353, 0.3639, 0.38], [0.4, 0.0, 0.7]), strict=True)))
+    guard = FamilyGuard(0.5, 60)
+    assert [guard.observe(i, r) for i, r in enumerate(elsewhere)] == [None] * len(elsewhere)
+    assert guard.frontier_index == len(elsewhere) - 1
+
+
 # ----------------------------------------------------------------- clearances
 @pytest.fixture(scope="module")
 def clearance(stiff_chain):

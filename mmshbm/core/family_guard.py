@@ -28,6 +28,11 @@ def family_value(rec: dict) -> float | None:
 _LOOP_DROP = 0.05
 
 
+#: an excursion that comes back onto the family above the frontier within this (relative)
+#: of where an earlier one came back goes round a closed loop
+_REENTRY_TOL = 1e-3
+
+
 #: a stretch of the branch above the frontier whose amplitude grows by this factor while
 #: its frequency grows by less than _LOCK_FREQUENCY (relative) is locked onto ω_j/k: a
 #: tongue climbing without folding
@@ -69,6 +74,7 @@ class FamilyGuard:
         self.shares = {}  # family measure of the frontier points
         self.pending = []  # (index, amplitude, frequency, record) of a pending stretch
         self.active = False  # the problem records the family measure
+        self.reentries = []  # (amplitude, frequency) where excursions came back above the frontier
 
     def observe(self, index: int, rec: dict) -> str | None:
         """Register the accepted point ``index`` with record ``rec``; sets
@@ -99,6 +105,9 @@ class FamilyGuard:
                 self._revert()
         ahead = amplitude >= self.frontier * (1 - 1e-9)
         if on and ahead:
+            if self.left and self._reentered(amplitude, frequency):
+                rec["on_family"] = 0.0
+                return "jump"  # back where an earlier excursion came back: a closed loop
             self._advance(index, rec, share)
             return None
         if (not on and ahead and self.away == 0 and not self.left and self.frontier_index >= 0
@@ -115,6 +124,16 @@ class FamilyGuard:
         if self.away > self.max_excursion:
             return "jump"
         return None
+
+    def _reentered(self, amplitude: float, frequency: float) -> bool:
+        """Whether an excursion comes back onto the family where an earlier one came back
+        (amplitude and frequency within _REENTRY_TOL): the branch goes round a closed loop,
+        each round nudging the frontier by round-off. Registers the re-entry."""
+        for a, f in self.reentries:
+            if abs(amplitude - a) <= _REENTRY_TOL * a and abs(frequency - f) <= _REENTRY_TOL * f:
+                return True
+        self.reentries.append((amplitude, frequency))
+        return False
 
     def _advance(self, index: int, rec: dict, share: float) -> None:
         rec["on_family"] = 1.0
