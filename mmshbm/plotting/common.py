@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from .data import BranchData, _gap, reference_frequencies  # noqa: F401 (re-exported)
+from .data import BranchData, _gap, amplitude_name, reference_frequencies  # noqa: F401 (re-exported)
 
 log = logging.getLogger(__name__)
 
@@ -160,24 +160,6 @@ def dof_label(branch, dof: int) -> tuple[str, float]:
     if model is not None and dof == model.contact_dof:
         return "contact DOF q (mm)", 1e3
     return f"q[{dof}] (SI units)", 1.0
-
-
-def amplitude_name(branch) -> str:
-    """What the branch's amplitude measures, for an axis label: "tip amplitude" (a beam's
-    tip deflection), "node 3 amplitude", "contact DOF amplitude" or "amplitude of q[d]"
-    (a user's model), plain "amplitude" where the branch carries no model."""
-    model = _model(branch)
-    if model is None:
-        return "amplitude"
-    dof = int(model.amplitude_dof)
-    meta = branch.metadata.get("model", {})
-    if meta.get("kind") == "TimoshenkoBeam":
-        n_el, node = int(meta["n_elements"]), dof // 2 + 1
-        where = "tip" if node == n_el else f"node {node}"
-        return f"{where} amplitude" if dof % 2 == 0 else f"{where} rotation amplitude"
-    if model.n_contacts and dof == int(model.contacts[0].dof) and all(c.dof == dof for c in model.contacts):
-        return "contact DOF amplitude"
-    return f"amplitude of q[{dof}]"
 
 
 def points_at(branch, amplitudes) -> list[int]:

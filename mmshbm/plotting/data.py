@@ -9,8 +9,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["BranchData", "reference_frequencies", "resonance_label", "resonance_orders", "resonances_met",
-           "symmetric_clearance", "marked_run"]
+__all__ = ["BranchData", "amplitude_name", "reference_frequencies", "resonance_label", "resonance_orders",
+           "resonances_met", "symmetric_clearance", "marked_run"]
 
 log = logging.getLogger(__name__)
 
@@ -46,6 +46,7 @@ class BranchData:
     gap: float | None = None
     records: dict = field(default_factory=dict)
     odd_harmonics: bool = False
+    amplitude_name: str = "amplitude"
 
     #: the per-point records the plots read (the family front: mmshbm.results.family_points)
     RECORDS = ("on_family", "mode_share")
@@ -59,13 +60,34 @@ class BranchData:
         return cls(np.asarray(branch.frequency), np.asarray(branch.amplitude), np.asarray(branch.energy),
                    np.asarray(branch.contact_force_max), str(branch.status), str(branch.method),
                    int(branch.harmonics), list(branch.special_points), meta, _gap(branch), records,
-                   odd_harmonics(branch))
+                   odd_harmonics(branch), amplitude_name(branch))
 
     def __len__(self) -> int:
         return len(self.frequency)
 
     def get_model(self):
         raise ValueError("BranchData carries no model: pass the reference lines as model=(f_lin, f_zero)")
+
+
+def amplitude_name(branch) -> str:
+    """What the branch's amplitude measures, for an axis label: "tip amplitude" (a beam's
+    tip deflection), "node 3 amplitude", "contact DOF amplitude" or "amplitude of q[d]"
+    (a user's model), plain "amplitude" where the branch carries no model."""
+    if isinstance(branch, BranchData):
+        return branch.amplitude_name
+    try:
+        model = branch.get_model()
+    except ValueError:
+        return "amplitude"
+    dof = int(model.amplitude_dof)
+    meta = branch.metadata.get("model", {})
+    if meta.get("kind") == "TimoshenkoBeam":
+        n_el, node = int(meta["n_elements"]), dof // 2 + 1
+        where = "tip" if node == n_el else f"node {node}"
+        return f"{where} amplitude" if dof % 2 == 0 else f"{where} rotation amplitude"
+    if model.n_contacts and dof == int(model.contacts[0].dof) and all(c.dof == dof for c in model.contacts):
+        return "contact DOF amplitude"
+    return f"amplitude of q[{dof}]"
 
 
 def reference_frequencies(model, modes=(2, 3)) -> tuple[np.ndarray, float | None] | None:
