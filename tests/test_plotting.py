@@ -163,3 +163,19 @@ def test_amplitude_axis_names_what_the_amplitude_measures(branch):
     both = plotting.plot_backbone([branch, chain]).axes[0]
     assert both.get_ylabel() == "amplitude / its gap"
     assert len([t for t in both.get_legend().get_texts() if t.get_text().startswith("linear f")]) == 2
+
+
+def test_a_clearance_is_drawn_with_its_limit_with_the_node_held():
+    """Both gaps → 0 (or the amplitude → ∞): the node is held between its stops all the
+    time, so the backbone rises toward the first frequency of M, K with the node held
+    (an eigenproblem of the 2 × 2 blocks), drawn as the zero-gap limit."""
+    import scipy.linalg as sl
+
+    M = np.diag([1.0, 1.0, 0.0])
+    K = np.array([[2000.0, -1000, 0], [-1000, 6000, -5000], [0, -5000, 5000]])
+    model = mmshbm.Model.from_matrices(M, K, contact_dof=[2, 2], gap=[0.01, 0.01], stop_side=[1, -1])
+    f_held = np.sqrt(sl.eigh(K[:2, :2], M[:2, :2], eigvals_only=True)[0]) / (2 * np.pi)
+    b = mmshbm.backbone(model, harmonics=7)
+    ax = plotting.plot_backbone(b).axes[0]
+    assert any(abs(x - f_held) <= 1e-9 * f_held for x in _vlines(ax))
+    assert b.frequency[-1] < f_held < 1.02 * b.frequency[-1]

@@ -90,6 +90,13 @@ def amplitude_name(branch) -> str:
     return f"amplitude of q[{dof}]"
 
 
+def _is_clearance(model) -> bool:
+    """Two stops with positive gaps on one DOF, one on each side."""
+    contacts = list(model.contacts)
+    return (len(contacts) == 2 and contacts[0].dof == contacts[1].dof
+            and {int(c.side) for c in contacts} == {1, -1} and all(c.gap > 0 for c in contacts))
+
+
 def reference_frequencies(model, modes=(2, 3)) -> tuple[np.ndarray, float | None] | None:
     """(linear frequencies of modes 1..max(modes) (Hz), zero-gap limit (Hz) or None) of
     ``model`` (sparse eigen-solves on large models); None when they cannot be computed.
@@ -100,6 +107,10 @@ def reference_frequencies(model, modes=(2, 3)) -> tuple[np.ndarray, float | None
     try:
         f_lin = model.linear_frequencies(min(n, len(model.l)))
         f_zero = model.zero_gap_frequency() if model.n_contacts == 1 and model.gap > 0 else None
+        if _is_clearance(model):  # both gaps → 0: the DOF held between its stops at all times
+            from ..methods.mms.held import _held_frequency
+
+            f_zero = _held_frequency(model, [model.contacts[0].dof], 1)
     except (ValueError, np.linalg.LinAlgError) as err:
         log.info("no reference lines: %s", err)
         return None
