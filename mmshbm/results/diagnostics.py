@@ -13,7 +13,10 @@ study summaries):
     share of the period-mean kinetic energy (``records["mode_share"]``, 0..1, see
     :mod:`mmshbm.core.modal_energy`): from there on the motion is mostly another
     harmonic, a k:1 internal-resonance tongue or another family of periodic motions. The
-    message says where it leaves and whether it comes back.
+    message says where it leaves and whether it comes back. A branch followed plainly
+    that comes back below its grazing amplitude after passing it is reported too, whatever
+    share the fundamental holds: without contact its orbits are a linear mode's again
+    (another mode's family, or the same one once more).
 ``"penetration"``
     The contact DOF, as the method represents it (for harmonic balance the truncated
     Fourier series), passes its stop by more than :attr:`CheckThresholds.penetration`
@@ -52,6 +55,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import math
 import warnings
 from dataclasses import fields
 
@@ -123,6 +127,8 @@ def check_branch(branch, thresholds: CheckThresholds | None = None, *, warn: boo
                            fundamental=True)
         elif shares is not None:
             out += _family(branch, np.asarray(shares, dtype=float), th)
+        if not out:
+            out += _back_below_grazing(branch)
         out += _coexisting(branch)
         out += _contact(branch, solver, th)
     if Status.parse(branch.status).kind != Status.BOUND:
@@ -275,6 +281,37 @@ def _family(branch, shares: np.ndarray, th: CheckThresholds, fundamental: bool =
         tail = (f"; it returns at point {last + 1} ({branch.frequency[last + 1]:.4g} Hz): the "
                 f"points {first}..{last} are an excursion into another mode (internal resonance)")
     return [Finding("left_family", head + tail, first, last, float(shares[worst]))]
+
+
+#: a branch back below this fraction of its grazing amplitude has no contact left
+_BELOW_GRAZING = 0.9
+
+
+def _back_below_grazing(branch) -> list[Finding]:
+    """The finding of a branch followed plainly that comes back below its grazing
+    amplitude after passing it: without contact every periodic orbit is a linear mode's,
+    so from there the branch follows a linear mode again (another mode's family, or this
+    one's a second time) whatever share the fundamental holds. Branches that follow
+    their family (``records["on_family"]``) jump instead and are not checked here."""
+    if "on_family" in branch.records:
+        return []
+    grazing = [sp[1] for sp in branch.special_points if sp[0] == "grazing"]
+    if not grazing:
+        return []
+    g = int(grazing[0])
+    amplitude = np.asarray(branch.amplitude, dtype=float)
+    below = np.flatnonzero(amplitude[g + 1:] < _BELOW_GRAZING * amplitude[g]) + g + 1
+    if not len(below):
+        return []
+    mode = int(branch.metadata.get("method_options", {}).get("mode", 1))
+    first = int(below[0])
+    message = (f"{branch.method} branch leaves the family of linear mode {mode}: after grazing at point {g} "
+               f"it comes back below its grazing amplitude at {_where(branch, first)}, where no contact is "
+               "left and the orbit is a linear mode's: the rest of the branch follows a linear mode again "
+               "(another mode's family, or this one's once more), not this mode's backbone")
+    share = branch.records.get("fundamental_share", branch.records.get("mode_share"))
+    lowest = float(np.min(share[first:])) if share is not None and len(share) == len(branch) else math.nan
+    return [Finding("left_family", message, first, len(branch) - 1, lowest)]
 
 
 def _followed(branch, on: np.ndarray, shares: np.ndarray, mode: int) -> list[Finding]:
