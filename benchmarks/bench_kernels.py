@@ -112,3 +112,32 @@ class MMSHBMResidual:
 
     def time_condensation(self, name, H):
         self.problem.cond.dynamic_stiffness(self.omega, self.H, derivative=True)
+
+
+class AmplitudeGradient:
+    """The amplitude and its gradient at a DOF with mass (every pinned Newton iteration of a
+    jump): a corpus beam clearance (16 elements, H = 15, 28 pole unknowns on 15
+    harmonics), one recovery of the amplitude row per contact DOF, per group of poles with
+    distinct harmonics and per Ω difference."""
+
+    def setup(self):
+        import warnings
+
+        import mmshbm
+        from mmshbm.analysis import corpus
+
+        model = corpus.generate(291, 29)[290].model()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            branch = mmshbm.backbone(model, harmonics=15, max_amplitude=1.1 * model.gap)
+        self.problem = branch._require_solver()
+        self.u = branch.states[len(branch) - 1]
+        self.problem.amplitude_and_gradient(self.u)
+
+    def time_amplitude_and_gradient(self):
+        self.problem.amplitude_and_gradient(self.u)
+
+    def track_recoveries_per_gradient(self):
+        p = self.problem
+        return p.n_c + len(p._pole_groups) + 3  # + the peak's row and the two Ω differences
+    track_recoveries_per_gradient.unit = "recoveries"
