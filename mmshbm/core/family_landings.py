@@ -78,10 +78,14 @@ def harmonic_search(ladder, guard, targets, amplitude_max, newton_tol, max_newto
     raise PinnedFailure(last_error)
 
 
-#: homotopies run (at targets increasing from the frontier; a target whose start lies
-#: outside the jump's trust region runs none): each takes up to a few hundred steps, so
-#: the search costs at most a few seconds where every evaluation is expensive
+#: homotopies run at the targets nearest the frontier (increasing; a target whose start
+#: lies outside the jump's trust region runs none), then at most MAX_FAR_TARGETS more
+#: spread over the rest of the targets below the bound: next to a fold the homotopy's
+#: curve can turn back in s for every target near the frontier while it reaches the
+#: family farther up. Each takes up to a few hundred steps, so the search costs at most
+#: a few seconds where every evaluation is expensive
 MAX_TARGETS = 4
+MAX_FAR_TARGETS = 3
 #: largest relative distance of a landing from the frequency of the fundamental family's
 #: orbit it started from (the harmonics move a backbone by a few percent; the jumps'
 #: predictors are held to the same 15 %)
@@ -95,11 +99,16 @@ def homotopy_search(landing, guard, targets, amplitude_max: float, accept, frequ
     Returns (u, iterations, history, record, tangent, target); raises PinnedFailure with
     the last reason."""
     last_error = "no attempt"
+    above = [t for t in targets if t > float(guard.frontier) * (1 + 1e-12)]
+    # the bound is not among the spread targets: a landing there has no family above it
+    # to continue along, and one that does not come down either is a lone orbit
+    rest = [t for t in above[MAX_TARGETS:] if t < amplitude_max * (1 - 1e-9)]
+    picks = sorted({round(k * (len(rest) - 1) / MAX_FAR_TARGETS) for k in range(1, MAX_FAR_TARGETS + 1)}
+                   ) if rest else []
+    spread = [rest[i] for i in picks]
     tried = 0
-    for target in targets:
-        if target <= float(guard.frontier) * (1 + 1e-12):
-            continue
-        if tried >= MAX_TARGETS:
+    for target in above[:MAX_TARGETS] + spread:
+        if tried >= MAX_TARGETS + len(spread):
             break
         try:
             try:
