@@ -78,8 +78,8 @@ def test_batched_contact_signals_equal_the_per_point_ones():
 def test_amplitude_gradient_in_the_pole_unknowns():
     """Amplitude at a DOF with mass, poles sharing harmonics (a beam clearance, 28 poles on
     15 harmonics): the gradient in every η, taken one recovery per group of distinct
-    harmonics, is each pole's own recovery bit for bit and the central difference of the
-    amplitude (an error of order h² plus round-off ε·A/h)."""
+    harmonics, is each pole's own recovery (to round-off) and the central difference of
+    the amplitude (an error of order h² plus round-off ε·A/h)."""
     from mmshbm.analysis import corpus
 
     model = corpus.generate(291, 29)[290].model()
@@ -97,8 +97,9 @@ def test_amplitude_gradient_in_the_pole_unknowns():
         e = np.zeros(p.n_poles)
         e[q] = 1.0
         own = s * (p._amplitude_row(zero_a, omega, e) @ cosk) * p.colscale[n_a + q]
-        assert grad[n_a + q] == own
+        assert abs(grad[n_a + q] - own) <= 4 * np.finfo(float).eps * abs(own)  # one product either way
         du = np.zeros(p.n_unknowns)
         du[n_a + q] = h
         fd = (p.amplitude_value(u + du) - p.amplitude_value(u - du)) / (2 * h)
-        assert abs(fd - grad[n_a + q]) <= 1e-6 * np.abs(grad).max() + 1e-9 * amplitude / h
+        # h² terms of the moving peak, plus the amplitude's round-off (~100 terms of ε·A) over h
+        assert abs(fd - grad[n_a + q]) <= 1e-6 * np.abs(grad).max() + 1e-12 * amplitude / h
