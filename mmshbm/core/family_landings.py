@@ -95,40 +95,55 @@ _NEAR = 0.15
 def homotopy_search(landing, guard, targets, amplitude_max: float, accept, frequency_of, monitor, problem, *,
                     tol: float, max_iter: int, admissible=None) -> tuple:
     """Land at the first target above the frontier where ``landing`` converges onto the
-    family near its start's frequency (at most :data:`MAX_TARGETS` homotopies run).
-    Returns (u, iterations, history, record, tangent, target); raises PinnedFailure with
-    the last reason."""
-    last_error = "no attempt"
-    above = [t for t in targets if t > float(guard.frontier) * (1 + 1e-12)]
-    # the bound is not among the spread targets: a landing there has no family above it
-    # to continue along, and one that does not come down either is a lone orbit
-    rest = [t for t in above[MAX_TARGETS:] if t < amplitude_max * (1 - 1e-9)]
-    picks = sorted({round(k * (len(rest) - 1) / MAX_FAR_TARGETS) for k in range(1, MAX_FAR_TARGETS + 1)}
-                   ) if rest else []
-    spread = [rest[i] for i in picks]
-    tried = 0
-    for target in above[:MAX_TARGETS] + spread:
-        if tried >= MAX_TARGETS + len(spread):
-            break
+    family near its start's frequency: :data:`MAX_TARGETS` homotopies at the targets
+    nearest the frontier, then at most :data:`MAX_FAR_TARGETS` at targets spread over the
+    rest below the bound. Returns (u, iterations, history, record, tangent, target);
+    raises PinnedFailure with the last reason."""
+    errors = ["no attempt"]
+
+    def attempt(target) -> tuple | None:
+        """The landing at ``target``, or None (its reason kept); raises StartOutside
+        when the target's start lies outside the trust region (no homotopy run)."""
         try:
-            try:
-                u0, f_start = landing(target, amplitude_max, tol=tol, max_iter=max_iter,
-                                      admissible=admissible)
-            except StartOutside:
-                raise
-            except (PinnedFailure, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
-                tried += 1
-                raise
-            tried += 1
+            u0, f_start = landing(target, amplitude_max, tol=tol, max_iter=max_iter, admissible=admissible)
             f0 = (frequency_of(u0) if frequency_of is not None
                   else float(monitor(problem, u0).get("frequency", math.nan)))
             if math.isfinite(f_start) and not abs(f0 - f_start) <= _NEAR * f_start:
                 raise PinnedFailure(f"the homotopy ended at {f0:.4g} Hz, far from the fundamental family's "
                                     f"{f_start:.4g} Hz")
-            u, nit, hist, rec, t = accept(u0, target, f0)
+            return (*accept(u0, target, f0), target)
+        except StartOutside:
+            raise
         except (PinnedFailure, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as err:
-            last_error = str(err)
-            log.debug("homotopy landing at %.4g: %s", target, last_error)
+            errors.append(str(err))
+            log.debug("homotopy landing at %.4g: %s", target, err)
+            return None
+
+    above = [t for t in targets if t > float(guard.frontier) * (1 + 1e-12)]
+    tried, nearest = 0, len(above)
+    for position, target in enumerate(above):
+        if tried >= MAX_TARGETS:
+            nearest = position
+            break
+        try:
+            found = attempt(target)
+        except StartOutside as err:
+            errors.append(str(err))
             continue
-        return u, nit, hist, rec, t, target
-    raise PinnedFailure(last_error)
+        tried += 1
+        if found is not None:
+            return found
+    # the bound is not among the spread targets: a landing there has no family above it
+    # to continue along, and one that does not come down either is a lone orbit
+    rest = [t for t in above[nearest:] if t < amplitude_max * (1 - 1e-9)]
+    picks = sorted({round(k * (len(rest) - 1) / MAX_FAR_TARGETS) for k in range(1, MAX_FAR_TARGETS + 1)}
+                   ) if rest else []
+    for target in (rest[i] for i in picks):
+        try:
+            found = attempt(target)
+        except StartOutside as err:
+            errors.append(str(err))
+            continue
+        if found is not None:
+            return found
+    raise PinnedFailure(errors[-1])
