@@ -179,3 +179,25 @@ def test_a_clearance_is_drawn_with_its_limit_with_the_node_held():
     ax = plotting.plot_backbone(b).axes[0]
     assert any(abs(x - f_held) <= 1e-9 * f_held for x in _vlines(ax))
     assert b.frequency[-1] < f_held < 1.02 * b.frequency[-1]
+
+
+def test_labels_of_special_points_do_not_crowd():
+    """A clearance that jumps ten tongues within a few tenths of a gap (corpus seed 28
+    index 225): of the labels of its special points (tongues named, skipped intervals)
+    none is placed next to another (anchors at least 0.12 of the width or 0.035 of the
+    height apart); every marker stays."""
+    from mmshbm.analysis import corpus
+
+    model = corpus.generate(226, 28)[225].model()
+    b = mmshbm.backbone(model, harmonics=15, max_amplitude=10 * model.gap)
+    ax = plotting.plot_backbone(b).axes[0]
+    mine = [t for t in ax.texts if t.get_text().startswith("skipped") or "Ω≈" in t.get_text()]
+    assert len(mine) >= 3
+    to_axes = ax.transData + ax.transAxes.inverted()
+    anchors = [to_axes.transform(t.xy) for t in mine]
+    for i, p in enumerate(anchors):
+        for q in anchors[:i]:
+            assert abs(p[0] - q[0]) >= 0.12 or abs(p[1] - q[1]) >= 0.035
+    jumps = sum(1 for sp in b.special_points if sp.kind == "jump")
+    diamonds = [ln for ln in ax.get_lines() if ln.get_marker() == "D"]
+    assert jumps >= 8 and len(diamonds) >= 8

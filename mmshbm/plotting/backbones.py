@@ -98,6 +98,7 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
     if styles is None:
         styles = line_styles(len(branches))
     colors = []
+    notes: list = []  # labels of special points, placed once the axes' limits are known
     excursion_labelled = False
     for i, (b, label) in enumerate(zip(branches, labels, strict=True)):
         style = {"lw": 1.4} | dict(styles[i])
@@ -106,7 +107,7 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
         excursion_labelled |= drawn
         colors.append(line.get_color())
         if special:
-            _special_points(ax, b, scales[i], line.get_color())
+            _special_points(ax, b, scales[i], line.get_color(), notes)
     if measured is not None:
         if not hasattr(measured, "frequency"):
             from ..analysis.measured import load_measured
@@ -136,6 +137,7 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
     ax.set_ylabel(ylabel)
     ax.set_ylim(bottom=0)
     ax.grid(True, alpha=0.3)
+    _place_notes(ax, notes)
     _legend(ax, fontsize=8, loc=legend_loc)
     if title:
         ax.set_title(title)
@@ -267,7 +269,27 @@ def _draw_family(ax, branch, y, label, style, first_excursion: bool):
     return line, True
 
 
-def _special_points(ax, branch, scale: float, color) -> None:
+#: two labels of special points closer than this (fractions of the axes' width, height)
+#: would overlap: the later one (lower priority) is left out; its marker stays
+_NOTE_SPACING = (0.12, 0.035)
+
+
+def _place_notes(ax, notes: list) -> None:
+    """Annotate the special points' labels (priority, text, (x, y) data, offset in points,
+    colour), by priority (the end of a branch, then skipped intervals, then resonances),
+    leaving out a label whose anchor lies too close to one already placed."""
+    to_axes = ax.transData + ax.transAxes.inverted()
+    placed: list = []
+    for _, text, xy, offset, color in sorted(notes, key=lambda note: note[0]):
+        px, py = to_axes.transform(xy)
+        if any(abs(px - qx) < _NOTE_SPACING[0] and abs(py - qy) < _NOTE_SPACING[1] for qx, qy in placed):
+            continue
+        placed.append((px, py))
+        ax.annotate(text, xy, xytext=offset, textcoords="offset points", fontsize=7, color=color)
+
+
+def _special_points(ax, branch, scale: float, color, notes: list) -> None:
+    """Markers of the branch's special points; their labels go to ``notes``."""
     n = len(branch)
     f, a = branch.frequency, branch.amplitude / scale
     seen, named = set(), set()
@@ -287,8 +309,7 @@ def _special_points(ax, branch, scale: float, color) -> None:
                 k, j = data.get("k", data.get("harmonic")), data.get("j", data.get("mode"))
                 if k is not None and j is not None and (k, j) not in named:
                     named.add((k, j))
-                    ax.annotate(resonance_label(k, j), (f[i], a[i]), xytext=(4, -9),
-                                textcoords="offset points", fontsize=7, color=color)
+                    notes.append((2, resonance_label(k, j), (f[i], a[i]), (4, -9), color))
         elif kind == "jump" and i > 0:
             label = None if "jump" in seen else "jump (family not sampled)"
             seen.add("jump")
@@ -297,14 +318,12 @@ def _special_points(ax, branch, scale: float, color) -> None:
             ax.plot([f[i0], f[i]], [a[i0], a[i]], ls=":", color=color, lw=1.0, zorder=3, label=label)
             lo, hi = data.get("amplitude_frontier"), data.get("amplitude_to")
             if lo is not None and hi is not None and hi > lo * 1.01:
-                ax.annotate(f"skipped {lo / scale:.3g}–{hi / scale:.3g}", (f[i], a[i]),
-                            xytext=(4, 4), textcoords="offset points", fontsize=7, color=color)
+                notes.append((1, f"skipped {lo / scale:.3g}–{hi / scale:.3g}", (f[i], a[i]), (4, 4), color))
     status = Status.parse(branch.status)
     if n and status.kind != Status.BOUND:
         ax.plot(f[-1], a[-1], "x", color=color, ms=8, mew=2, zorder=6,
                 label=None if "_stopped" in seen else "stopped short of its bounds")
-        ax.annotate(status.kind.split(" (")[0], (f[-1], a[-1]), xytext=(5, 2),
-                    textcoords="offset points", fontsize=7, color=color)
+        notes.append((0, status.kind.split(" (")[0], (f[-1], a[-1]), (5, 2), color))
 
 
 def _legend(ax, **kwargs) -> None:
