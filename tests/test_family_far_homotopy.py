@@ -50,3 +50,23 @@ def test_a_light_host_rattling_reaches_its_bound_on_an_exact_orbit():
     assert abs(orbit.max_excursion / b.amplitude[-1] - 1) < 1e-9
     assert abs(orbit.frequency / f10 - 1) < 1e-3
     assert _fundamental_share(model, orbit) > 0.5
+
+
+def test_a_landing_apart_from_the_family_below_is_refused():
+    """3-mass chain (corpus seed 36 index 58, H = 9) whose branch turns back at grazing:
+    a homotopy at a spread target lands at 5.75 gaps on an orbit whose branch does not
+    come back down to the frontier, and ends at 10 gaps at 0.164 Hz, where the runs at
+    H = 5 and 15 (which pass grazing) give 0.184 and 0.192 Hz: another orbit. Such a
+    landing is refused; the run may end short, but not on a branch 10 % away from its
+    neighbours in H."""
+    model = corpus.generate(59, 36)[58].model()
+    gap = model.gap
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        b = mmshbm.backbone(model, harmonics=9, max_amplitude=10 * gap)
+        finer = mmshbm.backbone(model, harmonics=15, max_amplitude=10 * gap)
+    assert finer.completed and 0.18 < finer.frequency_at(10 * gap) < 0.2
+    if b.completed:
+        assert abs(b.frequency_at(10 * gap) / finer.frequency_at(10 * gap) - 1) < 0.05
+    else:
+        assert "does not come down" in b.status or "turns back" in b.status

@@ -52,7 +52,14 @@ import numpy as np
 
 from .family_end import FamilyEnded, end_of_family, turned_back
 from .family_guard import FAMILY_RECORD, FamilyGuard, family_value
-from .family_landings import LIMIT_SLACK, MAX_LADDERS, MAX_TARGETS, harmonic_search, homotopy_search
+from .family_landings import (
+    LIMIT_SLACK,
+    MAX_FAR_TARGETS,
+    MAX_LADDERS,
+    MAX_TARGETS,
+    harmonic_search,
+    homotopy_search,
+)
 from .pinned import PinnedFailure, solve_at_amplitude
 
 __all__ = ["FAMILY_RECORD", "FamilyEnded", "FamilyGuard", "family_value", "jump"]
@@ -305,11 +312,11 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     homotopy = problem.homotopy_landing
     if homotopy is not None:
         window["hi"] = window_near  # the far search's window, not the one above the bound
-        solves[:] = [0, MAX_TARGETS]
+        solves[:] = [0, MAX_TARGETS + MAX_FAR_TARGETS]  # one acceptance per homotopy
         try:
             u, nit, hist, rec, t, target = homotopy_search(
                 homotopy, guard, far, amplitude_max, accept, frequency_of, monitor, problem, tol=newton_tol,
-                max_iter=3 * max_newton, admissible=admissible)
+                max_iter=3 * max_newton, admissible=admissible, descend=descend)
             return u, nit, hist, rec, t, target, guard.frontier_index
         except PinnedFailure as err:
             far_error += f"; by a homotopy from the fundamental's family: {err}"

@@ -93,15 +93,20 @@ _NEAR = 0.15
 
 
 def homotopy_search(landing, guard, targets, amplitude_max: float, accept, frequency_of, monitor, problem, *,
-                    tol: float, max_iter: int, admissible=None) -> tuple:
+                    tol: float, max_iter: int, admissible=None, descend=None) -> tuple:
     """Land at the first target above the frontier where ``landing`` converges onto the
     family near its start's frequency: :data:`MAX_TARGETS` homotopies at the targets
     nearest the frontier, then at most :data:`MAX_FAR_TARGETS` at targets spread over the
-    rest below the bound. Returns (u, iterations, history, record, tangent, target);
-    raises PinnedFailure with the last reason."""
+    rest below the bound. A landing at a spread target counts only where its branch,
+    followed back down (``descend(u, tangent, amplitude, amplitude_to)``, None when it
+    leaves the family or turns back first), reaches the frontier's amplitude on the
+    family: the family resumes above a fold of the branch below, not somewhere apart.
+    Without ``descend`` no spread target runs. Returns (u, iterations, history, record,
+    tangent, target); raises PinnedFailure with the last reason."""
     errors = ["no attempt"]
+    frontier = float(guard.frontier)
 
-    def attempt(target) -> tuple | None:
+    def attempt(target, spread: bool = False) -> tuple | None:
         """The landing at ``target``, or None (its reason kept); raises StartOutside
         when the target's start lies outside the trust region (no homotopy run)."""
         try:
@@ -111,7 +116,11 @@ def homotopy_search(landing, guard, targets, amplitude_max: float, accept, frequ
             if math.isfinite(f_start) and not abs(f0 - f_start) <= _NEAR * f_start:
                 raise PinnedFailure(f"the homotopy ended at {f0:.4g} Hz, far from the fundamental family's "
                                     f"{f_start:.4g} Hz")
-            return (*accept(u0, target, f0), target)
+            u, nit, hist, rec, t = accept(u0, target, f0)
+            if spread and descend(u, t, target, frontier) is None:
+                raise PinnedFailure(f"the branch through the landing at {target:.4g} does not come down "
+                                    f"to the frontier's amplitude {frontier:.4g} on the family")
+            return u, nit, hist, rec, t, target
         except StartOutside:
             raise
         except (PinnedFailure, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as err:
@@ -135,12 +144,12 @@ def homotopy_search(landing, guard, targets, amplitude_max: float, accept, frequ
             return found
     # the bound is not among the spread targets: a landing there has no family above it
     # to continue along, and one that does not come down either is a lone orbit
-    rest = [t for t in above[nearest:] if t < amplitude_max * (1 - 1e-9)]
+    rest = [t for t in above[nearest:] if t < amplitude_max * (1 - 1e-9)] if descend is not None else []
     picks = sorted({round(k * (len(rest) - 1) / MAX_FAR_TARGETS) for k in range(1, MAX_FAR_TARGETS + 1)}
                    ) if rest else []
     for target in (rest[i] for i in picks):
         try:
-            found = attempt(target)
+            found = attempt(target, spread=True)
         except StartOutside as err:
             errors.append(str(err))
             continue
