@@ -185,7 +185,7 @@ def test_labels_of_special_points_do_not_crowd():
     """A clearance that jumps ten tongues within a few tenths of a gap (corpus seed 28
     index 225): of the labels of its special points (tongues named, skipped intervals)
     none is placed next to another (anchors at least 0.12 of the width or 0.035 of the
-    height apart); every marker stays."""
+    height apart) nor runs past the right edge; every marker stays."""
     from mmshbm.analysis import corpus
 
     model = corpus.generate(226, 28)[225].model()
@@ -201,3 +201,7 @@ def test_labels_of_special_points_do_not_crowd():
     jumps = sum(1 for sp in b.special_points if sp.kind == "jump")
     diamonds = [ln for ln in ax.get_lines() if ln.get_marker() == "D"]
     assert jumps >= 8 and len(diamonds) >= 8
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    renderer = FigureCanvasAgg(ax.figure).get_renderer()  # labels near the right edge open to the left
+    assert all(t.get_window_extent(renderer).x1 <= ax.bbox.x1 + 1 for t in mine)

@@ -285,7 +285,9 @@ def _place_notes(ax, notes: list) -> None:
         if any(abs(px - qx) < _NOTE_SPACING[0] and abs(py - qy) < _NOTE_SPACING[1] for qx, qy in placed):
             continue
         placed.append((px, py))
-        ax.annotate(text, xy, xytext=offset, textcoords="offset points", fontsize=7, color=color)
+        right = px > 0.8  # near the right edge the label goes to the left of its point
+        ax.annotate(text, xy, xytext=(-offset[0], offset[1]) if right else offset, textcoords="offset points",
+                    fontsize=7, color=color, ha="right" if right else "left")
 
 
 def _special_points(ax, branch, scale: float, color, notes: list) -> None:
