@@ -166,8 +166,9 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     (else it found another branch). ``coexisting`` checks a landing nearer the frontier
     than a filtered passage's (:func:`_nearer_landing`). When all of these fail, the
     problem's ``harmonic_landing`` (if any) gives the orbit at each target continued in
-    the harmonics from a low-harmonic family
-    (:func:`~mmshbm.core.family_landings.harmonic_search`); when that fails too, the
+    the harmonics from a low-harmonic family, up to the problem's
+    ``family_frequency_ceiling`` (:func:`~mmshbm.core.family_landings.harmonic_search`);
+    when that fails too, the
     family is sought above the bound and followed back down onto it by ``descend(u,
     tangent, amplitude, amplitude_max)`` (None or the tuple (u, iterations, history,
     record, tangent) at ``amplitude_max``; :func:`_beyond_bound`), and last
@@ -203,6 +204,8 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     window = {"hi": f_hi}  # the far search below widens it to its own targets
     limit = problem.family_frequency_limit
     f_limit = limit() if limit is not None else math.inf
+    ceiling = problem.family_frequency_ceiling
+    f_ceiling = ceiling() if ceiling is not None else f_limit
     frequency_of = problem.frequency_of
     admissible = None
     if frequency_of is not None and math.isfinite(f_lo) and f_lo > 0:
@@ -298,7 +301,7 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
             solves[:] = [0, MAX_LADDERS]
             u, nit, hist, rec, t, target = harmonic_search(
                 ladder, guard, far, amplitude_max, newton_tol, max_newton, admissible, accept, frequency_of,
-                monitor, problem, f_limit)
+                monitor, problem, f_ceiling)
             return u, nit, hist, rec, t, target, guard.frontier_index
         except PinnedFailure as err:
             far_error += f"; in the harmonics: {err}"

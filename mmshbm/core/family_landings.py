@@ -28,11 +28,10 @@ from .pinned import PinnedFailure, StartOutside
 
 log = logging.getLogger(__name__)
 
-#: relative margin above the problem's ``family_frequency_limit`` within which a landing
-#: of the harmonic search is still accepted: the backbone tends to that frequency far
-#: above the gaps (rigid stops stiffen the structure at most that far). The limit of one
-#: one-sided contact, 2/(1/f_open + 1/f_held), is exact for one DOF only, so the other
-#: stages, whose landings came first, keep the window's wider margin
+#: relative margin above the frequency bound within which a landing of the harmonic
+#: search (the problem's ``family_frequency_ceiling``) or above the bound (its
+#: ``family_frequency_limit``) is still accepted: rigid stops stiffen the structure at
+#: most to the frequency with every contact DOF held
 LIMIT_SLACK = 0.01
 
 #: targets of the harmonic search (each a ladder of pinned solves from the low H to H)
@@ -40,15 +39,18 @@ MAX_LADDERS = 8
 
 
 def harmonic_search(ladder, guard, targets, amplitude_max, newton_tol, max_newton, admissible, accept,
-                     frequency_of, monitor, problem, f_limit: float) -> tuple:
+                     frequency_of, monitor, problem, f_ceiling: float) -> tuple:
     """The last resort of a jump: the starting mode's orbit at each target above the
     frontier (increasing, at most ``MAX_LADDERS``) continued in the harmonics from a
     low-harmonic family (``problem.harmonic_landing``), which reaches orbits that no
     predictor taken from the family below a tongue converges to. The ladder must start
     on the family (the fundamental's share at its low H at least ``family_share``); its
     orbit at H is then accepted as any other landing (``accept``: on the family, in the
-    frequency window) that lies at most ``LIMIT_SLACK`` above ``f_limit``, the problem's
-    ``family_frequency_limit``. Returns (u, iterations, history, record, tangent, target); raises
+    frequency window) that lies at most ``LIMIT_SLACK`` above ``f_ceiling``, the problem's
+    ``family_frequency_ceiling`` (the frequency with every contact DOF held; not the
+    zero-gap limit of one one-sided contact, 2/(1/f_open + 1/f_held), which is exact for
+    one DOF only: above a 2:1 tongue a chain's first-mode orbit lies well above it,
+    docs/resonances.md). Returns (u, iterations, history, record, tangent, target); raises
     PinnedFailure with the last reason."""
     last_error = "no attempt"
     tried = 0
@@ -68,8 +70,9 @@ def harmonic_search(ladder, guard, targets, amplitude_max, newton_tol, max_newto
                 monitor(problem, u0).get("frequency", math.nan)
             u, nit, hist, rec, t = accept(u0, target, f_pred)
             f = float(rec.get("frequency", math.nan))
-            if f > f_limit * (1.0 + LIMIT_SLACK):
-                raise PinnedFailure(f"landed above the family's frequency limit ({f:.4g} > {f_limit:.4g} Hz)")
+            if f > f_ceiling * (1.0 + LIMIT_SLACK):
+                raise PinnedFailure(f"landed above the family's frequency ceiling "
+                                    f"({f:.4g} > {f_ceiling:.4g} Hz)")
         except (PinnedFailure, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as err:
             last_error = str(err)
             log.debug("harmonic ladder at %.4g: %s", target, last_error)

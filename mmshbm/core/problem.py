@@ -41,7 +41,10 @@ runners call them directly and never probe a problem for attributes.
     differenced from ``monitor(u)["amplitude"]``.
 :class:`FamilyEvents`
     What the jumps over internal-resonance tongues use (:mod:`mmshbm.core.family`):
-    ``frequency_of(u)`` (Hz, no evaluation), ``family_frequency_limit()`` (Hz),
+    ``frequency_of(u)`` (Hz, no evaluation), ``family_frequency_limit()`` (Hz, where the
+    starting mode's backbone tends far above the gaps: the far search's window),
+    ``family_frequency_ceiling()`` (Hz, above which no landing counts; the limit when
+    not offered),
     ``scaled_state(u, factor)``, ``family_predictor(u_from, A_from, A_to, A_max)``,
     ``family_landing(u_from, rec_from, excursion, A_max, A_min)``,
     ``harmonic_landing(A, A_max, tol=, max_iter=, admissible=) -> (u, share_ref)``,
@@ -145,6 +148,7 @@ class FamilyEvents(Protocol):
 
     frequency_of: Callable[[np.ndarray], float] | None
     family_frequency_limit: Callable[[], float] | None
+    family_frequency_ceiling: Callable[[], float] | None
     scaled_state: Callable[[np.ndarray, float], np.ndarray] | None
     family_predictor: Callable[[np.ndarray, float, float, float], np.ndarray] | None
     family_landing: Callable[..., tuple[np.ndarray, float]] | None
@@ -235,6 +239,7 @@ class ContinuationProblemBase:
     # FamilyEvents
     frequency_of: Callable[[np.ndarray], float] | None = None
     family_frequency_limit: Callable[[], float] | None = None
+    family_frequency_ceiling: Callable[[], float] | None = None
     scaled_state: Callable[[np.ndarray, float], np.ndarray] | None = None
     family_predictor: Callable[[np.ndarray, float, float, float], np.ndarray] | None = None
     family_landing: Callable[..., tuple[np.ndarray, float]] | None = None
