@@ -60,25 +60,47 @@ def harmonic_search(ladder, guard, targets, amplitude_max, newton_tol, max_newto
         if tried >= MAX_LADDERS:
             break
         tried += 1
-        try:
-            u0, share_ref = ladder(target, amplitude_max, tol=newton_tol, max_iter=3 * max_newton,
-                                   admissible=admissible)
-            if share_ref < guard.family_share:
-                raise PinnedFailure(f"the low-harmonic orbit at {target:.4g} is off the family "
-                                    f"(fundamental share {share_ref:.3f})")
-            f_pred = frequency_of(u0) if frequency_of is not None else \
-                monitor(problem, u0).get("frequency", math.nan)
-            u, nit, hist, rec, t = accept(u0, target, f_pred)
-            f = float(rec.get("frequency", math.nan))
-            if f > f_ceiling * (1.0 + LIMIT_SLACK):
-                raise PinnedFailure(f"landed above the family's frequency ceiling "
-                                    f"({f:.4g} > {f_ceiling:.4g} Hz)")
-        except (PinnedFailure, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as err:
-            last_error = str(err)
-            log.debug("harmonic ladder at %.4g: %s", target, last_error)
-            continue
-        return u, nit, hist, rec, t, target
+        for fundamental in (False, True):
+            found = _ladder_landing(ladder, guard, target, amplitude_max, newton_tol, max_newton, admissible,
+                                    accept, frequency_of, monitor, problem, f_ceiling, fundamental)
+            if isinstance(found, str):
+                if found:
+                    last_error = found
+                continue
+            return (*found, target)
     raise PinnedFailure(last_error)
+
+
+def _ladder_landing(ladder, guard, target, amplitude_max, newton_tol, max_newton, admissible, accept,
+                    frequency_of, monitor, problem, f_ceiling: float, fundamental: bool) -> tuple | str:
+    """One ladder's landing at ``target``: (u, iterations, history, record, tangent), or
+    the reason it failed ("" where the problem has no ladder from the fundamental's
+    family apart from its first)."""
+    try:
+        u0, share_ref = ladder(target, amplitude_max, tol=newton_tol, max_iter=3 * max_newton,
+                               admissible=admissible, fundamental=fundamental)
+    except ValueError as err:
+        if fundamental:
+            return ""
+        log.debug("harmonic ladder at %.4g: %s", target, err)
+        return str(err)
+    except (PinnedFailure, ArithmeticError, RuntimeError, np.linalg.LinAlgError) as err:
+        log.debug("harmonic ladder at %.4g: %s", target, err)
+        return str(err)
+    try:
+        if share_ref < guard.family_share:
+            raise PinnedFailure(f"the low-harmonic orbit at {target:.4g} is off the family "
+                                f"(fundamental share {share_ref:.3f})")
+        f_pred = frequency_of(u0) if frequency_of is not None else \
+            monitor(problem, u0).get("frequency", math.nan)
+        u, nit, hist, rec, t = accept(u0, target, f_pred)
+        f = float(rec.get("frequency", math.nan))
+        if f > f_ceiling * (1.0 + LIMIT_SLACK):
+            raise PinnedFailure(f"landed above the family's frequency ceiling ({f:.4g} > {f_ceiling:.4g} Hz)")
+    except (PinnedFailure, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as err:
+        log.debug("harmonic ladder at %.4g: %s", target, err)
+        return str(err)
+    return u, nit, hist, rec, t
 
 
 #: homotopies run at the targets nearest the frontier (increasing; a target whose start

@@ -141,7 +141,10 @@ class ModesMixin:
     def zero_gap_frequency(self) -> float:
         """Frequency (Hz) of the first mode's bilinear limit (gap → 0 or amplitude → ∞):
         half a period open, half a period with the contact DOF held at the stop,
-        f = 2 / (1/f_open + 1/f_closed). Kept with the model after the first call."""
+        f = 2 / (1/f_open + 1/f_closed). Exact for one DOF; on a structure whose open and
+        held first modes differ in shape an estimate (a chain's first-mode orbit above a
+        2:1 tongue lies up to 31 % above it at 10 gaps, docs/resonances.md). Kept with the
+        model after the first call."""
         memo = self.__dict__.get("_memo_zero_gap")
         if memo is None:
             memo = self._zero_gap_frequency()

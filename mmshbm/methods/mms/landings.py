@@ -19,7 +19,7 @@ class LandingsMixin:
     _reference: tuple | None = None
 
     def harmonic_landing(self, amplitude: float, amplitude_max: float, *, tol: float, max_iter: int,
-                         admissible=None) -> tuple[np.ndarray, float]:
+                         admissible=None, fundamental: bool = False) -> tuple[np.ndarray, float]:
         """The starting mode's orbit at ``amplitude`` (m) continued in the harmonics: a
         low-harmonic family solved with the amplitude pinned there, then solved again at
         H_ref + 2, H_ref + 4, ..., H harmonics, each from the one before (the new
@@ -29,6 +29,10 @@ class LandingsMixin:
         one of :meth:`reference_branch` (H_ref = 3) where it reaches ``amplitude``, else
         the fundamental alone (H_ref = 1), whose branch meets no internal resonance of a
         higher harmonic and reaches the bound where the H_ref = 3 branch ends in one.
+        ``fundamental=True`` starts from the fundamental's family wherever it reaches
+        ``amplitude``: the H_ref = 3 family carries harmonic 2 and can itself sit on a
+        2:1 tongue's side up to the bound, below the starting mode's orbit above the
+        tongue (docs/resonances.md).
 
         At high H an impacting orbit spreads its kinetic energy over many harmonics, and
         its fundamental's share can fall below the family's threshold while the orbit
@@ -45,18 +49,27 @@ class LandingsMixin:
         Raises
         ------
         ValueError
-            Without a low-harmonic branch that reaches ``amplitude``.
+            Without a low-harmonic branch that reaches ``amplitude`` (with
+            ``fundamental=True``: without a fundamental family that reaches it, or when it
+            is the low-harmonic family the default starts from).
         PinnedFailure
             When a rung does not converge, leaves ``admissible`` (the trust region) or
             gives a harmonic above the fundamental more kinetic energy than it.
         """
         from ...core.pinned import PinnedFailure, solve_at_amplitude
 
+        def reaches(branch) -> bool:
+            # a branch that reaches the bound ends on it to round-off (its end refined onto it)
+            return branch is not None and branch[1][0] <= amplitude <= branch[1][-1] * (1 + 1e-9)
+
         ref = self.reference_branch(amplitude_max)
-        # a branch that reaches the bound ends on it to round-off (its end refined onto it)
-        if ref is None or not ref[1][0] <= amplitude <= ref[1][-1] * (1 + 1e-9):
+        if fundamental:
+            if not reaches(ref) or ref[0].H == 1:
+                raise ValueError("the low-harmonic family of the ladder is the fundamental's")
             ref = self._fundamental_branch(amplitude_max)
-        if ref is None or not ref[1][0] <= amplitude <= ref[1][-1] * (1 + 1e-9):
+        elif not reaches(ref):
+            ref = self._fundamental_branch(amplitude_max)
+        if not reaches(ref):
             raise ValueError("no low-harmonic branch reaches the amplitude")
         aux, A, U = ref
         u0 = np.array([np.interp(amplitude, A, U[:, i]) for i in range(U.shape[1])])
