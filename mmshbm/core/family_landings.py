@@ -77,17 +77,11 @@ def _ladder_landing(ladder, guard, target, amplitude_max, newton_tol, max_newton
     the reason it failed ("" where the problem has no ladder from the fundamental's
     family apart from its first)."""
     try:
-        u0, share_ref = ladder(target, amplitude_max, tol=newton_tol, max_iter=3 * max_newton,
-                               admissible=admissible, fundamental=fundamental)
-    except ValueError as err:
-        if fundamental:
+        start = ladder(target, amplitude_max, tol=newton_tol, max_iter=3 * max_newton, admissible=admissible,
+                       fundamental=fundamental)
+        if start is None:
             return ""
-        log.debug("harmonic ladder at %.4g: %s", target, err)
-        return str(err)
-    except (PinnedFailure, ArithmeticError, RuntimeError, np.linalg.LinAlgError) as err:
-        log.debug("harmonic ladder at %.4g: %s", target, err)
-        return str(err)
-    try:
+        u0, share_ref = start
         if share_ref < guard.family_share:
             raise PinnedFailure(f"the low-harmonic orbit at {target:.4g} is off the family "
                                 f"(fundamental share {share_ref:.3f})")

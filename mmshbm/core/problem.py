@@ -43,11 +43,12 @@ runners call them directly and never probe a problem for attributes.
     What the jumps over internal-resonance tongues use (:mod:`mmshbm.core.family`):
     ``frequency_of(u)`` (Hz, no evaluation), ``family_frequency_limit()`` (Hz, where the
     starting mode's backbone tends far above the gaps: the far search's window),
-    ``family_frequency_ceiling()`` (Hz, above which no landing counts; the limit when
-    not offered),
+    ``family_frequency_ceiling()`` (Hz, above which no landing of the harmonic ladder
+    counts; the limit when not offered),
     ``scaled_state(u, factor)``, ``family_predictor(u_from, A_from, A_to, A_max)``,
     ``family_landing(u_from, rec_from, excursion, A_max, A_min)``,
-    ``harmonic_landing(A, A_max, tol=, max_iter=, admissible=) -> (u, share_ref)``,
+    ``harmonic_landing(A, A_max, tol=, max_iter=, admissible=, fundamental=) -> (u, share_ref)``
+    (None where ``fundamental=True`` names no ladder of its own),
     ``homotopy_landing(A, A_max, tol=, max_iter=, admissible=) -> (u, f_start)`` (the orbit
     reached by a homotopy from another family's orbit of frequency f_start, Hz;
     :mod:`mmshbm.core.family_landings`). Each is None when not offered.
@@ -152,7 +153,7 @@ class FamilyEvents(Protocol):
     scaled_state: Callable[[np.ndarray, float], np.ndarray] | None
     family_predictor: Callable[[np.ndarray, float, float, float], np.ndarray] | None
     family_landing: Callable[..., tuple[np.ndarray, float]] | None
-    harmonic_landing: Callable[..., tuple[np.ndarray, float]] | None
+    harmonic_landing: Callable[..., tuple[np.ndarray, float] | None] | None
     homotopy_landing: Callable[..., tuple[np.ndarray, float]] | None
 
 
@@ -243,7 +244,7 @@ class ContinuationProblemBase:
     scaled_state: Callable[[np.ndarray, float], np.ndarray] | None = None
     family_predictor: Callable[[np.ndarray, float, float, float], np.ndarray] | None = None
     family_landing: Callable[..., tuple[np.ndarray, float]] | None = None
-    harmonic_landing: Callable[..., tuple[np.ndarray, float]] | None = None
+    harmonic_landing: Callable[..., tuple[np.ndarray, float] | None] | None = None
     homotopy_landing: Callable[..., tuple[np.ndarray, float]] | None = None
     # AmplitudeStart
     open_amplitude: Callable[[], float] | None = None

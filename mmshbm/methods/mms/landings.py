@@ -19,7 +19,7 @@ class LandingsMixin:
     _reference: tuple | None = None
 
     def harmonic_landing(self, amplitude: float, amplitude_max: float, *, tol: float, max_iter: int,
-                         admissible=None, fundamental: bool = False) -> tuple[np.ndarray, float]:
+                         admissible=None, fundamental: bool = False) -> tuple[np.ndarray, float] | None:
         """The starting mode's orbit at ``amplitude`` (m) continued in the harmonics: a
         low-harmonic family solved with the amplitude pinned there, then solved again at
         H_ref + 2, H_ref + 4, ..., H harmonics, each from the one before (the new
@@ -45,13 +45,14 @@ class LandingsMixin:
         (u, share_ref): the scaled unknowns at H and the fundamental's share of the
         kinetic energy of the H_ref orbit (:meth:`fundamental_share`), which says
         whether the ladder started on the family.
+        None with ``fundamental=True`` where the default ladder starts from the
+        fundamental's family already (H <= 3, or the H = 3 family does not reach
+        ``amplitude``).
 
         Raises
         ------
         ValueError
-            Without a low-harmonic branch that reaches ``amplitude`` (with
-            ``fundamental=True``: without a fundamental family that reaches it, or when it
-            is the low-harmonic family the default starts from).
+            Without a low-harmonic branch that reaches ``amplitude``.
         PinnedFailure
             When a rung does not converge, leaves ``admissible`` (the trust region) or
             gives a harmonic above the fundamental more kinetic energy than it.
@@ -65,7 +66,7 @@ class LandingsMixin:
         ref = self.reference_branch(amplitude_max)
         if fundamental:
             if not reaches(ref) or ref[0].H == 1:
-                raise ValueError("the low-harmonic family of the ladder is the fundamental's")
+                return None
             ref = self._fundamental_branch(amplitude_max)
         elif not reaches(ref):
             ref = self._fundamental_branch(amplitude_max)
