@@ -181,6 +181,22 @@ def test_a_clearance_is_drawn_with_its_limit_with_the_node_held():
     assert b.frequency[-1] < f_held < 1.02 * b.frequency[-1]
 
 
+def test_the_one_dof_zero_gap_limit_is_labelled_an_estimate_on_a_chain():
+    """2/(1/f_open + 1/f_held) is the bilinear limit of one DOF with mass; a chain's first
+    mode can pass it (docs/resonances.md), so on a chain the legend calls it an estimate."""
+    osc = mmshbm.OneDofOscillator(1, 1, 4, 1).model()
+    M = np.diag([1.0, 1.0, 0.0])
+    K = np.array([[2000.0, -1000, 0], [-1000, 6000, -5000], [0, -5000, 5000]])
+    chain = mmshbm.Model.from_matrices(M, K, contact_dof=2, gap=0.01, stop_side=1)
+    labels = {}
+    for name, model in (("oscillator", osc), ("chain", chain)):
+        b = mmshbm.backbone(model, harmonics=3, max_amplitude=2 * model.gap)
+        texts = [t.get_text() for t in plotting.plot_backbone(b).axes[0].get_legend().get_texts()]
+        labels[name] = [t for t in texts if t.startswith("zero-gap limit")]
+    assert labels["oscillator"] == [f"zero-gap limit {osc.zero_gap_frequency():.2f} Hz"]
+    assert labels["chain"] == [f"zero-gap limit (one-DOF estimate) {chain.zero_gap_frequency():.2f} Hz"]
+
+
 def test_labels_of_special_points_do_not_crowd():
     """A clearance that jumps ten tongues within a few tenths of a gap (corpus seed 28
     index 225): of the labels of its special points (tongues named, skipped intervals)

@@ -41,9 +41,9 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
         Legend entries (default :func:`branch_label`).
     measured : MeasuredBackbone or path, optional
         A measured backbone to overlay (``mmshbm.analysis.measured.load_measured`` reads CSV).
-    model : Model or (f_lin, f_zero), optional
+    model : Model or (f_lin, f_zero[, exact]), optional
         For the reference lines (default: every distinct model of the branches); or the
-        pair :func:`~mmshbm.plotting.data.reference_frequencies` gives.
+        tuple :func:`~mmshbm.plotting.data.reference_frequencies` gives.
     marks : Branch or sequence of (branch index, point index), optional
         Points to mark and number 1, 2, ..., each with a legend entry "marked point n:
         f Hz, A gaps": the points of a Branch (those :meth:`~mmshbm.Branch.solve_at`
@@ -171,7 +171,7 @@ _MODEL_COLORS = ("k", "0.5", "tab:brown", "tab:olive", "tab:pink", "tab:cyan")
 
 def _merge_reference(groups, modes) -> list[tuple[tuple, list[int]]]:
     """Reference frequencies per distinct model, models with equal ones (to 1e-9, e.g.
-    differing only in the gap) merged: [((f_lin, f_zero), branch indices), ...]."""
+    differing only in the gap) merged: [((f_lin, f_zero, exact), branch indices), ...]."""
     out: list[tuple[tuple, list[int]]] = []
     for model, members in groups:
         values = reference_frequencies(model, modes)

@@ -180,11 +180,12 @@ def _reference_lines(ax, model, fmin, fmax, modes, max_order, *, color_open="0.5
     values = reference_frequencies(model, modes) if not isinstance(model, tuple) else model
     if values is None:
         return
-    f_lin, f_zero = values
+    f_lin, f_zero, *exact = values
     suffix = f" ({tag})" if tag else ""
     ax.axvline(f_lin[0], color=color_open, ls=":", lw=1.2, label=f"linear f₁ = {f_lin[0]:.2f} Hz{suffix}")
     if f_zero is not None:
-        ax.axvline(f_zero, color=color_zero, ls="--", lw=1.0, label=f"zero-gap limit {f_zero:.2f} Hz{suffix}")
+        what = "zero-gap limit (one-DOF estimate)" if exact and not exact[0] else "zero-gap limit"
+        ax.axvline(f_zero, color=color_zero, ls="--", lw=1.0, label=f"{what} {f_zero:.2f} Hz{suffix}")
     labelled = False
     for k in modes:
         if k - 1 >= len(f_lin):

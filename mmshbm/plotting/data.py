@@ -66,7 +66,8 @@ class BranchData:
         return len(self.frequency)
 
     def get_model(self):
-        raise ValueError("BranchData carries no model: pass the reference lines as model=(f_lin, f_zero)")
+        raise ValueError("BranchData carries no model: pass the reference lines as model=(f_lin, f_zero)"
+                         " or model=reference_frequencies(model)")
 
 
 def amplitude_name(branch) -> str:
@@ -97,24 +98,30 @@ def _is_clearance(model) -> bool:
             and {int(c.side) for c in contacts} == {1, -1} and all(c.gap > 0 for c in contacts))
 
 
-def reference_frequencies(model, modes=(2, 3)) -> tuple[np.ndarray, float | None] | None:
-    """(linear frequencies of modes 1..max(modes) (Hz), zero-gap limit (Hz) or None) of
-    ``model`` (sparse eigen-solves on large models); None when they cannot be computed.
-    A pair (f_lin, f_zero) given as ``model`` is returned as it is."""
+def reference_frequencies(model, modes=(2, 3)) -> tuple[np.ndarray, float | None, bool] | None:
+    """(linear frequencies of modes 1..max(modes) (Hz), zero-gap limit (Hz) or None, whether
+    that limit is exact) of ``model`` (sparse eigen-solves on large models); None when they
+    cannot be computed. The limit of one one-sided contact, 2/(1/f_open + 1/f_held), is
+    exact with one DOF with mass only (a chain's first mode can pass it by a third,
+    docs/resonances.md); a clearance's, the frequency with the node held between its
+    stops, is exact. A tuple (f_lin, f_zero[, exact]) given as ``model`` is returned as it
+    is."""
     if isinstance(model, tuple):
         return model
     n = max(max(modes, default=1), 1)
     try:
         f_lin = model.linear_frequencies(min(n, len(model.l)))
         f_zero = model.zero_gap_frequency() if model.n_contacts == 1 and model.gap > 0 else None
+        exact = len(model.l) == 1
         if _is_clearance(model):  # both gaps → 0: the DOF held between its stops at all times
             from ..methods.mms.held import _held_frequency
 
             f_zero = _held_frequency(model, [model.contacts[0].dof], 1)
+            exact = True
     except (ValueError, np.linalg.LinAlgError) as err:
         log.info("no reference lines: %s", err)
         return None
-    return f_lin, f_zero
+    return f_lin, f_zero, exact
 
 
 def resonance_label(k, j) -> str:
