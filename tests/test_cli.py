@@ -93,6 +93,7 @@ def test_modes(tmp_path, capsys):
     ["backbone", "--measured", "/nonexistent.csv", *SMALL],
     ["study", "--figure2", "-H", "3"],
     ["study", "--param", "gap"],
+    ["backbone", "--proximal", "residual", "--method", "penalty", *SMALL],
 ])
 def test_errors_are_one_line_exit_2(argv, tmp_path, capsys):
     assert main([*argv, "--out", str(tmp_path)] if argv[0] != "nonsense" else argv) == 2

@@ -270,10 +270,11 @@ def _hard_limit(seconds: float):
 
 
 def run_case(case: CorpusCase, *, time_limit: float = 30.0, compare_path: bool = False,
-             max_gaps: float = 10.0) -> CaseResult:
+             max_gaps: float = 10.0, options: dict | None = None) -> CaseResult:
     """Run the default backbone of ``case`` to ``max_gaps`` gaps (never raises: an
-    exception is a result). A run past ``time_limit`` seconds of processor time is
-    interrupted at its next point (status "interrupted")."""
+    exception is a result), with the further keyword arguments ``options`` of
+    :func:`~mmshbm.backbone` (e.g. ``{"r": "residual"}``). A run past ``time_limit``
+    seconds of processor time is interrupted at its next point (status "interrupted")."""
     from ..methods.backbone import backbone
 
     t0, c0 = time.perf_counter(), time.process_time()
@@ -282,7 +283,7 @@ def run_case(case: CorpusCase, *, time_limit: float = 30.0, compare_path: bool =
         with warnings.catch_warnings(), _hard_limit(time_limit):
             warnings.simplefilter("ignore")
             b = backbone(model, harmonics=case.harmonics, max_amplitude=max_gaps * model.gap,
-                         callback=_limited(time_limit))
+                         callback=_limited(time_limit), **(options or {}))
     except _TimeLimit:  # outside the continuation (setup, the branch's checks)
         return CaseResult(case, False, f"interrupted: past {time_limit:g} s of processor time",
                           time.perf_counter() - t0, cpu_seconds=time.process_time() - c0)
@@ -300,7 +301,7 @@ def run_case(case: CorpusCase, *, time_limit: float = 30.0, compare_path: bool =
             with warnings.catch_warnings(), _hard_limit(time_limit):
                 warnings.simplefilter("ignore")
                 p = backbone(model, harmonics=case.harmonics, max_amplitude=max_gaps * model.gap,
-                             follow="path", callback=_limited(time_limit))
+                             follow="path", callback=_limited(time_limit), **(options or {}))
             clean = p.status == "bound:amplitude" and not [
                 f for f in p.metadata.get("checks", []) if f["kind"] == "left_family"]
         except (Exception, _TimeLimit):  # noqa: BLE001

@@ -136,9 +136,11 @@ class ExactComparison:
 
 
 def compare(case: CorpusCase, amplitude_gaps: float = 1.3, harmonics: int = 31,
-            tol: float = 1e-3) -> ExactComparison:
+            tol: float = 1e-3, options: dict | None = None) -> ExactComparison:
     """Exact orbit and default branch of ``case`` at ``amplitude_gaps`` gaps (and at
-    2·``harmonics`` where the two differ by more than ``tol``)."""
+    2·``harmonics`` where the two differ by more than ``tol``); ``options``: further
+    keyword arguments of :func:`~mmshbm.backbone` for both branches (e.g.
+    ``{"r": "residual"}``)."""
     from .. import exact
     from ..methods.backbone import backbone
 
@@ -154,7 +156,7 @@ def compare(case: CorpusCase, amplitude_gaps: float = 1.3, harmonics: int = 31,
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         try:
-            b = backbone(model, harmonics=harmonics, max_amplitude=1.2 * A)
+            b = backbone(model, harmonics=harmonics, max_amplitude=1.2 * A, **(options or {}))
             f = float(b.frequency_at(A))
             status = b.status
             special = [(s.kind, round(float(b.amplitude[s.index]) / model.gap, 3)) for s in b.special_points
@@ -168,7 +170,7 @@ def compare(case: CorpusCase, amplitude_gaps: float = 1.3, harmonics: int = 31,
             out.estimate, out.estimate_note, out.branch_contacts = _self_report(b, A)
         if clean and not out.error <= tol:
             try:
-                b2 = backbone(model, harmonics=2 * harmonics, max_amplitude=1.2 * A)
+                b2 = backbone(model, harmonics=2 * harmonics, max_amplitude=1.2 * A, **(options or {}))
                 out.branch_2h = float(b2.frequency_at(A))
             except Exception:  # noqa: BLE001
                 pass

@@ -26,6 +26,10 @@ def register(sub) -> None:
     p.add_argument("--follow", default="family", choices=["family", "path"],
                    help="'family' (default): the first mode's backbone, jumping internal-resonance "
                         "tongues; 'path': plain path following (to study a tongue)")
+    p.add_argument("--proximal", default="static", choices=["static", "residual"],
+                   help="MMS-HBM's proximal parameter r: 'static' (default) the contact DOFs' static "
+                        "stiffness; 'residual' the compliance of the modes above the truncation frequency, "
+                        "smaller truncation errors with stiff stops (docs/exact.md)")
     p.set_defaults(func=run)
 
 
@@ -53,6 +57,10 @@ def _run(args, worker) -> int:
         extra["max_steps"] = args.max_steps
     if args.follow != "family":
         extra["follow"] = args.follow
+    if args.proximal != "static":
+        if args.method != "mmshbm":
+            raise ValueError(f"--proximal {args.proximal} applies to --method mmshbm, not {args.method}")
+        extra["r"] = args.proximal
     branch = backbone(model, harmonics=args.harmonics, method=args.method, max_amplitude=max_amp,
                       verbose=common.progress(args), **extra)
     out = common.out_dir(args)

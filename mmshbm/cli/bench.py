@@ -37,6 +37,10 @@ def register(sub) -> None:
     p.add_argument("--contact-decades", type=common.finite_float, nargs=2, default=None, metavar=("LO", "HI"),
                    help="with --corpus-exact: draw the contact spring as 10**U(LO, HI) N/m (default: the "
                         "corpus's, up to 100 times stiffer than the other springs)")
+    p.add_argument("--proximal", choices=("static", "residual"), default="static",
+                   help="with --corpus or --corpus-exact: the MMS-HBM proximal parameter r (default static: "
+                        "the contact DOFs' static stiffness; residual: the compliance of the modes above the "
+                        "truncation frequency, docs/exact.md)")
     p.add_argument("--seed", type=common.non_negative_int, default=0,
                    help="with --corpus or --corpus-exact: the corpus seed (default 0)")
     p.add_argument("--compare-path", action="store_true",
@@ -61,6 +65,11 @@ def _from_asv(args) -> int:
     return 0
 
 
+def _options(args) -> dict:
+    """The backbone options the corpus runs take from the command line."""
+    return {} if args.proximal == "static" else {"r": args.proximal}
+
+
 def _corpus(args) -> int:
     """The corpus run: one line per model as it ends, then the summary; writes
     corpus.csv. Exit 1 when a model raised."""
@@ -75,7 +84,7 @@ def _corpus(args) -> int:
               flush=True)
 
     results = corpus.run_corpus(cases, workers=args.workers, progress=progress, time_limit=args.time_limit,
-                                compare_path=args.compare_path)
+                                compare_path=args.compare_path, options=_options(args))
     print(corpus.summary(results))
     path = common.out_dir(args) / "corpus.csv"
     with open(path, "w", newline="") as fh:
@@ -103,7 +112,7 @@ def _corpus_exact(args) -> int:
                                 contact_decades=tuple(args.contact_decades) if args.contact_decades else None)
     results = []
     for case in cases:
-        r = corpus_exact.compare(case)
+        r = corpus_exact.compare(case, options=_options(args))
         results.append(r)
         print(f"{corpus_exact.name(case):<34} {r.seconds:7.2f} s  {'clean' if r.clean else 'not clean':9} "
               f"error {r.error:.2e}  {r.status[:60]}", flush=True)

@@ -44,6 +44,7 @@ from ...core.measures import refined_max
 from ...core.problem import ContinuationProblemBase
 from ...model.contact import admissible_intervals
 from ...model.model import Model
+from .proximal import proximal_parameter
 
 __all__: list[str] = []
 
@@ -121,7 +122,7 @@ class DampedHBMBase(ContinuationProblemBase):
         flex = np.linalg.inv(self.cond.D0)
         stiff = 1.0 / np.diag(flex)[self.contact_rows]
         self.contact_stiffness = stiff
-        self.r = stiff.copy() if r is None else np.full(len(dofs), check.positive("r", r))
+        self.r = proximal_parameter(r, stiff, model, self.cond.D0, self.contact_rows, self.H)
         self._project = contact_projection(projection, self.H, self.N)
         self.projection = projection
         self._exact, n_grid = _projection_grid(projection, self.H, self.N)

@@ -9,9 +9,9 @@ import weakref
 
 import numpy as np
 
-from ... import _validate as check
 from ...model.contact import admissible_intervals
 from ...model.model import Model
+from .proximal import proximal_parameter
 
 __all__ = ["fixed_contacts", "fixed_scaling", "kept_entries"]
 
@@ -52,15 +52,8 @@ def fixed_contacts(problem, model: Model, r) -> None:
     problem.lo, problem.hi = lo, hi
     D0inv = np.linalg.inv(problem.cond.D0)
     problem.contact_stiffness_each = 1.0 / np.diag(D0inv)[problem.cdof]
-    if r is None:
-        problem.r_each = problem.contact_stiffness_each.copy()
-    else:
-        r_arr = np.atleast_1d(np.asarray(r, dtype=float))
-        if r_arr.ndim != 1 or len(r_arr) not in (1, len(dofs)):
-            raise ValueError(f"r must be a number or one per contact DOF ({len(dofs)}), got {r!r}")
-        for v in r_arr:
-            check.positive("r", float(v))
-        problem.r_each = np.broadcast_to(r_arr, (len(dofs),)).astype(float).copy()
+    problem.r_each = proximal_parameter(r, problem.contact_stiffness_each, model, problem.cond.D0,
+                                        problem.cdof, problem.H, problem.mode)
     # the 0.1 names of a single contact
     problem.contact_stiffness = float(problem.contact_stiffness_each[0])
     problem.r = float(problem.r_each[0])
