@@ -60,3 +60,45 @@ def test_a_branch_found_above_the_bound_on_another_mode_is_not_taken_for_the_fam
     fundamental = np.asarray(b.records["modal_shares"])[:, :, 1]  # (points, linear modes)
     assert np.all(fundamental[on, 0] > fundamental[on, 1:].max(axis=1))
     assert np.isnan(b.frequency_at(5 * model.gap))
+
+
+def _chain_locked_at_bound():
+    """Two masses (96.12 and 3.554 kg; 24216 N/m to the ground, 71.65 N/m between them)
+    and a massless contact node on the second through 32745 N/m, a stop 1 cm away
+    (corpus_exact seed 32 with contact springs over 10¹–10⁵ N/m, chain 227): linear
+    frequencies 0.7135 and 2.530 Hz, so the backbone crosses 3Ω = f₂ just above grazing."""
+    m0, m1 = 96.12039440141906, 3.553771858702108
+    k0, k1, kc = 24215.72436481033, 71.65004920227263, 32744.803183011758
+    M = np.diag([m0, m1, 0.0])
+    K = np.array([[k0 + k1, -k1, 0.0], [-k1, k1 + kc, -kc], [0.0, -kc, kc]])
+    return mmshbm.Model.from_matrices(M, K, 2, 0.01, 1)
+
+
+def test_a_climb_locked_onto_a_resonance_that_the_bound_cuts_short_is_a_tongue():
+    """At H = 31 the branch turns at 1.19 gaps into the 3:1 tongue of the second mode: its
+    frequency stays at f₂/3 = 0.84339 Hz while the amplitude rises, and the fundamental's
+    share falls to 4e-4, but the stretch counted as pending (still advancing) until it
+    grows by 1.5×. With the bound at 1.56 gaps it ended there "complete", and
+    ``frequency_at(1.3 gaps)`` gave the tongue's 0.84338 Hz, 5 % below the exact
+    first-mode orbit (0.889798 Hz, one contact per period), while a run to 10 gaps
+    jumped the tongue and gave 0.88519 Hz. The climb locked at the bound is a tongue: the
+    run jumps from below it, the answer at 1.3 gaps no longer depends on the bound, and
+    it is the first mode's orbit within the truncation error at H = 31 (5.2e-3; 7.6e-5
+    with r="residual", whose series is cut in the smooth variable)."""
+    from mmshbm import exact
+
+    model = _chain_locked_at_bound()
+    gap = model.gap
+    A = 1.3 * gap
+    orbit = exact.periodic_orbit(model, A)
+    assert orbit.converged and orbit.n_contacts == 1
+    short = mmshbm.backbone(model, harmonics=31, max_amplitude=1.56 * gap)
+    assert short.status == "bound:amplitude"
+    assert [s for s in short.special_points if s.kind == "jump"]
+    assert short.records["on_family"][-1] == 1.0
+    assert abs(short.frequency[-1] - 0.84339) > 0.05  # the run does not end on the tongue
+    wide = mmshbm.backbone(model, harmonics=31, max_amplitude=10 * gap)
+    assert abs(short.frequency_at(A) / wide.frequency_at(A) - 1) < 1e-8
+    assert abs(short.frequency_at(A) / orbit.frequency - 1) < 6e-3
+    residual = mmshbm.backbone(model, harmonics=31, max_amplitude=1.56 * gap, r="residual")
+    assert abs(residual.frequency_at(A) / orbit.frequency - 1) < 2e-4

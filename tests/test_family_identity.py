@@ -88,6 +88,32 @@ def test_a_climb_that_locks_its_frequency_is_a_tongue():
     assert [r["on_family"] for r in recs] == [1, 1, 0, 0, 0]
 
 
+def test_a_locked_climb_cut_short_by_the_bound_is_a_tongue():
+    """A pending climb that reaches the amplitude bound after growing by 30 % (less than
+    the lock's 1.5×) with the frequency flat is judged at the bound by the lock's slope
+    (0.5 % of frequency per 50 % of amplitude): a tongue, its points off the family and
+    the frontier back where it began. One whose frequency keeps rising at the family's
+    pace stays pending (it is not decided there), and so does one that grew by less than
+    10 %, or by more than the lock test's 1.5× (which judged it on the way)."""
+    def judged(amplitudes, frequencies, shares):
+        recs = _records(amplitudes, frequencies, shares)
+        guard = FamilyGuard(0.5, 60)
+        for i, r in enumerate(recs):
+            guard.observe(i, r)
+        return guard.locked_at_bound(), [r["on_family"] for r in recs], guard.frontier_index
+
+    flat = [10, 11, 11.001, 11.002, 11.003]
+    locked, on, frontier = judged([1, 2, 2.2, 2.4, 2.6], flat, [1, 0.9, 0.3, 0.1, 0.01])
+    assert locked and on == [1, 1, 0, 0, 0] and frontier == 1
+    rising = judged([1, 2, 2.2, 2.4, 2.6], [10, 11, 11.2, 11.4, 11.6], [1, 0.9, 0.3, 0.1, 0.01])
+    assert not rising[0] and rising[1] == [1] * 5
+    short = judged([1, 2, 2.05, 2.1, 2.15], [10, 11, 11.0, 11.0, 11.0], [1, 0.9, 0.3, 0.1, 0.01])
+    assert not short[0]
+    # past 1.5x the lock test itself has judged the stretch (0.64 % > 0.5 %: not locked)
+    grown = judged([1, 2, 2.2, 3.4, 3.6], [10, 11, 11.0, 11.07, 11.075], [1, 0.9, 0.3, 0.1, 0.01])
+    assert not grown[0] and grown[1] == [1] * 5
+
+
 def test_a_climb_that_keeps_rising_is_the_family():
     recs = _records([1, 2, 3, 4, 5], [10, 11, 11.5, 11.8, 12.0], [1, 0.9, 0.45, 0.42, 0.6])
     guard = FamilyGuard(0.5, 60)

@@ -76,9 +76,12 @@ class FamilyFollower:
 
     def at_bound(self, index: int, record: dict) -> str | None:
         self.guard.observe(index, record)
-        # reached off the family (a tongue climbing to the bound): not an end of the
-        # backbone; jump from the frontier instead
-        if self.guard.active and record.get("on_family", 1.0) < 0.5 and self._may_jump():
+        # reached off the family (a tongue climbing to the bound, or a pending climb
+        # locked onto ω_j/k that the bound cut short): not an end of the backbone; jump
+        # from the frontier instead
+        if not (self.guard.active and self._may_jump()):
+            return None
+        if record.get("on_family", 1.0) < 0.5 or self.guard.locked_at_bound():
             return "tongue reached the bound"
         return None
 

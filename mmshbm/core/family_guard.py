@@ -39,6 +39,12 @@ _REENTRY_TOL = 1e-3
 _LOCK_AMPLITUDE = 1.5
 _LOCK_FREQUENCY = 0.005
 
+#: a pending stretch that reaches the amplitude bound having grown by at least this factor
+#: (and less than _LOCK_AMPLITUDE, where the lock test applies) is judged there by the
+#: lock's slope: frequency growth below _LOCK_FREQUENCY per (_LOCK_AMPLITUDE − 1) of
+#: amplitude growth is a locked climb the bound cut short
+_LOCK_AT_BOUND = 1.1
+
 
 class FamilyGuard:
     """Bookkeeping of the family's frontier along a branch (see the module docstring).
@@ -148,6 +154,24 @@ class FamilyGuard:
     def _locked(self, amplitude: float, frequency: float) -> bool:
         _, a0, f0, _ = self.pending[0]
         return amplitude >= _LOCK_AMPLITUDE * a0 and frequency <= f0 * (1 + _LOCK_FREQUENCY)
+
+    def locked_at_bound(self) -> bool:
+        """Whether the pending stretch that reached the amplitude bound is a locked climb
+        the bound cut short: grown by at least _LOCK_AT_BOUND but less than
+        _LOCK_AMPLITUDE (where the lock test itself applies), with the frequency rising
+        more slowly than the lock's slope (_LOCK_FREQUENCY per _LOCK_AMPLITUDE − 1 of
+        amplitude). Such a stretch is marked off the family (as a tongue's climb that
+        locks) and the frontier goes back to where it began."""
+        if not self.pending:
+            return False
+        _, a0, f0, _ = self.pending[0]
+        _, a1, f1, _ = self.pending[-1]
+        growth = a1 / a0 - 1.0
+        slope = _LOCK_FREQUENCY / (_LOCK_AMPLITUDE - 1.0)
+        if not (_LOCK_AT_BOUND * a0 <= a1 < _LOCK_AMPLITUDE * a0 and f1 <= f0 * (1.0 + slope * growth)):
+            return False
+        self._revert()
+        return True
 
     def _confirm(self) -> None:
         """The pending stretch came back to a fundamental majority without folding: it is
