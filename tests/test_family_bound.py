@@ -2,6 +2,8 @@
 family found above the bound and followed back down onto it (``mmshbm.core.family``'s
 search above the bound, ``family_events._descend``)."""
 
+import warnings
+
 import numpy as np
 
 import mmshbm
@@ -102,3 +104,19 @@ def test_a_climb_locked_onto_a_resonance_that_the_bound_cuts_short_is_a_tongue()
     assert abs(short.frequency_at(A) / orbit.frequency - 1) < 6e-3
     residual = mmshbm.backbone(model, harmonics=31, max_amplitude=1.56 * gap, r="residual")
     assert abs(residual.frequency_at(A) / orbit.frequency - 1) < 2e-4
+
+
+def test_plain_path_following_onto_that_climb_is_told_it_left_the_family():
+    """The same chain followed plainly to 1.56 gaps ends on the tongue's climb: the
+    replayed guard judges the pending stretch at the bound as the family follower does,
+    so the branch says it left the first mode's family (a "left_family" finding from
+    the point where the fundamental lost the majority, 1.19 gaps), as a run continued
+    past the tongue's lock would have said."""
+    model = _chain_locked_at_bound()
+    gap = model.gap
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        path = mmshbm.backbone(model, harmonics=31, max_amplitude=1.56 * gap, follow="path")
+    assert path.status == "bound:amplitude"
+    left = [f for f in path.metadata["checks"] if f["kind"] == "left_family"]
+    assert left and 1.15 < path.amplitude[left[0]["first"]] / gap < 1.2

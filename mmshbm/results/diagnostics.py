@@ -242,7 +242,9 @@ def _family_measure(branch, fundamental: np.ndarray, th: CheckThresholds) -> np.
     branch followed plainly is classified by replaying the family guard over its points
     (:class:`mmshbm.core.family.FamilyGuard`: a stretch where a higher harmonic holds most
     of the kinetic energy but the backbone keeps rising without folding or locking is the
-    family, not a tongue)."""
+    family, not a tongue; one still pending where the branch reaches its amplitude bound
+    is judged there as the family follower judges it,
+    :meth:`~mmshbm.core.family.FamilyGuard.locked_at_bound`)."""
     if "on_family" in branch.records:
         return fundamental
     from ..core.family import FamilyGuard
@@ -252,6 +254,8 @@ def _family_measure(branch, fundamental: np.ndarray, th: CheckThresholds) -> np.
              "fundamental_share": float(fundamental[i])} for i in range(len(branch))]
     for i, rec in enumerate(recs):
         guard.observe(i, rec)
+    if str(branch.status) == "bound:amplitude":
+        guard.locked_at_bound()  # a pending climb the bound cut short, locked: a tongue
     on = np.array([rec.get("on_family", 1.0) for rec in recs]) > 0.5
     return np.where(on, np.maximum(fundamental, 1.0), fundamental)
 
