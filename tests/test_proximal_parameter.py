@@ -40,7 +40,10 @@ def test_residual_r_is_the_clamped_stiffness_when_every_mode_lies_below_the_cut(
     node's own spring: r = kc (up to the round-off of 1/D₀ − φ²/ω²: kc/k ~ 900)."""
     model = one_mass(2.0027, 38.071, 33749.83)
     p = MMSHBMProblem(model, 31, r="residual")
-    assert p.r_each[0] == pytest.approx(33749.83, rel=1e-9)
+    # 1/r is the difference of two compliances ~900 times larger than it: the modal term's
+    # round-off (~1e-13 relative, eigensolver included) grows to ~1e-10; 1e-7 bounds it on
+    # any LAPACK while staying far below the 1e-3 a wrong rule would make
+    assert p.r_each[0] == pytest.approx(33749.83, rel=1e-7)
     # the default keeps the static stiffness k·kc/(k + kc)
     series = 38.071 * 33749.83 / (38.071 + 33749.83)
     assert MMSHBMProblem(model, 31).r_each[0] == pytest.approx(series, rel=1e-12)
@@ -64,11 +67,11 @@ def test_residual_r_counts_the_modes_above_the_cut_as_static():
         low = w <= (H + 1) * w[0] * (1 + 1e-12)
         expected = 1.0 / (static - np.sum(phi_c[low] ** 2 / lam[low]))
         r = MMSHBMProblem(model, H, r="residual").r_each[0]
-        assert r == pytest.approx(expected, rel=1e-8), H
+        assert r == pytest.approx(expected, rel=1e-7), H  # cancellation ~1100x, as above
     # every mode below the cut: the node's spring alone
     H_all = int(np.ceil(w[-1] / w[0]))
     assert MMSHBMProblem(model, H_all - 2, r="residual").r_each[0] < kc * (1 - 1e-7)
-    assert MMSHBMProblem(model, H_all, r="residual").r_each[0] == pytest.approx(kc, rel=1e-9)
+    assert MMSHBMProblem(model, H_all, r="residual").r_each[0] == pytest.approx(kc, rel=1e-7)
 
 
 @pytest.mark.parametrize("model, factor", [
@@ -115,7 +118,7 @@ def test_forced_response_takes_the_residual_rule():
     fr = mmshbm.frequency_response(model, [0.5, 0.0], (0.8 * f1, 1.2 * f1), harmonics=9, r="residual")
     expected = residual_stiffness(model, fr.solver.cond.D0, fr.solver.contact_rows, 9)
     np.testing.assert_allclose(fr.solver.r, expected, rtol=1e-12)
-    assert fr.solver.r[0] == pytest.approx(1e5, rel=1e-8)
+    assert fr.solver.r[0] == pytest.approx(1e5, rel=1e-7)  # cancellation ~1000x
 
 
 def test_the_command_line_takes_the_rule(tmp_path, capsys):

@@ -143,8 +143,9 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         self.projection = projection
         self.cond = make_condensation(model, backend, harmonics=self.H, mode=self.mode)
         self.n_c = len(model.c)
-        # the numbers fixed by (model, H, N, mode, back end, projection, poles) with the default
-        # r: computed once per model, each problem its own copies
+        # the numbers fixed by (model, H, N, mode, back end, projection, poles) with a named r
+        # (the default, "static" or "residual"): computed once per model, each problem its own
+        # copies
         named = r is None or isinstance(r, str)
         memo = _FIXED.setdefault(model, {}) if named else None
         key = (type(self), self.H, self.N, self.mode, backend, projection, bool(poles))

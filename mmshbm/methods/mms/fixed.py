@@ -1,6 +1,6 @@
 """The numbers of an MMS-HBM problem that its model and options fix: the contact DOFs,
 their intervals and stiffness, r, the linear mode, the amplitude's rule and the scaling of
-the unknowns and residual rows; kept per model for the problems with the default r."""
+the unknowns and residual rows; kept per model for the problems with a named r."""
 
 from __future__ import annotations
 
@@ -15,8 +15,8 @@ from .proximal import proximal_parameter
 
 __all__ = ["fixed_contacts", "fixed_scaling", "kept_entries"]
 
-#: model -> {(class, H, N, mode, backend, projection, poles): the attributes below} of the
-#: problems with the default r (:func:`fixed_contacts`, :func:`fixed_scaling`)
+#: model -> {(class, H, N, mode, backend, projection, poles[, rule]): the attributes below}
+#: of the problems with a named r (:func:`fixed_contacts`, :func:`fixed_scaling`)
 _FIXED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 _FIXED_CONTACTS = ("contact_dofs", "cdof", "lo", "hi", "contact_stiffness_each", "r_each",
                    "contact_stiffness", "r", "gap", "linear_frequency", "omega_ref", "amplitude_dof",
