@@ -31,7 +31,7 @@ import numpy as np
 
 from .corpus import CorpusCase, generate
 
-__all__ = ["ExactComparison", "chains", "compare", "name", "report"]
+__all__ = ["ExactComparison", "branch_orbit", "chains", "compare", "name", "report"]
 
 
 def name(case: CorpusCase) -> str:
@@ -83,6 +83,10 @@ class ExactComparison:
     estimate: float = math.nan
     estimate_note: str = ""
     branch_contacts: int = -1
+    exact_share: float = math.nan
+    continued_share: float = math.nan
+    family_exact: float = math.nan
+    family_share: float = math.nan
 
     @property
     def error(self) -> float:
@@ -122,11 +126,24 @@ class ExactComparison:
         return out
 
     @property
+    def resonant(self) -> bool:
+        """The exact orbit continued from the linear mode through grazing, or the
+        single-contact orbit found from its shape, is an internal resonance's (its
+        fundamental harmonic holds less than half the kinetic energy, docs/resonances.md),
+        and the exact orbit found from the branch's own point at the amplitude holds the
+        fundamental's majority and agrees with the branch within 1e-3: past the tongue the
+        continuation climbs, the branch is the mode's orbit."""
+        return bool(min(self.exact_share, self.continued_share) < 0.5 <= self.family_share
+                    and abs(self.branch / self.family_exact - 1.0) <= 1e-3)
+
+    @property
     def first_mode(self) -> bool:
         """The branch gives the first mode's orbit within 1e-3: the exact orbit found from
         the linear mode's shape, or, where another orbit coexists there, the exact orbit
-        continued from the linear mode through grazing (:attr:`coexisting`)."""
-        return bool(self.error <= 1e-3 or self.coexisting)
+        continued from the linear mode through grazing (:attr:`coexisting`), or, where the
+        single-contact orbit is an internal resonance's, the exact orbit with the
+        fundamental's majority found from the branch's point (:attr:`resonant`)."""
+        return bool(self.error <= 1e-3 or self.coexisting or self.resonant)
 
     @property
     def truncation(self) -> bool:
@@ -176,11 +193,42 @@ def compare(case: CorpusCase, amplitude_gaps: float = 1.3, harmonics: int = 31,
                 pass
             try:  # two halvings per step: more cost minutes on rattling orbits, not the answer
                 amps = np.linspace(0.5 * model.gap, A, 81)
-                out.continued = float(exact.backbone(model, amps, max_halvings=2).frequency[-1])
+                continued = exact.backbone(model, amps, max_halvings=2)
+                out.continued = float(continued.frequency[-1])
+                if continued.converged[-1]:
+                    out.continued_share = continued.orbits[-1].fundamental_share()
             except Exception:  # noqa: BLE001
                 pass
+            out.exact_share = orbit.fundamental_share()
+            if min(out.exact_share, out.continued_share) < 0.5 and math.isfinite(f):
+                out.family_exact, out.family_share = branch_orbit(model, b, A)
     out.seconds = time.perf_counter() - t0
     return out
+
+
+def branch_orbit(model, branch, amplitude: float, n_samples: int = 1024) -> tuple[float, float]:
+    """(frequency in Hz, fundamental share) of the exact symmetric orbit at ``amplitude``
+    (m) found by Newton shooting from the branch's own point there (the positions of the
+    DOFs with mass at its turning point away from the stop, its half period); NaNs where
+    the branch has no solved point there or Newton does not converge on an orbit of that
+    excursion."""
+    from .. import exact
+    from ..methods.exact.system import PiecewiseLinearSystem
+
+    try:
+        point = branch.solve_at([amplitude])
+        if not point.records["solved"][0]:
+            return math.nan, math.nan
+        _, q = point.time_signals(0, n_samples=n_samples)
+        system = PiecewiseLinearSystem.of(model)
+        q_l = q[model.l]
+        x = q_l[:, int(np.argmax(system.amplitude_row @ q_l))]
+        orbit = exact.periodic_orbit(model, amplitude, guess=(x, 0.5 / float(point.frequency[0])))
+    except (ValueError, RuntimeError, ArithmeticError, np.linalg.LinAlgError):
+        return math.nan, math.nan
+    if not (orbit.converged and abs(orbit.max_excursion / amplitude - 1) < 1e-6):
+        return math.nan, math.nan
+    return float(orbit.frequency), orbit.fundamental_share()
 
 
 def _self_report(branch, amplitude: float) -> tuple[float, str, int]:
@@ -255,17 +303,22 @@ def report(results: list[ExactComparison], tol: float = 1e-3) -> str:
              f"{np.nanmedian(errs) if np.any(np.isfinite(errs)) else math.nan:.2e}"]
     bad = [r for r in clean if not r.error <= tol]
     coexist = [r for r in bad if r.coexisting]
-    trunc = [r for r in bad if not r.coexisting and r.truncation]
+    resonant = [r for r in bad if not r.coexisting and r.resonant]
+    trunc = [r for r in bad if not r.coexisting and not r.resonant and r.truncation]
     lines.append(f"disagreeing: {len(bad)}; {len(coexist)} where another orbit coexists and the exact orbit "
-                 f"continued from the linear mode agrees with the branch; {len(trunc)} converging toward the "
+                 f"continued from the linear mode agrees with the branch; {len(resonant)} where the "
+                 "continued or single-contact orbit is an internal resonance's (fundamental share < 0.5) "
+                 "and the branch "
+                 f"is the exact orbit with the fundamental's majority; {len(trunc)} converging toward the "
                  "exact orbit at 2H (truncation of the Fourier series); "
-                 f"{len(bad) - len(coexist) - len(trunc)} other")
-    right = [r for r in clean if r.error <= tol or r.coexisting]
+                 f"{len(bad) - len(coexist) - len(resonant) - len(trunc)} other")
+    right = [r for r in clean if r.first_mode]
     lines.append(f"on the first mode's orbit within {tol:g} (the exact orbit, or the exact orbit continued "
-                 f"from the linear mode where another coexists): {len(right)} "
+                 "from the linear mode where another coexists, or the exact orbit with the fundamental's "
+                 f"majority where those are a resonance's): {len(right)} "
                  f"({100 * len(right) / max(len(clean), 1):.1f} %)")
     told = [r for r in bad if r.reasons(tol)]
-    right_or_told = good + sum(1 for r in bad if r.reasons(tol) or r.coexisting)
+    right_or_told = good + sum(1 for r in bad if r.reasons(tol) or r.first_mode)
     share_right_or_told = 100 * right_or_told / max(len(clean), 1)
     by_estimate = [r for r in bad if r.estimate >= tol]
     lines.append(f"explained by the branch itself (its truncation estimate >= {tol:g}, an orbit closing the "
@@ -274,11 +327,15 @@ def report(results: list[ExactComparison], tol: float = 1e-3) -> str:
                  f"explained: {100 * (good + len(told)) / max(len(clean), 1):.1f} %; "
                  f"on the first mode's orbit or explained: {share_right_or_told:.1f} %")
     for r in bad:
-        kind = "coexisting" if r.coexisting else "truncation" if r.truncation else "OTHER"
+        kind = ("coexisting" if r.coexisting else "resonant" if r.resonant
+                else "truncation" if r.truncation else "OTHER")
         why = "; ".join(r.reasons(tol)) or "not reported"
         lines.append(f"  {kind} [{why}] (estimate {r.estimate:.2e} {r.estimate_note}): {name(r.case)}: "
                      f"exact {r.exact:.6g} Hz, "
                      f"continued exact "
-                     f"{r.continued:.6g} Hz, branch {r.branch:.6g} Hz (error {r.error:.2e}, at 2H "
+                     f"{r.continued:.6g} Hz, exact from the branch {r.family_exact:.6g} Hz (fundamental "
+                     f"share {r.family_share:.2f}, the single-contact orbit's {r.exact_share:.2f}, the "
+                     f"continued one's {r.continued_share:.2f}), "
+                     f"branch {r.branch:.6g} Hz (error {r.error:.2e}, at 2H "
                      f"{r.error_2h:.2e}, {r.status}); {r.special[:6]}")
     return "\n".join(lines)

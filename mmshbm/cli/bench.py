@@ -121,12 +121,14 @@ def _corpus_exact(args) -> int:
     with open(path, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["index", "seed", "clean", "exact_hz", "branch_hz", "error", "error_2h", "continued_hz",
-                    "first_mode", "estimate", "reasons", "status", "seconds"])
+                    "first_mode", "estimate", "reasons", "status", "seconds", "exact_share",
+                    "continued_share", "branch_orbit_hz", "branch_orbit_share"])
         for r in results:
             w.writerow([r.case.index, r.case.seed, int(r.clean), repr(r.exact), repr(r.branch),
                         f"{r.error:.3e}", f"{r.error_2h:.3e}", repr(r.continued), int(r.first_mode),
                         f"{r.estimate:.3e}",
-                        "; ".join(r.reasons()), r.status, f"{r.seconds:.3f}"])
+                        "; ".join(r.reasons()), r.status, f"{r.seconds:.3f}", f"{r.exact_share:.4f}",
+                        f"{r.continued_share:.4f}", repr(r.family_exact), f"{r.family_share:.4f}"])
     common.wrote(path)
     unexplained = [r for r in results if r.clean and not r.first_mode and not r.explained]
     return 1 if unexplained else 0

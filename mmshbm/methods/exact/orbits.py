@@ -91,6 +91,20 @@ class PeriodicOrbit:
         """True if the orbit has several contact phases per period."""
         return self.n_contacts > 1
 
+    def fundamental_share(self, n_samples: int = 2048) -> float:
+        """Share (0..1) of the period-mean kinetic energy in the fundamental harmonic: the
+        family measure of the harmonic-balance branches (docs/resonances.md), here of the
+        exact motion (harmonics up to ``n_samples``/2 of the velocities of the DOFs with
+        mass, sampled from the closed-form phases). Below one half the orbit's energy has
+        moved into higher harmonics: an internal resonance's orbit, not the mode's."""
+        n_samples = check.integer("n_samples", n_samples, minimum=8)
+        t = np.arange(n_samples) * (self.period / n_samples)
+        _, v = self.trajectory.state_l(t)
+        V = np.fft.rfft(v, axis=1)
+        T = np.einsum("ik,ij,jk->k", V.conj(), self.trajectory.system.M_ll, V).real
+        total = float(T[1:].sum())
+        return float(T[1] / total) if total > 0 else 1.0
+
     def __repr__(self) -> str:
         return (f"PeriodicOrbit(amplitude={self.amplitude:.6g} m, frequency={self.frequency:.12g} Hz, "
                 f"n_contacts={self.n_contacts}, converged={self.converged}, iterations={self.iterations})")
