@@ -292,6 +292,15 @@ def _reported(branch, amplitude: float) -> str:
     return ", ".join(out)
 
 
+def _shares(r: ExactComparison) -> str:
+    """The fundamental shares of a miss's exact orbits, and the exact orbit found from the
+    branch's point where it was sought, for the report's line."""
+    out = f"fundamental share {r.exact_share:.2f} (single-contact), {r.continued_share:.2f} (continued), "
+    if math.isfinite(r.family_exact):
+        out += f"exact from the branch {r.family_exact:.6g} Hz (share {r.family_share:.2f}), "
+    return out
+
+
 def report(results: list[ExactComparison], tol: float = 1e-3) -> str:
     """Agreement within ``tol`` among the clean cases, the median error, and each
     disagreeing case with the special points of its branch up to the amplitude."""
@@ -331,11 +340,7 @@ def report(results: list[ExactComparison], tol: float = 1e-3) -> str:
                 else "truncation" if r.truncation else "OTHER")
         why = "; ".join(r.reasons(tol)) or "not reported"
         lines.append(f"  {kind} [{why}] (estimate {r.estimate:.2e} {r.estimate_note}): {name(r.case)}: "
-                     f"exact {r.exact:.6g} Hz, "
-                     f"continued exact "
-                     f"{r.continued:.6g} Hz, exact from the branch {r.family_exact:.6g} Hz (fundamental "
-                     f"share {r.family_share:.2f}, the single-contact orbit's {r.exact_share:.2f}, the "
-                     f"continued one's {r.continued_share:.2f}), "
+                     f"exact {r.exact:.6g} Hz, continued exact {r.continued:.6g} Hz, {_shares(r)}"
                      f"branch {r.branch:.6g} Hz (error {r.error:.2e}, at 2H "
                      f"{r.error_2h:.2e}, {r.status}); {r.special[:6]}")
     return "\n".join(lines)
