@@ -261,6 +261,11 @@ def periodic_orbit(model_or_system, amplitude: float, guess=None, *, tol: float 
         x, tau, F, res = x_new, tau_new, F_n, res_n
         dv_dx, dv_dtau = dvx_n, dvt_n
         converged = step * float(np.abs(dz).max()) <= tol and res <= max(floor, tol)
+    # v(0) = 0 and v(T/2) = 0 hold trivially as T/2 → 0: Newton can slide to that spurious
+    # root. A motion whose velocities vanish at t = 0 turns back no sooner than half a
+    # period of its fastest phase, so a shorter half period is no orbit
+    fastest = max(float(ph.omega.max()) for ph in system._phases.values())
+    converged = converged and tau >= 0.5 * math.pi / fastest
     return _orbit_result(system, A, x, tau, converged, it, res, samples_per_period)
 
 
