@@ -88,3 +88,21 @@ def test_the_branch_is_the_modes_orbit_past_the_tongue_the_continuation_climbs()
     assert static.family_exact == pytest.approx(residual.family_exact, rel=1e-9)  # one exact orbit
     assert not static.first_mode
     assert static.estimate >= abs(static.branch / static.family_exact - 1) > 1e-3
+
+
+def test_newton_does_not_report_the_vanishing_half_period_as_an_orbit():
+    """v(0) = 0 = v(T/2) holds trivially as T/2 → 0. Started from the second open mode's
+    shape at 4.9 Hz on a corpus chain (seed 55 #180), Newton slid to T/2 ~ 5e-26 s and
+    reported a converged orbit of 9.7e24 Hz with no contact; no orbit turns back sooner
+    than half a period of its fastest phase."""
+    from mmshbm.analysis.corpus import generate
+    from mmshbm.methods.exact.system import PiecewiseLinearSystem
+
+    model = generate(181, 55)[180].model()
+    system = PiecewiseLinearSystem.of(model)
+    x = system.open.modes[:, 1]
+    x = x if system.amplitude_row @ x > 0 else -x
+    orbit = exact.periodic_orbit(model, 2.2 * model.gap, guess=(x, 0.5 / 4.875), max_iter=40)
+    fastest = max(float(ph.omega.max()) for ph in system._phases.values()) / (2 * np.pi)
+    assert orbit.frequency > 1e20 * fastest  # the spurious root, reached
+    assert not orbit.converged

@@ -32,34 +32,45 @@ def _fundamental_share(model, orbit) -> float:
     return float(E[1] / E[1:].sum())
 
 
-def test_a_family_that_ends_in_a_2_to_1_resonance_says_where():
+def test_past_a_2_to_1_tongue_the_family_goes_on_along_its_far_side():
     """2Ω approaches the second mode (3.324 Hz) as the backbone stiffens towards 1.65 Hz:
     the exact orbit, continued from the linear mode, holds the fundamental's majority up
     to 1.5 gaps (share 0.513) and loses it from there on, its frequency locked below
-    f2/2 (share 0.42 at 1.6 gaps, 0.13 at 2.5 gaps): no first-mode orbit with the
-    fundamental's majority lies on that path. At H = 15 the branch loses the majority at
-    1.645 gaps (the truncation: its frequency is 0.6 % below the exact one at 1.5 gaps);
-    the run ends there with a status that says so (before: "jump failed")."""
+    f2/2 (share 0.42 at 1.6 gaps, 0.13 at 2.5 gaps). The family goes on along the tongue's
+    far side, 25-50 % higher in frequency: exact orbits with one contact per period and
+    three quarters of the energy in the fundamental from 2.2 to 10 gaps (2.0989 Hz at 2.2
+    gaps, 2.5032 Hz at 10, shot from the branch's points). No predictor from the branch
+    below reaches them; the frequency scan of the jumps does (before: "family ended" at
+    1.645 gaps). With r = "residual" the branch is 0.7-0.8 % below those exact orbits at
+    H = 15 (the truncation); the default r, further (4 % at 3 gaps), converges toward
+    them in H."""
+    from mmshbm.analysis.corpus_exact import branch_orbit
+
     model = _two_mass_chain()
     gap = model.gap
-    b = mmshbm.backbone(model, harmonics=15, max_amplitude=10 * gap)
-    assert b.status.kind == Status.FAMILY_ENDED, b.status
-    found = re.search(r"at amplitude ([0-9.e+-]+) \(([0-9.e+-]+) Hz\)", b.status.detail)
-    amplitude, frequency = float(found.group(1)), float(found.group(2))
-    assert "harmonic 2" in b.status.detail and "mode 2" in b.status.detail
-    front = b.family_front()
-    assert b.amplitude[front].max() <= amplitude
     steps = np.arange(0.9, 2.55, 0.1)
     ex = mmshbm.exact.backbone(model, gap * steps)
     assert ex.converged.all() and (ex.n_contacts[steps > 1.05] == 1).all()
     shares = np.array([_fundamental_share(model, o) for o in ex.orbits])
     lost = steps[shares < 0.5]
-    # the exact orbit loses the majority between 1.5 and 1.6 gaps and never regains it
+    # the continued exact orbit loses the majority between 1.5 and 1.6 gaps for good
     assert 1.5 < lost[0] < 1.65 and (shares[steps >= lost[0] - 1e-9] < 0.5).all()
-    # where the run says the family ends: within the truncation's 10 % of the exact loss
-    assert abs(amplitude / (lost[0] * gap) - 1) < 0.1
-    # and at the exact orbit's frequency there within the truncation's 1 %
-    assert abs(frequency / np.interp(amplitude, ex.amplitude, ex.frequency) - 1) < 0.01
+
+    b = mmshbm.backbone(model, harmonics=15, max_amplitude=10 * gap, r="residual")
+    assert b.status == "bound:amplitude", b.status
+    assert any(s.kind == "jump" for s in b.special_points)
+    for a in (2.2, 3.0, 5.0, 10.0):
+        f_exact, share = branch_orbit(model, b, a * gap)
+        assert share > 0.7, a
+        assert f_exact > 1.25 * np.interp(min(a, 2.5), steps, ex.frequency)  # the far side
+        assert abs(b.frequency_at(a * gap) / f_exact - 1) < 0.01, a  # measured 0.7-0.8 %
+    f3 = branch_orbit(model, b, 3 * gap)[0]
+    errors = []
+    for H in (15, 31):
+        default = mmshbm.backbone(model, harmonics=H, max_amplitude=10 * gap)
+        assert default.status == "bound:amplitude", default.status
+        errors.append(abs(default.frequency_at(3 * gap) / f3 - 1))
+    assert errors[1] < errors[0] / 1.5 and errors[0] < 0.05  # measured 4.0 %, 1.8 %
 
 
 def _tree_one_sided():

@@ -56,7 +56,10 @@ from .family_landings import (
     LIMIT_SLACK,
     MAX_FAR_TARGETS,
     MAX_LADDERS,
+    MAX_SCAN_TARGETS,
     MAX_TARGETS,
+    N_SCAN_FREQUENCIES,
+    frequency_search,
     harmonic_search,
     homotopy_search,
 )
@@ -323,6 +326,15 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
             return u, nit, hist, rec, t, target, guard.frontier_index
         except PinnedFailure as err:
             far_error += f"; by a homotopy from the fundamental's family: {err}"
+    if problem.with_frequency is not None:
+        window["hi"] = f_ceiling * (1.0 + LIMIT_SLACK)
+        solves[:] = [0, 2 * MAX_SCAN_TARGETS * N_SCAN_FREQUENCIES]  # two starts
+        try:
+            u, nit, hist, rec, t, target = frequency_search(problem, guard, us, recs, far, f_ceiling, accept,
+                                                            descend)
+            return u, nit, hist, rec, t, target, guard.frontier_index
+        except PinnedFailure as err:
+            far_error += f"; in frequency up to {f_ceiling:.4g} Hz: {err}"
     message = (f"jump from amplitude {frontier:.4g} failed{reason}{last_error}; the far search "
                f"up to {far[-1]:.4g}: {far_error}{beyond}")
     end = "" if beyond else end_of_family(recs, guard, problem)

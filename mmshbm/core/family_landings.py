@@ -1,7 +1,8 @@
 """The jumps' last-resort searches, after the near and far searches from the branch below:
-the orbit continued in the harmonics from a low-harmonic family (:func:`harmonic_search`)
-and, last, the orbit reached by a homotopy from the fundamental's family
-(:func:`homotopy_search`).
+the orbit continued in the harmonics from a low-harmonic family (:func:`harmonic_search`),
+the orbit reached by a homotopy from the fundamental's family (:func:`homotopy_search`)
+and, last, the family's upper side of a tongue found by a scan in frequency
+(:func:`frequency_search`).
 
 The homotopy search:
 
@@ -19,6 +20,7 @@ to another mode's orbit lands far from it.
 
 from __future__ import annotations
 
+import itertools
 import logging
 import math
 
@@ -175,3 +177,58 @@ def homotopy_search(landing, guard, targets, amplitude_max: float, accept, frequ
         if found is not None:
             return found
     raise PinnedFailure(errors[-1])
+
+
+#: targets of the frequency scan (the first above the frontier) and frequencies per target
+MAX_SCAN_TARGETS = 3
+N_SCAN_FREQUENCIES = 12
+
+
+def frequency_search(problem, guard, us: list, recs: list, targets, f_ceiling: float, accept,
+                     descend) -> tuple:
+    """The family on the far side of a tongue, at a frequency no predictor reaches.
+
+    Where the starting mode's orbit climbs a k:1 tongue with a higher mode (kΩ ≈ ω_j)
+    and never comes back to the fundamental's majority, the family goes on along the
+    tongue's other side: orbits at the same amplitudes, well above the tongue's
+    frequency (on chains 25–40 % above it, below the frequency with every contact DOF
+    held), which coexist with the tongue down to the frontier's amplitude. Newton finds
+    them from the problem's shapes at each target (``problem.scan_starts``: e.g. the
+    linear mode's, since that side keeps the fundamental's majority, and the frontier's
+    scaled) with the frequency set (``problem.with_frequency``) on a geometric grid from
+    just above the frontier's frequency to ``f_ceiling``. A landing counts when
+    ``accept`` takes it (on the family, in the trust region), it lies above the
+    frontier's frequency and at most ``LIMIT_SLACK`` above the ceiling, the starting
+    mode leads its fundamental (``problem.leads_fundamental``: not another mode's
+    backbone), and its branch, followed back down (``descend``), reaches the frontier's
+    amplitude on the family (the tongue's other side, not an orbit apart). Returns (u,
+    iterations, history, record, tangent, target); raises PinnedFailure with the last
+    reason."""
+    at_frequency, leads, shapes = problem.with_frequency, problem.leads_fundamental, problem.scan_starts
+    if at_frequency is None or leads is None or shapes is None or descend is None:
+        raise PinnedFailure("not offered")
+    i = guard.frontier_index
+    frontier = float(guard.frontier)
+    f_front = float(recs[i].get("frequency", math.nan))
+    if not (math.isfinite(f_front) and math.isfinite(f_ceiling) and f_ceiling > f_front):
+        raise PinnedFailure("no frequencies between the frontier's and the ceiling")
+    last_error = "no landing"
+    above = [t for t in targets if t > frontier * (1 + 1e-12)][:MAX_SCAN_TARGETS]
+    grid = np.geomspace(f_front * 1.02, f_ceiling, N_SCAN_FREQUENCIES)
+    for target in above:
+        for start, f_try in itertools.product(shapes(us[i], frontier, target), grid):
+            try:
+                u, nit, hist, rec, t = accept(at_frequency(start, float(f_try)), target, math.nan)
+                f = float(rec.get("frequency", math.nan))
+                if not f_front < f <= f_ceiling * (1.0 + LIMIT_SLACK):
+                    raise PinnedFailure(f"landed at {f:.4g} Hz, outside ({f_front:.4g}, {f_ceiling:.4g}] Hz")
+                if not leads(u):
+                    raise PinnedFailure(f"landed on another mode's backbone at {f:.4g} Hz")
+                if descend(u, t, target, frontier) is None:
+                    raise PinnedFailure(f"the branch through the landing at {f:.4g} Hz does not come down "
+                                        f"to the frontier's amplitude {frontier:.4g} on the family")
+                return u, nit, hist, rec, t, target
+            except (PinnedFailure, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as err:
+                last_error = str(err)
+                log.debug("frequency scan at %.4g, %.4g Hz: %s", target, f_try, err)
+    raise PinnedFailure(last_error)

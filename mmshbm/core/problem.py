@@ -51,7 +51,11 @@ runners call them directly and never probe a problem for attributes.
     (None where ``fundamental=True`` names no ladder of its own),
     ``homotopy_landing(A, A_max, tol=, max_iter=, admissible=) -> (u, f_start)`` (the orbit
     reached by a homotopy from another family's orbit of frequency f_start, Hz;
-    :mod:`mmshbm.core.family_landings`). Each is None when not offered.
+    :mod:`mmshbm.core.family_landings`), ``with_frequency(u, f)`` (``u`` with its
+    frequency set to f, Hz), ``scan_starts(u_front, A_front, A) -> list`` (states to
+    start Newton from at amplitude A, frequency aside) and ``leads_fundamental(u) ->
+    bool`` (the starting mode holds the largest share of the fundamental harmonic's
+    kinetic energy among the tracked modes): the frequency scan above a tongue. Each is None when not offered.
 :class:`AmplitudeStart` (backbones, :class:`BackboneProblemBase`)
     ``linear_mode_point(amplitude)`` (the linear mode at that amplitude, m),
     ``initial_tangent()``, ``open_amplitude()`` (the amplitude at which the linear mode
@@ -155,6 +159,9 @@ class FamilyEvents(Protocol):
     family_landing: Callable[..., tuple[np.ndarray, float]] | None
     harmonic_landing: Callable[..., tuple[np.ndarray, float] | None] | None
     homotopy_landing: Callable[..., tuple[np.ndarray, float]] | None
+    with_frequency: Callable[[np.ndarray, float], np.ndarray] | None
+    scan_starts: Callable[[np.ndarray, float, float], list] | None
+    leads_fundamental: Callable[[np.ndarray], bool] | None
 
 
 @runtime_checkable
@@ -246,6 +253,9 @@ class ContinuationProblemBase:
     family_landing: Callable[..., tuple[np.ndarray, float]] | None = None
     harmonic_landing: Callable[..., tuple[np.ndarray, float] | None] | None = None
     homotopy_landing: Callable[..., tuple[np.ndarray, float]] | None = None
+    with_frequency: Callable[[np.ndarray, float], np.ndarray] | None = None
+    scan_starts: Callable[[np.ndarray, float, float], list] | None = None
+    leads_fundamental: Callable[[np.ndarray], bool] | None = None
     # AmplitudeStart
     open_amplitude: Callable[[], float] | None = None
     # BranchRecords

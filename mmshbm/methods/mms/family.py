@@ -66,6 +66,27 @@ class FamilyMixin(LandingsMixin):
                 out = min(out, ct.gap / motion)
         return float(out)
 
+    def with_frequency(self, u: np.ndarray, frequency: float) -> np.ndarray:
+        """``u`` with Ω = 2π·``frequency`` (Hz), the coefficients kept."""
+        out = np.array(u, dtype=float)
+        out[-1] = 2 * np.pi * frequency / self.colscale[-1]
+        return out
+
+    def scan_starts(self, u_front: np.ndarray, amplitude_front: float, amplitude: float) -> list:
+        """States to start the frequency scan above a tongue from at ``amplitude`` (m): the
+        linear mode's there (the tongue's other side keeps the fundamental's majority, its
+        shape near the mode's) and the frontier's state ``u_front`` scaled to it."""
+        return [np.asarray(self.linear_mode_point(amplitude), dtype=float),
+                self.scaled_state(u_front, amplitude / amplitude_front)]
+
+    def leads_fundamental(self, u: np.ndarray) -> bool:
+        """Whether the starting mode holds the largest share of the fundamental harmonic's
+        kinetic energy among the tracked open-contact modes (:meth:`modal_shares`): the
+        fundamental's shape is the starting mode's, moved toward its closed-contact form,
+        not another mode's backbone."""
+        fundamental = self.modal_shares(u)[:, 1]
+        return bool(fundamental[self.mode - 1] >= fundamental.max())
+
     def scaled_state(self, u: np.ndarray, factor: float) -> np.ndarray:
         """``u`` with every displacement coefficient (and pole unknown) times ``factor``,
         Ω kept: far above the gap a piecewise-linear system is nearly homogeneous, so
