@@ -165,3 +165,34 @@ def test_a_failed_jump_says_when_the_backbone_itself_turns_back():
     assert abs(path.amplitude[i] / b.amplitude[top] - 1) < 1e-3
     assert abs(path.frequency[i] / b.frequency[top] - 1) < 1e-5
     assert path.records["fundamental_share"][: i + 1].min() > 0.5
+
+
+def test_the_far_side_of_a_2_to_1_tongue_converges_to_the_exact_orbits():
+    """Corpus seed 55 #180 (a chain of two masses and two light stiff ones, open modes
+    2.811 and 6.339 Hz, a one-sided contact 2000 times stiffer than the structure): the
+    backbone climbs a 2:1 tongue of mode 2 at 1.89 gaps (3.096 Hz), and the family goes on
+    along the far side, exact from 1.02 gaps (3.537 Hz) to 10 gaps (4.804 Hz) with one
+    contact per period and about 0.74 of the energy in the fundamental. With r =
+    "residual" the run lands on it and follows it to 10 gaps at H = 15 and 31, within
+    2e-3 and then 2e-5 of the exact orbits (measured 1.7e-3 and 1e-5: the truncation).
+    The default r reaches it at H = 15 through the scan in frequency (before: "family
+    ended" at 1.89 gaps), 2.0, 1.7 and 1.5 % below it at 2.2, 5 and 10 gaps."""
+    from mmshbm.analysis.corpus import generate
+    from mmshbm.analysis.corpus_exact import branch_orbit
+
+    model = generate(181, 55)[180].model()
+    gap = model.gap
+    exact_far = {}
+    for H, tol in ((15, 2e-3), (31, 2e-5)):
+        b = mmshbm.backbone(model, harmonics=H, max_amplitude=10 * gap, r="residual")
+        assert b.status == "bound:amplitude", b.status
+        for a in (2.2, 5.0, 10.0):
+            f_exact, share = branch_orbit(model, b, a * gap)
+            assert 0.7 < share < 0.8 and f_exact > 4.2, (H, a)  # the far side, above f2/2 = 3.17 Hz
+            assert abs(b.frequency_at(a * gap) / f_exact - 1) < tol, (H, a)
+            if H == 15:
+                exact_far[a] = f_exact
+    default = mmshbm.backbone(model, harmonics=15, max_amplitude=10 * gap)
+    assert default.status == "bound:amplitude", default.status
+    for a, f_exact in exact_far.items():
+        assert 0.01 < 1 - default.frequency_at(a * gap) / f_exact < 0.025, a  # the static r's truncation
