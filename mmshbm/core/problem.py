@@ -55,7 +55,8 @@ runners call them directly and never probe a problem for attributes.
     frequency set to f, Hz), ``scan_starts(u_front, A_front, A) -> list`` (states to
     start Newton from at amplitude A, frequency aside) and ``leads_fundamental(u) ->
     bool`` (the starting mode holds the largest share of the fundamental harmonic's
-    kinetic energy among the tracked modes): the frequency scan above a tongue. Each is None when not offered.
+    kinetic energy among the tracked modes): the frequency scan above a tongue. Each is
+    None when not offered.
 :class:`AmplitudeStart` (backbones, :class:`BackboneProblemBase`)
     ``linear_mode_point(amplitude)`` (the linear mode at that amplitude, m),
     ``initial_tangent()``, ``open_amplitude()`` (the amplitude at which the linear mode
