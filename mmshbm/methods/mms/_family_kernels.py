@@ -2,14 +2,9 @@
 harmonic, the fundamental's share and the strongest higher harmonic's detuning from the
 nearest tracked mode (:meth:`~mmshbm.methods.mms.family.FamilyMixin.family_records`).
 
-The kernels reproduce the NumPy expressions they replace operation for operation, so
-their results are the same floating-point numbers: ``einsum("ki,kij,kj->k")`` sums
-(a_ki·D_kij)·a_kj over i then j into one accumulator, ``ndarray.sum`` is NumPy's
-pairwise summation (8 accumulators on a block of up to 128 numbers: H <= 128 here, the
-NumPy expressions themselves above), ``argmax``/``argmin``
-take the first extremum (the first NaN where there is one). They are compiled without
-fast-math flags for that reason (no contraction into fused multiply-adds, no
-reassociation).
+Plain loops: the energies a_kᵀ ∂D_k/∂Ω a_k and their total are sums of a few terms, equal to
+NumPy's expressions of them up to the round-off of those sums. ``argmax``/``argmin`` take the
+first extremum (the first NaN where there is one), as NumPy's do.
 """
 
 from __future__ import annotations
@@ -21,45 +16,13 @@ from numba import njit
 
 __all__ = ["harmonic_energies", "family_records"]
 
-_JIT = dict(cache=True, nogil=True)  # exact IEEE arithmetic: no fast-math flags
+_JIT = dict(cache=True, nogil=True)  # no fast-math: NaNs propagate as in NumPy
 
 
 @njit(**_JIT)
-def _block_sum(x, lo, n):
-    """NumPy's sum of n <= 128 numbers x[lo:lo+n] (``x[lo:lo+n].sum()``: 8 accumulators;
-    NumPy halves longer arrays into such blocks)."""
-    if n < 8:
-        res = 0.0
-        for i in range(n):
-            res += x[lo + i]
-        return res
-    r0, r1, r2, r3 = x[lo], x[lo + 1], x[lo + 2], x[lo + 3]
-    r4, r5, r6, r7 = x[lo + 4], x[lo + 5], x[lo + 6], x[lo + 7]
-    i = 8
-    stop = n - n % 8
-    while i < stop:
-        r0 += x[lo + i]
-        r1 += x[lo + i + 1]
-        r2 += x[lo + i + 2]
-        r3 += x[lo + i + 3]
-        r4 += x[lo + i + 4]
-        r5 += x[lo + i + 5]
-        r6 += x[lo + i + 6]
-        r7 += x[lo + i + 7]
-        i += 8
-    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-    while i < n:
-        res += x[lo + i]
-        i += 1
-    return res
-
-
-@njit(**_JIT)
-def _harmonic_energies(a, dD, eta, pole_k, omega, energies, two):
+def _harmonic_energies(a, dD, eta, pole_k, omega, energies):
     """In place: energies (H+1,) J, T_k = max(−(Ω/8)(a_kᵀ ∂D_k/∂Ω a_k − 2k²Ω Σ_p η_p²), 0),
-    T_0 = 0; a (H+1, n_c), dD (H+1, n_c, n_c), eta (n_p,), pole_k (n_p,) int. ``two`` is
-    2.0, passed at run time: η² is C's pow(η, 2.0) as for a NumPy scalar (η·η differs from
-    it in the last bit now and then, and a literal exponent would be folded into η·η)."""
+    T_0 = 0; a (H+1, n_c), dD (H+1, n_c, n_c), eta (n_p,), pole_k (n_p,) int."""
     n_k, n_c = a.shape
     for k in range(n_k):
         s = 0.0
@@ -69,7 +32,7 @@ def _harmonic_energies(a, dD, eta, pole_k, omega, energies, two):
         energies[k] = s
     for p in range(len(pole_k)):
         k = pole_k[p]
-        energies[k] -= 2.0 * k * k * omega * math.pow(eta[p], two)
+        energies[k] -= 2.0 * k * k * omega * (eta[p] * eta[p])
     c = -omega / 8.0
     for k in range(n_k):
         energies[k] = c * energies[k]
@@ -92,13 +55,15 @@ def _first_argmax(x, lo):
 
 
 @njit(**_JIT)
-def _family_records(a, dD, eta, pole_k, omega, freqs, energies, out, two):
+def _family_records(a, dD, eta, pole_k, omega, freqs, energies, out):
     """In place: energies as :func:`_harmonic_energies`; out (4,) = fundamental_share,
     resonance_harmonic k, resonance_mode j (1-based), resonance_detuning kΩ/ω_j − 1 (0, 0,
     NaN for H = 1 or no motion); freqs (n_t,) Hz."""
-    _harmonic_energies(a, dD, eta, pole_k, omega, energies, two)
+    _harmonic_energies(a, dD, eta, pole_k, omega, energies)
     H = len(energies) - 1
-    total = _block_sum(energies, 1, H)  # H <= 128: one block of NumPy's pairwise sum
+    total = 0.0
+    for k in range(1, H + 1):
+        total += energies[k]
     out[0] = energies[1] / total if total > 0 else 1.0
     out[1] = 0.0
     out[2] = 0.0
@@ -129,39 +94,17 @@ def harmonic_energies(a: np.ndarray, dD: np.ndarray, eta: np.ndarray, pole_k: np
     (rad/s)."""
     energies = np.empty(a.shape[0])
     _harmonic_energies(np.ascontiguousarray(a), np.ascontiguousarray(dD), np.ascontiguousarray(eta),
-                       pole_k, float(omega), energies, 2.0)
+                       pole_k, float(omega), energies)
     return energies
 
 
 def family_records(a: np.ndarray, dD: np.ndarray, eta: np.ndarray, pole_k: np.ndarray, omega: float,
                    freqs: np.ndarray) -> dict:
     """The family records of one point (see :meth:`FamilyMixin.family_records`): arguments
-    as :func:`harmonic_energies`, ``freqs`` (n_t,) Hz the tracked open-contact modes.
-    Above H = 128 (NumPy sums in several blocks) the NumPy expressions themselves."""
-    if a.shape[0] - 1 > _MAX_H:
-        return _family_records_numpy(a, dD, eta, pole_k, omega, freqs)
+    as :func:`harmonic_energies`, ``freqs`` (n_t,) Hz the tracked open-contact modes."""
     out = np.empty(4)
     _family_records(np.ascontiguousarray(a), np.ascontiguousarray(dD), np.ascontiguousarray(eta), pole_k,
-                    float(omega), np.ascontiguousarray(freqs, dtype=float), np.empty(a.shape[0]), out, 2.0)
+                    float(omega), np.ascontiguousarray(freqs, dtype=float), np.empty(a.shape[0]), out)
     return {"fundamental_share": float(out[0]), "resonance_harmonic": float(out[1]),
             "resonance_mode": float(out[2]), "resonance_detuning": float(out[3])}
 
-
-#: the largest H of the compiled records (NumPy's sum of H numbers is one block up to 128)
-_MAX_H = 128
-
-
-def _family_records_numpy(a, dD, eta, pole_k, omega, freqs) -> dict:
-    """:func:`family_records` by the NumPy expressions the kernel reproduces."""
-    energies = harmonic_energies(a, dD, eta, pole_k, omega)
-    total = float(energies[1:].sum())
-    out = {"fundamental_share": float(energies[1] / total) if total > 0 else 1.0,
-           "resonance_harmonic": 0.0, "resonance_mode": 0.0, "resonance_detuning": float("nan")}
-    H = len(energies) - 1
-    if H >= 2 and total > 0:
-        k = int(np.argmax(energies[2:])) + 2
-        f = k * float(omega) / (2 * np.pi)
-        j = int(np.argmin(np.abs(freqs - f)))
-        out.update(resonance_harmonic=float(k), resonance_mode=float(j + 1),
-                   resonance_detuning=float(f / freqs[j] - 1.0))
-    return out

@@ -480,16 +480,15 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         """(entry, arguments after pole_k, entry, arguments after Ω, records (4,)): the
         compiled overloads of the starting mode's share (``_start_mode_share``) and of the
         family records (``_family_kernels._family_records``) for the compiled corrector's
-        problems (modal back end, H up to the compiled family records'); () for the others."""
+        problems (modal back end); () for the others."""
         shares, fast = (), self._fast_setup()
-        if fast and self.H <= _family_kernels._MAX_H and hasattr(ck._start_mode_share, "compile"):
+        if fast and hasattr(ck._start_mode_share, "compile"):
             _, s0, s, sv, pole_j = self._share_setup()
             _, B, w2, _, keep, _, _ = fast["cond"]
             records = np.empty(4)
             share_args = (pole_j, self._pole_w2, B, w2, keep, s0, s, sv)
-            # 2.0 passed at run time (see _family_kernels._harmonic_energies)
             family_args = (np.ascontiguousarray(self._modal_basis()[0], dtype=float), np.empty(self.H + 1),
-                           records, 2.0)
+                           records)
             a = np.zeros((self.H + 1, self.n_c))  # arguments of the monitor's types
             dD, eta = np.zeros((self.H + 1, self.n_c, self.n_c)), np.zeros(self.n_poles)
             share = compiled_entry(ck._start_mode_share, (a, eta, 0.0, dD, self._pole_k, *share_args),

@@ -267,7 +267,7 @@ class FamilyMixin(LandingsMixin):
 
     def _family_records_at(self, a: np.ndarray, omega: float, eta: np.ndarray, dD: np.ndarray) -> dict:
         """:meth:`family_records` from the unpacked (a, Ω, η) and ∂D/∂Ω at Ω, in one
-        compiled pass (:mod:`._family_kernels`: the same numbers as NumPy's)."""
+        compiled pass (:mod:`._family_kernels`)."""
         return family_records(a, dD, eta, self._pole_k, omega, self._modal_basis()[0])
 
     def _share_setup(self):
