@@ -1,11 +1,13 @@
 """The continuation step's shortcuts give the numbers of the plain computation: the turn
 t_new·t computed once (the turn test, the corner test and the curvature reuse it), the
-tangent's dot products by ndarray.dot, and the MMS-HBM monitor's kernel arguments kept
-with its compiled entry (a problem's later monitors against a fresh problem's first)."""
+tangent's dot products by ndarray.dot (matmul's to its round-off), and the MMS-HBM
+monitor's kernel arguments kept with its compiled entry (a problem's later monitors against
+a fresh problem's first)."""
 
 import warnings
 
 import numpy as np
+from roundoff import assert_roundoff_close
 
 import mmshbm
 from mmshbm.core.continuation import ContinuationOptions
@@ -20,13 +22,14 @@ def _beam_branch():
         return model, mmshbm.backbone(model, harmonics=3)
 
 
-def test_dot_is_matmul_and_negation_is_exact():
+def test_dot_is_matmul_to_its_roundoff_and_negation_is_exact():
     rng = np.random.default_rng(1)
     for n in (2, 7, 15, 16, 33, 64):
         for _ in range(50):
             t, p = rng.standard_normal(n), rng.standard_normal(n) * rng.uniform(1e-6, 1e6)
-            assert t.dot(p) == t @ p
-            assert (-t).dot(p) == -t.dot(p)
+            # two paths to one dot product (ndarray.dot, matmul): its round-off apart
+            assert_roundoff_close(t.dot(p), t @ p, np.abs(t) @ np.abs(p), terms=n)
+            assert (-t).dot(p) == -t.dot(p)  # one path, the inputs negated: rounding is symmetric
 
 
 def test_turn_is_the_tangents_product_and_the_curvature_the_same():
@@ -38,13 +41,15 @@ def test_turn_is_the_tangents_product_and_the_curvature_the_same():
     t = t / np.linalg.norm(t)
     ds = 0.5 * float(np.linalg.norm(branch.states[4] - branch.states[3]))
     u_new, _, _, J, t_new, sign, _, turn = _advance_turn(p, u, t, ds, opt, None)
-    assert turn == float(t_new @ t) and turn >= 0
+    assert_roundoff_close(turn, float(t_new @ t), np.abs(t_new) @ np.abs(t), terms=len(t))
+    assert turn >= 0
     for got, want in ((_curvature(t, t_new, ds, turn), _curvature(t, t_new, ds)),):
         assert got is not None and np.array_equal(got, (t_new - t) / ds) and np.array_equal(got, want)
     # the tangent and its sign as the two-value form gives them (solved again from J)
     t2, s2, turn2 = _tangent_sign_turn(J, t)
     t3, s3 = _tangent_sign(J, t)
-    assert np.array_equal(t2, t3) and s2 == s3 and turn2 == float(t3 @ t)
+    assert np.array_equal(t2, t3) and s2 == s3  # one solve (the two-value form calls the three-value one)
+    assert_roundoff_close(turn2, float(t3 @ t), np.abs(t3) @ np.abs(t), terms=len(t))
 
 
 def test_monitor_with_kept_arguments_is_a_fresh_problems():
