@@ -74,10 +74,9 @@ class Phase:
     switch_static: np.ndarray = field(init=False)
 
     def __post_init__(self):
-        # row by row: a single row gives the same numbers as mmshbm 0.1's vector products
-        object.__setattr__(self, "switch_modal", np.array([g @ self.modes for g in self.switch_grad]))
+        object.__setattr__(self, "switch_modal", self.switch_grad @ self.modes)
+        object.__setattr__(self, "switch_static", self.switch_offset + self.switch_grad @ self.q_static)
         pairs = list(zip(self.switch_grad, self.switch_offset, strict=True))
-        object.__setattr__(self, "switch_static", np.array([float(o + g @ self.q_static) for g, o in pairs]))
         # magnitudes that set the round-off of u: |offset| + |grad|·|q_static| + Σ_j |grad|·|φ_j| |η_j|
         absg = np.abs(self.switch_grad)
         qs = np.abs(self.q_static)
