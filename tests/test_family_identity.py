@@ -41,7 +41,7 @@ def test_a_mode_that_changes_shape_reaches_its_bound_on_its_family(stiff_chain):
     assert np.all(fam.records["on_family"] == 1.0)
     assert min(fam.records["fundamental_share"]) < 0.5  # the stretch that is not a tongue
     assert len(fam) == len(path)
-    np.testing.assert_array_equal(fam.frequency, path.frequency)
+    np.testing.assert_array_equal(fam.frequency, path.frequency)  # no jump taken: the same steps
     assert not [f for f in fam.metadata["checks"] if f["kind"] == "left_family"]
     assert not [f for f in path.metadata["checks"] if f["kind"] == "left_family"]
 

@@ -46,7 +46,7 @@ def test_all_modes_equal_the_banded_backend(complete21, banded21):
         for k in range(6):
             assert np.abs(D[k] - D_ref[k]).max() <= 1e-10 * np.abs(D_ref[k]).max()
             assert np.abs(dD[k] - dD_ref[k]).max() <= 1e-10 * max(np.abs(dD_ref[k]).max(), 1e-300)
-            np.testing.assert_array_equal(D[k], D[k].T)
+            np.testing.assert_array_equal(D[k], D[k].T)  # the kernel mirrors its upper triangle
 
 
 def test_one_dof_closed_form():
@@ -121,14 +121,20 @@ def test_sparse_eigensolver_path_matches_the_dense_one(beam21, complete21):
 
 
 def test_large_beam_is_independent_of_its_size():
-    """1000 elements: ARPACK, the same ~11 modes as 21 elements, D against the banded LU."""
+    """1000 elements: ARPACK, the same ~11 modes as 21 elements, D against the banded LU to
+    2e-9 (the modes left out) plus the banded LU's own round-off. D = K_cc − K_cl S⁻¹ K_lc
+    cancels terms far larger than itself (S of 2000 DOFs), so that round-off is well above
+    ε|D| and depends on the LAPACK kernel: measured as the asymmetry of the banded D (exact D
+    is symmetric, the modal one is by construction), four times its largest."""
     model = mmshbm.default_beam().model(1000)
     cond = make_condensation(model, "modal")
     assert cond.reduction.solver == "arpack" and cond.n_modes <= 12
     band = Condensation(model, "banded")
     for omega in OMEGAS:
         D, D_ref = cond.dynamic_stiffness(omega, 5, False), band.dynamic_stiffness(omega, 5, False)
-        assert np.abs(D - D_ref).max() <= 2e-9 * np.abs(D_ref).max()
+        noise = np.abs(D_ref - D_ref.transpose(0, 2, 1)).max()
+        assert noise <= 1e-6 * np.abs(D_ref).max()  # round-off, not a wrong reference
+        assert np.abs(D - D_ref).max() <= 2e-9 * np.abs(D_ref).max() + 4 * noise
 
 
 def test_pole_raises_and_excluding_its_term_regularises():
@@ -158,7 +164,7 @@ def test_regular_part_identity(complete21):
     deta = b @ a * 2 * k * k * omega / (w2 - x) ** 2  # ∂η/∂Ω
     np.testing.assert_allclose(dD[k] @ a, dDr[k] @ a - b * (deta * x + eta * 2 * k * k * omega) / w2,
                                rtol=1e-8)
-    np.testing.assert_array_equal(D[:k], Dr[:k])
+    np.testing.assert_array_equal(D[:k], Dr[:k])  # each harmonic its own loop: those below k untouched
     # the exposed modes: M-orthonormal, b_j = K_cl φ_j
     model = mmshbm.default_beam().model(21)
     M = model.blocks["M_ll"]

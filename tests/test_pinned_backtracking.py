@@ -126,6 +126,7 @@ def test_same_iterates_as_full_backtracking():
             seen.add(str(err).split(" ")[0])
             continue
         u_ref, it_ref, hist_ref, evaluated = ref
+        # the reference performs the same NumPy operations on the same numbers (solve=_dense)
         assert it == it_ref and np.array_equal(u, u_ref) and np.array_equal(hist, hist_ref), seed
         assert problem.counts["amplitude"] <= evaluated
         saved += evaluated - problem.counts["amplitude"]
@@ -168,7 +169,7 @@ def test_dense_bordered_equals_scipy_lu(n):
     J, t, rhs = rng.standard_normal((n - 1, n)), rng.standard_normal(n), rng.standard_normal(n)
     x, sign = bordered_solve_sign(J, t, rhs)
     M = np.vstack([J, t])
-    assert np.array_equal(x, la.lu_solve(la.lu_factor(M), rhs))
+    assert np.array_equal(x, la.lu_solve(la.lu_factor(M), rhs))  # the same LAPACK getrf/getrs calls
     assert sign == np.sign(np.linalg.det(M))
     R = np.column_stack([rhs, 2.0 * rhs])
     np.testing.assert_allclose(bordered_solve(J, t, R), np.linalg.solve(M, R), rtol=1e-9, atol=1e-12)

@@ -72,7 +72,7 @@ def test_corrector_tangent_is_the_bordered_solve(beam):
     rhs[-1] = 1.0
     x_ref, sign_ref = bordered_solve_sign(J, t, rhs)
     x, sign = p.solved_tangent(J, t)
-    np.testing.assert_array_equal(x, x_ref)
+    np.testing.assert_array_equal(x, x_ref)  # one LU kernel (kernels._dense_solve) on one matrix
     assert sign == sign_ref
     assert p.solved_tangent(J, t) is None  # given once
     p.fast_newton(u, u, t, 1e-10, 10, 1e-12)
@@ -93,7 +93,7 @@ def test_condensed_stiffness_kept_by_frequency_is_the_computed_one(beam):
     for derivative in (False, True):
         D, dD = kept.condensed_many(omegas, derivative=derivative)
         D_ref, dD_ref = fresh.condensed_many(omegas, derivative=derivative)
-        np.testing.assert_array_equal(D, D_ref)
+        np.testing.assert_array_equal(D, D_ref)  # kept copies of _modal_dynamic_stiffness's output
         if derivative:
             np.testing.assert_array_equal(dD, dD_ref)
     # and the records computed from them: a branch's modal shares, again from scratch
