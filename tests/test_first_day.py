@@ -1,0 +1,51 @@
+"""What a new user meets on the first day: answers outside a branch, models the methods
+cannot run, messages in the units the user typed, resumed runs with other settings,
+swapped matrices, failed starts, progress in a log, figures that say what they show."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import mmshbm
+from mmshbm import BranchWarning
+
+
+@pytest.fixture(scope="module")
+def oscillator_branch():
+    """The 1-DOF impact oscillator's backbone up to 3 gaps (gap 1 m), H = 5."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", BranchWarning)
+        return mmshbm.backbone(mmshbm.one_dof_oscillator(), harmonics=5, max_amplitude=3.0)
+
+
+# ---------------------------------------------------------------------- a. solve_at outside the branch
+def test_solve_at_beyond_the_branch_is_nan_and_warns_as_frequency_at(oscillator_branch):
+    b = oscillator_branch
+    assert b.amplitude[b.family_front()].max() == pytest.approx(3.0, rel=1e-9)
+    with pytest.warns(BranchWarning, match="outside the amplitude range"):
+        assert np.isnan(b.frequency_at(50, unit="gap"))
+    with pytest.warns(BranchWarning, match=r"50 m \(50 gaps\) outside the amplitude range.*0\.5 m.*3 m"):
+        points = b.solve_at([50, 2], unit="gap")
+    assert points.records["solved"].tolist() == [0, 1]
+    assert np.isnan(points.frequency[0]) and np.isnan(points.amplitude[0])
+    assert np.isnan(points.states[0]).all()
+    # the solved entry is the pinned solve frequency_at makes (same computation, Newton tolerance)
+    assert points.amplitude[1] == pytest.approx(2.0, rel=1e-8)
+    assert points.frequency[1] == pytest.approx(b.frequency_at(2, unit="gap"), rel=1e-9)
+
+
+def test_solve_at_inside_the_branch_does_not_warn(oscillator_branch):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", BranchWarning)
+        points = oscillator_branch.solve_at([1.5, 2.5], unit="gap")
+    assert points.records["solved"].tolist() == [1, 1]
+
+
+def test_solve_at_with_stand_in_marks_the_nearest_front_point(oscillator_branch):
+    b = oscillator_branch
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", BranchWarning)
+        points = b.solve_at([50], unit="gap", stand_in=True)
+    assert points.records["solved"].tolist() == [0]
+    assert points.amplitude[0] == pytest.approx(b.amplitude[b.family_front()[-1]], rel=1e-9)
