@@ -49,3 +49,25 @@ def test_solve_at_with_stand_in_marks_the_nearest_front_point(oscillator_branch)
         points = b.solve_at([50], unit="gap", stand_in=True)
     assert points.records["solved"].tolist() == [0]
     assert points.amplitude[0] == pytest.approx(b.amplitude[b.family_front()[-1]], rel=1e-9)
+
+
+# ---------------------------------------------------------------------- b. a model without contacts
+def _linear_chain():
+    """Two masses and a massless node on springs, with no stop and no friction."""
+    M = np.diag([1.0, 1.0, 0.0])
+    K = np.array([[2.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 1.0]])
+    return mmshbm.Model.from_matrices(M, K, contact_dof=[], gap=[], stop_side=[], amplitude_dof=0)
+
+
+@pytest.mark.parametrize("method", ["mmshbm", "penalty", "shooting"])
+@pytest.mark.parametrize("max_amplitude", [None, 0.1])
+def test_backbone_of_a_model_without_contact_says_so(method, max_amplitude):
+    with pytest.raises(ValueError, match="no contact.*backbone of a linear model is its linear mode"):
+        mmshbm.backbone(_linear_chain(), method=method, max_amplitude=max_amplitude)
+
+
+@pytest.mark.parametrize("method", ["mmshbm", "penalty"])
+def test_forced_response_of_a_model_without_contact_says_so(method):
+    model = _linear_chain().with_damping(modal_ratio=0.01)
+    with pytest.raises(ValueError, match="no contact.*forced response of a linear model is linear"):
+        mmshbm.frequency_response(model, [1.0, 0.0, 0.0], (0.1, 0.3), method=method)

@@ -74,9 +74,11 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     Raises
     ------
     TypeError, ValueError
-        For bad input, naming the offending argument and value.
+        For bad input, naming the offending argument and value; a model with no contact
+        (neither a stop nor friction: its backbone is its linear mode).
     """
     runner.check_model(model)
+    runner.check_has_contact(model, "backbone")
     runner.check_method(method, METHODS)
     requested = method
     method = backbone_method(model, method)

@@ -38,7 +38,7 @@ from ..core.status import Status
 from ..model.model import Model
 
 __all__ = ["CONTINUATION_FIELDS", "Run", "run", "jsonable", "continuation_options", "check_option_names",
-           "checkpoint_header", "mark_grazing", "run_metadata"]
+           "check_has_contact", "checkpoint_header", "mark_grazing", "run_metadata"]
 
 log = logging.getLogger(__name__)
 
@@ -53,6 +53,21 @@ def check_model(model) -> None:
     """TypeError unless ``model`` is a :class:`~mmshbm.model.Model`."""
     if not isinstance(model, Model):
         raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
+
+
+def check_has_contact(model: Model, what: str) -> None:
+    """ValueError when ``model`` has neither a unilateral contact nor a friction contact:
+    ``what`` (a backbone, a forced response) of a linear structure is linear and needs no
+    continuation."""
+    if model.contacts or model.friction:
+        return
+    hints = {"backbone": "a backbone of a linear model is its linear mode, at every amplitude: "
+                         "model.linear_modes(n) gives its frequencies (Hz) and shapes",
+             "forced response": "the forced response of a linear model is linear: "
+                                "(K - Ω² M + iΩ C)⁻¹ F̂ at each frequency, with no continuation"}
+    raise ValueError(f"the model has no contact (no stop and no friction): {hints[what]}; add a "
+                     "stop with Model.from_matrices(M, K, contact_dof=..., gap=...) or friction with "
+                     "model.with_friction(...)")
 
 
 def check_method(method, methods) -> None:
