@@ -71,3 +71,45 @@ def test_forced_response_of_a_model_without_contact_says_so(method):
     model = _linear_chain().with_damping(modal_ratio=0.01)
     with pytest.raises(ValueError, match="no contact.*forced response of a linear model is linear"):
         mmshbm.frequency_response(model, [1.0, 0.0, 0.0], (0.1, 0.3), method=method)
+
+
+# ---------------------------------------------------------------------- c. amplitudes in the user's units
+def test_a_max_amplitude_below_the_default_start_starts_below_it():
+    model = mmshbm.one_dof_oscillator(gap=2.0)  # the mass on k1 = 1 N/m while the contact is open
+    branch = mmshbm.backbone(model, harmonics=3, max_amplitude=0.45 * model.gap)
+    assert branch.status == "bound:amplitude"
+    assert branch.metadata["start_amplitude"] < 0.45 * model.gap
+    assert branch.amplitude[-1] == pytest.approx(0.45 * model.gap, rel=1e-9)
+    # below the gap the backbone is the linear mode, sqrt(k1/m)/(2π) Hz (to the Newton tolerance)
+    np.testing.assert_allclose(branch.frequency, 1 / (2 * np.pi), rtol=1e-9)
+
+
+def test_a_start_above_max_is_refused_in_metres_and_gaps():
+    model = mmshbm.one_dof_oscillator(gap=2.0)
+    message = (r"start_amplitude \(1\.2 m = 0\.6 gaps\) must be below max_amplitude \(1 m = 0\.5 gaps\): "
+               "lower start_amplitude or raise max_amplitude")
+    with pytest.raises(ValueError, match=message):
+        mmshbm.backbone(model, max_amplitude=1.0, start_amplitude=1.2)
+
+
+def test_cli_backbone_with_a_max_amplitude_below_half_a_gap(tmp_path, capsys):
+    from mmshbm.cli import main
+
+    path = tmp_path / "oscillator.npz"
+    mmshbm.one_dof_oscillator(gap=2.0).save_npz(path)
+    code = main(["backbone", "--model-file", str(path), "-H", "3", "--max-amplitude", "0.4", "--out",
+                 str(tmp_path)])
+    assert code == 0, capsys.readouterr().err
+    amplitude = np.loadtxt(tmp_path / "backbone.csv", delimiter=",", skiprows=1)[:, 1]
+    assert amplitude[-1] == pytest.approx(0.4 * 2.0, rel=1e-9)
+
+
+def test_cli_max_amplitude_in_gaps_of_a_model_without_gap(tmp_path, capsys):
+    from mmshbm.cli import main
+
+    model = _linear_chain().with_friction(2, 0.3, normal_load=1.0)
+    path = tmp_path / "friction.npz"
+    model.save_npz(path)
+    assert main(["backbone", "--model-file", str(path), "--max-amplitude", "2", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "--max-amplitude is in gaps, and this model has no stop with a positive gap" in err
