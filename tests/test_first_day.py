@@ -113,3 +113,17 @@ def test_cli_max_amplitude_in_gaps_of_a_model_without_gap(tmp_path, capsys):
     assert main(["backbone", "--model-file", str(path), "--max-amplitude", "2", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert "--max-amplitude is in gaps, and this model has no stop with a positive gap" in err
+
+
+# ---------------------------------------------------------------------- d. resuming with other settings
+def test_resume_with_another_h_names_h(tmp_path):
+    model = mmshbm.one_dof_oscillator()
+    path = tmp_path / "osc.ckpt"
+    mmshbm.backbone(model, harmonics=5, max_steps=3, checkpoint=path)
+    with pytest.raises(ValueError, match=r"harmonics \(H\): file 5, now 8; the number of unknowns: file 8, "
+                                         r"now 11; resume with the file's settings"):
+        mmshbm.backbone(model, harmonics=8, n_samples=128, resume=path)
+    # every setting that differs, not the first only (N follows H by default)
+    with pytest.raises(ValueError, match=r"harmonics \(H\): file 5, now 15; n_samples \(N\): file 128, "
+                                         "now 256"):
+        mmshbm.backbone(model, harmonics=15, resume=path)

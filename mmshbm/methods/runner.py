@@ -198,13 +198,17 @@ def checkpoint_header(model: Model, method: str, problem, options: dict, **extra
 
 
 def check_resumable(stored: dict, current: dict, path) -> None:
-    """ValueError naming the first entry of the run's configuration (``current``, a
-    :func:`checkpoint_header`; the model's description left out) that differs from the file's."""
-    for key in _RESUME_KEYS + tuple(k for k in current if k not in _RESUME_KEYS and k != "model_description"):
-        if stored.get(key) != current[key]:
-            what = "the model's matrices, contact DOF, gap or stop side" if key == "model" else key
-            raise ValueError(f"cannot resume from {str(path)!r}: {what} differ(s) from this run "
-                             f"(file: {stored.get(key)!r}, now: {current[key]!r})")
+    """ValueError naming every entry of the run's configuration (``current``, a
+    :func:`checkpoint_header`; the model's description left out) that differs from the
+    file's (:func:`~mmshbm.core.checkpoint.header_differences`: H, N, method, options...)."""
+    from ..core.checkpoint import header_differences
+
+    keys = _RESUME_KEYS + tuple(k for k in current if k not in _RESUME_KEYS and k != "model_description")
+    differences = header_differences(stored, current, keys)
+    if differences:
+        raise ValueError(f"cannot resume from {str(path)!r}: this run's settings differ from the file's: "
+                         f"{'; '.join(differences)}; resume with the file's settings, or start a new run "
+                         "without resume")
 
 
 def _finished(previous, copts: ContinuationOptions) -> bool:
