@@ -2,6 +2,7 @@
 cannot run, messages in the units the user typed, resumed runs with other settings,
 swapped matrices, failed starts, progress in a log, figures that say what they show."""
 
+import re
 import warnings
 
 import numpy as np
@@ -127,3 +128,17 @@ def test_resume_with_another_h_names_h(tmp_path):
     with pytest.raises(ValueError, match=r"harmonics \(H\): file 5, now 15; n_samples \(N\): file 128, "
                                          "now 256"):
         mmshbm.backbone(model, harmonics=15, resume=path)
+
+
+# ---------------------------------------------------------------------- e. M and K swapped
+def test_swapped_mass_and_stiffness_are_named():
+    beam = mmshbm.default_beam().model(4)
+    massless = beam.c.tolist()  # the tip node's deflection and rotation
+    message = re.escape(f"K is zero on the rows of DOFs {massless}, where M is not") + ".*may be swapped"
+    with pytest.raises(ValueError, match=message):
+        mmshbm.Model.from_matrices(beam.K, beam.M, beam.contact_dof, beam.gap)
+    M = np.diag([1.0, 0.0])
+    K = np.array([[5.0, -4.0], [-4.0, 4.0]])
+    with pytest.raises(ValueError, match=r"DOFs \[1\], where M is not.*M has 0 zero row.*may be swapped"):
+        mmshbm.Model.from_matrices(K, M, 1, 1.0)
+    assert mmshbm.Model.from_matrices(M, K, 1, 1.0).c.tolist() == [1]  # the right order is accepted
