@@ -142,3 +142,41 @@ def test_swapped_mass_and_stiffness_are_named():
     with pytest.raises(ValueError, match=r"DOFs \[1\], where M is not.*M has 0 zero row.*may be swapped"):
         mmshbm.Model.from_matrices(K, M, 1, 1.0)
     assert mmshbm.Model.from_matrices(M, K, 1, 1.0).c.tolist() == [1]  # the right order is accepted
+
+
+# ---------------------------------------------------------------------- f. a forced start in contact
+@pytest.fixture(scope="module")
+def beam_in_contact_at_44_hz():
+    """The default beam (21 elements), 0.5 % modal damping, 2.3 N at the last node with
+    mass: at 44 Hz its linear response passes the stop (1.36 gaps at the tip)."""
+    model = mmshbm.default_beam().model(21).with_damping(modal_ratio=0.005)
+    force = np.zeros(model.n_dof)
+    force[int(model.l[model.l < model.amplitude_dof][-2])] = 2.3
+    return model, force
+
+
+def test_penalty_forced_response_starts_in_contact(beam_in_contact_at_44_hz):
+    """The start at 44 Hz failed at every H and N (the linear response is 1.36 gaps there,
+    not aliasing); continued in force level from below the stop it converges, onto the
+    response MMS-HBM starts on, to the penalty error (k_p = 10³ k_c)."""
+    model, force = beam_in_contact_at_44_hz
+    from mmshbm.methods.penalty.forced import PenaltyForcedProblem
+
+    linear = PenaltyForcedProblem(model, force, harmonics=5)
+    assert linear.monitor(linear.linear_response_point(44.0))["amplitude"] > 1.3 * model.gap
+    pen = mmshbm.frequency_response(model, force, (44.0, 60.0), harmonics=5, method="penalty", max_steps=2)
+    mms = mmshbm.frequency_response(model, force, (44.0, 60.0), harmonics=5, max_steps=2, stability=False)
+    assert pen.status == "max_steps" and len(pen) == 3
+    assert pen.frequency[0] == pytest.approx(44.0, rel=1e-9) and pen.contact_force_max[0] > 0
+    # both in contact at 44 Hz; penalty-HBM is softer by its penetration, of order k_c/k_p of the force
+    assert pen.amplitude[0] == pytest.approx(mms.amplitude[0], rel=0.05)
+
+
+def test_a_failed_forced_start_warns_with_its_status(beam_in_contact_at_44_hz):
+    model, force = beam_in_contact_at_44_hz
+    message = (r"shooting frequency response is empty: its first point at 44 Hz did not converge \(.*\); "
+               r"the linear response there swings 1\.36 gaps, past the stop")
+    with pytest.warns(BranchWarning, match=message):
+        resp = mmshbm.frequency_response(model, force, (44.0, 60.0), method="shooting", max_steps=2)
+    assert len(resp) == 0 and not resp.completed
+    assert resp.status.startswith("start failed")

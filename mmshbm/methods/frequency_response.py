@@ -11,10 +11,13 @@ from __future__ import annotations
 
 import importlib
 import logging
+import warnings
 
 import numpy as np
 
 from .. import _validate as check
+from .._warnings import BranchWarning
+from ..core.status import Status
 from ..model.damping import model_has_damping
 from ..model.model import Model
 from ..results.response import FrequencyResponse
@@ -149,7 +152,43 @@ def frequency_response(model: Model, force, frequency_range, harmonics: int = 5,
     res = done.result
     log.info("%s frequency response: %d points, status %s, %.3f s", method, len(res.u), res.status,
              done.elapsed_s)
-    return _assemble(model, excitation, problem, res, method, (f0, f1), options, copts, done)
+    response = _assemble(model, excitation, problem, res, method, (f0, f1), options, copts, done)
+    warn_failed_start(response, model, excitation, f0)
+    return response
+
+
+def warn_failed_start(response: FrequencyResponse, model: Model, excitation: Excitation,
+                      frequency: float) -> bool:
+    """Warn (:class:`~mmshbm.BranchWarning`) when ``response`` is empty because its first
+    point at ``frequency`` (Hz) did not converge (status kind "start failed"), saying how
+    far the linear response there swings the amplitude DOF (:func:`linear_amplitude`, in
+    gaps) and what to do; returns whether it warned."""
+    status = Status.parse(response.status)
+    if status.kind != Status.START_FAILED:
+        return False
+    reach = ""
+    if model.gap > 0:
+        a = linear_amplitude(model, excitation, frequency) / model.gap
+        reach = f"; the linear response there swings {a:.3g} gaps" + (
+            ", past the stop: the start is in contact" if a > 1 else ", inside the clearance")
+    warnings.warn(f"{response.method} frequency response is empty: its first point at {frequency:g} Hz "
+                  f"did not converge ({status.detail}){reach}; start the range lower, where the response "
+                  "stays off the stops (below grazing), or lower the force", BranchWarning, stacklevel=3)
+    return True
+
+
+def linear_amplitude(model: Model, excitation: Excitation, frequency: float) -> float:
+    """Amplitude (m) of the amplitude DOF in the linear response at ``frequency`` (Hz), the
+    stops ignored: |q̂| of (K − Ω²M + iΩC) q̂ = σ(Ω) F̂."""
+    import scipy.sparse.linalg as spla
+
+    omega = 2 * np.pi * frequency
+    s, _ = excitation.scale(omega)
+    A = model.K - omega**2 * model.M
+    if model.damping is not None:
+        A = A + 1j * omega * model.damping
+    q = spla.spsolve(A.tocsc().astype(complex), s * np.asarray(excitation.vector, dtype=complex))
+    return float(abs(q[model.amplitude_dof]))
 
 
 def _frequency_range(frequency_range) -> tuple[float, float]:
