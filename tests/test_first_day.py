@@ -180,3 +180,48 @@ def test_a_failed_forced_start_warns_with_its_status(beam_in_contact_at_44_hz):
         resp = mmshbm.frequency_response(model, force, (44.0, 60.0), method="shooting", max_steps=2)
     assert len(resp) == 0 and not resp.completed
     assert resp.status.startswith("start failed")
+
+
+# ---------------------------------------------------------------------- g. progress in a pipe
+def test_verbose_backbone_writes_progress_lines_when_stderr_is_not_a_terminal(monkeypatch, capsys):
+    import mmshbm._progress as progress
+
+    monkeypatch.setattr(progress, "LINE_INTERVAL_S", 0.0)  # a line per point
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", BranchWarning)
+        branch = mmshbm.backbone(mmshbm.one_dof_oscillator(), harmonics=3, max_amplitude=2.0, verbose=True)
+    lines = capsys.readouterr().err.splitlines()
+    points = [line for line in lines if line.startswith("mmshbm backbone: ")]
+    assert len(points) == len(branch) + 1  # one per point and the last
+    assert points[0].startswith("mmshbm backbone: 0.5/2 gap, 0.1592 Hz, 1 points [")
+    last = f"mmshbm backbone: 2/2 gap, {branch.frequency[-1]:.4g} Hz, {len(branch)} points, done ["
+    assert points[-1].startswith(last)
+
+
+def test_line_progress_writes_at_most_one_line_per_interval():
+    import io
+
+    from mmshbm._progress import LineProgress
+
+    out = io.StringIO()
+    bar = LineProgress("study", unit="run", total=40, file=out, interval=3600.0)
+    for k in range(40):
+        bar.set_postfix_str(f"run {k}", refresh=False)
+        bar.update(1)
+    bar.close()
+    bar.close()
+    lines = out.getvalue().splitlines()
+    assert len(lines) == 2
+    assert lines[0].startswith("study: 1/40 run, run 0 [")
+    assert lines[1].startswith("study: 40/40 run, run 39, done [")
+
+
+def test_verbose_forced_response_writes_progress_lines(monkeypatch, capsys):
+    import mmshbm._progress as progress
+
+    monkeypatch.setattr(progress, "LINE_INTERVAL_S", 0.0)
+    model = mmshbm.one_dof_oscillator().with_damping(modal_ratio=0.02)
+    resp = mmshbm.frequency_response(model, [0.1, 0.0], (0.1, 0.12), harmonics=3, verbose=True)
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if line.startswith("mmshbm frequency response")]
+    assert len(lines) == len(resp) + 1 and lines[0].startswith("mmshbm frequency response: 1 pt, 0.1 Hz, ")

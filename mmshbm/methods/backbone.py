@@ -47,8 +47,9 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
         Further bounds on recorded quantities, e.g. ``{"frequency": (0, 60)}`` (Hz),
         ``{"energy": (0, 1.0)}`` (J).
     verbose : bool
-        Show a progress bar (tqdm) that counts the amplitude toward ``max_amplitude`` (in
-        gaps), with the frequency and the number of points.
+        Show the progress on stderr: the amplitude toward ``max_amplitude`` (in gaps), the
+        frequency and the number of points; a tqdm bar on a terminal, plain lines every few
+        seconds in a pipe or a log file (:mod:`mmshbm._progress`).
     callback : callable(u, record), optional
         Called with every converged point.
     checkpoint : str or Path, optional
@@ -194,15 +195,16 @@ def backbone_method(model: Model, method: str) -> str:
 
 
 def _amplitude_progress(method: str, max_amplitude: float, gap: float, callback):
-    """A tqdm bar that counts the amplitude (in gaps, else mm) toward its bound, and the
-    callback that moves it (then calls the user's ``callback``)."""
-    from tqdm.auto import tqdm
+    """A progress display (:func:`mmshbm._progress.progress_bar`: a tqdm bar on a terminal,
+    plain lines in a pipe or log) that counts the amplitude (in gaps, else mm) toward its
+    bound, and the callback that moves it (then calls the user's ``callback``)."""
+    from .._progress import progress_bar
 
     scale, unit = (gap, "gap") if gap > 0 else (1e-3, "mm")
     total = max_amplitude / scale
-    bar = tqdm(desc=f"{method} backbone", unit=unit, total=total, leave=False, disable=None,
-               bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.3g}/{total:.3g} " + unit
-               + " [{elapsed}{postfix}]")
+    bar = progress_bar(f"{method} backbone", unit=unit, total=total,
+                       bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.3g}/{total:.3g} " + unit
+                       + " [{elapsed}{postfix}]")
     points = [0]
 
     def advance(u, record):

@@ -88,7 +88,9 @@ def frequency_response(model: Model, force, frequency_range, harmonics: int = 5,
     method : {"mmshbm", "penalty", "shooting"}
         MMS-HBM, or a baseline on the same forced problem.
     verbose : bool
-        Progress bar.
+        Show the progress on stderr: the points, with the frequency and amplitude of the
+        last; a tqdm bar on a terminal, plain lines every few seconds in a pipe or a log
+        file (:mod:`mmshbm._progress`).
     callback : callable(u, record), optional
         Called with every converged point.
     checkpoint : str or Path, optional
@@ -138,23 +140,39 @@ def frequency_response(model: Model, force, frequency_range, harmonics: int = 5,
     header = runner.checkpoint_header(model, method, problem, options, excitation=excitation.to_json())
     progress = None
     if verbose:
-        from tqdm.auto import tqdm
-
-        progress = tqdm(desc=f"{method} frequency response", unit="pt", leave=False, disable=None)
+        progress, callback = _response_progress(method, model.gap, callback)
 
     def start():
         return (problem.start_point(f0),
                 problem.initial_tangent())
 
-    done = runner.run(problem, copts, start, callback=callback, progress=progress, checkpoint=checkpoint,
-                      resume=resume, header=header, header_extra={"frequency_range": [f0, f1]},
-                      close=(progress,))
+    done = runner.run(problem, copts, start, callback=callback, checkpoint=checkpoint, resume=resume,
+                      header=header, header_extra={"frequency_range": [f0, f1]}, close=(progress,))
     res = done.result
     log.info("%s frequency response: %d points, status %s, %.3f s", method, len(res.u), res.status,
              done.elapsed_s)
     response = _assemble(model, excitation, problem, res, method, (f0, f1), options, copts, done)
     warn_failed_start(response, model, excitation, f0)
     return response
+
+
+def _response_progress(method: str, gap: float, callback):
+    """A progress display (:func:`mmshbm._progress.progress_bar`: a tqdm bar on a terminal,
+    plain lines in a pipe or log) that counts the points with the frequency and amplitude
+    of the last, and the callback that moves it (then calls the user's ``callback``)."""
+    from .._progress import progress_bar
+
+    bar = progress_bar(f"{method} frequency response", unit="pt")
+
+    def advance(u, record):
+        f, a = float(record.get("frequency", np.nan)), float(record.get("amplitude", np.nan))
+        bar.set_postfix_str(f"{f:.4g} Hz, " + (f"{a / gap:.3g} gaps" if gap > 0 else f"{a:.3g} m"),
+                            refresh=False)
+        bar.update(1)
+        if callback is not None:
+            callback(u, record)
+
+    return bar, advance
 
 
 def warn_failed_start(response: FrequencyResponse, model: Model, excitation: Excitation,
