@@ -225,3 +225,27 @@ def test_verbose_forced_response_writes_progress_lines(monkeypatch, capsys):
     err = capsys.readouterr().err
     lines = [line for line in err.splitlines() if line.startswith("mmshbm frequency response")]
     assert len(lines) == len(resp) + 1 and lines[0].startswith("mmshbm frequency response: 1 pt, 0.1 Hz, ")
+
+
+# ---------------------------------------------------------------------- h. figures that say what they show
+def test_frf_plot_names_its_dof_and_measure():
+    from mmshbm.plotting.response import plot_frequency_response
+
+    model = mmshbm.default_beam().model(4).with_damping(modal_ratio=0.005)
+    force = np.zeros(model.n_dof)
+    force[4] = 2.3  # the deflection of the last node with mass
+    resp = mmshbm.frequency_response(model, force, (40.0, 41.0), harmonics=3, stability=False)
+    ax = plot_frequency_response(resp).axes[0]
+    tip = 2 * 4 - 2  # the tip node's deflection w, the 4-element beam's contact DOF
+    assert ax.get_title() == f"forced response at DOF {tip} (tip deflection w)"
+    assert ax.get_ylabel() == "tip amplitude: max |q| over a period / gap"
+    assert plot_frequency_response(resp, title="mine").axes[0].get_title() == "mine"
+
+
+def test_frequency_energy_plot_has_a_title(oscillator_branch):
+    from mmshbm import plotting
+    from mmshbm.plotting.data import BranchData
+
+    for shown in (oscillator_branch, BranchData.of(oscillator_branch)):  # the CLI draws BranchData
+        assert plotting.plot_frequency_energy(shown).axes[0].get_title() == (
+            "frequency–energy plot of nonlinear mode 1 (H5)")
