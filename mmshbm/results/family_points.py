@@ -239,11 +239,8 @@ def solve_at(branch, amplitudes, *, tol: float = 1e-10, stand_in: bool = False, 
         if name in names:
             records[name] = column(name)
             records["on_family"] = np.array(solved, dtype=float) if not stand_in else np.ones(n)
-    empty = n == 0 or not names
-    return replace(branch, frequency=np.full(n, np.nan) if empty else column("frequency"),
-                   amplitude=np.full(n, np.nan) if empty else column("amplitude"),
-                   energy=np.full(n, np.nan) if empty else column("energy"),
-                   contact_force_max=np.full(n, np.nan) if empty else column("contact_force_max"),
+    return replace(branch, frequency=column("frequency"), amplitude=column("amplitude"),
+                   energy=column("energy"), contact_force_max=column("contact_force_max"),
                    newton_iterations=np.zeros(n, dtype=int),
                    step_size=np.zeros(n), states=np.array(states).reshape(n, -1), special_points=[],
                    metadata=dict(branch.metadata), solver=solver, residual_histories=[], model=branch.model,
