@@ -24,6 +24,7 @@ LAYERS = {
     "mmshbm._warnings": 0,
     "mmshbm._files": 0,
     "mmshbm._threads": 0,
+    "mmshbm._progress": 0,
     "mmshbm._aliases": 0,
     "mmshbm._kernel_cache": 0,
     "mmshbm._entry_points": 0,

@@ -69,7 +69,7 @@ def test_plot_prints_and_labels_the_marked_points(h5, tmp_path, capsys):
 
 
 def test_a_point_beyond_the_front_is_the_nearest_family_point(h5):
-    marked = h5.solve_at([20.0], unit="gap")
+    marked = h5.solve_at([20.0], unit="gap", stand_in=True)
     assert marked.records["solved"].tolist() == [0]
     assert marked.amplitude[0] == pytest.approx(h5.amplitude[h5.family_front()[-1]], rel=1e-9)
 
@@ -80,7 +80,7 @@ def test_without_a_solver_the_stored_family_points_stand_in(h5):
     bare = replace(h5, solver=None, model=None, metadata={**h5.metadata, "model": {}})
     with pytest.raises(RuntimeError, match="no solver"):
         bare._require_solver()
-    marked = bare.solve_at([1.5 * h5.gap, 3.0 * h5.gap])
+    marked = bare.solve_at([1.5 * h5.gap, 3.0 * h5.gap], stand_in=True)
     front = h5.family_front()
     assert marked.solver is None and marked.records["solved"].tolist() == [0, 0]
     for a, f in zip((1.5, 3.0), marked.frequency, strict=True):

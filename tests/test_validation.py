@@ -137,7 +137,7 @@ CASES = [
      r"n_samples must be >= 2\*harmonics\+1 = 11, got 10"),
     ("amplitude", "start_amplitude=3 >= max_amplitude=2",
      lambda t: mmshbm.backbone(osc(), start_amplitude=3.0, max_amplitude=2.0), ValueError,
-     r"start_amplitude \(3 m\) must be below max_amplitude \(2 m\)"),
+     r"start_amplitude \(3 m = 3 gaps\) must be below max_amplitude \(2 m = 2 gaps\)"),
     ("amplitude", "max_amplitude=-1", lambda t: mmshbm.backbone(osc(), max_amplitude=-1.0), ValueError,
      r"max_amplitude must be positive, got -1\.0"),
     ("amplitude", "max_amplitude=nan", lambda t: mmshbm.backbone(osc(), max_amplitude=float("nan")),

@@ -216,7 +216,7 @@ def branch_orbit(model, branch, amplitude: float, n_samples: int = 1024) -> tupl
     from ..methods.exact.system import PiecewiseLinearSystem
 
     try:
-        point = branch.solve_at([amplitude])
+        point = branch.solve_at([amplitude], stand_in=True)
         if not point.records["solved"][0]:
             return math.nan, math.nan
         _, q = point.time_signals(0, n_samples=n_samples)
@@ -248,7 +248,7 @@ def contact_closings(branch, amplitude: float, n_samples: int = 4096, floor: flo
     driven by the DOFs with mass) exceeds ``floor`` times its peak; -1 when the branch has
     no solved point there."""
     try:
-        point = branch.solve_at([amplitude])
+        point = branch.solve_at([amplitude], stand_in=True)
         if not point.records["solved"][0]:
             return -1
         _, lam = point.contact_force(0, n_samples, admissible=True)

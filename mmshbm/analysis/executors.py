@@ -236,7 +236,7 @@ def run_specs(specs: list, executor, workers: int, *, chunksize="auto", verbose:
     chunksize : int or "auto"
         Specs per task, or "auto" (:func:`plan_chunks`); ignored in this process.
     verbose : bool
-        Progress bar (tqdm; hidden when not on a terminal).
+        Progress on stderr (a tqdm bar on a terminal, plain lines in a pipe or log).
     tabulate : (amplitudes, unit), optional
         Each task also computes its runs' table rows after them
         (:func:`mmshbm.analysis.table_rows.tabulate`).
@@ -309,12 +309,13 @@ def run_specs(specs: list, executor, workers: int, *, chunksize="auto", verbose:
 
 
 def _bar(total: int, verbose: bool):
-    """A tqdm progress bar (hidden when not on a terminal) with ``verbose``, else None."""
+    """With ``verbose`` a progress display (:func:`mmshbm._progress.progress_bar`: a tqdm
+    bar on a terminal, plain lines in a pipe or log), else None."""
     if not verbose:
         return None
-    from tqdm.auto import tqdm
+    from .._progress import progress_bar
 
-    return tqdm(total=total, desc="study", unit="run", disable=None, leave=False)
+    return progress_bar("study", unit="run", total=total)
 
 
 def _progress(bar, spec, branch) -> None:

@@ -340,7 +340,7 @@ def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
         one for small studies, about 16 tasks per worker for large ones), so that the
         per-task cost of the executor is paid per chunk; the numbers do not depend on it.
     verbose : bool
-        Progress bar (tqdm; also hidden when not on a terminal).
+        Progress on stderr (a tqdm bar on a terminal, plain lines in a pipe or log).
     warn : bool
         Issue one :class:`~mmshbm.BranchWarning` summarising what the checks of the runs
         found (counts; :meth:`Study.findings` gives a row per run, :meth:`Study.report`

@@ -46,7 +46,7 @@ def _run(args, worker) -> int:
 
     measured = common.measured(args)
     model = common.model(args)
-    max_amp = args.max_amplitude * model.gap if args.max_amplitude is not None else None
+    max_amp = gaps_in_m(10.0 if args.max_amplitude is None else args.max_amplitude, model)
     extra = {}
     if args.checkpoint:
         Path(args.checkpoint).parent.mkdir(parents=True, exist_ok=True)
@@ -79,6 +79,16 @@ def _run(args, worker) -> int:
     if args.method != "mmshbm" and _another_family(branch, model.gap):
         code = 1
     return code
+
+
+def gaps_in_m(gaps: float, model, option: str = "--max-amplitude") -> float:
+    """``gaps`` (the value of ``option``, in gaps) in m; ValueError naming the option when
+    the model has no positive gap to measure it in."""
+    if not model.gap > 0:
+        raise ValueError(f"{option} is in gaps, and this model has no stop with a positive gap to measure it "
+                         "in: give the model a stop with gap > 0, or call mmshbm.backbone(model, "
+                         "max_amplitude=...) in m from Python")
+    return float(gaps) * model.gap
 
 
 def _another_family(branch, gap: float) -> bool:

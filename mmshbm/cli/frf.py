@@ -82,9 +82,10 @@ def run(args) -> int:
     print(repr(resp))
     if args.phase_resonance:
         from ..analysis.phase_resonance import compare_backbones
+        from .backbone import gaps_in_m
 
         both = compare_backbones(model, force, harmonics=args.harmonics,
-                                 max_amplitude=args.max_amplitude * model.gap)
+                                 max_amplitude=gaps_in_m(args.max_amplitude, model))
         pr = both["phase_resonance"]
         files += [pr.to_csv(out / "phase_resonance.csv"), out / "phase_resonance.png"]
         plot_phase_resonance(pr, both["epmc"], both["conservative"], measured=measured, path=files[-1])

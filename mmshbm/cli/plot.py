@@ -72,9 +72,9 @@ def run(args) -> int:
         raise ValueError(f"{args.file}: the branch has no points")
     gap = plotting._gap(branch)
     if gap > 0:  # the marked points, solved on the family front
-        points = branch.solve_at([m * gap for m in marks])
+        points = branch.solve_at([m * gap for m in marks], stand_in=True)
     else:
-        points = branch.solve_at([branch.amplitude[branch.family_front()[-1]]])
+        points = branch.solve_at([branch.amplitude[branch.family_front()[-1]]], stand_in=True)
     pts = list(range(len(points)))
     for n, i in enumerate(pts, start=1):
         print(f"point {n}: {_point_line(points, i, gap)}")
@@ -123,7 +123,7 @@ def _print_points(study, marks) -> None:
     gap = _gap(branch)
     if gap <= 0:
         return
-    points = branch.solve_at([m * gap for m in marks])
+    points = branch.solve_at([m * gap for m in marks], stand_in=True)
     for i in range(len(points)):
         print(f"point {i + 1}: {_point_line(points, i, gap)} ({branch_label(branch)})")
 

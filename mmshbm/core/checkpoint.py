@@ -38,7 +38,8 @@ from .._files import apply_umask
 from .continuation import ContinuationState
 from .special_points import SpecialPoint, special_from_json, special_to_json
 
-__all__ = ["CheckpointWriter", "Checkpoint", "read_checkpoint", "model_fingerprint", "CHECKPOINT_FORMAT"]
+__all__ = ["CheckpointWriter", "Checkpoint", "read_checkpoint", "model_fingerprint", "header_differences",
+           "CHECKPOINT_FORMAT"]
 
 log = logging.getLogger(__name__)
 
@@ -84,6 +85,52 @@ def _restore(x):
         out.real, out.imag = re, im
         return out
     return x
+
+
+#: how a mismatch names a header entry (or an entry of its ``solver`` settings): the
+#: argument of ``mmshbm.backbone`` / ``frequency_response`` that sets it
+_SETTING_NAMES = {
+    "H": "harmonics (H)", "N": "n_samples (N)", "r": "r", "mode": "mode",
+    "penalty_stiffness": "penalty_stiffness", "steps_per_period": "steps_per_period",
+    "method": "method", "model": "the model's matrices, contact DOF, gap or stop side",
+    "n_unknowns": "the number of unknowns", "pole_scaling": "the scaling of the pole unknowns",
+}
+
+
+#: header entries whose own entries are settings of their own, named one by one
+_BY_ENTRY = ("solver", "method_options")
+
+
+def header_differences(stored: dict, current: dict, keys) -> list[str]:
+    """The entries ``keys`` of a run's checkpoint header ``current`` that differ from a
+    file's header ``stored``, one phrase each ("harmonics (H): file 5, now 8"): the
+    solver settings and method options entry by entry, other entries whole, the model by its fingerprint, the
+    number of unknowns last (it follows from the others, and is named alone only when
+    nothing else explains it)."""
+    out, unknowns = [], None
+    for key in keys:
+        old, new = stored.get(key), current.get(key)
+        if old == new:
+            continue
+        if key == "n_unknowns":
+            unknowns = _difference(key, stored, current)
+        elif key == "model":
+            out.append(_SETTING_NAMES[key] + " (another fingerprint)")
+        elif key in _BY_ENTRY and isinstance(old, dict) and isinstance(new, dict):
+            for name in sorted(set(old) | set(new), key=str):
+                if old.get(name) != new.get(name):
+                    out.append(_difference(name, old, new))
+        else:
+            out.append(_difference(key, stored, current))
+    return out + ([unknowns] if unknowns else [])
+
+
+def _difference(name: str, stored: dict, current: dict) -> str:
+    return f"{_SETTING_NAMES.get(name, name)}: file {_shown(stored, name)}, now {_shown(current, name)}"
+
+
+def _shown(settings: dict, name: str) -> str:
+    return repr(settings[name]) if name in settings else "not set"
 
 
 def _line(obj) -> str:

@@ -15,7 +15,7 @@ from . import runner
 from .limits import check_resources
 from .registry import _CONTINUATION_FIELDS, METHODS, make_problem, method_options  # noqa: F401 - public here since 0.1
 
-__all__ = ["backbone", "backbone_method"]
+__all__ = ["backbone", "backbone_method", "amplitude_range"]
 
 log = logging.getLogger(__name__)
 
@@ -39,15 +39,17 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     max_amplitude : float, optional
         Stop at this amplitude (m) of the contact DOF; default 10 gaps.
     start_amplitude : float, optional
-        Amplitude (m) of the first point, on the linear mode; default half the gap, or
-        less where a contact of the linear mode would reach its stop first (several
-        contacts): half the amplitude at which the first contact closes.
+        Amplitude (m) of the first point, on the linear mode, below ``max_amplitude``;
+        default half the gap, or less where a contact of the linear mode would reach its
+        stop first (several contacts): half the amplitude at which the first contact
+        closes; at most half of ``max_amplitude``.
     bounds : dict, optional
         Further bounds on recorded quantities, e.g. ``{"frequency": (0, 60)}`` (Hz),
         ``{"energy": (0, 1.0)}`` (J).
     verbose : bool
-        Show a progress bar (tqdm) that counts the amplitude toward ``max_amplitude`` (in
-        gaps), with the frequency and the number of points.
+        Show the progress on stderr: the amplitude toward ``max_amplitude`` (in gaps), the
+        frequency and the number of points; a tqdm bar on a terminal, plain lines every few
+        seconds in a pipe or a log file (:mod:`mmshbm._progress`).
     callback : callable(u, record), optional
         Called with every converged point.
     checkpoint : str or Path, optional
@@ -74,9 +76,11 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     Raises
     ------
     TypeError, ValueError
-        For bad input, naming the offending argument and value.
+        For bad input, naming the offending argument and value; a model with no contact
+        (neither a stop nor friction: its backbone is its linear mode).
     """
     runner.check_model(model)
+    runner.check_has_contact(model, "backbone")
     runner.check_method(method, METHODS)
     requested = method
     method = backbone_method(model, method)
@@ -86,23 +90,9 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     runner.check_harmonics(method, harmonics)
     runner.check_callback(callback)
     gap = model.gap
-    if max_amplitude is None:
-        if gap == 0:
-            raise ValueError("the model's gap is 0: pass max_amplitude (m)")
-        max_amplitude = 10.0 * gap
-    max_amplitude = check.positive("max_amplitude", max_amplitude)
-    model.check_amplitude_reach(max_amplitude)
     default_start = start_amplitude is None
-    if start_amplitude is None:
-        start_amplitude = 0.5 * gap if gap > 0 else 0.01 * max_amplitude
-        if model.friction and gap == 0:  # start stuck: below the amplitude where slip begins
-            from .mms.friction_epmc import stuck_mode
-
-            start_amplitude = min(start_amplitude, 0.5 * stuck_mode(model, options.get("mode", 1))[2])
-    start_amplitude = check.positive("start_amplitude", start_amplitude)
-    if start_amplitude >= max_amplitude:
-        raise ValueError(f"start_amplitude ({start_amplitude:g} m) must be below max_amplitude "
-                         f"({max_amplitude:g} m)")
+    start_amplitude, max_amplitude = amplitude_range(model, start_amplitude, max_amplitude,
+                                                     options.get("mode", 1))
     if bounds is not None and not isinstance(bounds, Mapping):
         raise TypeError(f"bounds must be a dict name -> (lo, hi), got {type(bounds).__name__} {bounds!r}")
     copts = runner.continuation_options(options, {"amplitude": (0.0, max_amplitude), **dict(bounds or {})})
@@ -157,6 +147,44 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     return branch
 
 
+def amplitude_range(model: Model, start_amplitude: float | None, max_amplitude: float | None,
+                    mode: int = 1) -> tuple[float, float]:
+    """The checked (start, max) amplitudes (m) of a backbone of ``model`` (see
+    :func:`backbone`): max by default 10 gaps; start by default half the gap (for a
+    friction model without gap, half the amplitude where slip begins, else 1 % of max),
+    and at most half of max, so that a small max amplitude needs no start of its own.
+
+    Raises
+    ------
+    ValueError
+        A non-positive amplitude, no max for a model without gap, a max the amplitude DOF
+        cannot reach, or a given start not below max (both in m and in gaps).
+    """
+    gap = model.gap
+    if max_amplitude is None:
+        if gap == 0:
+            raise ValueError("the model's gap is 0: pass max_amplitude (m)")
+        max_amplitude = 10.0 * gap
+    max_amplitude = check.positive("max_amplitude", max_amplitude)
+    model.check_amplitude_reach(max_amplitude)
+    if start_amplitude is None:
+        start_amplitude = 0.5 * gap if gap > 0 else 0.01 * max_amplitude
+        if model.friction and gap == 0:  # start stuck: below the amplitude where slip begins
+            from .mms.friction_epmc import stuck_mode
+
+            start_amplitude = min(start_amplitude, 0.5 * stuck_mode(model, mode)[2])
+        start_amplitude = min(start_amplitude, 0.5 * max_amplitude)
+    start_amplitude = check.positive("start_amplitude", start_amplitude)
+    if start_amplitude >= max_amplitude:
+        def both(a):
+            return f"{a:g} m = {a / gap:.4g} gaps" if gap > 0 else f"{a:g} m"
+
+        raise ValueError(f"start_amplitude ({both(start_amplitude)}) must be below max_amplitude "
+                         f"({both(max_amplitude)}): lower start_amplitude or raise max_amplitude (or leave "
+                         "start_amplitude out: the default starts below max_amplitude)")
+    return start_amplitude, max_amplitude
+
+
 def backbone_method(model: Model, method: str) -> str:
     """The method that computes the backbone asked of ``method``: "mmshbm" on a model with
     damping (viscous, ``model.damping``, or friction contacts) is its damped nonlinear mode,
@@ -167,15 +195,16 @@ def backbone_method(model: Model, method: str) -> str:
 
 
 def _amplitude_progress(method: str, max_amplitude: float, gap: float, callback):
-    """A tqdm bar that counts the amplitude (in gaps, else mm) toward its bound, and the
-    callback that moves it (then calls the user's ``callback``)."""
-    from tqdm.auto import tqdm
+    """A progress display (:func:`mmshbm._progress.progress_bar`: a tqdm bar on a terminal,
+    plain lines in a pipe or log) that counts the amplitude (in gaps, else mm) toward its
+    bound, and the callback that moves it (then calls the user's ``callback``)."""
+    from .._progress import progress_bar
 
     scale, unit = (gap, "gap") if gap > 0 else (1e-3, "mm")
     total = max_amplitude / scale
-    bar = tqdm(desc=f"{method} backbone", unit=unit, total=total, leave=False, disable=None,
-               bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.3g}/{total:.3g} " + unit
-               + " [{elapsed}{postfix}]")
+    bar = progress_bar(f"{method} backbone", unit=unit, total=total,
+                       bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.3g}/{total:.3g} " + unit
+                       + " [{elapsed}{postfix}]")
     points = [0]
 
     def advance(u, record):

@@ -11,10 +11,13 @@ from __future__ import annotations
 
 import importlib
 import logging
+import warnings
 
 import numpy as np
 
 from .. import _validate as check
+from .._warnings import BranchWarning
+from ..core.status import Status
 from ..model.damping import model_has_damping
 from ..model.model import Model
 from ..results.response import FrequencyResponse
@@ -85,7 +88,9 @@ def frequency_response(model: Model, force, frequency_range, harmonics: int = 5,
     method : {"mmshbm", "penalty", "shooting"}
         MMS-HBM, or a baseline on the same forced problem.
     verbose : bool
-        Progress bar.
+        Show the progress on stderr: the points, with the frequency and amplitude of the
+        last; a tqdm bar on a terminal, plain lines every few seconds in a pipe or a log
+        file (:mod:`mmshbm._progress`).
     callback : callable(u, record), optional
         Called with every converged point.
     checkpoint : str or Path, optional
@@ -110,11 +115,13 @@ def frequency_response(model: Model, force, frequency_range, harmonics: int = 5,
     Raises
     ------
     ValueError, TypeError
-        Naming the offending input: a model without damping
+        Naming the offending input: a model with no contact (its response is linear), a
+        model without damping
         (:func:`~mmshbm.model.damping.model_has_damping`), an empty or inverted frequency
         range, a force of the wrong length or on a massless DOF, an unknown method or option.
     """
     runner.check_model(model)
+    runner.check_has_contact(model, "forced response")
     f0, f1 = _frequency_range(frequency_range)
     if not model_has_damping(model):
         raise ValueError("the model has no damping: its forced response grows along the backbone without "
@@ -133,21 +140,73 @@ def frequency_response(model: Model, force, frequency_range, harmonics: int = 5,
     header = runner.checkpoint_header(model, method, problem, options, excitation=excitation.to_json())
     progress = None
     if verbose:
-        from tqdm.auto import tqdm
-
-        progress = tqdm(desc=f"{method} frequency response", unit="pt", leave=False, disable=None)
+        progress, callback = _response_progress(method, model.gap, callback)
 
     def start():
         return (problem.start_point(f0),
                 problem.initial_tangent())
 
-    done = runner.run(problem, copts, start, callback=callback, progress=progress, checkpoint=checkpoint,
-                      resume=resume, header=header, header_extra={"frequency_range": [f0, f1]},
-                      close=(progress,))
+    done = runner.run(problem, copts, start, callback=callback, checkpoint=checkpoint, resume=resume,
+                      header=header, header_extra={"frequency_range": [f0, f1]}, close=(progress,))
     res = done.result
     log.info("%s frequency response: %d points, status %s, %.3f s", method, len(res.u), res.status,
              done.elapsed_s)
-    return _assemble(model, excitation, problem, res, method, (f0, f1), options, copts, done)
+    response = _assemble(model, excitation, problem, res, method, (f0, f1), options, copts, done)
+    warn_failed_start(response, model, excitation, f0)
+    return response
+
+
+def _response_progress(method: str, gap: float, callback):
+    """A progress display (:func:`mmshbm._progress.progress_bar`: a tqdm bar on a terminal,
+    plain lines in a pipe or log) that counts the points with the frequency and amplitude
+    of the last, and the callback that moves it (then calls the user's ``callback``)."""
+    from .._progress import progress_bar
+
+    bar = progress_bar(f"{method} frequency response", unit="pt")
+
+    def advance(u, record):
+        f, a = float(record.get("frequency", np.nan)), float(record.get("amplitude", np.nan))
+        bar.set_postfix_str(f"{f:.4g} Hz, " + (f"{a / gap:.3g} gaps" if gap > 0 else f"{a:.3g} m"),
+                            refresh=False)
+        bar.update(1)
+        if callback is not None:
+            callback(u, record)
+
+    return bar, advance
+
+
+def warn_failed_start(response: FrequencyResponse, model: Model, excitation: Excitation,
+                      frequency: float) -> bool:
+    """Warn (:class:`~mmshbm.BranchWarning`) when ``response`` is empty because its first
+    point at ``frequency`` (Hz) did not converge (status kind "start failed"), saying how
+    far the linear response there swings the amplitude DOF (:func:`linear_amplitude`, in
+    gaps) and what to do; returns whether it warned."""
+    status = Status.parse(response.status)
+    if status.kind != Status.START_FAILED:
+        return False
+    reach = ""
+    if model.gap > 0:
+        a = linear_amplitude(model, excitation, frequency) / model.gap
+        reach = f"; the linear response there swings {a:.3g} gaps" + (
+            ", past the stop: the start is in contact" if a > 1 else ", inside the clearance")
+    warnings.warn(f"{response.method} frequency response is empty: its first point at {frequency:g} Hz "
+                  f"did not converge ({status.detail}){reach}; start the range lower, where the response "
+                  "stays off the stops (below grazing), or lower the force", BranchWarning, stacklevel=3)
+    return True
+
+
+def linear_amplitude(model: Model, excitation: Excitation, frequency: float) -> float:
+    """Amplitude (m) of the amplitude DOF in the linear response at ``frequency`` (Hz), the
+    stops ignored: |q̂| of (K − Ω²M + iΩC) q̂ = σ(Ω) F̂."""
+    import scipy.sparse.linalg as spla
+
+    omega = 2 * np.pi * frequency
+    s, _ = excitation.scale(omega)
+    A = model.K - omega**2 * model.M
+    if model.damping is not None:
+        A = A + 1j * omega * model.damping
+    q = spla.spsolve(A.tocsc().astype(complex), s * np.asarray(excitation.vector, dtype=complex))
+    return float(abs(q[model.amplitude_dof]))
 
 
 def _frequency_range(frequency_range) -> tuple[float, float]:

@@ -38,7 +38,7 @@ from ..core.status import Status
 from ..model.model import Model
 
 __all__ = ["CONTINUATION_FIELDS", "Run", "run", "jsonable", "continuation_options", "check_option_names",
-           "checkpoint_header", "mark_grazing", "run_metadata"]
+           "check_has_contact", "checkpoint_header", "mark_grazing", "run_metadata"]
 
 log = logging.getLogger(__name__)
 
@@ -53,6 +53,21 @@ def check_model(model) -> None:
     """TypeError unless ``model`` is a :class:`~mmshbm.model.Model`."""
     if not isinstance(model, Model):
         raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
+
+
+def check_has_contact(model: Model, what: str) -> None:
+    """ValueError when ``model`` has neither a unilateral contact nor a friction contact:
+    ``what`` (a backbone, a forced response) of a linear structure is linear and needs no
+    continuation."""
+    if model.contacts or model.friction:
+        return
+    hints = {"backbone": "a backbone of a linear model is its linear mode, at every amplitude: "
+                         "model.linear_modes(n) gives its frequencies (Hz) and shapes",
+             "forced response": "the forced response of a linear model is linear: "
+                                "(K - Ω² M + iΩ C)⁻¹ F̂ at each frequency, with no continuation"}
+    raise ValueError(f"the model has no contact (no stop and no friction): {hints[what]}; add a "
+                     "stop with Model.from_matrices(M, K, contact_dof=..., gap=...) or friction with "
+                     "model.with_friction(...)")
 
 
 def check_method(method, methods) -> None:
@@ -183,13 +198,17 @@ def checkpoint_header(model: Model, method: str, problem, options: dict, **extra
 
 
 def check_resumable(stored: dict, current: dict, path) -> None:
-    """ValueError naming the first entry of the run's configuration (``current``, a
-    :func:`checkpoint_header`; the model's description left out) that differs from the file's."""
-    for key in _RESUME_KEYS + tuple(k for k in current if k not in _RESUME_KEYS and k != "model_description"):
-        if stored.get(key) != current[key]:
-            what = "the model's matrices, contact DOF, gap or stop side" if key == "model" else key
-            raise ValueError(f"cannot resume from {str(path)!r}: {what} differ(s) from this run "
-                             f"(file: {stored.get(key)!r}, now: {current[key]!r})")
+    """ValueError naming every entry of the run's configuration (``current``, a
+    :func:`checkpoint_header`; the model's description left out) that differs from the
+    file's (:func:`~mmshbm.core.checkpoint.header_differences`: H, N, method, options...)."""
+    from ..core.checkpoint import header_differences
+
+    keys = _RESUME_KEYS + tuple(k for k in current if k not in _RESUME_KEYS and k != "model_description")
+    differences = header_differences(stored, current, keys)
+    if differences:
+        raise ValueError(f"cannot resume from {str(path)!r}: this run's settings differ from the file's: "
+                         f"{'; '.join(differences)}; resume with the file's settings, or start a new run "
+                         "without resume")
 
 
 def _finished(previous, copts: ContinuationOptions) -> bool:

@@ -33,7 +33,25 @@ from .linear_modes import ModesMixin, _require_positive_definite, open_contact_m
 from .partition import PartitionMixin
 from .stops import StopsMixin
 
-__all__ = ["Model"]
+__all__ = ["Model", "check_not_swapped"]
+
+
+def check_not_swapped(M: sp.spmatrix, K: sp.spmatrix) -> None:
+    """ValueError when ``K`` has zero rows where ``M`` has not: DOFs with mass and no
+    stiffness at all, which no fixed structure has (its K is singular there) and which
+    is what a mass matrix with massless DOFs passed as K looks like. The message names
+    those DOFs and says that M and K may be swapped."""
+    k_rows = np.asarray(abs(K).sum(axis=1)).ravel()
+    m_rows = np.asarray(abs(M).sum(axis=1)).ravel()
+    loose = np.flatnonzero((k_rows == 0) & (m_rows > 0))
+    if not len(loose):
+        return
+    shown = loose[:10].tolist()
+    more = f" and {len(loose) - 10} more" if len(loose) > 10 else ""
+    massless = int(np.count_nonzero(m_rows == 0))
+    raise ValueError(f"K is zero on the rows of DOFs {shown}{more}, where M is not: DOFs with mass and no "
+                     f"stiffness (K singular), while M has {massless} zero row(s); M and K may be swapped: "
+                     "Model.from_matrices takes the mass matrix first, then the stiffness matrix")
 
 
 # the stops (single-contact names, amplitude DOF), the DOF partition and the linear modes
@@ -106,7 +124,8 @@ class Model(StopsMixin, PartitionMixin, ModesMixin):
             Naming the offending input: non-square, non-symmetric, non-finite or
             mismatched matrices; bad contact data (see
             :func:`~mmshbm.model.contact.contacts_from`); damping on a massless DOF; a
-            singular or indefinite linear subsystem.
+            singular or indefinite linear subsystem; M and K swapped
+            (:func:`check_not_swapped`).
         """
         M = check.square_matrix("M", M)
         K = check.square_matrix("K", K)
@@ -114,6 +133,7 @@ class Model(StopsMixin, PartitionMixin, ModesMixin):
             raise ValueError(f"M and K must have the same shape, got {M.shape} and {K.shape}")
         check.symmetric("M", M)
         check.symmetric("K", K)
+        check_not_swapped(M, K)
         n = M.shape[0]
         empty = no_contacts(contact_dof, gap, stop_side)
         contacts = () if empty else contacts_from(contact_dof, gap, stop_side, n)

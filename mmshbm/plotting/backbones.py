@@ -345,7 +345,8 @@ def plot_frequency_energy(branches, labels: Sequence[str] | None = None, *, ax=N
     """Frequency–energy plot: log10 of the mechanical energy (J) against frequency (Hz),
     drawn as :func:`plot_backbone` draws the backbone (the family front as the line,
     excursions into internal-resonance tongues thin); ``styles`` are line keyword
-    arguments per branch."""
+    arguments per branch. ``title`` defaults to "frequency–energy plot of nonlinear mode
+    m" with the branch's label when there is one branch."""
     branches = _as_list(branches)
     if not branches:
         raise ValueError("no branches to plot")
@@ -362,9 +363,14 @@ def plot_frequency_energy(branches, labels: Sequence[str] | None = None, *, ax=N
     ax.set_ylabel("log₁₀(energy / J)")
     ax.grid(True, alpha=0.3)
     _legend(ax, fontsize=8)
-    if title:
-        ax.set_title(title)
+    ax.set_title(_frequency_energy_title(branches, labels) if title is None else title)
     return _finish(fig, path)
+
+
+def _frequency_energy_title(branches, labels) -> str:
+    modes = {int(dict(b.metadata.get("solver") or {}).get("mode", 1)) for b in branches}
+    what = f"nonlinear mode {modes.pop()}" if len(modes) == 1 else "nonlinear modes"
+    return f"frequency–energy plot of {what}" + (f" ({labels[0]})" if len(branches) == 1 else "")
 
 
 def plot_peak_contact_force(branches, labels: Sequence[str] | None = None, *, measured=None, ax=None,

@@ -131,7 +131,7 @@ def plot_family_grid(study, *, amplitudes: Sequence[float] = (2.0, 5.0, 10.0), p
         marked = marked or marked_run(runs)
         mb = study.branch(**marked)
         gap = _gap(mb) or 1.0
-        points = mb.solve_at(np.asarray(marks, dtype=float) * gap)
+        points = mb.solve_at(np.asarray(marks, dtype=float) * gap, stand_in=True)
         ax = axes[elements.index(marked.get("elements", mb.metadata.get("model", {}).get("n_elements")))]
         for n in range(len(points)):
             x, y = points.frequency[n], points.amplitude[n] / gap

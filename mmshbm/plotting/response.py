@@ -19,8 +19,10 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from .common import _figure, _finish, _overlay_measured
+from .data import amplitude_name
 
-__all__ = ["plot_frequency_response", "plot_phase_resonance", "plot_damping_ratio", "stability_runs"]
+__all__ = ["plot_frequency_response", "plot_phase_resonance", "plot_damping_ratio", "stability_runs",
+           "response_dof"]
 
 _MARKERS = {"fold": ("o", "fold"), "branch_point": ("s", "branch point"),
             "period_doubling": ("D", "period doubling"), "neimark_sacker": ("^", "Neimark–Sacker"),
@@ -44,6 +46,34 @@ def stability_runs(stable: np.ndarray) -> list[tuple[int, int, bool]]:
 def _scale(obj) -> tuple[float, str]:
     gap = obj.gap if getattr(obj, "gap", None) else 0.0
     return (gap, "amplitude / gap") if gap and gap > 0 else (1e-3, "amplitude (mm)")
+
+
+def response_dof(response) -> str:
+    """The DOF whose amplitude a result reports, in words: "DOF 40 (tip deflection w)",
+    "DOF 7 (rotation θ at node 4)", "DOF 2 (contact DOF)" or "DOF 5"; "the amplitude DOF"
+    when the result does not say which."""
+    meta = response.metadata
+    dof = meta.get("amplitude_dof")
+    model = None
+    try:
+        model = response.get_model()
+    except (ValueError, RuntimeError, AttributeError):
+        pass
+    if dof is None and model is not None:
+        dof = model.amplitude_dof
+    if dof is None:
+        return "the amplitude DOF"
+    dof = int(dof)
+    description = dict(meta.get("model") or {})
+    if description.get("kind") == "TimoshenkoBeam":
+        node = dof // 2 + 1
+        where = "tip" if node == int(description["n_elements"]) else f"node {node}"
+        words = f"{where} deflection w" if dof % 2 == 0 else f"rotation θ at {where}"
+    elif model is not None and model.n_contacts and all(c.dof == dof for c in model.contacts):
+        words = "contact DOF"
+    else:
+        return f"DOF {dof}"
+    return f"DOF {dof} ({words})"
 
 
 def _draw(ax, f, a, stable, color, label, lw=1.4):
@@ -73,6 +103,9 @@ def plot_frequency_response(responses, labels: Sequence[str] | None = None, *, p
         points, period doublings and Neimark–Sacker points).
     path : str or Path, optional
     axes : (ax_amplitude, ax_phase), optional
+    title : str, optional
+        Default: "forced response at DOF d (...)" (:func:`response_dof`); the amplitude
+        axis says the measure (the largest |q| of that DOF over a period).
     """
     from ..results.response import FrequencyResponse
 
@@ -120,12 +153,14 @@ def plot_frequency_response(responses, labels: Sequence[str] | None = None, *, p
             measured = load_measured(measured)
         _overlay_measured(ax, measured, scale)
     ax.plot([], [], "--", color="0.4", label="unstable")
-    ax.set_ylabel(ylabel)
+    name = amplitude_name(responses[0])
+    ax.set_ylabel(ylabel.replace("amplitude", f"{name}: max |q| over a period", 1))
     ax.set_ylim(bottom=0)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8, loc="upper left")
-    if title:
-        ax.set_title(title)
+    dofs = {response_dof(r) for r in responses}
+    ax.set_title((f"forced response at {dofs.pop()}" if len(dofs) == 1 else "forced responses")
+                 if title is None else title, fontsize=10)
     if axp is not None:
         axp.axhline(90, color="0.5", lw=0.8, ls=":")
         axp.set_ylabel("phase lag (°)")

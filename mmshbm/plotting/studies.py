@@ -192,7 +192,8 @@ def plot_figure2(study, *, marks: Sequence[float] = (1.5, 3.0, 6.0), marked: dic
     right += [fig.add_subplot(grid[i, 1], sharex=right[0]) for i in (1, 2)]
     gap = _gap(mb)
     model = mb.get_model()
-    points = mb.solve_at(np.asarray(marks, dtype=float) * gap) if gap > 0 and len(marks) else None
+    points = (mb.solve_at(np.asarray(marks, dtype=float) * gap, stand_in=True) if gap > 0 and len(marks)
+              else None)
     pts = list(range(len(points))) if points is not None else []
     plot_backbone(branches, labels, measured=measured, marks=points, ax=left, styles=styles, model=model)
     study_legend(left, [runs[i] for i in order], styles, labels, fontsize=7, loc="upper left",

@@ -316,16 +316,41 @@ class Branch(ResultBase):
         warn_outside_front(self, a)
         return frequency_at(self, a, interpolate=interpolate, tol=tol)
 
-    def solve_at(self, amplitudes, *, unit: str = "m", tol: float = 1e-10) -> Branch:
+    def solve_at(self, amplitudes, *, unit: str = "m", tol: float = 1e-10, stand_in: bool = False) -> Branch:
         """The backbone's points at ``amplitudes`` (m, or gaps with ``unit="gap"``), solved
         on the family front (as :meth:`frequency_at`): a Branch with one point per
         amplitude and this branch's solver, so that ``time_signals``, ``contact_force`` and
         ``harmonic_content`` give the on-family orbits (the marked points of the plots).
-        Where the front has no point at an amplitude, its stored point nearest in amplitude
-        stands in (``records["solved"]`` is 0 there, 1 for solved points).
+
+        Parameters
+        ----------
+        amplitudes : float or sequence of float
+            In m (``unit="m"``) or in multiples of the model's gap (``unit="gap"``).
+        unit : {"m", "gap"}
+            Unit of ``amplitudes``.
+        tol : float
+            Newton tolerance of the solves.
+        stand_in : bool
+            False (default): where the front has no point at an amplitude (beyond its
+            ends, where :meth:`frequency_at` is NaN, or inside a tongue the branch jumped),
+            the entry is NaN, as :meth:`frequency_at` answers there. True: the front's
+            stored point nearest in amplitude stands in (what a plot marks), without a
+            warning.
+
+        Returns
+        -------
+        Branch
+            ``records["requested_amplitude"]`` (m) the amplitudes asked for,
+            ``records["solved"]`` 1 for solved points and 0 for NaN entries or stand-ins.
+
+        Warns
+        -----
+        BranchWarning
+            Without ``stand_in``, once when some amplitude has no backbone point: the
+            message names them and the front's range in m and in gaps.
         """
         amps = [amplitude_in_m(self, a, unit) for a in np.atleast_1d(amplitudes)]
-        return solve_at(self, amps, tol=tol)
+        return solve_at(self, amps, tol=tol, stand_in=stand_in)
 
     def truncation_error(self, amplitude: float, *, unit: str = "m", factors=(2, 4), rate: float = 1.0,
                          tol: float = 1e-10):

@@ -184,16 +184,22 @@ def _on_segment(branch, i: int, j: int, a: float, interpolate: bool, tol: float,
     return float(record["frequency"]), np.asarray(u)
 
 
-def solve_at(branch, amplitudes, *, tol: float = 1e-10):
+def solve_at(branch, amplitudes, *, tol: float = 1e-10, stand_in: bool = False, stacklevel: int = 3):
     """The backbone's points at ``amplitudes`` (m), solved on the family front as
     :func:`frequency_at` solves them: a branch of the same type, one point per amplitude,
     sharing ``branch``'s solver and model (so its signals, contact force and harmonic
-    content are those of the on-family orbits). Where the front has no point at an
-    amplitude (beyond its ends, inside a skipped interval, or a failed solve) the front's
-    stored point nearest in amplitude stands in. ``records["requested_amplitude"]`` holds
-    the amplitudes asked for, ``records["solved"]`` 1 for a solved point and 0 for a
-    stand-in. A branch whose solver cannot be rebuilt (a file of a model that is not
-    described) gets its stored front points, without a solver."""
+    content are those of the on-family orbits). ``records["requested_amplitude"]`` holds
+    the amplitudes asked for, ``records["solved"]`` 1 for a solved point and 0 for one
+    the front has not (beyond its ends, inside a skipped interval, or a failed solve).
+
+    Where the front has no point, the entry is what :func:`frequency_at` answers there:
+    NaN (frequency, amplitude, energy, force and state), with one
+    :class:`~mmshbm.BranchWarning` naming those amplitudes and the front's range. With
+    ``stand_in`` the front's stored point nearest in amplitude stands in instead, without
+    a warning (the marked points of a plot), and a branch whose solver cannot be rebuilt
+    (a file of a model that is not described) gets its stored front points, without a
+    solver; without ``stand_in`` such a branch raises the solver's RuntimeError, as
+    :func:`frequency_at` does."""
     from dataclasses import replace
 
     amps = np.atleast_1d(np.asarray(amplitudes, dtype=float))
@@ -203,34 +209,65 @@ def solve_at(branch, amplitudes, *, tol: float = 1e-10):
     try:
         solver = branch._require_solver() if len(amps) else None
     except RuntimeError:
+        if not stand_in:
+            raise
         return _stored_points(branch, front, amps)
     rows, states, solved = [], [], []
     for a in amps:
         f, u = family_point(branch, a, tol=tol) if math.isfinite(a) else (math.nan, None)
-        if u is None or not math.isfinite(f):
-            i = int(front[np.argmin(np.abs(branch.amplitude[front] - a))])
-            u = np.asarray(branch.states[i])
-            solved.append(0)
-        else:
+        if u is not None and math.isfinite(f):
             solved.append(1)
-        states.append(u)
-        rows.append(solver.monitor(u))
+            states.append(np.asarray(u))
+            rows.append(solver.monitor(u))
+            continue
+        solved.append(0)
+        i = int(front[np.argmin(np.abs(branch.amplitude[front] - a))])
+        stored = np.asarray(branch.states[i])
+        states.append(stored if stand_in else np.full(stored.shape, np.nan))
+        rows.append(solver.monitor(states[-1]) if stand_in else None)
     n = len(amps)
+    missing = [float(a) for a, ok in zip(amps, solved, strict=True) if not ok]
+    if missing and not stand_in:
+        _warn_unsolved(branch, front, missing, stacklevel + 1)
+    names = next((list(r) for r in rows if r is not None), [])
 
     def column(name):
-        return np.array([r[name] for r in rows], dtype=float)
+        return np.array([math.nan if r is None else r[name] for r in rows], dtype=float)
 
     records = {"requested_amplitude": amps, "solved": np.array(solved, dtype=int)}
     for name in ("mode_share", "fundamental_share"):
-        if rows and name in rows[0]:
+        if name in names:
             records[name] = column(name)
-            records["on_family"] = np.ones(n)
+            records["on_family"] = np.array(solved, dtype=float) if not stand_in else np.ones(n)
     return replace(branch, frequency=column("frequency"), amplitude=column("amplitude"),
-                   energy=column("energy"),
-                   contact_force_max=column("contact_force_max"), newton_iterations=np.zeros(n, dtype=int),
+                   energy=column("energy"), contact_force_max=column("contact_force_max"),
+                   newton_iterations=np.zeros(n, dtype=int),
                    step_size=np.zeros(n), states=np.array(states).reshape(n, -1), special_points=[],
                    metadata=dict(branch.metadata), solver=solver, residual_histories=[], model=branch.model,
                    records=records)
+
+
+def _warn_unsolved(branch, front, amplitudes: list, stacklevel: int) -> None:
+    """One BranchWarning for the amplitudes (m) where :func:`solve_at` found no family point."""
+    lo, hi = float(np.min(branch.amplitude[front])), float(np.max(branch.amplitude[front]))
+    gap = branch.gap
+    in_gaps = gap and gap > 0
+
+    def both(a):
+        return f"{a:.4g} m ({a / gap:.4g} gaps)" if in_gaps else f"{a:.4g} m"
+
+    outside = [a for a in amplitudes if not (lo * (1 - 1e-9) <= a <= hi * (1 + 1e-9))]
+    inside = [a for a in amplitudes if a not in outside]
+    parts = []
+    if outside:
+        parts.append(f"{', '.join(both(a) for a in outside)} outside the amplitude range of the backbone "
+                     f"(its family spans {both(lo)}..{both(hi)})")
+    if inside:
+        parts.append(f"{', '.join(both(a) for a in inside)} where the starting mode's family has no point "
+                     "(an internal-resonance tongue the branch jumped or passed, or a failed solve)")
+    warnings.warn(f"solve_at: no backbone point at {'; '.join(parts)}: those entries are NaN "
+                  "(records['solved'] = 0); stand_in=True puts the nearest family point there instead",
+                  BranchWarning, stacklevel=stacklevel)
 
 
 def _stored_points(branch, front, amps):
