@@ -1,6 +1,6 @@
 """Write the FE-export fixtures of this folder: one cantilever in every format mmshbm reads.
 
-    python tests/data/fe/make_fixtures.py
+    python tests/data/fe/make_fixtures.py [OUTPUT_FOLDER]     # default: this folder
 
 The structure: a clamped-free Euler–Bernoulli beam (``mmshbm.fe.euler_bernoulli``), the
 default beam's section (0.5 m x 20 mm x 13.5 mm, steel), 10 equal elements, consistent
@@ -225,29 +225,32 @@ def code_aster(path: Path) -> None:
     np.savez(path, **parts, dim=m, nodes=np.array(nodes), components=np.array(components))
 
 
-def main() -> None:
+def main(out: Path = HERE) -> None:
+    """Write every fixture into ``out``."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
     from mmshbm.model.model import Model
 
     M, K = cantilever()
-    abaqus_matrix_input(HERE / "beam_MASS1.mtx", M)
-    abaqus_matrix_input(HERE / "beam_STIF1.mtx", K)
-    abaqus_user_element(HERE / "beam_substructure.inp", M, K)
-    op4_text(HERE / "beam.op4", {"KAA": K, "MAA": M}, sparse=False)
-    op4_text(HERE / "beam_sparse.op4", {"KAA": K, "MAA": M}, sparse=True)
-    op4_binary(HERE / "beam_binary.op4", {"KAA": K, "MAA": M}, "<", bigmat=False)
-    op4_binary(HERE / "beam_bigmat.op4", {"KAA": K, "MAA": M}, ">", bigmat=True)
-    dmig_large(HERE / "beam.pch", {"KAAX": K, "MAAX": M})
+    abaqus_matrix_input(out / "beam_MASS1.mtx", M)
+    abaqus_matrix_input(out / "beam_STIF1.mtx", K)
+    abaqus_user_element(out / "beam_substructure.inp", M, K)
+    op4_text(out / "beam.op4", {"KAA": K, "MAA": M}, sparse=False)
+    op4_text(out / "beam_sparse.op4", {"KAA": K, "MAA": M}, sparse=True)
+    op4_binary(out / "beam_binary.op4", {"KAA": K, "MAA": M}, "<", bigmat=False)
+    op4_binary(out / "beam_bigmat.op4", {"KAA": K, "MAA": M}, ">", bigmat=True)
+    dmig_large(out / "beam.pch", {"KAAX": K, "MAAX": M})
     for name, A in (("M", M), ("K", K)):
-        scipy.io.mmwrite(str(HERE / f"beam_{name}.mtx"), sp.coo_matrix(A), symmetry="symmetric",
+        scipy.io.mmwrite(str(out / f"beam_{name}.mtx"), sp.coo_matrix(A), symmetry="symmetric",
                          precision=17)
-        scipy.io.hb_write(str(HERE / f"beam_{name}.rua"), sp.csc_matrix(A))
-    scipy.io.savemat(str(HERE / "beam.mat"), {"M": sp.csc_matrix(M), "K": sp.csc_matrix(K),
+        scipy.io.hb_write(str(out / f"beam_{name}.rua"), sp.csc_matrix(A))
+    scipy.io.savemat(str(out / "beam.mat"), {"M": sp.csc_matrix(M), "K": sp.csc_matrix(K),
                                               "dofs": DOFS.astype(float)})
-    matlab_v73(HERE / "beam_v73.mat", M, K)
-    code_aster(HERE / "beam_aster.npz")
+    matlab_v73(out / "beam_v73.mat", M, K)
+    code_aster(out / "beam_aster.npz")
     tip = int(np.flatnonzero((DOFS[:, 0] == TIP_NODE) & (DOFS[:, 1] == 2))[0])
-    Model.from_matrices(M, K, tip, 1e-3).save_npz(HERE / "beam.npz")
+    Model.from_matrices(M, K, tip, 1e-3).save_npz(out / "beam.npz")
 
 
 if __name__ == "__main__":
-    main()
+    main(*sys.argv[1:2])
