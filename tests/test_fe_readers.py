@@ -301,3 +301,18 @@ def test_a_large_export_is_read_and_reduced_without_densifying(tmp_path, monkeyp
     cond = make_condensation(model, "modal", harmonics=3)
     assert cond.reduction.solver == "arpack" and cond.n_modes < 60
     assert np.all(np.isfinite(cond.dynamic_stiffness(2 * np.pi * 40.0, 3, False)))
+
+
+def test_harwell_boeing_symmetric_storage(tmp_path, reference):
+    """An RSA file (symmetric: the lower triangle by columns) reads as the full matrix."""
+    M, K = reference
+    for name, A in (("M", M), ("K", K)):
+        path = tmp_path / f"beam_{name}.rsa"
+        scipy.io.hb_write(str(path), sp.csc_matrix(np.tril(A)))
+        lines = path.read_text().splitlines(keepends=True)
+        assert lines[2].startswith("RUA")
+        lines[2] = "RSA" + lines[2][3:]
+        path.write_text("".join(lines))
+    fe = read_fe(tmp_path / "beam_M.rsa", tmp_path / "beam_K.rsa")
+    np.testing.assert_allclose(fe.K.toarray(), K, rtol=0, atol=2e-16 * abs(K).max())
+    np.testing.assert_allclose(fe.frequencies(3), _read("abaqus").frequencies(3), rtol=1e-12)

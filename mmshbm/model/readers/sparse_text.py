@@ -1,7 +1,7 @@
 """Matrix Market (``.mtx``, ``%%MatrixMarket`` header) and Harwell–Boeing (``.rb``,
 ``.rsa``, ``.hb``) files: one matrix a file, no DOF table (plain indices). ANSYS
-``*EXPORT`` writes both (``*EXPORT,MASS,MMF,...`` / ``HBMAT``), as do many codes; a
-symmetric file holding one triangle is completed.
+``*EXPORT`` writes both (``MMF`` / ``HBMAT``), as do many codes; a symmetric file holding
+one triangle is completed.
 """
 
 from __future__ import annotations
@@ -30,10 +30,18 @@ def read_matrix_market(path: Path, role: str) -> Part:
 
 
 def read_harwell_boeing(path: Path, role: str) -> Part:
+    """Real assembled matrices, unsymmetric (RUA) or symmetric (RSA) storage: an RSA file's
+    columns hold one triangle, which is read as an RUA file of that triangle and completed
+    later (scipy reads RUA only)."""
+    import io
+
     import scipy.io
 
     try:
-        A = scipy.io.hb_read(str(path))
+        lines = Path(path).read_text(encoding="ascii", errors="replace").splitlines(keepends=True)
+        if len(lines) > 2 and lines[2][:3].upper() == "RSA":
+            lines[2] = "RUA" + lines[2][3:]
+        A = scipy.io.hb_read(io.StringIO("".join(lines)))
     except (OSError, ValueError, TypeError) as err:
         raise ReadError(f"cannot read {str(path)!r} as Harwell-Boeing: {err}") from None
     return Part(str(path), {role: A.tocsr()})
