@@ -163,10 +163,10 @@ class FEMatrices:
         where = {r: r for r in named}
         layer = {}
         if carry:
-            k = self._layer_stiffness(carry, layer_stiffness)
+            ks = self.static_stiffness(carry)  # one factorisation of K for every layer
+            k = self._layer_stiffness(carry, layer_stiffness, ks)
             K, M, C, new = _add_layer(K, M, C, carry, k)
             where.update(dict(zip(carry, new.tolist(), strict=True)))
-            ks = self.static_stiffness(carry)
             layer = {"attached_to": [self._name(r) for r in carry], "nodes": new.tolist(),
                      "stiffness": k.tolist(), "static_stiffness": ks.tolist(),
                      "ratio_to_static": (k / ks).tolist()}
@@ -185,16 +185,16 @@ class FEMatrices:
             model = model.with_friction(where[r], mu, normal_load=load)
         return model
 
-    def _layer_stiffness(self, rows, given) -> np.ndarray:
+    def _layer_stiffness(self, rows, given, static: np.ndarray) -> np.ndarray:
         from ..transforms import DEFAULT_LAYER_FACTOR
 
         if given is None:
-            return DEFAULT_LAYER_FACTOR * self.static_stiffness(rows)
+            return DEFAULT_LAYER_FACTOR * static
         out = []
-        for r in rows:
+        for r, k_s in zip(rows, static, strict=True):
             value = given.get(tuple(int(v) for v in self.dofs[r])) if isinstance(given, dict) else given
             if value is None:
-                value = DEFAULT_LAYER_FACTOR * self.static_stiffness([r])[0]
+                value = DEFAULT_LAYER_FACTOR * float(k_s)
             if isinstance(value, bool) or not isinstance(value, int | float | np.number) or \
                     not np.isfinite(value) or value <= 0:
                 raise ValueError(f"layer_stiffness for {self._name(r)} must be a finite stiffness > 0 (N/m), "
