@@ -227,6 +227,12 @@ def test_heavy_readers_are_refused_by_name(monkeypatch, tmp_path):
     with pytest.raises(ImportError, match=r"ANSYS \.full files needs ansys-mapdl-reader: pip install "
                                           r"'mmshbm\[fe\]'"):
         read_fe(tmp_path / "file.full")
+    monkeypatch.setitem(sys.modules, "pyNastran", None)
+    monkeypatch.setitem(sys.modules, "pyNastran.op2", None)
+    monkeypatch.setitem(sys.modules, "pyNastran.op2.op2", None)
+    (tmp_path / "beam.op2").write_bytes(b"\0" * 64)
+    with pytest.raises(ImportError, match=r"NASTRAN \.op2 files needs pyNastran: pip install 'mmshbm\[fe\]'"):
+        read_fe(tmp_path / "beam.op2")
     monkeypatch.setitem(sys.modules, "h5py", None)
     with pytest.raises(ImportError, match=r"v7.3 .* needs h5py: pip install 'mmshbm\[fe\]'"):
         read_fe(DATA / "beam_v73.mat")
