@@ -243,9 +243,9 @@ def _fe_model_with_mass(fe, contacts, friction):
 
 
 def _node_list(fe) -> str:
-    from ..model.readers.fematrices import _ranges
+    from ..model.readers.fematrices import id_ranges
 
-    return _ranges(fe.nodes)
+    return id_ranges(fe.nodes)
 
 
 def model_source(args):

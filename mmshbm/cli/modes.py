@@ -46,7 +46,7 @@ def run(args) -> int:
 
 def _describe(fe) -> None:
     """The import: format, DOF count, nodes and components, what was removed."""
-    from ..model.readers.fematrices import _ranges
+    from ..model.readers.fematrices import id_ranges
 
     plain = bool((fe.dofs[:, 1] == 0).all())
     print(f"read {', '.join(fe.source)} ({fe.format}): {fe.n_dof} DOFs"
@@ -55,9 +55,10 @@ def _describe(fe) -> None:
         print(f"DOFs: plain indices 0..{fe.n_dof - 1} (the format names no nodes; --contact ROW:0:GAP)")
     else:
         comps = sorted({int(c) for c in fe.dofs[:, 1]})
-        print(f"nodes {_ranges(fe.nodes)} ({len(fe.nodes)}), components {comps}")
+        print(f"nodes {id_ranges(fe.nodes)} ({len(fe.nodes)}), components {comps}")
     if fe.removed is not None and len(fe.removed):
-        print(f"removed {len(fe.removed)} constrained DOFs (nodes {_ranges(set(fe.removed[:, 0].tolist()))})")
+        nodes = id_ranges(set(fe.removed[:, 0].tolist()))
+        print(f"removed {len(fe.removed)} constrained DOFs (nodes {nodes})")
     massless = int((abs(fe.M).sum(axis=1) == 0).sum())
     if massless:
         print(f"{massless} DOFs carry no mass")

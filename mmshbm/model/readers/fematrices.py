@@ -22,7 +22,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-__all__ = ["FEMatrices"]
+__all__ = ["FEMatrices", "id_ranges"]
 
 log = logging.getLogger(__name__)
 
@@ -84,7 +84,7 @@ class FEMatrices:
                              + self._removed_note(key))
         plain = bool(np.all(self.dofs[:, 1] == 0))
         what = (f"the DOFs are plain indices 0..{self.n_dof - 1} (component 0)" if plain else
-                f"nodes {_ranges(self.nodes)}")
+                f"nodes {id_ranges(self.nodes)}")
         raise ValueError(f"no DOF (node {key[0]}, component {key[1]}) in "
                          f"{', '.join(self.source) or 'the model'}:"
                          f" {what}" + self._removed_note(key))
@@ -206,7 +206,7 @@ class FEMatrices:
         return [int(self.dofs[row, 0]), int(self.dofs[row, 1])]
 
     def __repr__(self) -> str:
-        return (f"FEMatrices(n_dof={self.n_dof}, nodes={_ranges(self.nodes)}, format={self.format!r}, "
+        return (f"FEMatrices(n_dof={self.n_dof}, nodes={id_ranges(self.nodes)}, format={self.format!r}, "
                 f"damping={'yes' if self.C is not None else 'no'}, "
                 f"removed={0 if self.removed is None else len(self.removed)})")
 
@@ -264,7 +264,7 @@ def _friction_entry(entry, i: int) -> tuple:
             _number(items[3], f"friction[{i}] normal_load"))
 
 
-def _ranges(values) -> str:
+def id_ranges(values) -> str:
     """``[1, 2, 3, 7, 9, 10]`` -> ``"1-3, 7, 9-10"``."""
     values = sorted(int(v) for v in values)
     out, start = [], None
