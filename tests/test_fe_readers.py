@@ -193,7 +193,7 @@ def test_code_aster_lagrange_rows_and_relations(tmp_path):
 
 def test_op4_files_agree_with_pynastran():
     """pyNastran's own OP4 reader (an independent implementation) reads the fixtures alike."""
-    pytest.importorskip("pyNastran.op4.op4", reason="pyNastran is not installed (pip install 'mmshbm[fe]')")
+    pytest.importorskip("pyNastran.op4.op4", reason="pyNastran is not installed (pip install 'mmshbm[op2]')")
     from pyNastran.op4.op4 import read_op4
 
     from mmshbm.model.readers.op4 import read_matrices
@@ -231,7 +231,7 @@ def test_heavy_readers_are_refused_by_name(monkeypatch, tmp_path):
     monkeypatch.setitem(sys.modules, "pyNastran.op2", None)
     monkeypatch.setitem(sys.modules, "pyNastran.op2.op2", None)
     (tmp_path / "beam.op2").write_bytes(b"\0" * 64)
-    with pytest.raises(ImportError, match=r"NASTRAN \.op2 files needs pyNastran: pip install 'mmshbm\[fe\]'"):
+    with pytest.raises(ImportError, match=r"\.op2 files needs pyNastran: pip install 'mmshbm\[op2\]'"):
         read_fe(tmp_path / "beam.op2")
     monkeypatch.setitem(sys.modules, "h5py", None)
     with pytest.raises(ImportError, match=r"v7.3 .* needs h5py: pip install 'mmshbm\[fe\]'"):

@@ -22,8 +22,8 @@ code-aster         ``.npz`` of ``EXTR_MATR(sparse=True)``       :mod:`.code_aste
 npz                mmshbm's own ``.npz``                        :mod:`.npz`
 =================  ===========================================  ==========================
 
-The heavy readers (ansys-mapdl-reader, pyNastran, h5py) are imported only by the
-functions that need them and are the optional extra ``pip install 'mmshbm[fe]'``.
+The heavy readers (ansys-mapdl-reader, h5py: the extra ``pip install 'mmshbm[fe]'``;
+pyNastran: ``'mmshbm[op2]'``) are imported only by the functions that need them.
 """
 
 from __future__ import annotations

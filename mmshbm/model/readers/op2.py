@@ -1,6 +1,7 @@
 """NASTRAN OP2 files with matrices (``PARAM,POST,-1`` plus ``PARAM,EXTOUT,MATRIXDB`` or
-``OUTPUT2`` of KAA/MAA), read by pyNastran (``pip install 'mmshbm[fe]'``). OP2 matrices
-carry no DOF table here: plain indices.
+``OUTPUT2`` of KAA/MAA), read by pyNastran (``pip install 'mmshbm[op2]'``, apart from the
+``fe`` extra: pyNastran 1.4 requires NumPy < 2). OP2 matrices carry no DOF table here:
+plain indices.
 """
 
 from __future__ import annotations
@@ -20,7 +21,8 @@ def read_op2(path: Path, names: dict | None = None) -> Part:
     try:
         from pyNastran.op2.op2 import OP2
     except ImportError:
-        raise ImportError("reading NASTRAN .op2 files needs pyNastran: pip install 'mmshbm[fe]'") from None
+        raise ImportError("reading NASTRAN .op2 files needs pyNastran: pip install 'mmshbm[op2]' (pyNastran "
+                          "1.4 requires NumPy < 2; OP4 and DMIG need nothing extra)") from None
     except AttributeError as err:  # pyNastran releases that predate the installed NumPy
         raise ImportError(f"pyNastran cannot be imported with NumPy {np.__version__} ({err}); install a "
                           "pyNastran release that supports it, or export OP4 (OUTPUT4) instead") from None
