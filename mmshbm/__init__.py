@@ -51,6 +51,8 @@ _LAZY = {
     "branch_stability": "mmshbm.methods.mms.stability",
     "phase_resonance_backbone": "mmshbm.analysis.phase_resonance",
     "load": "mmshbm.io",
+    "read_fe": "mmshbm.model.readers",
+    "FEMatrices": "mmshbm.model.readers",
     "MmshbmWarning": "mmshbm._warnings",
     "BranchWarning": "mmshbm._warnings",
     "ModelWarning": "mmshbm._warnings",

@@ -136,32 +136,130 @@ def beam(args):
                            if v is not None})
 
 
-def model(args):
+def model(args, layer: bool = True):
     """The model of the options: ``--model-file`` or the default beam, converted by
     ``--contact-layer K`` / ``--massless-contact [DOF ...]`` (the beam then starts from its
-    full-mass model: the tip keeps its mass)."""
-    layer = getattr(args, "contact_layer", None)
+    full-mass model: the tip keeps its mass). An FE export given with ``--contact`` /
+    ``--friction`` gets its massless layer on the named DOFs that carry mass (stiffness
+    ``--contact-layer K``, default 10⁵ x the static stiffness there) unless ``layer`` is
+    False (the named DOFs keep their mass)."""
+    layer_k = getattr(args, "contact_layer", None)
     massless = getattr(args, "massless_contact", None)
-    if layer is not None and massless is not None:
+    if layer_k is not None and massless is not None:
         raise ValueError("--contact-layer and --massless-contact are two ways to the same end: give one")
-    convert = layer is not None or massless is not None
+    convert = layer_k is not None or massless is not None
     if getattr(args, "model_file", None):
+        fe = fe_matrices(args)
+        if fe is not None:
+            return _fe_model(args, fe, layer)
         model = _model_file(args)
     else:
         from ..methods.limits import check_beam_elements
 
         check_beam_elements(args.elements)  # before assembling anything
         model = beam(args).model(args.elements, grading=args.grading, massless_tip=not convert)
-    if layer is not None:
-        model = model.with_contact_layer(None if layer == "default" else layer)
+    if layer_k is not None:
+        model = model.with_contact_layer(None if layer_k == "default" else layer_k)
     elif massless is not None:
         model = model.with_massless_contact(massless or None)
     return model
 
 
+def fe_matrices(args):
+    """The :class:`~mmshbm.model.readers.FEMatrices` of ``--model-file`` when it is an FE
+    export, or an own ``.npz`` given with ``--contact`` / ``--friction``; None for the
+    beam and for an own ``.npz`` model read as it is (its contacts kept)."""
+    paths = getattr(args, "model_file", None)
+    if not paths:
+        return None
+    from ..model.readers import detect_format, read_fe
+
+    paths = [paths] if isinstance(paths, str) else list(paths)
+    named = bool(getattr(args, "contact", None) or getattr(args, "friction", None))
+    if len(paths) == 1 and not named and Path(paths[0]).is_file() and detect_format(Path(paths[0])) == "npz":
+        return None
+    memo = getattr(args, "_fe_memo", None)
+    if memo is None:
+        memo = read_fe(*paths)
+        args._fe_memo = memo
+    return memo
+
+
+def _fe_model(args, fe, layer: bool):
+    """The model of an FE export with the contacts of ``--contact`` (or ``--contact-dof``
+    rows) and the friction of ``--friction``."""
+    if getattr(args, "massless_contact", None) is not None:
+        raise ValueError("--massless-contact applies to .npz models; an FE export given with --contact "
+                         "gets a "
+                         "massless layer (its stiffness: --contact-layer K)")
+    contacts = []
+    for node, comp, gap, side in getattr(args, "contact", None) or ():
+        gap = gap if gap is not None else args.gap
+        if gap is None:
+            raise ValueError(f"--contact {node}:{comp}: give the gap (NODE:COMPONENT:GAP) or --gap (m)")
+        contacts.append((node, comp, gap, side))
+    rows = getattr(args, "contact_dof", None)
+    if rows:
+        if contacts:
+            raise ValueError("give --contact NODE:COMPONENT[:GAP[:SIDE]] or --contact-dof ROW, not both")
+        if args.gap is None:
+            raise ValueError("--contact-dof with an FE export: give --gap (m)")
+        sides = getattr(args, "stop_side", None) or [1]
+        if len(sides) not in (1, len(rows)):
+            raise ValueError(f"--stop-side: one side, or one per --contact-dof ({len(rows)}); got "
+                             f"{len(sides)}")
+        for k, r in enumerate(rows):
+            if not r < fe.n_dof:
+                raise ValueError(f"--contact-dof {r}: the export has DOFs 0..{fe.n_dof - 1}")
+            node, comp = (int(v) for v in fe.dofs[r])
+            contacts.append((node, comp, args.gap, sides[k if len(sides) > 1 else 0]))
+    friction = list(getattr(args, "friction", None) or ())
+    if not contacts and not friction:
+        raise ValueError(f"{', '.join(fe.source)} names no contact: give --contact NODE:COMPONENT:GAP (nodes "
+                         f"{_node_list(fe)}; `mmshbm modes --model-file ...` lists the DOFs)")
+    k = getattr(args, "contact_layer", None)
+    if not layer:
+        return _fe_model_with_mass(fe, contacts, friction)
+    k = None if k in (None, "default") else k
+    model = fe.model(contact=contacts, friction=friction, layer_stiffness=k)
+    info = model.description.get("contact_layer")
+    if info:
+        for (node, comp), kk, ratio in zip(info["attached_to"], info["stiffness"], info["ratio_to_static"],
+                                           strict=True):
+            print(f"massless layer at node {node} component {comp}: k = {kk:.6g} N/m ({ratio:.3g} x the "
+                  f"static "
+                  "stiffness there; --contact-layer K sets it)")
+    return model
+
+
+def _fe_model_with_mass(fe, contacts, friction):
+    from ..model.model import Model
+
+    if friction:
+        raise ValueError("--friction needs a massless DOF: this command keeps the named DOFs' mass")
+    rows = [fe.index(n, c) for n, c, _, _ in contacts]
+    return Model.from_matrices(fe.M, fe.K, rows, [c[2] for c in contacts], [c[3] for c in contacts],
+                               {"kind": "FEMatrices", "source": list(fe.source)}, damping=fe.C)
+
+
+def _node_list(fe) -> str:
+    from ..model.readers.fematrices import id_ranges
+
+    return id_ranges(fe.nodes)
+
+
+def model_source(args):
+    """What the analysis functions take as a model: the ``--model-file`` path when it is one
+    own ``.npz`` read as it is, else the :class:`~mmshbm.model.Model` of the options."""
+    paths = args.model_file
+    if fe_matrices(args) is None:
+        return paths[0] if isinstance(paths, list) else paths
+    return model(args)
+
+
 def _model_file(args):
-    """The model of ``--model-file``, with ``--contact-dof``, ``--gap`` and ``--stop-side``
-    given in place of (or over) the file's entries."""
+    """The model of ``--model-file`` (an own .npz), with ``--contact-dof``, ``--gap`` and
+    ``--stop-side`` given in place of (or over) the file's entries."""
     import re
 
     from ..model.model import Model
@@ -169,12 +267,49 @@ def _model_file(args):
     def one_or_list(values):
         return None if values is None else values[0] if len(values) == 1 else list(values)
 
+    path = args.model_file[0] if isinstance(args.model_file, list) else args.model_file
     try:
-        return Model.from_npz(args.model_file, contact_dof=one_or_list(getattr(args, "contact_dof", None)),
+        return Model.from_npz(path, contact_dof=one_or_list(getattr(args, "contact_dof", None)),
                               gap=args.gap, stop_side=one_or_list(getattr(args, "stop_side", None)))
     except ValueError as err:  # the library's "pass name=..." is an option here
         raise ValueError(re.sub(r"pass (\w+)=\.\.\.", lambda m: f"give --{m.group(1).replace('_', '-')}",
                                 str(err))) from None
+
+
+def contact_spec(text: str) -> tuple:
+    """``--contact`` value ``NODE:COMPONENT[:GAP[:SIDE]]`` -> (node, component, gap or None,
+    side)."""
+    parts = text.split(":")
+    if not 2 <= len(parts) <= 4:
+        raise argparse.ArgumentTypeError(f"expected NODE:COMPONENT[:GAP[:SIDE]], got {text!r}")
+    try:
+        node, comp = int(parts[0]), int(parts[1])
+        gap = float(parts[2]) if len(parts) > 2 and parts[2] else None
+        side = int(parts[3]) if len(parts) > 3 else 1
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected integers NODE:COMPONENT, a gap in m and a side "
+                                         f"+1/-1, got "
+                                         f"{text!r}") from None
+    if gap is not None and not (math.isfinite(gap) and gap > 0):
+        raise argparse.ArgumentTypeError(f"the gap must be a finite number > 0 (m), got {text!r}")
+    if side not in (1, -1):
+        raise argparse.ArgumentTypeError(f"the side must be +1 or -1, got {text!r}")
+    return node, comp, gap, side
+
+
+def friction_spec(text: str) -> tuple:
+    """``--friction`` value ``NODE:COMPONENT:MU:LOAD`` -> (node, component, mu, normal load)."""
+    parts = text.split(":")
+    try:
+        if len(parts) != 4:
+            raise ValueError
+        node, comp, mu, load = int(parts[0]), int(parts[1]), float(parts[2]), float(parts[3])
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected NODE:COMPONENT:MU:LOAD (integers, then the friction "
+                                         f"coefficient and the normal load in N), got {text!r}") from None
+    if not (math.isfinite(mu) and mu >= 0 and math.isfinite(load) and load >= 0):
+        raise argparse.ArgumentTypeError(f"MU and LOAD must be finite and >= 0, got {text!r}")
+    return node, comp, mu, load
 
 
 def stop_side(text: str) -> int:
@@ -244,13 +379,10 @@ def beam_options(p, elements=True, model_file=True, conversions=None):
     p.add_argument("--E", type=positive_float, default=None, help="Young's modulus (Pa) (default 210e9)")
     p.add_argument("--rho", type=positive_float, default=None, help="density (kg/m^3) (default 7850)")
     if model_file:
-        p.add_argument("--model-file", default=None,
-                       help="a user model (.npz of Model.save_npz, or any .npz with M and K) instead of the "
-                            "beam; its contact DOF may carry mass (runs with --method penalty, or convert it "
-                            "for MMS-HBM)")
+        fe_options(p)
         p.add_argument("--contact-dof", type=non_negative_int, nargs="+", default=None, metavar="DOF",
-                       help="--model-file: the contact DOF(s), over the file's 'contact_dof' (default: the "
-                            "file's)")
+                       help="--model-file: the contact DOF(s) as row indices, over the file's 'contact_dof' "
+                            "(default: the file's)")
         p.add_argument("--stop-side", type=stop_side, nargs="+", default=None, metavar="SIDE",
                        help="--model-file: +1 (stop at +gap) or -1 per contact (default: the file's, "
                             "else +1)")
@@ -263,3 +395,30 @@ def beam_options(p, elements=True, model_file=True, conversions=None):
                        help="remove the mass of the contact node's DOFs (or of the DOFs given); reports the "
                             "mass removed and the frequency shift")
     out_option(p)
+
+
+#: the help of --model-file: what it reads
+MODEL_FILE_HELP = ("a model instead of the beam: an .npz of Model.save_npz (or any .npz with M and K), "
+                   "or an FE "
+                   "export: Abaqus job_MASS1.mtx job_STIF1.mtx (FORMAT=MATRIX INPUT) or a *USER ELEMENT "
+                   "file, "
+                   "ANSYS .full, NASTRAN .op4 / DMIG .pch / .op2, Matrix Market or Harwell-Boeing mass and "
+                   "stiffness files, MATLAB .mat (M, K), code_aster triplets .npz (docs/fe_models.md); "
+                   "name contacts with --contact")
+
+
+def fe_options(p) -> None:
+    """--model-file PATH [PATH ...], --contact, --friction: the model options every subcommand
+    with a model shares."""
+    p.add_argument("--model-file", nargs="+", default=None, metavar="PATH", help=MODEL_FILE_HELP)
+    p.add_argument("--contact", type=contact_spec, action="append", default=None,
+                   metavar="NODE:COMPONENT[:GAP[:SIDE]]",
+                   help="--model-file: a rigid stop at the DOF (node id, component 1..6; 0 and the row index "
+                        "where the format names no DOFs), GAP in m (default --gap), SIDE +1 (stop at +GAP, "
+                        "default) or -1; repeat for several. A DOF with mass gets a massless layer "
+                        "(--contact-layer K)")
+    p.add_argument("--friction", type=friction_spec, action="append", default=None,
+                   metavar="NODE:COMPONENT:MU:LOAD",
+                   help="--model-file: Coulomb friction at the DOF, coefficient MU, constant normal "
+                        "load LOAD "
+                        "(N); repeatable")

@@ -63,9 +63,7 @@ def run(args) -> int:
         ok = ok and report.success and report.identifiable
     if measured is not None:
         if args.model_file:
-            from ..model.model import Model
-
-            model = Model.from_npz(args.model_file)
+            model = common.model(args, layer=False)  # the contact keeps its mass: the layer is fitted
             if args.gap is not None:
                 model = model.with_gap(args.gap)
         else:

@@ -140,7 +140,7 @@ def _run_study(args):
         if args.model_file:
             if args.elements:
                 raise ValueError("--elements applies to the beam, not to --model-file")
-            study = studies.run_study(model=args.model_file, **grid, **shared)
+            study = studies.run_study(model=common.model_source(args), **grid, **shared)
         else:
             study = studies.run_study(beam, elements=args.elements or (8, 21), grading=args.grading, **grid,
                                       **shared)
