@@ -59,6 +59,7 @@ import numpy as np
 
 from ...contact.coulomb import derivative_matrix, project_coulomb, project_coulomb_play
 from ...model.model import Model
+from .corrector import at_roundoff, backtrack, corrector_to_roundoff
 from .forced import ForcedResponseProblem
 
 __all__ = ["FrictionRows", "FrictionForcedProblem", "check_friction_model", "check_law"]
@@ -363,9 +364,12 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
 
     def solve_at(self, frequency: float, guess: np.ndarray, max_iter: int = 50, tol: float = 1e-11):
         """Newton at fixed Ω from the scaled ``guess``, with a backtracking line search on
-        max|R/rowscale|: (scaled unknowns, converged)."""
+        max|R/rowscale|: (scaled unknowns, converged). Converged: the scaled residual is
+        <= ``tol`` and Newton has reached the solve's round-off
+        (:func:`~mmshbm.methods.mms.corrector.at_roundoff`)."""
         x, omega = self.unpack(guess)
         omega = 2 * np.pi * frequency
+        xs = self.xscale
 
         def merit(x):
             R = self.residual_parts(x, omega, 1.0, False)[0]
@@ -375,61 +379,31 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         for _ in range(max_iter):
             if not np.isfinite(r):
                 return guess, False
-            if r < tol:
-                return self.pack(x, omega), True
             _, Jx, _, _ = self.residual_parts(x, omega, 1.0, True)
             try:
                 dx = np.linalg.solve(Jx, -R)
             except np.linalg.LinAlgError:
                 dx = np.linalg.lstsq(Jx, -R, rcond=None)[0]
-            x, r, R, ok = _backtrack(merit, x, dx, r)
+            if r <= tol:
+                done, x, r, R = at_roundoff(merit, x, dx, r, R, xs)
+                if done:
+                    return self.pack(x, omega), True
+                continue
+            x, r, R, ok = backtrack(merit, x, dx, r)
             if not ok:
                 return self.pack(x, omega), False
-        return self.pack(x, omega), r < tol
+        return self.pack(x, omega), r <= tol
 
     def fast_newton(self, u, u_pred, tangent, tol, max_iter, step_tol):
         """The continuation's corrector on [R(u); t·(u − u_pred)] = 0, globalised: each Newton
         step is halved until the merit max(|R|, |t·(u − u_pred)|) (scaled) decreases. The
         friction rows are semismooth, and where a node sticks only briefly (a stiff node,
-        slip over > 99 % of the period) plain Newton cycles. Converged: residual <= ``tol``
-        and a Newton step <= ``step_tol`` (or one that no longer lowers the merit). Returns
-        (u, iterations, residual history, Jacobian at u); raises RuntimeError when it does
-        not converge."""
-        from ...core.bordered import bordered_solve
-
-        def merit(u):
-            R = self.residual(u)
-            return max(float(np.abs(R).max()), abs(float(tangent @ (u - u_pred)))), R
-
-        r, _ = merit(u)
-        history = [r]
-        for it in range(max_iter + 1):
-            if not np.isfinite(r):
-                raise RuntimeError("non-finite residual")
-            R, J = self.residual_and_jacobian(u)
-            if it == max_iter and r > tol:
-                break
-            du = -bordered_solve(J, tangent, np.append(R, tangent @ (u - u_pred)))
-            if not np.all(np.isfinite(du)):
-                raise RuntimeError("singular Jacobian")
-            step = float(np.abs(du).max())
-            # the residual alone does not bound the error where the friction rows are weak
-            # (a stiff node that sticks briefly: condition numbers of 1e7 and more, a point
-            # at |R| = 1e-10 measured 2.5e-5 off the branch, and every later corrector had
-            # to move that far, out of the predictor cone): converged means a small
-            # residual and a small Newton step, or a step that no longer lowers the merit
-            if r <= tol and (step <= step_tol or it == max_iter):
-                return u, it, np.array(history), J
-            if float(np.abs(du).max()) <= step_tol and r <= np.sqrt(tol):
-                return u, it, np.array(history), J
-            u_new, r_new, _, ok = _backtrack(merit, u, du, r)
-            if not ok:
-                if r <= tol:
-                    return u, it, np.array(history), J
-                break
-            u, r = u_new, r_new
-            history.append(r)
-        raise RuntimeError(f"no convergence in {max_iter} iterations (residual {history[-1]:.2e})")
+        slip over > 99 % of the period) plain Newton cycles. Stopped at the solve's round-off
+        (:func:`~mmshbm.methods.mms.corrector.corrector_to_roundoff`: the residual alone does
+        not bound the error where the friction rows are weak, condition numbers of 1e7 and
+        more). Returns (u, iterations, residual history, Jacobian); raises RuntimeError when
+        it does not converge."""
+        return corrector_to_roundoff(self, u, u_pred, tangent, tol, max_iter, step_tol)
 
     def start_point(self, frequency: float, max_iter: int = 50, tol: float = 1e-11) -> np.ndarray:
         """Converged unknowns at ``frequency`` (Hz) by Newton from the free-slip, then the
@@ -481,16 +455,3 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         rec = super()._record(x, omega, sigma)
         rec.update(self.friction_records(x, omega, sigma))
         return rec
-
-
-def _backtrack(merit, x: np.ndarray, dx: np.ndarray, r: float, min_step: float = 1.0 / 4096):
-    """x + λ dx with λ = 1, 1/2, ... down to ``min_step``: the first with merit below
-    (1 − 1e-4 λ) r. Returns (x, merit, residual, decreased)."""
-    lam = 1.0
-    while True:
-        r_new, R_new = merit(x + lam * dx)
-        if r_new < (1 - 1e-4 * lam) * r:
-            return x + lam * dx, r_new, R_new, True
-        if lam <= min_step:
-            return x, r, merit(x)[1], False
-        lam *= 0.5
