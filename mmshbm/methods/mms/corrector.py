@@ -42,16 +42,17 @@ def _step_at_roundoff(u: np.ndarray, du: np.ndarray, scale) -> bool:
     return bool(np.all(np.abs(du) <= 8 * _EPS * np.maximum(np.abs(u), scale)))
 
 
-def at_roundoff(merit, x: np.ndarray, dx: np.ndarray, r: float, R, scale, floor: float = 0.0):
+def at_roundoff(merit, x: np.ndarray, dx: np.ndarray, r: float, R, scale, floor: float = 0.0, first=None):
     """One Newton step ``dx`` from a point whose merit ``r`` already meets the tolerance:
     (done, x, merit, residual). Done when the step is at the round-off of x (``scale``: the
     size below which |x_i| counts as that size), or when x + dx does not halve the merit
     and, with the merit above ``floor`` (a level well above the residual's round-off), no
     step halved down to 1/64 lowers it (a corner of the semismooth rows): then the better
-    point. Otherwise the step that lowered it is taken and Newton goes on."""
+    point. Otherwise the step that lowered it is taken and Newton goes on. ``first``: the
+    merit for the full step, when it differs (one that also returns the Jacobian)."""
     if _step_at_roundoff(x, dx, scale):
         return True, x, r, R
-    r_new, R_new = merit(x + dx)
+    r_new, R_new = (first or merit)(x + dx)
     if r_new <= 0.5 * r:
         return False, x + dx, r_new, R_new
     if r > floor:
@@ -66,12 +67,13 @@ def at_roundoff(merit, x: np.ndarray, dx: np.ndarray, r: float, R, scale, floor:
     return True, x, r, R
 
 
-def backtrack(merit, x: np.ndarray, dx: np.ndarray, r: float, min_step: float = 1.0 / 4096):
+def backtrack(merit, x: np.ndarray, dx: np.ndarray, r: float, min_step: float = 1.0 / 4096, first=None):
     """x + λ dx with λ = 1, 1/2, ... down to ``min_step``: the first with merit below
-    (1 − 1e-4 λ) r. Returns (x, merit, residual, decreased)."""
+    (1 − 1e-4 λ) r (``first``: the merit for λ = 1, when it differs). Returns (x, merit,
+    residual, decreased)."""
     lam = 1.0
     while True:
-        r_new, R_new = merit(x + lam * dx)
+        r_new, R_new = (first if first is not None and lam == 1.0 else merit)(x + lam * dx)
         if r_new < (1 - 1e-4 * lam) * r:
             return x + lam * dx, r_new, R_new, True
         if lam <= min_step:
@@ -90,22 +92,30 @@ def corrector_to_roundoff(problem, u: np.ndarray, u_pred: np.ndarray, tangent: n
     above round-off once the tolerance is met (the continuation then retries the step).
     """
 
-    def merit(v):
+    def size(R, v):
+        return max(float(np.abs(R).max()) if R.size else 0.0, abs(float(tangent @ (v - u_pred))))
+
+    def merit(v):  # (merit, (R, None))
         R = problem.residual(v)
-        return max(float(np.abs(R).max()) if R.size else 0.0, abs(float(tangent @ (v - u_pred)))), R
+        return size(R, v), (R, None)
+
+    def merit_full(v):  # (merit, (R, J)): a full step is taken most of the time
+        R, J = problem.residual_and_jacobian(v)
+        return size(R, v), (R, J)
 
     stall_tol = max(_FLOOR, _STALL * tol)
-    r, _ = merit(u)
+    r, (R, J) = merit_full(u)
     history = [r]
     for it in range(max_iter + 1):
         if not math.isfinite(r):
             raise RuntimeError("non-finite residual")
-        R, J = problem.residual_and_jacobian(u)
+        if J is None:
+            R, J = problem.residual_and_jacobian(u)
         du = -bordered_solve(J, tangent, np.append(R, tangent @ (u - u_pred)))
         if not np.all(np.isfinite(du)):
             raise RuntimeError("singular Jacobian")
         if r <= tol:
-            done, u_new, r_new, _ = at_roundoff(merit, u, du, r, None, 1.0, _FLOOR)
+            done, u_new, r_new, RJ = at_roundoff(merit, u, du, r, (R, J), 1.0, _FLOOR, merit_full)
             if done:
                 if r_new > stall_tol:
                     # no step lowers a merit above round-off: Newton has stalled on a corner of
@@ -114,17 +124,18 @@ def corrector_to_roundoff(problem, u: np.ndarray, u_pred: np.ndarray, tangent: n
                     raise RuntimeError(f"Newton stalled at residual {r_new:.2e}")
                 if r_new < r:
                     history.append(r_new)
-                return u_new, it, np.array(history), J
-            u, r = u_new, r_new
+                # the Jacobian at the point returned where it was evaluated there
+                return u_new, it, np.array(history), (RJ[1] if RJ[1] is not None else J)
+            u, r, (R, J) = u_new, r_new, RJ
             history.append(r)
             continue
         if it == max_iter:
             break
-        u_new, r_new, _, ok = backtrack(merit, u, du, r)
+        u_new, r_new, RJ, ok = backtrack(merit, u, du, r, first=merit_full)
         if not ok:
             if float(np.abs(du).max()) <= step_tol and r <= math.sqrt(tol):
                 return u, it, np.array(history), J  # the residual's floor above the tolerance
             break
-        u, r = u_new, r_new
+        u, r, (R, J) = u_new, r_new, RJ
         history.append(r)
     raise RuntimeError(f"no convergence in {max_iter} iterations (residual {history[-1]:.2e})")

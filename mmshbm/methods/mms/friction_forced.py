@@ -58,9 +58,11 @@ from __future__ import annotations
 import numpy as np
 
 from ...contact.coulomb import derivative_matrix, project_coulomb, project_coulomb_play
+from ...core.damped_condense import DENSE_LIMIT
 from ...model.model import Model
 from .corrector import at_roundoff, backtrack, corrector_to_roundoff
 from .forced import ForcedResponseProblem
+from .friction_tracked import TrackedHarmonic
 
 __all__ = ["FrictionRows", "FrictionForcedProblem", "check_friction_model", "check_law"]
 
@@ -275,6 +277,9 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         # harmonic 1 of the amplitude DOF (when it carries mass) as two more unknowns
         hit = np.flatnonzero(model.l == self.amplitude_dof)
         self._track = int(hit[0]) if len(hit) else None
+        self._tracker = None
+        if self._track is not None and self.cond.n_l <= DENSE_LIMIT:
+            self._tracker = TrackedHarmonic(model.blocks, self._track, self.force_l)
         if self._track is not None:
             self.colscale = np.concatenate([self.xscale, [self.length, self.length, self.omega_ref]])
             self.n_unknowns = self.n_x + 3
@@ -296,37 +301,49 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         ab = self._tracked(np.asarray(x, dtype=float), omega)[0]
         return np.concatenate([x, ab, [omega]]) / self.colscale
 
-    def _tracked(self, x: np.ndarray, omega: float):
-        """(cos, sin) of harmonic 1 of the amplitude DOF (m) and ∂/∂x (2, n_x).
+    def _tracked(self, x: np.ndarray, omega: float, derivative: bool = False):
+        """(cos, sin) of harmonic 1 of the amplitude DOF (m), ∂/∂x (2, n_x) and, with
+        ``derivative``, ∂/∂Ω (2,) (else None).
 
-        Q̂ = −z·Û_1 + σ Y_1, z the amplitude DOF's row of Z_1 = S_1⁻¹K_lc."""
-        ch = self._condensed(omega, recover=True)
-        s, _ = self.excitation.scale(omega)
-        z = ch.Z[1][self._track]
+        Q̂ = −z·Û_1 + σ y, z the amplitude DOF's row of Z_1 = S_1⁻¹K_lc, y its row of
+        S_1⁻¹F̂_l (:class:`~mmshbm.methods.mms.friction_tracked.TrackedHarmonic`, exact
+        derivatives; above DENSE_LIMIT DOFs with mass from the condensation's recovery and
+        central differences in Ω, step 1e-6 Ω)."""
+        s, ds = self.excitation.scale(omega)
+        if self._tracker is not None:
+            z, y, dz, dy = self._tracker.at(omega, derivative)
+        else:
+            ch = self._condensed(omega, recover=True)
+            z, y, dz, dy = ch.Z[1][self._track], ch.Y[self._track, 0], None, None
         n_c = self.n_c
         Uc, Us = x[n_c:2 * n_c], x[2 * n_c:3 * n_c]
-        q = -z @ (Uc - 1j * Us) + s * ch.Y[self._track, 0]
+        U = Uc - 1j * Us
+        q = -z @ U + s * y
         dx = np.zeros((2, self.n_x))
         dx[0, n_c:2 * n_c], dx[0, 2 * n_c:3 * n_c] = -z.real, -z.imag
         dx[1, n_c:2 * n_c], dx[1, 2 * n_c:3 * n_c] = z.imag, -z.real
-        return np.array([q.real, -q.imag]), dx
+        dw = None
+        if derivative and dz is not None:
+            dq = -dz @ U + ds * y + s * dy
+            dw = np.array([dq.real, -dq.imag])
+        elif derivative:
+            h = 1e-6 * omega
+            dw = (self._tracked(x, omega + h)[0] - self._tracked(x, omega - h)[0]) / (2 * h)
+            self._condensed(omega, 0.0, True, recover=True)  # back to Ω in the cache
+        return np.array([q.real, -q.imag]), dx, dw
 
     def _evaluate(self, u: np.ndarray, jacobian: bool):
         """Scaled residual and, if asked, its Jacobian; with the amplitude DOF tracked, two
-        more rows (its harmonic-1 unknowns equal their recovery from x; the Ω column of
-        these rows by central differences of the recovery, step 1e-6 Ω)."""
+        more rows (its harmonic-1 unknowns equal their recovery from x, :meth:`_tracked`)."""
         if self._track is None:
             return super()._evaluate(u, jacobian)
         x, omega = self.unpack(u)
         ab = np.asarray(u[self.n_x:self.n_x + 2], dtype=float) * self.length
         R_x, Jx, Jw, _ = self.residual_parts(x, omega, 1.0, jacobian)
-        rec, drec = self._tracked(x, omega)
+        rec, drec, dw = self._tracked(x, omega, jacobian)
         R = np.concatenate([R_x / self.rowscale, (ab - rec) / self.length])
         if not jacobian:
             return R
-        h = 1e-6 * omega
-        dw = (self._tracked(x, omega + h)[0] - self._tracked(x, omega - h)[0]) / (2 * h)
-        self._condensed(omega, 0.0, True, recover=True)  # back to Ω in the cache
         J = np.zeros((self.n_x + 2, self.n_unknowns))
         J[:self.n_x, :self.n_x] = Jx * self.xscale[None, :] / self.rowscale[:, None]
         J[:self.n_x, -1] = Jw * self.omega_ref / self.rowscale
