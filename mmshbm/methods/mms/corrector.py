@@ -14,9 +14,10 @@ of the condensed stiffness) a step no longer lowering the merit with the step <=
 
 Globalised by halving the step until the merit decreases: the friction rows are
 semismooth, and where a node sticks only briefly plain Newton cycles. Once the tolerance
-is met, a stall above round-off (no step, halved down to 1/64, lowers the merit) is a
-failure, not a converged point: on a corner of the branch such points were measured up to
-5e-5 off it.
+is met, a stall above round-off (no step, halved down to 1/64, lowers the merit) with a
+Newton step above ``step_tol`` is a failure, not a converged point: on a corner of the
+branch such points were measured up to 5e-5 off it. A stall with a small step is the
+residual's floor (a stiff model's scaled residual bottoms out near 1e-12).
 """
 
 from __future__ import annotations
@@ -42,20 +43,22 @@ def _step_at_roundoff(u: np.ndarray, du: np.ndarray, scale) -> bool:
     return bool(np.all(np.abs(du) <= 8 * _EPS * np.maximum(np.abs(u), scale)))
 
 
-def at_roundoff(merit, x: np.ndarray, dx: np.ndarray, r: float, R, scale, floor: float = 0.0, first=None):
+def at_roundoff(merit, x: np.ndarray, dx: np.ndarray, r: float, R, scale, floor: float = 0.0, first=None,
+                small: float = 0.0):
     """One Newton step ``dx`` from a point whose merit ``r`` already meets the tolerance:
     (done, x, merit, residual). Done when the step is at the round-off of x (``scale``: the
     size below which |x_i| counts as that size), or when x + dx does not halve the merit
-    and, with the merit above ``floor`` (a level well above the residual's round-off), no
-    step halved down to 1/64 lowers it (a corner of the semismooth rows): then the better
-    point. Otherwise the step that lowered it is taken and Newton goes on. ``first``: the
-    merit for the full step, when it differs (one that also returns the Jacobian)."""
+    and, with the merit above ``floor`` (a level well above the residual's round-off) and a
+    step above ``small`` (a step at the residual's floor is noise), no step halved down to
+    1/64 lowers it (a corner of the semismooth rows): then the better point. Otherwise the
+    step that lowered it is taken and Newton goes on. ``first``: the merit for the full
+    step, when it differs (one that also returns the Jacobian)."""
     if _step_at_roundoff(x, dx, scale):
         return True, x, r, R
     r_new, R_new = (first or merit)(x + dx)
     if r_new <= 0.5 * r:
         return False, x + dx, r_new, R_new
-    if r > floor:
+    if r > floor and float(np.abs(dx).max()) > small:
         lam = 0.5
         while lam >= 1.0 / 64:
             r_lam, R_lam = merit(x + lam * dx)
@@ -115,12 +118,14 @@ def corrector_to_roundoff(problem, u: np.ndarray, u_pred: np.ndarray, tangent: n
         if not np.all(np.isfinite(du)):
             raise RuntimeError("singular Jacobian")
         if r <= tol:
-            done, u_new, r_new, RJ = at_roundoff(merit, u, du, r, (R, J), 1.0, _FLOOR, merit_full)
+            done, u_new, r_new, RJ = at_roundoff(merit, u, du, r, (R, J), 1.0, _FLOOR, merit_full, step_tol)
             if done:
-                if r_new > stall_tol:
-                    # no step lowers a merit above round-off: Newton has stalled on a corner of
-                    # the semismooth rows (a point accepted there was measured 5e-5 off the
-                    # branch at a scaled residual of 8.5e-11)
+                if r_new > stall_tol and float(np.abs(du).max()) > step_tol:
+                    # no step lowers a merit above round-off and the Newton step is not small:
+                    # Newton has stalled on a corner of the semismooth rows (a point accepted
+                    # there was measured 5e-5 off the branch at a scaled residual of 8.5e-11,
+                    # its Newton steps 1e-6 to 1e-4; at the residual's floor of a stiff model,
+                    # 1e-12 to 1e-11 on NLvib's friction beam, the steps are 1e-12)
                     raise RuntimeError(f"Newton stalled at residual {r_new:.2e}")
                 if r_new < r:
                     history.append(r_new)
