@@ -156,11 +156,13 @@ class FrequencyResponse(ResultBase):
     def _excitation_reference(self) -> complex:
         solver = self._require_solver()
         exc = getattr(solver, "excitation", None)
-        if exc is None:
-            from ..methods.mms.forced import Excitation
-
-            exc = Excitation.from_json(self.metadata["excitation"])
-        return complex(exc.reference)
+        if exc is not None:
+            return complex(exc.reference)
+        try:  # the excitation's JSON record (Excitation.to_json)
+            re_, im_ = self.metadata["excitation"]["reference"]
+        except (KeyError, TypeError, ValueError) as err:
+            raise RuntimeError(f"this response records no excitation phase reference: {err}") from None
+        return complex(float(re_), float(im_))
 
     # ------------------------------------------------------------------ solver
     def _build_solver(self, model, options: dict):
