@@ -12,6 +12,17 @@
   against Jenkins with N = 16(2H+1) and 1024 samples.
 * ``NormalLoadStudy``: the 20-load optimal-normal-load study of the tip damper (mid-span
   force and amplitude, 30–250 Hz, H = 7) on 2 worker processes.
+* ``TwoMassDamper``: the whole FRF (0.5–2 f₁, H = 15) of a 2-mass chain (1 kg each, springs
+  of 10⁴ N/m to ground and between them, 1 % modal damping, 10 N on mass 1) whose mass 2 is
+  joined by k_t = 10⁴ N/m to a massless Coulomb slider, μN = 5 N
+  (``with_friction(..., tangential_stiffness=)``): MMS-HBM against the Jenkins baseline on
+  the same physical spring; ``track_ms_per_point`` the time per FRF point.
+* ``NLvibFrictionBeam``: NLvib's example-08 beam (2 m, 0.1 × 0.3 m, 185 GPa, 7830 kg/m³, 8
+  elements; 0.2 N at the tip, C = βK with 1 % at the first stuck mode), μN = 1.5 N at node 4
+  behind k_t = 1e7 or 1e9 N/m, or rigid at node 4 made massless; the whole FRF 0.9 ω_free …
+  1.5 ω_stuck at H = 13, with its Newton iterations per point.
+* ``ImpactFriction``: impact with friction on 4 DOFs (two masses driving a node's normal and
+  tangential DOFs; gap 0.05 m, μ = 0.3, preload 0.05 N), the FRF 0.1–0.3 Hz at H = 7.
 """
 
 from __future__ import annotations
@@ -156,3 +167,133 @@ class NormalLoadStudy:
         import mmshbm
 
         mmshbm.normal_load_study(_study_model, self.loads, self.force, (30, 250), harmonics=7, workers=2)
+
+
+@functools.cache
+def two_mass_damper():
+    import mmshbm
+
+    M = np.diag([1.0, 1.0])
+    K = np.array([[2e4, -1e4], [-1e4, 1e4]])
+    base = mmshbm.Model.from_matrices(M, K, [], [], [], amplitude_dof=1).with_damping(modal_ratio=0.01)
+    return base.with_friction(1, 0.5, normal_load=10.0, tangential_stiffness=1e4)
+
+
+DAMPER_FORCE = [10.0, 0.0, 0.0]
+
+
+class TwoMassDamper:
+    """The 2-mass friction damper's whole FRF at H = 15, MMS-HBM and the Jenkins baseline."""
+
+    params = [("mmshbm", "penalty")]
+    param_names = ["method"]
+    number = 1
+    repeat = (3, 10, 60.0)
+    warmup_time = 0.0
+    timeout = 300
+
+    def setup(self, method):
+        model = two_mass_damper()
+        f1 = float(model.linear_frequencies(1)[0])
+        self.band = (0.5 * f1, 2.0 * f1)
+        self.run(method)  # kernels compiled or loaded outside the samples
+
+    def run(self, method):
+        import mmshbm
+
+        return mmshbm.frequency_response(two_mass_damper(), DAMPER_FORCE, self.band, harmonics=15,
+                                         method=method)
+
+    def time_frf(self, method):
+        self.run(method)
+
+    def track_ms_per_point(self, method):
+        import time
+
+        t0 = time.perf_counter()
+        r = self.run(method)
+        return 1e3 * (time.perf_counter() - t0) / len(r.frequency)
+
+    track_ms_per_point.unit = "ms"
+
+
+@functools.cache
+def nlvib_friction_beam(kind: str):
+    """NLvib's example-08 beam with Coulomb at node 4: ``kind`` "1e7" / "1e9" (a slider behind
+    that k_t, N/m) or "rigid" (node 4's translational mass and damping removed, the friction
+    on it). Returns (model, force, band in Hz)."""
+    import scipy.linalg as la
+
+    import mmshbm
+    from mmshbm.fe.euler_bernoulli import cantilever
+
+    M, K, dofs = cantilever(2.0, 0.3, 0.1, 185e9, 7830.0, 8)
+    Md, Kd = M.toarray(), K.toarray()
+    node4, tip = int(dofs[3, 0]), int(dofs[-1, 0])
+    keep = [i for i in range(len(Md)) if i != node4]
+    w_free = np.sqrt(la.eigh(Kd, Md, eigvals_only=True)[0])
+    w_stuck = np.sqrt(la.eigh(Kd[np.ix_(keep, keep)], Md[np.ix_(keep, keep)], eigvals_only=True)[0])
+    C = (2e-2 / w_stuck) * Kd
+    if kind == "rigid":
+        for A in (Md, C):
+            A[node4, :] = 0.0
+            A[:, node4] = 0.0
+        model = mmshbm.Model.from_matrices(Md, Kd, [], [], [], damping=C, amplitude_dof=tip)
+        model = model.with_friction(node4, 1.0, normal_load=1.5)
+    else:
+        model = mmshbm.Model.from_matrices(M, K, [], [], [], damping=C, amplitude_dof=tip)
+        model = model.with_friction(node4, 1.0, normal_load=1.5, tangential_stiffness=float(kind))
+    force = np.zeros(model.n_dof)
+    force[tip] = 0.2
+    return model, force, (0.9 * w_free / (2 * np.pi), 1.5 * w_stuck / (2 * np.pi))
+
+
+class NLvibFrictionBeam:
+    """The whole ex08-like FRF at H = 13 by MMS-HBM."""
+
+    params = [("1e7", "1e9", "rigid")]
+    param_names = ["tangential_stiffness"]
+    number = 1
+    repeat = (3, 10, 60.0)
+    warmup_time = 0.0
+    timeout = 300
+
+    def setup(self, kind):
+        self.run(kind)
+
+    def run(self, kind):
+        import mmshbm
+
+        model, force, band = nlvib_friction_beam(kind)
+        return mmshbm.frequency_response(model, force, band, harmonics=13)
+
+    def time_frf(self, kind):
+        self.run(kind)
+
+    def track_newton_per_point(self, kind):
+        return float(self.run(kind).newton_iterations.mean())
+
+
+class ImpactFriction:
+    """Impact with friction on 4 DOFs, the FRF 0.1–0.3 Hz at H = 7."""
+
+    number = 1
+    repeat = (3, 10, 60.0)
+    warmup_time = 0.0
+    timeout = 300
+
+    def setup(self):
+        self.run()
+
+    def run(self):
+        import mmshbm
+
+        M = np.diag([1.0, 1.0, 0.0, 0.0])
+        K = np.array([[5.5, -0.5, -4, 0], [-0.5, 3.5, 0, -2], [-4, 0, 4, 0], [0, -2, 0, 2]], float)
+        base = mmshbm.Model.from_matrices(M, K, [2], [0.05], [+1], damping=np.diag([0.05, 0.05, 0.0, 0.0]),
+                                          amplitude_dof=0)
+        model = base.with_friction(3, 0.3, normal_contact=0, preload=0.05)
+        return mmshbm.frequency_response(model, [0.1, 0.1, 0.0, 0.0], (0.1, 0.3), harmonics=7)
+
+    def time_frf(self):
+        self.run()

@@ -79,6 +79,12 @@ def _ev(c, sn, t):
     return c @ np.cos(k * t) + sn @ np.sin(k * t)
 
 
+def _ev_many(c, sn, t):
+    """(c, sn) evaluated at every τ of ``t`` (n,)."""
+    kt = np.outer(np.asarray(t, dtype=float), np.arange(c.shape[0]))
+    return np.cos(kt) @ c + np.sin(kt) @ sn
+
+
 class _Bands:
     """α, β, y, z as trigonometric polynomials, the band's formulas per normal arc."""
 
@@ -103,6 +109,9 @@ class _Bands:
 
     def closed_at(self, t):
         return _ev(self.zc, self.zs, t) > self.gap
+
+    def closed_many(self, t):
+        return _ev_many(self.zc, self.zs, t) > self.gap
 
 
 def coupled_play_pieces(y, z, w0: float, kappa: float, gap: float, n_samples: int | None = None):
@@ -142,7 +151,7 @@ def coupled_play_pieces(y, z, w0: float, kappa: float, gap: float, n_samples: in
         for which in ((-1, 1) if closed else (-1,)):
             ext = _all_zeros(*_deriv(*bd.coeffs(which, closed)), tables)
             if len(switches) and len(ext):
-                ext = ext[np.array([bd.closed_at(t) == closed for t in ext], dtype=bool)]
+                ext = ext[bd.closed_many(ext) == closed]
             pts.append(ext)
             kinds.append(np.full(len(ext), 0 if which == -1 else 1))
     pts = np.concatenate(pts)
@@ -152,10 +161,10 @@ def coupled_play_pieces(y, z, w0: float, kappa: float, gap: float, n_samples: in
     if len(pts) == 0:  # y constant on an always open or always closed contact
         return [(0.0, _TWO_PI, 0, float(y[0]), np.nan, 0.0, bool(bd.closed_at(0.0)))]
     mids = 0.5 * (pts + np.roll(pts, -1) + np.where(np.arange(len(pts)) == len(pts) - 1, _TWO_PI, 0.0))
-    seg_closed = np.array([bd.closed_at(t % _TWO_PI) for t in mids])   # segment i: [pts[i], pts[i+1]]
+    seg_closed = bd.closed_many(mids % _TWO_PI)   # segment i: [pts[i], pts[i+1]]
     # α and β at every breakpoint (the band is continuous: the arc after it)
-    alpha = np.array([bd.value(-1, seg_closed[i], pts[i]) for i in range(len(pts))])
-    beta = np.array([bd.value(1, seg_closed[i], pts[i]) for i in range(len(pts))])
+    alpha = np.where(seg_closed, _ev_many(*bd.coeffs(-1, True), pts), _ev_many(*bd.coeffs(-1, False), pts))
+    beta = np.where(seg_closed, _ev_many(*bd.coeffs(1, True), pts), _ev_many(*bd.coeffs(1, False), pts))
     i_a, i_b = int(np.argmax(alpha)), int(np.argmin(beta))
 
     def kappa_at(i, sigma):
@@ -179,16 +188,22 @@ def coupled_play_pieces(y, z, w0: float, kappa: float, gap: float, n_samples: in
     start = pts[i_a]
     P = [pts[i] + (_TWO_PI if pts[i] < start else 0.0) for i in idx] + [start + _TWO_PI]
     out = []
+    # α and β of both arc kinds at every point of the walk, evaluated at once
+    band = {}
+    for which in (-1, 1):
+        for closed in (False, True):
+            cs = bd.coeffs(which, closed)
+            band[(which, closed)] = (cs, _ev_many(*cs, P))
     mode, u, t_e, k_e = 1, float(alpha[i_a]), float(start), kappa_at(i_a, 1)
     for m in range(n):
         i = idx[m]
         a, b, closed = P[m], P[m + 1], bool(seg_closed[i])
         if b <= a:
             continue
-        al_c, al_s = bd.coeffs(-1, closed)
-        be_c, be_s = bd.coeffs(1, closed)
-        al_a, al_b = _ev(al_c, al_s, a), _ev(al_c, al_s, b)
-        be_a, be_b = _ev(be_c, be_s, a), _ev(be_c, be_s, b)
+        (al_c, al_s), al_v = band[(-1, closed)]
+        (be_c, be_s), be_v = band[(1, closed)]
+        al_a, al_b = al_v[m], al_v[m + 1]
+        be_a, be_b = be_v[m], be_v[m + 1]
         if mode == 1 and not al_b > al_a:
             mode, u, t_e, k_e = 0, float(al_a), a, kappa_at(i, 1)
         elif mode == -1 and not be_b < be_a:

@@ -24,7 +24,8 @@ import numpy as np
 
 from .. import _validate as check
 
-__all__ = ["FrictionContact", "with_friction", "add_friction", "friction_contact", "friction_args",
+__all__ = ["FrictionContact", "with_friction", "add_friction", "saved_friction", "friction_contact",
+           "friction_args",
            "friction_to_json",
            "friction_from_json", "no_contacts"]
 
@@ -63,14 +64,16 @@ class FrictionContact:
         return self.mu * self.normal_load
 
 
-def with_friction(model, dof, mu, normal_load=None, normal_contact=None, preload=None):
-    """``model`` with Coulomb friction on the massless DOF ``dof`` added (a new Model; the
-    call recorded in ``description["transforms"]``).
+def with_friction(model, dof, mu, normal_load=None, normal_contact=None, preload=None,
+                  tangential_stiffness=None):
+    """``model`` with Coulomb friction added (a new Model; the call recorded in
+    ``description["transforms"]``).
 
     Parameters
     ----------
     dof : int
-        A massless DOF (the tangential displacement of a contact node).
+        The tangential displacement of a contact node. Without ``tangential_stiffness`` it
+        must be massless (the friction acts on it, rigid Coulomb); with it, any DOF.
     mu : float
         Friction coefficient >= 0.
     normal_load : float, optional
@@ -78,23 +81,75 @@ def with_friction(model, dof, mu, normal_load=None, normal_contact=None, preload
     normal_contact : int, optional
         Index of the unilateral contact whose force λ_j(t) (plus ``preload``, N) is the
         normal force. Exactly one of ``normal_load`` and ``normal_contact``.
+    tangential_stiffness : float, optional
+        k_t > 0 (N/m, finite): a massless slider node is appended (DOF ``n_dof``), joined to
+        ``dof`` by a spring k_t, and the friction acts on the slider (a Jenkins element: the
+        spring is the contact's tangential compliance). None (default): no spring, the
+        friction on ``dof`` itself, which must then be massless.
 
     Raises
     ------
     ValueError, TypeError
-        Naming the offending input (:func:`friction_contact`).
+        Naming the offending input (:func:`friction_contact`); a ``dof`` with mass without
+        ``tangential_stiffness``.
     """
     from dataclasses import replace
 
     args = {"dof": dof, "mu": mu}
     given = {"normal_load": normal_load, "normal_contact": normal_contact, "preload": preload}
     args.update({k: v for k, v in given.items() if v is not None})
-    out = add_friction(model, [args])
+    step = {"name": "with_friction"}
+    if tangential_stiffness is None:
+        out = add_friction(model, [args])
+    else:
+        k_t = check.positive("tangential_stiffness", tangential_stiffness)
+        d = check.integer("dof", dof)
+        if not 0 <= d < model.n_dof:
+            raise ValueError(f"dof must be in [0, {model.n_dof - 1}], got {d}")
+        slider_model, slider = with_slider(model, d, k_t)
+        out = add_friction(slider_model, [dict(args, dof=slider)])
+        args["tangential_stiffness"] = k_t
+        step["slider"] = slider  # where the friction acts: the models saved with their matrices
     description = dict(model.description)
-    description["transforms"] = list(description.get("transforms", [])) + [
-        {"name": "with_friction", "args": {k: (v.item() if isinstance(v, np.generic) else v)
-                                           for k, v in args.items()}}]
+    step["args"] = {k: (v.item() if isinstance(v, np.generic) else v) for k, v in args.items()}
+    description["transforms"] = list(description.get("transforms", [])) + [step]
     return replace(out, description=description)
+
+
+def with_slider(model, dof: int, stiffness: float):
+    """The model with a new massless DOF (the last, index ``n_dof``) joined to ``dof`` by a
+    spring of ``stiffness`` (N/m): K' = [[K + k e_d e_dᵀ, −k e_d], [−k e_dᵀ, k]], M and the
+    damping padded with zeros; contacts, friction contacts and the amplitude DOF kept (the
+    amplitude DOF defaults to ``dof`` when the model has no contact and names none).
+    Nothing recorded in the description. Returns (Model, index of the new DOF)."""
+    import scipy.sparse as sp
+
+    n = model.n_dof
+    k = float(stiffness)
+    K = sp.block_diag([model.K, sp.csr_matrix((1, 1))], format="csr") + \
+        sp.csr_matrix(([k, -k, -k, k], ([dof, dof, n, n], [dof, n, dof, n])), shape=(n + 1, n + 1))
+    M = sp.block_diag([model.M, sp.csr_matrix((1, 1))], format="csr")
+    C = None if model.damping is None else sp.block_diag([model.damping, sp.csr_matrix((1, 1))], format="csr")
+    amplitude_dof = model._amplitude_dof
+    if amplitude_dof is None and not model.contacts:
+        amplitude_dof = int(dof)
+    dofs, gaps, sides = ([c.dof for c in model.contacts], [c.gap for c in model.contacts],
+                         [c.side for c in model.contacts])
+    if len(dofs) == 1:
+        dofs, gaps, sides = dofs[0], gaps[0], sides[0]
+    new = type(model).from_matrices(M, K, dofs, gaps, sides, dict(model.description), damping=C,
+                                    amplitude_dof=amplitude_dof)
+    return add_friction(new, [friction_args(fc) for fc in model.friction]), n
+
+
+def saved_friction(step: dict) -> dict:
+    """The :func:`friction_contact` arguments of a recorded ``with_friction`` step applied to
+    the matrices it produced (a slider's friction acts on the slider, ``step["slider"]``)."""
+    kw = dict(step.get("args", {}))
+    if "tangential_stiffness" in kw:
+        kw.pop("tangential_stiffness")
+        kw["dof"] = step["slider"]
+    return kw
 
 
 def add_friction(model, entries):
@@ -123,9 +178,10 @@ def friction_contact(model, dof, mu, normal_load=None, normal_contact=None, prel
         raise ValueError(f"dof must be in [0, {model.n_dof - 1}], got {dof}")
     if dof not in set(model.c.tolist()):
         raise ValueError(
-            f"dof {dof} carries mass, but Coulomb friction needs a massless DOF (its equation is static): "
-            "join a massless slider node to it by a tangential spring (a Jenkins element, the spring "
-            "physical) or remove its mass (model.with_massless_contact([...]))")
+            f"dof {dof} carries mass, but rigid Coulomb friction needs a massless DOF (its equation is "
+            "static): give the contact's tangential stiffness, model.with_friction(dof, mu, ..., "
+            "tangential_stiffness=k_t), which joins a massless slider to it by that spring (a Jenkins "
+            "element), or remove its mass (model.with_massless_contact([...]))")
     if any(fc.dof == dof for fc in model.friction):
         raise ValueError(f"dof {dof} already carries a friction contact: one per DOF")
     if any(ct.dof == dof for ct in model.contacts):

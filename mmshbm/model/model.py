@@ -228,14 +228,18 @@ class Model(StopsMixin, PartitionMixin, ModesMixin):
         return replace(self, damping=C, description=description)
 
     def with_friction(self, dof: int, mu: float, *, normal_load: float | None = None,
-                      normal_contact: int | None = None, preload: float | None = None) -> Model:
-        """The same model with Coulomb friction (coefficient ``mu``) on the massless DOF
-        ``dof``, pressed by a constant ``normal_load`` (N) or by unilateral contact
-        ``normal_contact`` (plus ``preload``); several calls add several. See
-        :func:`mmshbm.model.friction.with_friction` (ValueError naming bad input)."""
+                      normal_contact: int | None = None, preload: float | None = None,
+                      tangential_stiffness: float | None = None) -> Model:
+        """The same model with Coulomb friction (coefficient ``mu``) at ``dof``, pressed by a
+        constant ``normal_load`` (N) or by unilateral contact ``normal_contact`` (plus
+        ``preload``); several calls add several. With ``tangential_stiffness`` k_t (N/m) a
+        massless slider (the new last DOF) is joined to ``dof`` by k_t and carries the
+        friction (a Jenkins element: ``dof`` may carry mass); without it ``dof`` must be
+        massless (rigid Coulomb). See :func:`mmshbm.model.friction.with_friction`
+        (ValueError naming bad input)."""
         from .friction import with_friction
 
-        return with_friction(self, dof, mu, normal_load, normal_contact, preload)
+        return with_friction(self, dof, mu, normal_load, normal_contact, preload, tangential_stiffness)
 
     def with_amplitude_dof(self, dof: int) -> Model:
         """The same model with its amplitude measured at ``dof``."""

@@ -96,6 +96,11 @@ def with_contact_layer(model, stiffness=None):
         A non-positive, non-finite or non-numeric stiffness, the wrong number of them, or a
         contact DOF that is already massless.
     """
+    if not model.contacts:
+        what = (f"friction on DOFs {[fc.dof for fc in model.friction]}" if model.friction else "no contact")
+        raise ValueError(f"the model has no unilateral contact ({what}): a contact layer joins a massless "
+                         "node to each stop's DOF. For friction at a DOF with mass, add the friction with "
+                         "its slider: model.with_friction(dof, mu, normal_load=N, tangential_stiffness=k_t)")
     massless = set(model.c.tolist())
     already = sorted({c.dof for c in model.contacts if c.dof in massless})
     if already:

@@ -97,10 +97,11 @@ def _model_from_arrays(arrays: dict, info: dict):
         dofs, gaps, sides = int(info["contact_dof"]), float(info["gap"]), int(info["stop_side"])
     model = Model.from_matrices(mats["M"], mats["K"], dofs, gaps, sides, dict(info.get("description", {})),
                                 damping=mats.get("C"), amplitude_dof=info.get("amplitude_dof"))
-    friction = [dict(step.get("args", {})) for step in model.description.get("transforms", [])
+    from ..model.friction import add_friction, saved_friction
+
+    friction = [saved_friction(step) for step in model.description.get("transforms", [])
                 if step.get("name") == "with_friction"]
     if friction:  # recorded by Model.with_friction; added here without recording them again
-        from ..model.friction import add_friction
 
         model = add_friction(model, friction)
     return model

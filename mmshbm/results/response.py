@@ -23,6 +23,11 @@ from .base import FORMAT_VERSION, ResultBase, SolverSlot, entry_point
 
 __all__ = ["FrequencyResponse", "FORMAT_VERSION"]
 
+
+def _rms(q: np.ndarray) -> float:
+    """Root mean square of one period of uniform samples."""
+    return float(np.sqrt(np.mean(q * q)))
+
 RESPONSE_FORMAT = "mmshbm.FrequencyResponse"
 #: per-point arrays, in file order
 ARRAY_FIELDS = ("frequency", "amplitude", "phase", "energy", "contact_force_max", "stable", "floquet_max",
@@ -99,6 +104,65 @@ class FrequencyResponse(ResultBase):
         """(frequency (Hz), amplitude (m)) of the largest amplitude on the response."""
         i = int(np.argmax(self.amplitude))
         return float(self.frequency[i]), float(self.amplitude[i])
+
+    # ------------------------------------------------------------------ measures per DOF
+    @property
+    def angular_frequency(self) -> np.ndarray:
+        """Excitation frequency Ω = 2π f (rad/s), shape (n_points,)."""
+        return 2 * np.pi * np.asarray(self.frequency, dtype=float)
+
+    def rms(self, dof: int | None = None) -> np.ndarray:
+        """Root mean square over the period of DOF ``dof`` (default the amplitude DOF; m or
+        rad), shape (n_points,): sqrt(c_0² + ½ Σ_k (a_k² + b_k²)) of its series (the sample
+        mean of q² over more than 2H uniform samples is exact for degree H; shooting: its
+        samples)."""
+        return np.array([_rms(q) for q in self._signals(dof)])
+
+    def peak_amplitude(self, dof: int | None = None) -> np.ndarray:
+        """Largest |q(t)| over the period of DOF ``dof`` (default the amplitude DOF; m or
+        rad), refined by a parabola through the sampled peak, shape (n_points,). For the
+        amplitude DOF of a model with friction or several contacts this is ``amplitude``."""
+        from ..core.measures import refined_max
+
+        return np.array([max(refined_max(q), refined_max(-q)) for q in self._signals(dof)])
+
+    def phase_of(self, dof: int | None = None) -> np.ndarray:
+        """Lag (rad) of the fundamental harmonic of DOF ``dof`` (default the amplitude DOF)
+        behind the excitation, in [−π/2, 3π/2) (π/2 at phase resonance), shape (n_points,)."""
+        ref = self._excitation_reference()
+        out = np.empty(len(self))
+        for i, q in enumerate(self._signals(dof)):
+            n = len(q)
+            q1 = 2.0 / n * np.sum(q * np.exp(-2j * np.pi * np.arange(n) / n))  # a_1 − i b_1
+            lag = np.angle(ref) - np.angle(q1)
+            out[i] = (lag + 0.5 * np.pi) % (2 * np.pi) - 0.5 * np.pi
+        return out
+
+    def _signals(self, dof: int | None) -> list:
+        """One period of DOF ``dof`` per point (samples at τ_j = 2πj/n), from the solver."""
+        from ..core.measures import check_dof
+
+        solver = self._require_solver()
+        model = solver.model
+        dof = check_dof(dof, model.n_dof, model.amplitude_dof)
+        H = self.harmonics
+        n = None if H == 0 else max(256, 2 ** int(np.ceil(np.log2(8 * (2 * H + 1)))))
+        out = []
+        for u in self.states:
+            _, q = solver.time_signals(u, [dof]) if n is None else solver.time_signals(u, [dof], n)
+            out.append(np.asarray(q[0], dtype=float))
+        return out
+
+    def _excitation_reference(self) -> complex:
+        solver = self._require_solver()
+        exc = getattr(solver, "excitation", None)
+        if exc is not None:
+            return complex(exc.reference)
+        try:  # the excitation's JSON record (Excitation.to_json)
+            re_, im_ = self.metadata["excitation"]["reference"]
+        except (KeyError, TypeError, ValueError) as err:
+            raise RuntimeError(f"this response records no excitation phase reference: {err}") from None
+        return complex(float(re_), float(im_))
 
     # ------------------------------------------------------------------ solver
     def _build_solver(self, model, options: dict):

@@ -58,8 +58,11 @@ from __future__ import annotations
 import numpy as np
 
 from ...contact.coulomb import derivative_matrix, project_coulomb, project_coulomb_play
+from ...core.damped_condense import DENSE_LIMIT
 from ...model.model import Model
+from .corrector import at_roundoff, backtrack, corrector_to_roundoff
 from .forced import ForcedResponseProblem
+from .friction_tracked import TrackedHarmonic
 
 __all__ = ["FrictionRows", "FrictionForcedProblem", "check_friction_model", "check_law"]
 
@@ -274,6 +277,9 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         # harmonic 1 of the amplitude DOF (when it carries mass) as two more unknowns
         hit = np.flatnonzero(model.l == self.amplitude_dof)
         self._track = int(hit[0]) if len(hit) else None
+        self._tracker = None
+        if self._track is not None and self.cond.n_l <= DENSE_LIMIT:
+            self._tracker = TrackedHarmonic(model.blocks, self._track, self.force_l)
         if self._track is not None:
             self.colscale = np.concatenate([self.xscale, [self.length, self.length, self.omega_ref]])
             self.n_unknowns = self.n_x + 3
@@ -295,37 +301,49 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         ab = self._tracked(np.asarray(x, dtype=float), omega)[0]
         return np.concatenate([x, ab, [omega]]) / self.colscale
 
-    def _tracked(self, x: np.ndarray, omega: float):
-        """(cos, sin) of harmonic 1 of the amplitude DOF (m) and ∂/∂x (2, n_x).
+    def _tracked(self, x: np.ndarray, omega: float, derivative: bool = False):
+        """(cos, sin) of harmonic 1 of the amplitude DOF (m), ∂/∂x (2, n_x) and, with
+        ``derivative``, ∂/∂Ω (2,) (else None).
 
-        Q̂ = −z·Û_1 + σ Y_1, z the amplitude DOF's row of Z_1 = S_1⁻¹K_lc."""
-        ch = self._condensed(omega, recover=True)
-        s, _ = self.excitation.scale(omega)
-        z = ch.Z[1][self._track]
+        Q̂ = −z·Û_1 + σ y, z the amplitude DOF's row of Z_1 = S_1⁻¹K_lc, y its row of
+        S_1⁻¹F̂_l (:class:`~mmshbm.methods.mms.friction_tracked.TrackedHarmonic`, exact
+        derivatives; above DENSE_LIMIT DOFs with mass from the condensation's recovery and
+        central differences in Ω, step 1e-6 Ω)."""
+        s, ds = self.excitation.scale(omega)
+        if self._tracker is not None:
+            z, y, dz, dy = self._tracker.at(omega, derivative)
+        else:
+            ch = self._condensed(omega, recover=True)
+            z, y, dz, dy = ch.Z[1][self._track], ch.Y[self._track, 0], None, None
         n_c = self.n_c
         Uc, Us = x[n_c:2 * n_c], x[2 * n_c:3 * n_c]
-        q = -z @ (Uc - 1j * Us) + s * ch.Y[self._track, 0]
+        U = Uc - 1j * Us
+        q = -z @ U + s * y
         dx = np.zeros((2, self.n_x))
         dx[0, n_c:2 * n_c], dx[0, 2 * n_c:3 * n_c] = -z.real, -z.imag
         dx[1, n_c:2 * n_c], dx[1, 2 * n_c:3 * n_c] = z.imag, -z.real
-        return np.array([q.real, -q.imag]), dx
+        dw = None
+        if derivative and dz is not None:
+            dq = -dz @ U + ds * y + s * dy
+            dw = np.array([dq.real, -dq.imag])
+        elif derivative:
+            h = 1e-6 * omega
+            dw = (self._tracked(x, omega + h)[0] - self._tracked(x, omega - h)[0]) / (2 * h)
+            self._condensed(omega, 0.0, True, recover=True)  # back to Ω in the cache
+        return np.array([q.real, -q.imag]), dx, dw
 
     def _evaluate(self, u: np.ndarray, jacobian: bool):
         """Scaled residual and, if asked, its Jacobian; with the amplitude DOF tracked, two
-        more rows (its harmonic-1 unknowns equal their recovery from x; the Ω column of
-        these rows by central differences of the recovery, step 1e-6 Ω)."""
+        more rows (its harmonic-1 unknowns equal their recovery from x, :meth:`_tracked`)."""
         if self._track is None:
             return super()._evaluate(u, jacobian)
         x, omega = self.unpack(u)
         ab = np.asarray(u[self.n_x:self.n_x + 2], dtype=float) * self.length
         R_x, Jx, Jw, _ = self.residual_parts(x, omega, 1.0, jacobian)
-        rec, drec = self._tracked(x, omega)
+        rec, drec, dw = self._tracked(x, omega, jacobian)
         R = np.concatenate([R_x / self.rowscale, (ab - rec) / self.length])
         if not jacobian:
             return R
-        h = 1e-6 * omega
-        dw = (self._tracked(x, omega + h)[0] - self._tracked(x, omega - h)[0]) / (2 * h)
-        self._condensed(omega, 0.0, True, recover=True)  # back to Ω in the cache
         J = np.zeros((self.n_x + 2, self.n_unknowns))
         J[:self.n_x, :self.n_x] = Jx * self.xscale[None, :] / self.rowscale[:, None]
         J[:self.n_x, -1] = Jw * self.omega_ref / self.rowscale
@@ -363,9 +381,12 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
 
     def solve_at(self, frequency: float, guess: np.ndarray, max_iter: int = 50, tol: float = 1e-11):
         """Newton at fixed Ω from the scaled ``guess``, with a backtracking line search on
-        max|R/rowscale|: (scaled unknowns, converged)."""
+        max|R/rowscale|: (scaled unknowns, converged). Converged: the scaled residual is
+        <= ``tol`` and Newton has reached the solve's round-off
+        (:func:`~mmshbm.methods.mms.corrector.at_roundoff`)."""
         x, omega = self.unpack(guess)
         omega = 2 * np.pi * frequency
+        xs = self.xscale
 
         def merit(x):
             R = self.residual_parts(x, omega, 1.0, False)[0]
@@ -375,61 +396,31 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         for _ in range(max_iter):
             if not np.isfinite(r):
                 return guess, False
-            if r < tol:
-                return self.pack(x, omega), True
             _, Jx, _, _ = self.residual_parts(x, omega, 1.0, True)
             try:
                 dx = np.linalg.solve(Jx, -R)
             except np.linalg.LinAlgError:
                 dx = np.linalg.lstsq(Jx, -R, rcond=None)[0]
-            x, r, R, ok = _backtrack(merit, x, dx, r)
+            if r <= tol:
+                done, x, r, R = at_roundoff(merit, x, dx, r, R, xs)
+                if done:
+                    return self.pack(x, omega), True
+                continue
+            x, r, R, ok = backtrack(merit, x, dx, r)
             if not ok:
                 return self.pack(x, omega), False
-        return self.pack(x, omega), r < tol
+        return self.pack(x, omega), r <= tol
 
     def fast_newton(self, u, u_pred, tangent, tol, max_iter, step_tol):
         """The continuation's corrector on [R(u); t·(u − u_pred)] = 0, globalised: each Newton
         step is halved until the merit max(|R|, |t·(u − u_pred)|) (scaled) decreases. The
         friction rows are semismooth, and where a node sticks only briefly (a stiff node,
-        slip over > 99 % of the period) plain Newton cycles. Converged: residual <= ``tol``
-        and a Newton step <= ``step_tol`` (or one that no longer lowers the merit). Returns
-        (u, iterations, residual history, Jacobian at u); raises RuntimeError when it does
-        not converge."""
-        from ...core.bordered import bordered_solve
-
-        def merit(u):
-            R = self.residual(u)
-            return max(float(np.abs(R).max()), abs(float(tangent @ (u - u_pred)))), R
-
-        r, _ = merit(u)
-        history = [r]
-        for it in range(max_iter + 1):
-            if not np.isfinite(r):
-                raise RuntimeError("non-finite residual")
-            R, J = self.residual_and_jacobian(u)
-            if it == max_iter and r > tol:
-                break
-            du = -bordered_solve(J, tangent, np.append(R, tangent @ (u - u_pred)))
-            if not np.all(np.isfinite(du)):
-                raise RuntimeError("singular Jacobian")
-            step = float(np.abs(du).max())
-            # the residual alone does not bound the error where the friction rows are weak
-            # (a stiff node that sticks briefly: condition numbers of 1e7 and more, a point
-            # at |R| = 1e-10 measured 2.5e-5 off the branch, and every later corrector had
-            # to move that far, out of the predictor cone): converged means a small
-            # residual and a small Newton step, or a step that no longer lowers the merit
-            if r <= tol and (step <= step_tol or it == max_iter):
-                return u, it, np.array(history), J
-            if float(np.abs(du).max()) <= step_tol and r <= np.sqrt(tol):
-                return u, it, np.array(history), J
-            u_new, r_new, _, ok = _backtrack(merit, u, du, r)
-            if not ok:
-                if r <= tol:
-                    return u, it, np.array(history), J
-                break
-            u, r = u_new, r_new
-            history.append(r)
-        raise RuntimeError(f"no convergence in {max_iter} iterations (residual {history[-1]:.2e})")
+        slip over > 99 % of the period) plain Newton cycles. Stopped at the solve's round-off
+        (:func:`~mmshbm.methods.mms.corrector.corrector_to_roundoff`: the residual alone does
+        not bound the error where the friction rows are weak, condition numbers of 1e7 and
+        more). Returns (u, iterations, residual history, Jacobian); raises RuntimeError when
+        it does not converge."""
+        return corrector_to_roundoff(self, u, u_pred, tangent, tol, max_iter, step_tol)
 
     def start_point(self, frequency: float, max_iter: int = 50, tol: float = 1e-11) -> np.ndarray:
         """Converged unknowns at ``frequency`` (Hz) by Newton from the free-slip, then the
@@ -481,16 +472,3 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         rec = super()._record(x, omega, sigma)
         rec.update(self.friction_records(x, omega, sigma))
         return rec
-
-
-def _backtrack(merit, x: np.ndarray, dx: np.ndarray, r: float, min_step: float = 1.0 / 4096):
-    """x + λ dx with λ = 1, 1/2, ... down to ``min_step``: the first with merit below
-    (1 − 1e-4 λ) r. Returns (x, merit, residual, decreased)."""
-    lam = 1.0
-    while True:
-        r_new, R_new = merit(x + lam * dx)
-        if r_new < (1 - 1e-4 * lam) * r:
-            return x + lam * dx, r_new, R_new, True
-        if lam <= min_step:
-            return x, r, merit(x)[1], False
-        lam *= 0.5

@@ -13,14 +13,18 @@ per period with the hysteresis made periodic by two passes
 f_t the force the element exerts on its support (the structure receives −f_t), as in
 :mod:`mmshbm.contact.coulomb`. Two uses:
 
-* ``tangential_stiffness=k`` (default 10³ ρ, ρ = 1/(K⁻¹)_tt the static stiffness at the
-  friction DOF): the spring is a penalty on a rigid Coulomb contact at the friction DOF; the
-  law is regularised and the orbit tends to the rigid contact's as k_t → ∞, with an error
-  of order ρ/k_t (plus the sampling error of the switch instants, O(1/N)).
+* ``tangential_stiffness=k``: the spring is a penalty on a rigid Coulomb contact at the
+  friction DOF; the law is regularised and the orbit tends to the rigid contact's as
+  k_t → ∞, with an error of order ρ/k_t (ρ = 1/(K⁻¹)_tt the static stiffness at the
+  friction DOF; plus the sampling error of the switch instants, O(1/N)).
 * ``tangential_stiffness="physical"``: the friction DOF is a massless node joined by one
-  spring k to one other DOF (a Jenkins element of the model itself): the node is removed
-  and the Jenkins element (k, s) acts on that DOF. The law is then the model's own, and
-  the only errors are the truncation to H and the AFT sampling.
+  spring k to one other DOF (a Jenkins element of the model itself, as
+  ``Model.with_friction(..., tangential_stiffness=k)`` builds it): the node is removed and
+  the Jenkins element (k, s) acts on that DOF. The law is then the model's own, and the
+  only errors are the truncation to H and the AFT sampling.
+* default (None): ``"physical"`` where every friction node is joined so; otherwise the
+  penalty 10³ ρ at every friction DOF, with a :class:`~mmshbm.ModelWarning` saying which
+  spring it adds (``tangential_origin`` records which).
 """
 
 from __future__ import annotations
@@ -57,6 +61,30 @@ def _physical(model: Model, dof: int) -> tuple[int, float]:
     return int(others[0]), float(k)
 
 
+def _all_physical(model: Model) -> bool:
+    """True when every friction DOF is a massless node joined by one spring to one DOF."""
+    try:
+        for fc in model.friction:
+            _physical(model, fc.dof)
+    except ValueError:
+        return False
+    return True
+
+
+def _warn_penalty(dofs, kt) -> None:
+    import warnings
+
+    from ..._warnings import ModelWarning
+
+    springs = ", ".join(f"{k:.4g} N/m at DOF {d}" for d, k in zip(dofs, kt, strict=True))
+    warnings.warn(f'method="penalty" adds a tangential penalty spring in series with each friction contact '
+                  f"({springs}: {DEFAULT_TANGENTIAL_FACTOR:g} times the static stiffness there), as the "
+                  "model has no spring of its own joining a massless slider: the orbit tends to rigid "
+                  "Coulomb's as the spring stiffens (error ~ 1e-3); pass tangential_stiffness=k_t to "
+                  "choose it",
+                  ModelWarning, stacklevel=4)
+
+
 class JenkinsForcedProblem(PenaltyForcedProblem):
     """Penalty HBM with Jenkins elements by AFT, forced, as a continuation problem in (Q, Ω).
 
@@ -68,8 +96,9 @@ class JenkinsForcedProblem(PenaltyForcedProblem):
     harmonics : int
         H >= 1.
     tangential_stiffness : float or "physical", optional
-        k_t (N/m) of every Jenkins element, default 10³ ρ (module docstring); "physical":
-        the model's own spring joining each massless friction node to one DOF.
+        k_t (N/m) of every Jenkins element; "physical": the model's own spring joining each
+        massless friction node to one DOF; default "physical" where the model has those
+        springs, else 10³ ρ with a ModelWarning (module docstring).
     n_samples : int, optional
         AFT samples per period N (default 2^⌈log2(8(2H+1))⌉; the switches are located to
         one sample, so the error of a stick-slip orbit falls as 1/N).
@@ -102,6 +131,10 @@ class JenkinsForcedProblem(PenaltyForcedProblem):
         keep = np.arange(model.n_dof)
         force_vec = np.asarray(exc.vector)
         slip = np.array([fc.slip_force for fc in model.friction])
+        if tangential_stiffness is None:
+            tangential_stiffness = "physical" if _all_physical(model) else None
+        self.tangential_origin = ("physical" if isinstance(tangential_stiffness, str)
+                                  else "default penalty" if tangential_stiffness is None else "given")
         if isinstance(tangential_stiffness, str):
             if tangential_stiffness != "physical":
                 raise ValueError(f'tangential_stiffness must be a stiffness (N/m) or "physical", '
@@ -122,6 +155,7 @@ class JenkinsForcedProblem(PenaltyForcedProblem):
             rho = 1.0 / np.diag(flex)
             if tangential_stiffness is None:
                 kt = DEFAULT_TANGENTIAL_FACTOR * rho
+                _warn_penalty(dofs, kt)
             else:
                 kt = np.full(len(dofs), check.positive("tangential_stiffness", tangential_stiffness))
         K, M, C = (A[keep][:, keep].tocsr() for A in (K, M, C))
