@@ -1,5 +1,5 @@
-"""The README's and docs' benchmark tables come from one recorded asv run
-(mmshbm bench --from-asv): the numbers of the results file, in the right cells."""
+"""The benchmark tables of docs/validation.md and docs/benchmarks.md come from one recorded
+asv run (mmshbm bench --from-asv): the numbers of the results file, in the right cells."""
 
 import json
 import math
@@ -175,15 +175,16 @@ def test_rows_absent_when_not_recorded(tmp_path):
 
 
 def test_record_command_selects_what_the_tables_read():
-    """The ``--bench`` regex of the README's and the docs' record command selects the goal
-    and study suites and, besides, exactly the benchmarks the rows read (asv matches with
-    re.search, on ``name(params)`` for parameterized ones)."""
+    """The ``--bench`` regex of the record command in docs/validation.md and
+    docs/benchmarks.md selects the goal and study suites and, besides, exactly the
+    benchmarks the rows read (asv matches with re.search, on ``name(params)`` for
+    parameterized ones)."""
     import re
     from pathlib import Path
 
     root = Path(__file__).resolve().parents[1]
     regex = asv_tables.RECORD_BENCH
-    for doc in ("README.md", "docs/benchmarks.md"):
+    for doc in ("docs/validation.md", "docs/benchmarks.md"):
         assert f'--bench "{regex}"' in (root / doc).read_text(), doc
     described = json.loads((root / "benchmarks/results/benchmarks.json").read_text())
     names = [k for k, v in described.items() if isinstance(v, dict) and "name" in v]

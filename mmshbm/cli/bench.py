@@ -24,8 +24,8 @@ def register(sub) -> None:
                         ".asv/results and the committed benchmarks/results: the newest run with the "
                         "bench_goals figures)")
     p.add_argument("--update", nargs="+", default=None, metavar="FILE",
-                   help="with --from-asv: write the tables into FILEs (README.md docs/benchmarks.md) between "
-                        "their generated-block markers")
+                   help="with --from-asv: write the tables into FILEs (docs/validation.md "
+                        "docs/benchmarks.md) between their generated-block markers")
     p.add_argument("--corpus", type=common.positive_int, default=None, metavar="N",
                    help="run the default backbone on N random models (mmshbm.analysis.corpus: chains, "
                         "trees, beams; one-sided, clearance, several contacts) and tabulate completion, "
@@ -90,11 +90,11 @@ def _corpus(args) -> int:
     with open(path, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["index", "seed", "kind", "contact", "harmonics", "completed", "status", "seconds",
-                    "points", "jumps", "frequency", "path_completed", "same_as_path"])
+                    "points", "jumps", "frequency", "path_completed", "same_as_path", "cpu_seconds"])
         for r in results:
             w.writerow([r.case.index, r.case.seed, r.case.kind, r.case.contact, r.case.harmonics,
                         int(r.completed), r.status, f"{r.seconds:.4f}", r.points, r.jumps, repr(r.frequency),
-                        r.path_completed, r.same_as_path])
+                        r.path_completed, r.same_as_path, f"{r.cpu_seconds:.4f}"])
     common.wrote(path)
     return 1 if any(r.status.startswith("exception") for r in results) else 0
 
@@ -122,13 +122,16 @@ def _corpus_exact(args) -> int:
         w = csv.writer(fh)
         w.writerow(["index", "seed", "clean", "exact_hz", "branch_hz", "error", "error_2h", "continued_hz",
                     "first_mode", "estimate", "reasons", "status", "seconds", "exact_share",
-                    "continued_share", "branch_orbit_hz", "branch_orbit_share"])
+                    "continued_share", "branch_orbit_hz", "branch_orbit_share", "proximal",
+                    "contact_decades"])
+        decades = " ".join(f"{x:g}" for x in args.contact_decades) if args.contact_decades else ""
         for r in results:
             w.writerow([r.case.index, r.case.seed, int(r.clean), repr(r.exact), repr(r.branch),
                         f"{r.error:.3e}", f"{r.error_2h:.3e}", repr(r.continued), int(r.first_mode),
                         f"{r.estimate:.3e}",
                         "; ".join(r.reasons()), r.status, f"{r.seconds:.3f}", f"{r.exact_share:.4f}",
-                        f"{r.continued_share:.4f}", repr(r.family_exact), f"{r.family_share:.4f}"])
+                        f"{r.continued_share:.4f}", repr(r.family_exact), f"{r.family_share:.4f}",
+                        args.proximal, decades])
     common.wrote(path)
     unexplained = [r for r in results if r.clean and not r.first_mode and not r.explained]
     return 1 if unexplained else 0
