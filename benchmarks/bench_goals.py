@@ -12,7 +12,7 @@
 
 The study throughput (1000 backbones) is tracked in ``bench_studies.py``. The benchmark
 tables of docs/validation.md and docs/benchmarks.md are generated from one recorded run of this
-suite: ``mmshbm bench --from-asv`` prints them, ``mmshbm bench --from-asv --update
+suite: ``python -m validation tables`` prints them, ``python -m validation tables --update
 docs/validation.md docs/benchmarks.md`` rewrites them from the run recorded in
 ``benchmarks/results`` (docs/benchmarks.md, "Record the tables").
 """

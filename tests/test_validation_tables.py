@@ -1,4 +1,4 @@
-"""The generated tables of docs/validation.md (mmshbm.analysis.validation_tables): counts
+"""The generated tables of docs/validation.md (validation.tables): counts
 from hand-made run files, the columns the CLI writes, the blocks between their markers."""
 
 import csv
@@ -6,8 +6,9 @@ from pathlib import Path
 
 import pytest
 
-from mmshbm.analysis import validation_tables as vt
 from mmshbm.cli import main
+from validation import tables as vt
+from validation.__main__ import main as validation_main
 
 CORPUS_COLUMNS = ["index", "seed", "kind", "contact", "harmonics", "completed", "status", "seconds", "points",
                   "jumps", "frequency", "path_completed", "same_as_path", "cpu_seconds"]
@@ -100,16 +101,16 @@ def test_the_runs_the_cli_writes_make_the_tables(tmp_path, capsys):
     assert main(["study", "-H", "1", "3", "--elements", "4", "--executor", "serial", "--max-amplitude", "2",
                  "--amplitudes", "1.5", "2", "--out", str(runs / "grid")]) == 0
     seed_2 = runs / "corpus" / "a" / "seed-2"
-    assert main(["bench", "--corpus", "3", "--seed", "2", "--out", str(seed_2)]) == 0
+    assert validation_main(["corpus", "3", "--seed", "2", "--out", str(seed_2)]) == 0
     rows = list(csv.DictReader(open(seed_2 / "corpus.csv")))
     for r in ("static", "residual"):
-        assert main(["bench", "--corpus-exact", "2", "--seed", "3", "--proximal", r,
-                     "--out", str(runs / "exact" / r)]) == 0
+        out = str(runs / "exact" / r)
+        assert validation_main(["exact", "2", "--seed", "3", "--proximal", r, "--out", out]) == 0
     doc = tmp_path / "validation.md"
     blocks = "\n\n".join("\n".join(vt.markers(n)) for n in ("grid", "corpus", "exact"))
     doc.write_text(f"# Validation\n\n{blocks}\n")
     capsys.readouterr()
-    assert vt.main([str(runs), "--update", str(doc)]) == 0
+    assert validation_main(["tables", str(runs), "--update", str(doc)]) == 0
     out = capsys.readouterr().out
     assert all(f"updated {doc}: {name}" in out for name in ("grid", "corpus", "exact"))
     text = doc.read_text()

@@ -7,18 +7,18 @@ typed by hand:
 * ``grid``: the convergence grid of the default beam in H and elements, f (Hz) at the
   study's amplitudes, from the ``study_table.csv`` of ``mmshbm study``;
 * ``corpus``: completion to 10 gaps on random models per contact type, one row per
-  group of seeds, from the ``corpus.csv`` files of ``mmshbm bench --corpus``;
+  group of seeds, from the ``corpus.csv`` files of ``python -m validation corpus``;
 * ``exact``: the default branch against the exact single-contact orbit, one row per
   seed with the static and the residual proximal parameter side by side, from the
-  ``corpus_exact.csv`` files of ``mmshbm bench --corpus-exact``;
+  ``corpus_exact.csv`` files of ``python -m validation exact``;
 * ``asv``: the benchmark tables of one recorded asv run
-  (:func:`mmshbm.analysis.asv_tables.tables`, between that module's markers).
+  (:func:`validation.asv_tables.tables`, between that module's markers).
 
 The runs lie in one folder ``RUNS``: ``RUNS/grid/study_table.csv``,
 ``RUNS/corpus/<group>/**/corpus.csv`` (one row of the table per ``<group>`` folder, a
 total row over all) and ``RUNS/exact/**/corpus_exact.csv``. From the repository root::
 
-    python -m mmshbm.analysis.validation_tables RUNS --update docs/validation.md
+    python -m validation tables RUNS --update docs/validation.md docs/benchmarks.md
 
 rewrites every table whose runs are present and leaves the others as they are
 (docs/validation.md gives the commands that make the runs).
@@ -38,7 +38,7 @@ __all__ = ["markers", "grid_table", "corpus_table", "exact_table", "update_block
 
 #: the comparison tolerance of the exact comparison (relative frequency error)
 EXACT_TOL = 1e-3
-_COMMAND = "python -m mmshbm.analysis.validation_tables"
+_COMMAND = "python -m validation tables"
 
 
 def markers(name: str) -> tuple[str, str]:
@@ -258,7 +258,7 @@ def update_block(path: str | Path, name: str, block: str, begin: str | None = No
 
 def generate(runs: str | Path, asv_results: str | Path | None = None) -> dict[str, str]:
     """The tables whose runs lie under ``runs`` (name -> Markdown); ``"asv"`` from the
-    asv results ``asv_results`` (default: :func:`~mmshbm.analysis.asv_tables.find_results`'s)
+    asv results ``asv_results`` (default: :func:`validation.asv_tables.find_results`'s)
     when any are found."""
     runs = Path(runs)
     out = {}
@@ -286,7 +286,7 @@ def generate(runs: str | Path, asv_results: str | Path | None = None) -> dict[st
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m mmshbm.analysis.validation_tables RUNS [--update FILE ...]``."""
+    """``python -m validation tables RUNS [--update FILE ...]``."""
     parser = argparse.ArgumentParser(prog=_COMMAND, description=__doc__.split("\n\n")[0])
     parser.add_argument("runs", help="folder of the runs (grid/, corpus/<group>/, exact/)")
     parser.add_argument("--asv", default=None, metavar="RESULTS",
