@@ -123,3 +123,17 @@ def test_the_runs_the_cli_writes_make_the_tables(tmp_path, capsys):
     both = "1 (100 %); 1 (100 %)"
     assert f"| 2, seed 3 | 1 | {both} | {both} | 100 %; 100 % | 100 %; 100 % |" in text
     assert vt.main([str(tmp_path / "nothing"), "--asv", str(tmp_path / "no-asv")]) == 2  # no runs at all
+
+
+def test_published_blocks_are_the_generators_output():
+    """docs/validation.md has every generated block, and its benchmark tables are those
+    the committed asv record gives (rerunning the generator changes nothing)."""
+    from validation import asv_tables
+
+    root = Path(__file__).resolve().parents[1]
+    text = (root / "docs" / "validation.md").read_text()
+    for name in ("grid", "corpus", "exact"):
+        begin, end = vt.markers(name)
+        assert text.index(begin) < text.index(end)
+    block = text.split(asv_tables.BEGIN + "\n", 1)[1].split("\n" + asv_tables.END, 1)[0]
+    assert block == asv_tables.tables(asv_tables.load_run(root / "benchmarks" / "results"))
