@@ -10,10 +10,10 @@
   on the one-DOF oscillator (2 gaps, closed-form reference: equal accuracy) and on the
   default beam (1.5 gaps, equal H): every column of its table as a ``track_``.
 
-The study throughput (1000 backbones) is tracked in ``bench_studies.py``. The README's
-benchmark tables and docs/benchmarks.md are generated from one recorded run of this
-suite: ``mmshbm bench --from-asv`` prints them, ``mmshbm bench --from-asv --update
-README.md docs/benchmarks.md`` rewrites them from the run recorded in
+The study throughput (1000 backbones) is tracked in ``bench_studies.py``. The benchmark
+tables of docs/validation.md and docs/benchmarks.md are generated from one recorded run of this
+suite: ``python -m validation tables`` prints them, ``python -m validation tables --update
+docs/validation.md docs/benchmarks.md`` rewrites them from the run recorded in
 ``benchmarks/results`` (docs/benchmarks.md, "Record the tables").
 """
 

@@ -124,7 +124,7 @@ class AmplitudeGradient:
         import warnings
 
         import mmshbm
-        from mmshbm.analysis import corpus
+        from validation import corpus
 
         model = corpus.generate(291, 29)[290].model()
         with warnings.catch_warnings():

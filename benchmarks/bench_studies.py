@@ -5,11 +5,11 @@
 - :class:`ConvergenceGrid`: the whole grid of ``mmshbm study -H 1 3 5 7 9 11 15
   --elements 8 21 40 100 200`` (to 10 gaps), computed once in ``setup_cache`` through a
   process pool of 2 workers; tracks its wall time and, per cell, points, jumps, the
-  amplitude the family front skips and f at 10 gaps (the numbers the README quotes).
+  amplitude the family front skips and f at 10 gaps (the numbers docs/validation.md quotes).
 - :class:`StudyThroughput`: a Monte-Carlo study of 200 backbones (8 elements, H = 3, gap,
   E and ρ drawn) serially and through a warm process pool and Dask cluster of 2 workers:
   backbones per second, parallel efficiency serial / (workers x parallel) and the share
-  of the workers' time spent inside tasks. ``mmshbm study --throughput 1000`` gives the
+  of the workers' time spent inside tasks. ``python -m validation throughput 1000`` gives the
   issue's full figure.
 
 Wall-clock figures depend on the machine's load; compare ratios within one run.
@@ -108,7 +108,7 @@ class StudyThroughput:
     timeout = 900
 
     def setup_cache(self):
-        from mmshbm.analysis.throughput import measure_throughput
+        from validation.throughput import measure_throughput
 
         _quiet()
         try:

@@ -17,7 +17,16 @@ class MmshbmWarning(UserWarning):
 
 
 class BranchWarning(MmshbmWarning):
-    """A computed branch (or response) may not be what it seems; the message says why."""
+    """A computed branch (or response) may not be what it seems; the message says why.
+
+    ``kind`` is the kind of the :class:`~mmshbm.results.findings.Finding` it reports
+    (``"left_family"``, ``"penetration"``, ``"incomplete"``, ...), or None for a warning that
+    reports no finding: code that sorts warnings reads it, never the message.
+    """
+
+    def __init__(self, message: str = "", kind: str | None = None):
+        super().__init__(message)
+        self.kind = kind
 
 
 class ModelWarning(MmshbmWarning):

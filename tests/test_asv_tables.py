@@ -1,13 +1,13 @@
-"""The README's and docs' benchmark tables come from one recorded asv run
-(mmshbm bench --from-asv): the numbers of the results file, in the right cells."""
+"""The benchmark tables of docs/validation.md and docs/benchmarks.md come from one recorded
+asv run (python -m validation tables): the numbers of the results file, in the right cells."""
 
 import json
 import math
 
 import pytest
 
-from mmshbm.analysis import asv_tables
-from mmshbm.cli import main
+from validation import asv_tables
+from validation.__main__ import main
 
 COLUMNS = ["result", "params", "version", "started_at", "duration"]
 GRID = [["'1'", "'15'"], ["'8'", "'200'"]]  # H x elements of a grid benchmark
@@ -79,7 +79,8 @@ def test_update_replaces_the_block_only(tmp_path, capsys):
     doc = tmp_path / "doc.md"
     quoted = f"write between `{asv_tables.BEGIN}` and `{asv_tables.END}`"  # quoted markers do not count
     doc.write_text(f"# Title\n{quoted}\n\n{asv_tables.BEGIN}\nold table\n{asv_tables.END}\n\ntail\n")
-    assert main(["bench", "--from-asv", str(tmp_path / "results"), "--update", str(doc)]) == 0
+    no_runs = str(tmp_path / "no-runs")
+    assert main(["tables", no_runs, "--asv", str(tmp_path / "results"), "--update", str(doc)]) == 0
     text = doc.read_text()
     assert "old table" not in text and "| 4.2 ms |" in text
     assert text.startswith(f"# Title\n{quoted}\n") and text.endswith(f"{asv_tables.END}\n\ntail\n")
@@ -89,8 +90,7 @@ def test_update_replaces_the_block_only(tmp_path, capsys):
     bare.write_text("no markers\n")
     with pytest.raises(ValueError, match="no generated block"):
         asv_tables.update_file(bare, "x")
-    assert main(["bench", "--update", str(doc)]) == 2
-    assert main(["bench", "--from-asv", str(tmp_path / "nothing")]) == 2
+    assert main(["tables", no_runs, "--asv", str(tmp_path / "nothing")]) == 2
 
 
 def test_default_reads_asv_folder_and_the_committed_record(tmp_path, monkeypatch):
@@ -175,15 +175,16 @@ def test_rows_absent_when_not_recorded(tmp_path):
 
 
 def test_record_command_selects_what_the_tables_read():
-    """The ``--bench`` regex of the README's and the docs' record command selects the goal
-    and study suites and, besides, exactly the benchmarks the rows read (asv matches with
-    re.search, on ``name(params)`` for parameterized ones)."""
+    """The ``--bench`` regex of the record command in docs/validation.md and
+    docs/benchmarks.md selects the goal and study suites and, besides, exactly the
+    benchmarks the rows read (asv matches with re.search, on ``name(params)`` for
+    parameterized ones)."""
     import re
     from pathlib import Path
 
     root = Path(__file__).resolve().parents[1]
     regex = asv_tables.RECORD_BENCH
-    for doc in ("README.md", "docs/benchmarks.md"):
+    for doc in ("docs/validation.md", "docs/benchmarks.md"):
         assert f'--bench "{regex}"' in (root / doc).read_text(), doc
     described = json.loads((root / "benchmarks/results/benchmarks.json").read_text())
     names = [k for k, v in described.items() if isinstance(v, dict) and "name" in v]

@@ -260,7 +260,7 @@ def test_backbone_names_resonances_and_jumps_and_follows_the_path_on_request(tmp
     """H = 7: the family warning says where the excursions are and how to leave them out,
     the truncation effects come as one warning, and stdout names the 6:1 and 5:1
     resonances with mode 2 and the jumps; --follow path stays on the 6:1 tongue."""
-    assert main(["backbone", "-H", "7", "--out", str(tmp_path)]) == 0
+    assert main(["backbone", "-H", "7", "-v", "--out", str(tmp_path)]) == 0  # -v: every finding
     out, err = capsys.readouterr()
     assert "internal resonances: 6Ω≈f₂" in out and "5Ω≈f₂" in out
     assert "jumps over tongues: " in out

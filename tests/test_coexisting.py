@@ -6,8 +6,8 @@ import warnings
 import numpy as np
 
 import mmshbm
-from mmshbm.analysis import corpus
 from mmshbm.results.coexisting import coexisting_intervals
+from validation import corpus
 
 
 def _run(model, **kw):
@@ -66,7 +66,7 @@ def test_the_segment_from_the_front_into_a_tongue_holds_coexisting_orbits():
     holds the tongue side's orbit. The exact single-contact orbit at 1.3 gaps
     (mmshbm.exact) is that orbit: the branch must say that another orbit coexists there
     with its backbone, at the exact orbit's frequency."""
-    from mmshbm.analysis import corpus_exact as ce
+    from validation import corpus_exact as ce
 
     model = ce.chains(288, seed=23)[287].model()
     A = 1.3 * model.gap

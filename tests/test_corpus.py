@@ -1,4 +1,4 @@
-"""The corpus of random models (mmshbm.analysis.corpus): reproducible cases, valid models,
+"""The corpus of random models (validation.corpus): reproducible cases, valid models,
 and a fast slice of the defaults' figures (every model of the slice reaches its bound on
 the first mode's family, none raises, none runs past its limit)."""
 
@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import mmshbm
-from mmshbm.analysis import corpus
-from mmshbm.cli import main
+from validation import corpus
+from validation.__main__ import main as validation_main
 
 
 def test_cases_are_reproducible_and_independent_of_the_count():
@@ -54,7 +54,7 @@ def test_the_defaults_reach_the_bound_on_the_family(case):
 
 
 def test_cli_corpus(tmp_path, capsys):
-    assert main(["bench", "--corpus", "4", "--seed", "2", "--out", str(tmp_path)]) == 0
+    assert validation_main(["corpus", "4", "--seed", "2", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     assert "complete" in out and "exceptions: 0" in out
     rows = (tmp_path / "corpus.csv").read_text().splitlines()
@@ -79,7 +79,7 @@ def test_where_orbits_coexist_the_branch_is_the_first_modes():
     orbit from the linear mode through grazing gives the branch's orbit (three contacts
     per period at 1.3 gaps): the single-contact orbit coexists with the first mode's."""
     import mmshbm
-    from mmshbm.analysis import corpus_exact as ce
+    from validation import corpus_exact as ce
 
     case = ce.chains(137, seed=100)[136]
     model = case.model()
@@ -227,7 +227,7 @@ def test_a_chain_whose_jump_skipped_the_compared_amplitude_now_lands_below_it():
     1.0 gaps) skips nothing: at 1.3 gaps it has a frequency 0.87 % below the exact
     single-contact orbit, which is the Fourier series' truncation (at 2H the error falls
     to 0.1 %), and the branch says so. Inside any skipped interval frequency_at is NaN."""
-    from mmshbm.analysis import corpus_exact as ce
+    from validation import corpus_exact as ce
 
     case = ce.chains(14, seed=0)[13]
     model = case.model()
@@ -247,7 +247,7 @@ def test_a_chain_whose_jump_skipped_the_compared_amplitude_now_lands_below_it():
 def test_exact_chains_with_contact_springs_drawn_like_the_others():
     """``contact_decades`` redraws only the contact node's spring, inside its range, the same
     for the same seed; the rest of each chain is the corpus's."""
-    from mmshbm.analysis import corpus_exact as ce
+    from validation import corpus_exact as ce
 
     base = ce.chains(12, seed=4)
     soft = ce.chains(12, seed=4, contact_decades=(1.0, 2.0))
@@ -260,7 +260,7 @@ def test_exact_chains_with_contact_springs_drawn_like_the_others():
 
 def test_cli_corpus_exact(tmp_path, capsys):
     """Two chains whose branches agree with the exact orbit to 1e-3: exit 0, a row each."""
-    assert main(["bench", "--corpus-exact", "2", "--seed", "3", "--out", str(tmp_path)]) == 0
+    assert validation_main(["exact", "2", "--seed", "3", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     assert "on the first mode's orbit" in out
     rows = (tmp_path / "corpus_exact.csv").read_text().splitlines()

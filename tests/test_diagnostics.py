@@ -147,7 +147,7 @@ def test_a_path_back_below_grazing_left_its_family():
     the bound at 127 Hz), with the fundamental's majority all the way. The check says it
     left the family where it first went below grazing; a path that only rises past
     grazing (the stiff chain) is not flagged."""
-    from mmshbm.analysis import corpus
+    from validation import corpus
 
     model = corpus.generate(31, 31)[30].model()
     with warnings.catch_warnings():

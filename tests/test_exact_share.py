@@ -6,7 +6,7 @@ branches measure theirs (kinetic energy in harmonic 1 over all harmonics): check
 the linear motion (exactly one), against MMS-HBM converging in H on a one-mass chain,
 and on a corpus chain whose single-contact orbit at 1.3 gaps sits on a 2:1 resonance
 with its second mode while the default branch follows the exact orbit with the
-fundamental's majority (mmshbm.analysis.corpus_exact).
+fundamental's majority (validation.corpus_exact).
 """
 
 import warnings
@@ -17,7 +17,7 @@ from test_classical_hbm import chain
 
 import mmshbm
 from mmshbm import exact
-from mmshbm.analysis import corpus_exact
+from validation import corpus_exact
 
 
 def test_a_motion_without_contact_is_all_fundamental():
@@ -95,8 +95,8 @@ def test_newton_does_not_report_the_vanishing_half_period_as_an_orbit():
     shape at 4.9 Hz on a corpus chain (seed 55 #180), Newton slid to T/2 ~ 5e-26 s and
     reported a converged orbit of 9.7e24 Hz with no contact; no orbit turns back sooner
     than half a period of its fastest phase."""
-    from mmshbm.analysis.corpus import generate
     from mmshbm.methods.exact.system import PiecewiseLinearSystem
+    from validation.corpus import generate
 
     model = generate(181, 55)[180].model()
     system = PiecewiseLinearSystem.of(model)

@@ -52,7 +52,7 @@ def test_a_branch_found_above_the_bound_on_another_mode_is_not_taken_for_the_fam
     orbit, not the family test). The run must not follow it down as mode 1's backbone:
     every point it keeps on the family has mode 1 ahead of every other linear mode in the
     fundamental, and it ends short of the bound saying why."""
-    from mmshbm.analysis import corpus
+    from validation import corpus
 
     case = corpus.generate(104, seed=14)[103]
     model = case.model()

@@ -21,7 +21,7 @@ import pytest
 
 import mmshbm
 from mmshbm import exact
-from mmshbm.analysis import corpus
+from validation import corpus
 
 #: (seed, index, H, a larger H, mode-2 mix of the guess, guess frequency (Hz), exact
 #: frequency at 10 gaps (Hz), contacts per period)

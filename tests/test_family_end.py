@@ -44,7 +44,7 @@ def test_past_a_2_to_1_tongue_the_family_goes_on_along_its_far_side():
     1.645 gaps). With r = "residual" the branch is 0.7-0.8 % below those exact orbits at
     H = 15 (the truncation); the default r, further (4 % at 3 gaps), converges toward
     them in H."""
-    from mmshbm.analysis.corpus_exact import branch_orbit
+    from validation.corpus_exact import branch_orbit
 
     model = _two_mass_chain()
     gap = model.gap
@@ -177,8 +177,8 @@ def test_the_far_side_of_a_2_to_1_tongue_converges_to_the_exact_orbits():
     2e-3 and then 2e-5 of the exact orbits (measured 1.7e-3 and 1e-5: the truncation).
     The default r reaches it at H = 15 through the scan in frequency (before: "family
     ended" at 1.89 gaps), 2.0, 1.7 and 1.5 % below it at 2.2, 5 and 10 gaps."""
-    from mmshbm.analysis.corpus import generate
-    from mmshbm.analysis.corpus_exact import branch_orbit
+    from validation.corpus import generate
+    from validation.corpus_exact import branch_orbit
 
     model = generate(181, 55)[180].model()
     gap = model.gap

@@ -8,7 +8,7 @@ import mmshbm.exact as ex
 import numpy as np
 
 import mmshbm
-from mmshbm.analysis import corpus
+from validation import corpus
 
 
 def _fundamental_share(model, orbit, n=4096):

@@ -211,7 +211,7 @@ def test_the_first_point_has_every_contact_open():
     """Two contact nodes: half the smallest gap at the amplitude DOF would close the other
     contact on the linear mode (no solution there: the start failed). The first point
     is taken at half the amplitude at which the linear mode's first contact closes."""
-    from mmshbm.analysis import corpus
+    from validation import corpus
 
     case = corpus.generate(135, seed=0)[134]
     assert case.contact == "several"
@@ -231,7 +231,7 @@ def test_an_s_bend_of_the_amplitude_with_the_frequency_rising_is_not_a_tongue():
     there as a tongue's fold ended in a failed jump at 2.78 gaps. It is one continuous
     branch to 10 gaps, the one plain path following gives (same point at the bound to the
     Newton tolerance), with no jump."""
-    from mmshbm.analysis import corpus
+    from validation import corpus
 
     case = corpus.generate(92, seed=0)[91]
     assert (case.kind, case.contact, case.harmonics) == ("chain", "one-sided", 9)

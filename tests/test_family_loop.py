@@ -7,7 +7,7 @@ import numpy as np
 import scipy.linalg as sl
 
 import mmshbm
-from mmshbm.analysis import corpus
+from validation import corpus
 
 
 def test_a_closed_loop_is_left_by_a_jump_and_the_family_reaches_its_bound():

@@ -5,7 +5,7 @@ import numpy as np
 import scipy.linalg as la
 
 import mmshbm
-from mmshbm.analysis import corpus
+from validation import corpus
 
 
 def _held_frequency(model) -> float:

@@ -47,7 +47,7 @@ def test_the_family_goes_on_above_a_6_to_1_tongue():
     gaps). A first-mode orbit exists above the tongue: the last jump leaves the family
     below f2/6 and lands above it, and the fundamental holds the majority from there to
     10 gaps (measured 0.82 at the bound); the family does not end at the tongue's fold."""
-    from mmshbm.analysis import corpus
+    from validation import corpus
 
     case = corpus.generate(79, seed=0, contacts=("one-sided",))[78]
     assert (case.kind, case.harmonics, len(case.params["masses"])) == ("chain", 9, 7)
@@ -71,7 +71,7 @@ def test_a_bound_the_capped_searches_miss_is_reached_from_above():
     the branch through the landing, followed back down onto the bound, is that orbit:
     the run completes at the frequency the 10-gap run has at 1.56 gaps (``frequency_at``
     solves it there: the same to 1e-9)."""
-    from mmshbm.analysis import corpus_exact as ce
+    from validation import corpus_exact as ce
 
     model = ce.chains(69, seed=21)[68].model()
     with warnings.catch_warnings():

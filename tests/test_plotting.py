@@ -202,7 +202,7 @@ def test_labels_of_special_points_do_not_crowd():
     index 225): of the labels of its special points (tongues named, skipped intervals)
     none is placed next to another (anchors at least 0.12 of the width or 0.035 of the
     height apart) nor runs past the right edge; every marker stays."""
-    from mmshbm.analysis import corpus
+    from validation import corpus
 
     model = corpus.generate(226, 28)[225].model()
     b = mmshbm.backbone(model, harmonics=15, max_amplitude=10 * model.gap)

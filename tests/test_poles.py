@@ -80,7 +80,7 @@ def test_amplitude_gradient_in_the_pole_unknowns():
     15 harmonics): the gradient in every η, taken one recovery per group of distinct
     harmonics, is each pole's own recovery (to round-off) and the central difference of
     the amplitude (an error of order h² plus round-off ε·A/h)."""
-    from mmshbm.analysis import corpus
+    from validation import corpus
 
     model = corpus.generate(291, 29)[290].model()
     br = mmshbm.backbone(model, harmonics=15, max_amplitude=1.1 * model.gap)

@@ -42,9 +42,11 @@ def test_python_snippets_run(in_tmp):
         for block in blocks:
             exec(compile(block, "README.md", "exec"), namespace)  # noqa: S102 - the README's own code
     model, branch = namespace["model"], namespace["branch"]
-    # as the snippet's comment says
+    # as the snippets' comments say
     assert [round(f, 2) for f in model.linear_frequencies(3)] == [45.81, 286.13, 796.93]
-    assert branch.completed
+    assert (branch.completed, branch.status) == (True, "bound:amplitude")
+    assert round(namespace["chain_branch"].frequency_at(2, unit="gap"), 2) == 15.80
+    assert (in_tmp / "backbone.npz").exists()
 
 
 @pytest.mark.slow  # ~30 s, most of it `mmshbm bench --quick`
@@ -63,3 +65,12 @@ def test_command_lines_run(in_tmp, capsys):
 def test_quick_start_commands_are_documented():
     assert "pip install . && mmshbm backbone" in README
     assert "pip install '.[test]' && python -m pytest -q" in README
+
+
+def test_readme_is_a_front_door():
+    """At most 250 lines, and every page it links to exists."""
+    assert len(README.splitlines()) <= 250
+    root = Path(__file__).resolve().parents[1]
+    links = re.findall(r"\]\(((?:docs|examples)/[^)#]+)", README)
+    assert len(links) >= 10
+    assert [link for link in links if not (root / link).exists()] == []

@@ -141,7 +141,7 @@ def test_resonance_markers_only_where_the_branch_resonates(tmp_path, capsys):
     assert last  # what the continuation names at its end
     texts = [t.get_text() for t in plotting.plot_backbone(branch).axes[0].texts]
     assert "5Ω≈f₂" in texts and "4Ω≈f₂" not in texts
-    assert main(["backbone", "--out", str(tmp_path)]) == 0
+    assert main(["backbone", "-v", "--out", str(tmp_path)]) == 0  # -v: the resonances it met
     out = capsys.readouterr().out
     assert "5Ω≈f₂ at" in out and "4Ω≈f₂" not in out
 

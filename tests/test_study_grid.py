@@ -3,7 +3,6 @@ empty cells (named resonances) and non-monotone series, chunked executors, Monte
 the CLI on a tiny grid."""
 
 import concurrent.futures as cf
-import json
 import math
 
 import numpy as np
@@ -240,16 +239,3 @@ def test_cli_study_grid_writes_table_and_plots(tmp_path, capsys):
     for r, line in zip(study.runs, rows, strict=True):
         f = study.branch(harmonics=r["harmonics"], elements=r["elements"]).frequency_at(2.3e-3)
         assert line.split(",")[3] == ("nan" if np.isnan(f) else f"{f:.10g}")
-
-
-def test_cli_throughput(tmp_path):
-    assert main(["study", "--throughput", "4", "-H", "1", "--elements", "4", "--max-amplitude", "2",
-                 "--executor", "process", "--chunksize", "2", "--out", str(tmp_path)]) == 0
-    data = json.loads((tmp_path / "throughput.json").read_text())
-    runs = {(r["executor"], r["warm"]): r for r in data["runs"]}
-    assert set(runs) == {("serial", True), ("process", False), ("process", True)}
-    assert all(r["identical"] for r in runs.values())
-    r = runs[("process", True)]
-    assert r["tasks"] == 2 and r["efficiency"] == pytest.approx(data["serial_s"] / (2 * r["wall_s"]))
-    assert "backbones/s" in (tmp_path / "throughput.txt").read_text()
-    assert main(["study", "--throughput", "0"]) == 2

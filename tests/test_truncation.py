@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import mmshbm
-from mmshbm.analysis import corpus_exact as ce
 from mmshbm.results.truncation import _estimate
+from validation import corpus_exact as ce
 
 
 def _ratios(model, harmonics, gaps):

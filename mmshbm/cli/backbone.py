@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import contextlib
+import math
+import sys
+import warnings
 from pathlib import Path
 
 from . import common
@@ -36,11 +40,11 @@ def register(sub) -> None:
 def run(args) -> int:
     from ._plot_worker import PlotWorker
 
-    with PlotWorker() as worker:  # imports matplotlib in a child while this process computes
-        return _run(args, worker)
+    with PlotWorker() as worker, _branch_warnings() as caught:  # matplotlib loads in a child meanwhile
+        return _run(args, worker, caught)
 
 
-def _run(args, worker) -> int:
+def _run(args, worker, caught: list) -> int:
     from ..methods.backbone import backbone
     from ..plotting.data import BranchData, reference_frequencies
 
@@ -71,12 +75,51 @@ def _run(args, worker) -> int:
         worker.draw([("plot_backbone", (data,), {"measured": measured, "model": reference_frequencies(model),
                                                  "path": files[-2]}),
                      ("plot_frequency_energy", (data,), {"path": files[-1]})])
-    print(repr(branch))
-    for line in _special_lines(branch, model.gap):
-        print(line)
+    return _report(args, branch, model.gap, files, caught)
+
+
+@contextlib.contextmanager
+def _branch_warnings():
+    """Collect the messages of the branch's :class:`~mmshbm.BranchWarning` (its checks'
+    findings) instead of printing them; every other warning is shown as before."""
+    from .._warnings import BranchWarning
+
+    caught: list[BranchWarning] = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", BranchWarning)
+        shown = warnings.showwarning
+
+        def show(message, category, filename, lineno, file=None, line=None):
+            if issubclass(category, BranchWarning):
+                caught.append(message)
+            else:
+                shown(message, category, filename, lineno, file, line)
+
+        warnings.showwarning = show
+        yield caught
+
+
+def _report(args, branch, gap: float, files: list, caught: list) -> int:
+    """Print what the run gave: one summary line; warnings only for a result that is not
+    the backbone asked for (cut short, another family beyond the backbone, a message the
+    summary does not cover); every finding, the resonances and the jumps with ``-v``.
+    Returns the exit code."""
+    findings = branch.findings
+    short = _another_family(branch, gap, quiet=True)
+    print(_summary(branch, gap, findings, short))
+    verbose = args.verbose > 0
+    for message in caught:
+        kind = getattr(message, "kind", None)
+        if verbose or kind is None or kind == "incomplete" or (short and kind == "left_family"):
+            print(f"mmshbm backbone: warning: {message}", file=sys.stderr)
+    if short:
+        _another_family(branch, gap)
+    if verbose:
+        for line in _special_lines(branch, gap):
+            print(line)
     common.wrote(*files)
     code = common.exit_code([branch])
-    if args.method != "mmshbm" and _another_family(branch, model.gap):
+    if args.method != "mmshbm" and short:
         code = 1
     return code
 
@@ -91,25 +134,69 @@ def gaps_in_m(gaps: float, model, option: str = "--max-amplitude") -> float:
     return float(gaps) * model.gap
 
 
-def _another_family(branch, gap: float) -> bool:
-    """Whether a baseline's branch ends on another family than its starting mode's (its
-    family front stops short of the branch's reach); says so on stderr."""
-    import sys
+#: the methods' names in the summary
+_METHOD_NAMES = {"mmshbm": "MMS-HBM", "penalty": "penalty-HBM", "shooting": "shooting"}
 
+
+def _amp(a: float, gap: float) -> str:
+    return f"{a / gap:.3g} gaps" if gap > 0 else f"{a:.3g} m"
+
+
+def _summary(branch, gap: float, findings: list, short: bool) -> str:
+    """One line: what the branch is (complete or not, how far the backbone of linear mode 1
+    reaches, its frequency range) and how far to trust its frequency (the truncation
+    estimate at the top of the backbone, and whether the truncated series passes the stop)."""
+    head = f"mmshbm backbone: {_METHOD_NAMES.get(branch.method, branch.method)}"
+    head += f", H = {branch.harmonics}: " if branch.harmonics else ": "
+    state = "complete" if branch.completed else f"incomplete ({branch.status})"
+    front = branch.family_front() if len(branch) else []
+    if not len(front):
+        return f"{head}{state}, no point computed"
+    top = float(branch.amplitude[front].max())
+    f = branch.frequency[front]
+    parts = [f"{state}: the backbone of linear mode 1 to {_amp(top, gap)}"
+             + (" (another family beyond)" if short else "") + f", {f.min():.4g}–{f.max():.4g} Hz"]
+    parts.append(_trust(branch, top, gap))
+    pen = [x for x in findings if x.kind == "penetration"]
+    if pen:
+        parts.append(f"the truncated series passes the stop by up to {pen[0].value:.2g} gaps")
+    more = "; details: -v" if findings or branch.special_points else ""
+    return head + "; ".join(parts) + more
+
+
+def _trust(branch, top: float, gap: float) -> str:
+    """The frequency's truncation error estimate at the amplitude ``top`` (m), in words."""
+    if not branch.harmonics:
+        return "no truncation in H (time integration)"
+    if branch.method != "mmshbm":  # its re-solves at 2H and 4H take minutes on the beam
+        return "truncation estimate on request (branch.truncation_error(A))"
+    try:
+        est = branch.truncation_error(top)
+    except (ValueError, RuntimeError, ArithmeticError) as err:
+        return f"no truncation estimate ({str(err).splitlines()[0]})"
+    if not math.isfinite(est.error):
+        return f"no truncation estimate ({est.note or 'the re-solves failed'})"
+    at_h = ", ".join(str(h) for h in est.harmonics)
+    return (f"frequency error from truncation ≈ {est.error:.1e} at {_amp(top, gap)} (estimate from "
+            f"H = {at_h}{'' if est.asymptotic else ', not asymptotic'})")
+
+
+def _another_family(branch, gap: float, quiet: bool = False) -> bool:
+    """Whether a branch ends on another family than its starting mode's (its family front
+    stops short of the branch's reach); says so on stderr unless ``quiet``."""
     if not len(branch):
         return False
     front = branch.family_front()
     top = float(branch.amplitude.max())
     if len(front) and float(branch.amplitude[front].max()) >= top * (1 - 1e-9):
         return False
+    if quiet:
+        return True
     end = int(front[-1]) if len(front) else 0
-
-    def amp(a):
-        return f"{a / gap:.3g} gaps" if gap > 0 else f"{a:.3g} m"
-
-    print(f"mmshbm backbone: {branch.method} branch: the backbone of linear mode 1 ends at "
-          f"{amp(branch.amplitude[end])} ({branch.frequency[end]:.4g} Hz); up to {amp(top)} the branch is "
-          "another family of motions, not that mode's backbone (exit code 1)", file=sys.stderr)
+    code = "" if branch.method == "mmshbm" else " (exit code 1)"
+    print(f"mmshbm backbone: warning: {branch.method} branch: the backbone of linear mode 1 ends at "
+          f"{_amp(branch.amplitude[end], gap)} ({branch.frequency[end]:.4g} Hz); up to {_amp(top, gap)} the "
+          f"branch is another family of motions, not that mode's backbone{code}", file=sys.stderr)
     return True
 
 

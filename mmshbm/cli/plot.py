@@ -156,7 +156,7 @@ def _show_findings(data) -> None:
             branch.check(warn=False)
     if isinstance(data, Branch):
         for finding in data.findings:
-            warnings.warn(finding.message, BranchWarning, stacklevel=2)
+            warnings.warn(BranchWarning(finding.message, finding.kind), stacklevel=2)
     elif any(b.findings for b in branches):
         from ..analysis.tables import findings_count
 

@@ -40,23 +40,16 @@ def register(sub) -> None:
     p.add_argument("--max-steps", type=common.positive_int, default=None,
                    help="continuation step budget per run (default 1000); runs that use it up are incomplete")
     p.add_argument("--executor", default=None, choices=["process", "serial", "dask"],
-                   help="where runs go (default a local process pool; with --throughput: both pool and dask)")
+                   help="where runs go (default a local process pool)")
     p.add_argument("--workers", type=common.positive_int, default=2, help="processes (default 2)")
     p.add_argument("--chunksize", type=_chunksize, default="auto",
                    help="runs per task sent to the executor (default auto: 1 for small studies, "
                         "about 16 tasks per worker for large ones)")
-    p.add_argument("--throughput", type=common.positive_int, default=None, metavar="N",
-                   help="instead of a grid: time a Monte-Carlo study of N backbones (gap, E, rho drawn; "
-                        "H and elements from -H/--elements, default 3 and 8) serially, through a process "
-                        "pool and a Dask cluster: backbones/s and parallel efficiency "
-                        "(throughput.txt, throughput.json)")
     common.measured_option(p)
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
-    if args.throughput is not None:
-        return _throughput(args)
     params = common.params(args.param)
     if "normal_load" in params:
         from .friction_study import run_normal_load
@@ -178,26 +171,3 @@ def _plots(args, study, name, marks, measured, table, out, write_files) -> list:
 def _import_plots() -> None:
     """Import matplotlib and the study plots (~0.3 s)."""
     from ..plotting import grids, studies  # noqa: F401
-
-
-def _throughput(args) -> int:
-    from ..analysis.throughput import measure_throughput
-
-    if args.figure2 or args.model_file or args.param or args.methods:
-        raise ValueError("--throughput runs its own Monte-Carlo study of the default beam: drop --figure2, "
-                         "--model-file, --param and --methods")
-    if (args.harmonics and len(args.harmonics) > 1) or (args.elements and len(args.elements) > 1):
-        raise ValueError("--throughput takes one value of -H and of --elements")
-    executors = ("process", "dask") if args.executor is None else (args.executor,)
-    if executors == ("serial",):
-        executors = ()
-    result = measure_throughput(args.throughput, harmonics=args.harmonics[0] if args.harmonics else 3,
-                                elements=args.elements[0] if args.elements else 8,
-                                max_amplitude=args.max_amplitude or 10.0, workers=args.workers,
-                                executors=executors, chunksize=args.chunksize, verbose=common.progress(args))
-    out = common.out_dir(args)
-    text = out / "throughput.txt"
-    text.write_text(result.to_text() + "\n")
-    print(result.to_text())
-    common.wrote(text, result.to_json(out / "throughput.json"))
-    return 0 if all(r.identical for r in result.runs) else 1

@@ -137,8 +137,8 @@ def check_branch(branch, thresholds: CheckThresholds | None = None, *, warn: boo
     branch.metadata["check_thresholds"] = (dict(_DEFAULT_RECORD) if th is _DEFAULT_THRESHOLDS
                                            else {f.name: getattr(th, f.name) for f in fields(th)})
     if warn:
-        for message in _warnings(branch, out):
-            warnings.warn(message, BranchWarning, stacklevel=stacklevel + 1)
+        for message, kind in _warnings(branch, out):
+            warnings.warn(BranchWarning(message, kind), stacklevel=stacklevel + 1)
     return out
 
 
@@ -167,8 +167,8 @@ def _coexisting(branch) -> list[Finding]:
                     float(sum(c.hi - c.lo for c in found) / gap))]
 
 
-def _warnings(branch, found: list[Finding]) -> list[str]:
-    """One warning per finding, except that the two truncation effects of harmonic
+def _warnings(branch, found: list[Finding]) -> list[tuple[str, str]]:
+    """(message, finding kind) of one warning per finding, except that the two truncation effects of harmonic
     balance (penetration and a pulling force) make one, and orbits coexisting with a
     family that left into tongues are said in the family's warning."""
     kinds = {f.kind: f for f in found}
@@ -178,7 +178,7 @@ def _warnings(branch, found: list[Finding]) -> list[str]:
                  for f in found if f.kind != "coexisting_orbits"]
         kinds = {f.kind: f for f in found}
     if not ("penetration" in kinds and "negative_force" in kinds and branch.harmonics):
-        return [f.message for f in found]
+        return [(f.message, f.kind) for f in found]
     pen, neg = kinds["penetration"], kinds["negative_force"]
     joint = (f"{branch.method} branch, truncation effects of the Fourier series (more harmonics reduce "
              f"them): the contact DOF passes the stop by up to {pen.value:.3g} gaps (from "
@@ -188,9 +188,9 @@ def _warnings(branch, found: list[Finding]) -> list[str]:
     out = []
     for f in found:
         if f.kind == "penetration":
-            out.append(joint)
+            out.append((joint, "penetration"))
         elif f.kind != "negative_force":
-            out.append(f.message)
+            out.append((f.message, f.kind))
     return out
 
 

@@ -43,7 +43,7 @@ def name(case: CorpusCase) -> str:
 def chains(n: int, seed: int = 0, max_masses: int = 4, gap: float = 0.01,
            contact_decades: tuple[float, float] | None = None) -> list[CorpusCase]:
     """``n`` one-sided chains of at most ``max_masses`` masses with the gap ``gap``, drawn
-    from the corpus (:func:`mmshbm.analysis.corpus.generate`; the gap replaced).
+    from the corpus (:func:`validation.corpus.generate`; the gap replaced).
 
     ``contact_decades = (lo, hi)`` draws the contact node's spring anew as 10**U(lo, hi)
     N/m (the corpus draws it up to a hundred times stiffer than the other springs, whose
@@ -158,8 +158,8 @@ def compare(case: CorpusCase, amplitude_gaps: float = 1.3, harmonics: int = 31,
     2·``harmonics`` where the two differ by more than ``tol``); ``options``: further
     keyword arguments of :func:`~mmshbm.backbone` for both branches (e.g.
     ``{"r": "residual"}``)."""
-    from .. import exact
-    from ..methods.backbone import backbone
+    from mmshbm import exact
+    from mmshbm.methods.backbone import backbone
 
     model = case.model()
     A = amplitude_gaps * model.gap
@@ -212,8 +212,8 @@ def branch_orbit(model, branch, amplitude: float, n_samples: int = 1024) -> tupl
     DOFs with mass at its turning point away from the stop, its half period); NaNs where
     the branch has no solved point there or Newton does not converge on an orbit of that
     excursion."""
-    from .. import exact
-    from ..methods.exact.system import PiecewiseLinearSystem
+    from mmshbm import exact
+    from mmshbm.methods.exact.system import PiecewiseLinearSystem
 
     try:
         point = branch.solve_at([amplitude], stand_in=True)
@@ -268,7 +268,7 @@ def _reported(branch, amplitude: float) -> str:
     interval holds it), "truncation" (the contact force of the truncated series pulls, or
     its contact DOF passes the stop, over a stretch of points whose amplitudes bracket
     it), "special point" (a fold or branch point within 5 % of it)."""
-    from ..results.coexisting import coexisting_intervals
+    from mmshbm.results.coexisting import coexisting_intervals
 
     A = np.asarray(branch.amplitude, dtype=float)
     out = []

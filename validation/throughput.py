@@ -30,7 +30,7 @@ import warnings
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from .. import _validate as check
+from mmshbm import _validate as check
 
 __all__ = ["ThroughputRun", "Throughput", "measure_throughput", "machine_ceiling", "DEFAULT_RANGES"]
 
@@ -145,7 +145,7 @@ class Throughput:
 def _warm_worker(spec, pause: float = 0.0):
     """Run one backbone (loads the kernels), then wait ``pause`` s so that concurrent
     warm-up tasks land on different pool workers."""
-    from .runspec import execute
+    from mmshbm.analysis.runspec import execute
 
     execute(spec)
     time.sleep(pause)
@@ -167,7 +167,7 @@ def machine_ceiling(workers: int = 2, seconds: float = 0.3) -> float:
     perfectly parallel work: t(one copy alone) / t(``workers`` copies at once in a warm
     process pool). 1 on idle cores; about 2/3 when one other busy process shares two
     cores. An upper bound for the efficiency of any study measured at the same time."""
-    from .executors import process_pool
+    from mmshbm.analysis.executors import process_pool
 
     n = max(1, int(seconds * 2e7))
     with process_pool(workers) as pool:
@@ -218,11 +218,11 @@ def measure_throughput(n: int = 1000, *, harmonics: int = 3, elements: int = 8, 
     -------
     Throughput
     """
-    from .._warnings import BranchWarning
-    from .executors import auto_chunksize, process_pool
-    from .runspec import execute
-    from .studies import grid_specs, monte_carlo
-    from .studies import run_study as _run_study
+    from mmshbm import BranchWarning
+    from mmshbm.analysis.executors import auto_chunksize, process_pool
+    from mmshbm.analysis.runspec import execute
+    from mmshbm.analysis.studies import grid_specs, monte_carlo
+    from mmshbm.analysis.studies import run_study as _run_study
 
     def run_study(**kwargs):  # the branch checks' warnings are not the point here (they are in metadata)
         with warnings.catch_warnings():

@@ -1,17 +1,17 @@
-"""The benchmark tables of the README and of docs/benchmarks.md, from one recorded run of
+"""The benchmark tables of docs/validation.md and docs/benchmarks.md, from one recorded run of
 the airspeed-velocity suite (``benchmarks/bench_goals.py``, ``bench_studies.py`` and the
 model-size and forced benchmarks of :data:`RECORD_BENCH`).
 
-``mmshbm bench --from-asv [RESULTS]`` prints them; ``--update README.md
-docs/benchmarks.md`` writes them between the markers :data:`BEGIN` and :data:`END` of
-each file, so that the published figures are those of one recorded run and say which
-(commit, machine, date)::
+``python -m validation tables`` prints them (with the other tables of docs/validation.md);
+``--update docs/validation.md docs/benchmarks.md`` writes them between the markers
+:data:`BEGIN` and :data:`END` of each file, so that the published figures are those of
+one recorded run and say which (commit, machine, date)::
 
     OPENBLAS_NUM_THREADS=1 asv run --python=same --set-commit-hash $(git rev-parse HEAD) \\
         --bench "RECORD_BENCH"
-    mmshbm bench --from-asv --update README.md docs/benchmarks.md
+    python -m validation tables --update docs/validation.md docs/benchmarks.md
 
-with :data:`RECORD_BENCH` spelled out (README.md, docs/benchmarks.md). Rows of benchmarks
+with :data:`RECORD_BENCH` spelled out (docs/validation.md, docs/benchmarks.md). Rows of benchmarks
 the run did not record are left out.
 
 ``RESULTS`` is an asv results file (``.asv/results/<machine>/<commit>-<env>.json``) or a
@@ -37,7 +37,7 @@ __all__ = ["AsvRun", "DEFAULT_FOLDERS", "RECORD_BENCH", "find_results", "load_ru
            "equal_accuracy_table", "tables", "update_file", "BEGIN", "END"]
 
 #: markers of the generated block in a Markdown file
-BEGIN = "<!-- begin: tables from asv (mmshbm bench --from-asv --update) -->"
+BEGIN = "<!-- begin: tables from asv (python -m validation tables --update) -->"
 END = "<!-- end: tables from asv -->"
 
 #: the ``asv run --bench`` regex of the recorded run: the goal and study suites and the

@@ -10,7 +10,7 @@ several contacts (two contact nodes, one-sided stops). H is drawn from {1, 3, 5,
 
 :func:`run_case` runs the default backbone to 10 gaps under a wall-clock limit and says
 whether it reached its bound on the first mode's family; :func:`run_corpus` runs many
-and :func:`summary` tabulates them (``mmshbm bench --corpus N``).
+and :func:`summary` tabulates them (``python -m validation corpus N``).
 """
 
 from __future__ import annotations
@@ -135,7 +135,7 @@ def _case(i: int, seed: int, kinds, contacts, harmonics) -> CorpusCase:
 
 
 def _spring_mass_model(p: dict):
-    from ..model.model import Model
+    from mmshbm.model.model import Model
 
     masses, springs, parents = p["masses"], p["springs"], p["parents"]
     n_m = len(masses)
@@ -167,8 +167,8 @@ def _spring_mass_model(p: dict):
 
 
 def _beam_model(p: dict):
-    from ..fe.beam import TimoshenkoBeam
-    from ..model.model import Model
+    from mmshbm.fe.beam import TimoshenkoBeam
+    from mmshbm.model.model import Model
 
     beam = TimoshenkoBeam(p["length"], p["width"], p["height"], p["E"], p["rho"], gap=p["gaps"][0])
     model = beam.model(p["elements"], p["grading"])
@@ -275,7 +275,7 @@ def run_case(case: CorpusCase, *, time_limit: float = 30.0, compare_path: bool =
     exception is a result), with the further keyword arguments ``options`` of
     :func:`~mmshbm.backbone` (e.g. ``{"r": "residual"}``). A run past ``time_limit``
     seconds of processor time is interrupted at its next point (status "interrupted")."""
-    from ..methods.backbone import backbone
+    from mmshbm.methods.backbone import backbone
 
     t0, c0 = time.perf_counter(), time.process_time()
     try:
