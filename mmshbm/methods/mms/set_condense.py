@@ -1,0 +1,169 @@
+"""The linear structure condensed per harmonic onto a chosen set of DOFs (with or without mass).
+
+MMS-HBM condenses the structure onto its massless DOFs (:mod:`mmshbm.core.condense`). A
+smooth element needs no massless DOF: its DOFs may carry mass, and the structure is
+condensed exactly onto the set ``s`` of the element DOFs (and the contact and amplitude
+DOFs), every other DOF ``o`` eliminated per harmonic k from the dynamic stiffness
+
+    S_k(Ω) = K − (kΩ)² M + i kΩ C        (n, n), symmetric,
+    X_k = S_oo⁻¹ S_os,   D_k = S_ss − S_so X_k = T_kᵀ S_k T_k,   T_k = [I; −X_k],
+    ∂D_k/∂Ω = T_kᵀ (∂S_k/∂Ω) T_k,        ∂S_k/∂Ω = −2k²Ω M + i k C.
+
+A load F on the DOFs (harmonic k) condenses to P_k = T_kᵀ F = F_s − X_kᵀ F_o with
+Y_k = S_oo⁻¹ F_o, ∂P_k/∂Ω = −T_kᵀ (∂S_k/∂Ω) [0; Y_k]; the eliminated DOFs follow as
+q_o,k = Y_k − X_k q_s,k. The formulas use S_k = S_kᵀ (K, M, C symmetric).
+
+D_k has poles where kΩ is an eigenfrequency of the structure with the set held: there
+S_oo is singular and :class:`~mmshbm.core._errors.SingularDynamicStiffness` (an
+ArithmeticError: the continuation retries a smaller step) is raised. Small models are
+solved dense, larger ones with a sparse LU per harmonic.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg as la
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from ...core._errors import SingularDynamicStiffness
+
+__all__ = ["SetCondensation"]
+
+#: dense solves up to this many eliminated DOFs, sparse LU above
+_DENSE_LIMIT = 400
+#: a pivot below this fraction of the largest one makes S_oo singular
+_PIVOT_RTOL = 1e-13
+
+
+class SetCondensation:
+    """The dynamic stiffness of ``model`` condensed onto the DOFs ``dofs``.
+
+    Parameters
+    ----------
+    model : Model
+        The linear structure (M, K, damping).
+    dofs : sequence of int
+        The kept DOFs s (sorted, distinct); every other DOF is eliminated.
+    """
+
+    def __init__(self, model, dofs):
+        s = np.asarray(sorted(set(int(d) for d in dofs)), dtype=int)
+        n = model.n_dof
+        o = np.setdiff1d(np.arange(n), s)
+        self.s, self.o = s, o
+        self.n_s, self.n_o = len(s), len(o)
+        self.damped = model.damping is not None
+        mats = {"K": model.K, "M": model.M}
+        if self.damped:
+            mats["C"] = model.damping
+        self.dense = self.n_o <= _DENSE_LIMIT
+        self._blocks = {}
+        for name, A in mats.items():
+            A = sp.csr_matrix(A)
+            ss = A[s][:, s].toarray()
+            so = A[s][:, o].toarray()
+            oo = A[o][:, o]
+            self._blocks[name] = (ss, so, oo.toarray() if self.dense else oo.tocsc())
+        #: Ω -> per-harmonic (X_k (n_o, n_s), solver of S_oo) of the last evaluation
+        self._last = (None, None, None)
+
+    # ------------------------------------------------------------------ matrices
+    def _parts(self, k: int, omega: float, damped: bool):
+        """(S_ss, S_so, S_oo) and their Ω-derivatives at harmonic k."""
+        w = k * omega
+        Kss, Kso, Koo = self._blocks["K"]
+        Mss, Mso, Moo = self._blocks["M"]
+        S = [Kss - w * w * Mss, Kso - w * w * Mso, Koo - w * w * Moo]
+        dS = [-2.0 * k * w * Mss, -2.0 * k * w * Mso, -2.0 * k * w * Moo]
+        if damped and self.damped:
+            Css, Cso, Coo = self._blocks["C"]
+            S = [S[0] + 1j * w * Css, S[1] + 1j * w * Cso, S[2] + 1j * w * Coo]
+            dS = [dS[0] + 1j * k * Css, dS[1] + 1j * k * Cso, dS[2] + 1j * k * Coo]
+        return S, dS
+
+    def _factor(self, S_oo, k: int, omega: float):
+        """A solver of S_oo x = b; SingularDynamicStiffness where S_oo is singular."""
+        if self.dense:
+            lu, piv = la.lu_factor(S_oo, check_finite=False)
+            pivots = np.abs(np.diag(lu))
+            if not np.all(np.isfinite(pivots)) or pivots.min() <= _PIVOT_RTOL * max(pivots.max(), 1e-300):
+                raise SingularDynamicStiffness(self._singular_message(k, omega))
+            return lambda b: la.lu_solve((lu, piv), b, check_finite=False)
+        try:
+            lu = spla.splu(sp.csc_matrix(S_oo))
+        except RuntimeError:  # "Factor is exactly singular"
+            raise SingularDynamicStiffness(self._singular_message(k, omega)) from None
+        return lu.solve
+
+    @staticmethod
+    def _singular_message(k: int, omega: float) -> str:
+        return (f"the structure with the condensed DOFs held is singular at harmonic {k} of "
+                f"Ω = {omega:.9g} rad/s: kΩ sits on one of its eigenfrequencies")
+
+    # ------------------------------------------------------------------ condensation
+    def dynamic_stiffness(self, omega: float, harmonics: int, derivative: bool = True, damped: bool = False):
+        """(D, dD): D_k and ∂D_k/∂Ω for k = 0..H, shape (H+1, n_s, n_s); real undamped
+        (``damped=False``, the damping left out), complex with ``damped`` on a damped
+        model; dD None unless ``derivative``. Keeps X_k for :meth:`recover` and
+        :meth:`condensed_load`."""
+        cplx = damped and self.damped
+        dtype = complex if cplx else float
+        H1 = harmonics + 1
+        D = np.empty((H1, self.n_s, self.n_s), dtype=dtype)
+        dD = np.empty_like(D) if derivative else None
+        X_all, solvers = [], []
+        for k in range(H1):
+            S, dS = self._parts(k, omega, damped)
+            if self.n_o:
+                solve = self._factor(S[2], k, omega)
+                X = solve(np.asarray(S[1].T, dtype=dtype))
+                X = X.reshape(self.n_o, self.n_s)
+                D[k] = S[0] - S[1] @ X
+                if derivative:
+                    dSoo_X = dS[2] @ X
+                    D_part = dS[0] - dS[1] @ X - X.T @ dS[1].T + X.T @ dSoo_X
+                    dD[k] = D_part
+            else:
+                solve, X = None, np.zeros((0, self.n_s), dtype=dtype)
+                D[k] = S[0]
+                if derivative:
+                    dD[k] = dS[0]
+            X_all.append(X)
+            solvers.append(solve)
+        self._last = (float(omega), (cplx, X_all), solvers)
+        return D, dD
+
+    def _kept(self, omega: float, harmonics: int, damped: bool):
+        last, kept, solvers = self._last
+        cplx = damped and self.damped
+        if last != float(omega) or kept is None or kept[0] != cplx or len(kept[1]) < harmonics + 1:
+            self.dynamic_stiffness(omega, harmonics, derivative=False, damped=damped)
+            last, kept, solvers = self._last
+        return kept[1], solvers
+
+    def recover(self, omega: float, harmonics: int, damped: bool = False) -> list[np.ndarray]:
+        """[X_k (n_o, n_s)] for k = 0..H: the eliminated DOFs of a free harmonic follow as
+        q_o,k = −X_k q_s,k."""
+        return self._kept(omega, harmonics, damped)[0][: harmonics + 1]
+
+    def condensed_load(self, omega: float, k: int, load: np.ndarray, harmonics: int, damped: bool = True):
+        """(P_k (n_s,), ∂P_k/∂Ω (n_s,), Y_k (n_o,)) of the load ``load`` (n_dof,) at harmonic
+        k (module docstring)."""
+        X_all, solvers = self._kept(omega, harmonics, damped)
+        load = np.asarray(load)
+        F_s, F_o = load[self.s], load[self.o]
+        if not self.n_o:
+            return F_s.astype(complex), np.zeros(self.n_s, dtype=complex), np.zeros(0, dtype=complex)
+        X = X_all[k]
+        solve = solvers[k]
+        if damped and self.damped:
+            Y = np.asarray(solve(np.asarray(F_o, dtype=complex))).reshape(self.n_o)
+        else:  # a real factorisation: real and imaginary parts apart
+            F_o = np.asarray(F_o, dtype=complex)
+            Y = (np.asarray(solve(np.ascontiguousarray(F_o.real))).reshape(self.n_o)
+                 + 1j * np.asarray(solve(np.ascontiguousarray(F_o.imag))).reshape(self.n_o))
+        _, dS = self._parts(k, omega, damped)
+        P = F_s - X.T @ F_o
+        dP = -(dS[1] @ Y - X.T @ (dS[2] @ Y))
+        return P, dP, Y

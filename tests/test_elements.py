@@ -1,0 +1,154 @@
+"""The element protocol (mmshbm.elements): laws, JSON, validation, the model hook, the
+registry's refusals, the AFT force and the analytic Jacobian of the element problems."""
+
+import json
+
+import numpy as np
+import pytest
+from finite_differences import assert_derivative, assert_jacobian
+
+import mmshbm
+from mmshbm.elements import ELEMENTS, CompliantStop, CubicSpring, PolynomialSpring, from_json
+from mmshbm.methods.mms.element_aft import ElementForces
+from mmshbm.methods.mms.smooth import ElementBackboneProblem
+
+ELEMENT_CASES = [CubicSpring(dof=0, stiffness=2.5), CubicSpring(dofs=(1, 0), stiffness=-0.7),
+                 PolynomialSpring(dof=1, coefficients={2: 0.3, 3: 1.1, 5: -0.2}),
+                 CompliantStop(dof=0, gap=0.2, stiffness=40.0, side=-1),
+                 CompliantStop(dofs=(0, 1), gap=0.0, stiffness=3.0)]
+
+
+def duffing(k3=1.0):
+    return mmshbm.Model.from_matrices([[1.0]], [[1.0]], [], [], []).with_element(
+        CubicSpring(dof=0, stiffness=k3))
+
+
+@pytest.mark.parametrize("element", ELEMENT_CASES, ids=repr)
+def test_law_derivative_and_potential(element):
+    """φ' is the derivative of φ and φ the derivative of V (finite differences with their own
+    error bound), at points away from a compliant stop's kink."""
+    for delta in (-0.9, -0.35, 0.13, 0.6):
+        phi, dphi = element.law(np.array([delta]))
+        assert_derivative(lambda s, d=delta: element.law(np.array([d + s]))[0], dphi, 1e-3, name="phi'")
+        assert_derivative(lambda s, d=delta: element.potential(np.array([d + s])), phi, 1e-3, name="V'")
+    assert element.potential(np.zeros(1))[0] == 0.0
+
+
+@pytest.mark.parametrize("element", ELEMENT_CASES, ids=repr)
+def test_json_round_trip_and_registration(element):
+    record = json.loads(json.dumps(element.to_json()))
+    assert from_json(record) == element
+    assert ELEMENTS[record["kind"]] is type(element)
+    assert hash(from_json(record)) == hash(element)
+
+
+def test_two_dof_element_acts_on_the_relative_displacement():
+    """Between DOFs (i, j) the force is +φ(q_i − q_j) on i and −φ on j, its Jacobian w wᵀ φ'."""
+    spring = CubicSpring(dofs=(2, 5), stiffness=3.0)
+    q = np.array([[0.4, -0.1], [0.1, 0.3]])  # rows: DOF 2, DOF 5; two instants
+    f, df = spring.sampled(q)
+    delta = q[0] - q[1]
+    np.testing.assert_allclose(f, [3.0 * delta**3, -3.0 * delta**3], rtol=4e-16, atol=0)
+    np.testing.assert_allclose(df, [[9.0 * delta**2, -9.0 * delta**2], [-9.0 * delta**2, 9.0 * delta**2]],
+                               rtol=4e-16, atol=0)
+
+
+def test_compliant_stop_engages_behind_its_gap():
+    stop = CompliantStop(dof=0, gap=0.5, stiffness=10.0, side=-1)
+    phi, dphi = stop.law(np.array([-0.75, -0.5, 0.0, 0.75]))
+    np.testing.assert_array_equal(phi, [-2.5, 0.0, 0.0, 0.0])  # pushes back toward +
+    np.testing.assert_array_equal(dphi, [10.0, 0.0, 0.0, 0.0])
+
+
+@pytest.mark.parametrize("make, message", [
+    (lambda: CubicSpring(dof=0, stiffness=0.0), "nonzero"),
+    (lambda: CubicSpring(stiffness=1.0), "exactly one of dof"),
+    (lambda: CubicSpring(dof=0, stiffness=1.0, dofs=(0, 1)), "exactly one of dof"),
+    (lambda: CubicSpring(dofs=(3, 3), stiffness=1.0), "two different DOFs"),
+    (lambda: CubicSpring(dofs=(0, 1, 2), stiffness=1.0), "one DOF or a pair"),
+    (lambda: PolynomialSpring(dof=0, coefficients={1: 2.0}), "integers >= 2"),
+    (lambda: PolynomialSpring(dof=0, coefficients={3: 0.0}), "every coefficient"),
+    (lambda: CompliantStop(dof=0, gap=-1.0, stiffness=1.0), "gap must be >= 0"),
+    (lambda: CompliantStop(dof=0, gap=0.1, stiffness=0.0), "stiffness must be positive"),
+    (lambda: CompliantStop(dof=0, gap=0.1, stiffness=1.0, side=2), "side must be"),
+    (lambda: from_json({"kind": "no_such_element"}), "unknown element kind"),
+])
+def test_bad_elements_are_refused_by_name(make, message):
+    with pytest.raises((ValueError, TypeError), match=message):
+        make()
+
+
+def test_elements_are_immutable():
+    with pytest.raises(AttributeError, match="immutable"):
+        CubicSpring(dof=0, stiffness=1.0).stiffness = 2.0
+
+
+def test_with_element_hooks_into_the_model():
+    base = mmshbm.Model.from_matrices(np.eye(2), [[2.0, -1.0], [-1.0, 2.0]], [], [], [])
+    spring = CubicSpring(dofs=(0, 1), stiffness=1.0)
+    model = base.with_element(spring)
+    assert model.elements == (spring,) and base.elements == ()
+    assert model.amplitude_dof == 0  # no contacts: the first element's DOF
+    assert model.fingerprint() != base.fingerprint() and not model.same_as(base)
+    recorded = model.description["transforms"][-1]
+    assert recorded == {"name": "with_element", "args": {"element": spring.to_json()}}
+    assert model.with_element(spring.to_json()).elements == (spring, spring)
+    assert "cubic_spring on [0, 1]" in repr(model)
+    with pytest.raises(ValueError, match="outside the model's DOFs 0..1"):
+        base.with_element(CubicSpring(dof=2, stiffness=1.0))
+    with pytest.raises(TypeError, match="must be an mmshbm.elements.Element"):
+        base.with_element("cubic")
+
+
+@pytest.mark.parametrize("method", ["penalty", "shooting", "penalty-reduced"])
+def test_methods_without_elements_refuse_them_by_name(method):
+    with pytest.raises(NotImplementedError, match=f"method '{method}' .*cubic_spring.*use method 'mmshbm'"):
+        mmshbm.backbone(duffing(), harmonics=3, method=method, max_amplitude=1.0)
+
+
+def test_damped_model_with_elements_is_refused_until_epmc_takes_them():
+    model = duffing().with_damping(modal_ratio=0.01)
+    with pytest.raises(NotImplementedError, match="'epmc' .*cubic_spring"):
+        mmshbm.backbone(model, harmonics=3, max_amplitude=1.0)
+
+
+def test_element_on_a_contact_dof_is_refused():
+    model = mmshbm.default_beam().model(4)
+    with pytest.raises(ValueError, match="contact DOF"):
+        ElementBackboneProblem(model.with_element(CubicSpring(dof=model.contact_dof, stiffness=1.0)), 3)
+
+
+def test_aft_of_a_cubic_is_exact():
+    """cos³τ = (3 cos τ + cos 3τ)/4: the AFT force of a·cos τ on N = 4H+1 samples."""
+    H, a = 3, 0.7
+    forces = ElementForces([CubicSpring(dof=0, stiffness=2.0)], np.array([0]), H, 4 * H + 1, cosine_only=True)
+    X = np.zeros((H + 1, 1))
+    X[1, 0] = a
+    F, _ = forces.evaluate(X, jacobian=False)
+    np.testing.assert_allclose(F[:, 0], [0.0, 2.0 * 0.75 * a**3, 0.0, 2.0 * 0.25 * a**3], rtol=0, atol=1e-15)
+
+
+def test_backbone_jacobian_matches_finite_differences():
+    """The analytic Jacobian of the element backbone problem (condensation + AFT) on a
+    cantilever with a cubic spring between a DOF with mass and the massless tip, and a
+    compliant stop on another DOF with mass (away from its kink)."""
+    base = mmshbm.default_beam().model(4)
+    model = (mmshbm.Model.from_matrices(base.M, base.K, [], [], [])
+             .with_element(CubicSpring(dofs=(4, base.contact_dof), stiffness=3e9))
+             .with_element(CompliantStop(dof=2, gap=1e-4, stiffness=1e6)))
+    problem = ElementBackboneProblem(model, harmonics=3)
+    a = np.zeros((4, problem.n_s))
+    a[1] = 1.5e-3 * problem.mode_shape_s
+    a[3] = 2e-5 * problem.mode_shape_s
+    u = problem.pack(a, 1.1 * problem.omega_ref)
+    R, J = problem.residual_and_jacobian(u)
+    np.testing.assert_array_equal(R, problem.residual(u))
+    assert_jacobian(problem.residual, u, J, 1e-6 * np.abs(u).max())
+
+
+def test_registry_states_the_elements_of_every_method():
+    from mmshbm.methods.frequency_response import FORCED_METHODS
+    from mmshbm.methods.registry import FORCED_METHOD_ELEMENTS, METHOD_ELEMENTS, METHODS
+
+    assert set(METHOD_ELEMENTS) == set(METHODS) and set(FORCED_METHOD_ELEMENTS) == set(FORCED_METHODS)
+    assert set(METHOD_ELEMENTS["mmshbm"]) == set(ELEMENTS)
