@@ -152,3 +152,22 @@ def test_registry_states_the_elements_of_every_method():
 
     assert set(METHOD_ELEMENTS) == set(METHODS) and set(FORCED_METHOD_ELEMENTS) == set(FORCED_METHODS)
     assert set(METHOD_ELEMENTS["mmshbm"]) == set(ELEMENTS)
+
+
+@pytest.mark.parametrize("method", ["penalty", "shooting"])
+def test_forced_methods_without_elements_refuse_them_by_name(method):
+    model = duffing().with_damping(modal_ratio=0.05)
+    refusal = f"method '{method}' \\(frequency response\\).*cubic_spring"
+    with pytest.raises(NotImplementedError, match=refusal):
+        mmshbm.frequency_response(model, [0.1], (0.1, 0.3), harmonics=3, method=method)
+
+
+def test_forced_elements_beside_stops_are_refused():
+    from mmshbm.methods.frequency_response import make_forced_problem
+
+    beam = mmshbm.default_beam().model(4).with_damping(modal_ratio=0.01)
+    model = beam.with_element(CubicSpring(dof=2, stiffness=1e9))
+    force = np.zeros(model.n_dof)
+    force[2] = 1.0
+    with pytest.raises(NotImplementedError, match="no stops"):
+        make_forced_problem(model, force)

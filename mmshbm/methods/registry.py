@@ -40,11 +40,11 @@ _AFT_ELEMENTS = ("cubic_spring", "polynomial_spring", "compliant_stop")
 METHOD_ELEMENTS = {"mmshbm": _AFT_ELEMENTS, "penalty": (), "penalty-reduced": (), "shooting": (), "epmc": (),
                    "phase_resonance": ()}
 #: forced method name -> the element kinds its frequency response takes
-FORCED_METHOD_ELEMENTS = {"mmshbm": (), "penalty": (), "shooting": ()}
+FORCED_METHOD_ELEMENTS = {"mmshbm": _AFT_ELEMENTS, "penalty": (), "shooting": ()}
 #: method name -> "module:class" of the backbone problem of a model with elements
 ELEMENT_PROBLEMS = {"mmshbm": "mmshbm.methods.mms.smooth:ElementBackboneProblem"}
 #: forced method name -> "module:class" of the forced problem of a model with elements
-FORCED_ELEMENT_PROBLEMS: dict[str, str] = {}
+FORCED_ELEMENT_PROBLEMS = {"mmshbm": "mmshbm.methods.mms.smooth_forced:ElementForcedProblem"}
 
 
 def check_elements(model: Model, method: str, forced: bool = False) -> None:
