@@ -15,7 +15,10 @@ q_o,k = Y_k − X_k q_s,k. The formulas use S_k = S_kᵀ (K, M, C symmetric).
 
 D_k has poles where kΩ is an eigenfrequency of the structure with the set held: there
 S_oo is singular and :class:`~mmshbm.core._errors.SingularDynamicStiffness` (an
-ArithmeticError: the continuation retries a smaller step) is raised. Small models are
+ArithmeticError: the continuation retries a smaller step) is raised. Through a pole det D_k
+changes sign through infinity (det S_k = det S_oo det D_k); the undamped condensation
+returns sgn det S_oo,k with D_k (:attr:`SetCondensation.pole_signs`), so that a residual can
+keep the sign of its Jacobian's determinant where only a pole is crossed. Small models are
 solved dense, larger ones with a sparse LU per harmonic.
 """
 
@@ -83,18 +86,28 @@ class SetCondensation:
         return S, dS
 
     def _factor(self, S_oo, k: int, omega: float):
-        """A solver of S_oo x = b; SingularDynamicStiffness where S_oo is singular."""
+        """(a solver of S_oo x = b, sgn det S_oo (1.0 for a complex S_oo));
+        SingularDynamicStiffness where S_oo is singular."""
+        real = not np.iscomplexobj(S_oo)
         if self.dense:
             lu, piv = la.lu_factor(S_oo, check_finite=False)
-            pivots = np.abs(np.diag(lu))
+            diagonal = np.diag(lu)
+            pivots = np.abs(diagonal)
             if not np.all(np.isfinite(pivots)) or pivots.min() <= _PIVOT_RTOL * max(pivots.max(), 1e-300):
                 raise SingularDynamicStiffness(self._singular_message(k, omega))
-            return lambda b: la.lu_solve((lu, piv), b, check_finite=False)
+            sign = 1.0
+            if real:  # the row swaps' parity times the pivots' signs
+                swaps = int(np.count_nonzero(piv != np.arange(len(piv))))
+                sign = (-1.0) ** swaps * float(np.prod(np.sign(diagonal)))
+            return (lambda b: la.lu_solve((lu, piv), b, check_finite=False)), sign
         try:
             lu = spla.splu(sp.csc_matrix(S_oo))
         except RuntimeError:  # "Factor is exactly singular"
             raise SingularDynamicStiffness(self._singular_message(k, omega)) from None
-        return lu.solve
+        sign = 1.0
+        if real:  # det = det(P_r) det(L) det(U) det(P_c), L unit lower triangular
+            sign = _parity(lu.perm_r) * _parity(lu.perm_c) * float(np.prod(np.sign(lu.U.diagonal())))
+        return lu.solve, sign
 
     @staticmethod
     def _singular_message(k: int, omega: float) -> str:
@@ -113,10 +126,11 @@ class SetCondensation:
         D = np.empty((H1, self.n_s, self.n_s), dtype=dtype)
         dD = np.empty_like(D) if derivative else None
         X_all, solvers = [], []
+        signs = np.ones(H1)
         for k in range(H1):
             S, dS = self._parts(k, omega, damped)
             if self.n_o:
-                solve = self._factor(S[2], k, omega)
+                solve, signs[k] = self._factor(S[2], k, omega)
                 X = solve(np.asarray(S[1].T, dtype=dtype))
                 X = X.reshape(self.n_o, self.n_s)
                 D[k] = S[0] - S[1] @ X
@@ -132,6 +146,8 @@ class SetCondensation:
             X_all.append(X)
             solvers.append(solve)
         self._last = (float(omega), (cplx, X_all), solvers)
+        #: sgn det S_oo,k (H+1,) of the last call (1 where complex or nothing is eliminated)
+        self.pole_signs = signs
         return D, dD
 
     def _kept(self, omega: float, harmonics: int, damped: bool):
@@ -167,3 +183,21 @@ class SetCondensation:
         P = F_s - X.T @ F_o
         dP = -(dS[1] @ Y - X.T @ (dS[2] @ Y))
         return P, dP, Y
+
+
+def _parity(perm: np.ndarray) -> float:
+    """The sign (±1.0) of the permutation ``perm`` (by its cycles)."""
+    perm = np.asarray(perm)
+    seen = np.zeros(len(perm), dtype=bool)
+    sign = 1.0
+    for start in range(len(perm)):
+        if seen[start]:
+            continue
+        length, j = 0, start
+        while not seen[j]:
+            seen[j] = True
+            j = perm[j]
+            length += 1
+        if length % 2 == 0:
+            sign = -sign
+    return sign

@@ -182,7 +182,7 @@ class ElementBackboneProblem(OneEvaluation, BackboneProblemBase):
                       np.empty(2 * H + 1), np.empty(2 * H + 1), np.empty((H + 1, H + 1)))
         self._no_poles = (np.zeros(0), np.zeros(0, dtype=np.int64), np.zeros((0, n_s)), np.zeros(0))
         self._unit = (np.ones(self.n_unknowns - 1), np.ones(self.n_unknowns))
-        self._cached = (None, None, None)
+        self._cached = (None, None)
         #: residual (+ Jacobian) evaluations so far
         self.evaluations = 0
 
@@ -225,18 +225,20 @@ class ElementBackboneProblem(OneEvaluation, BackboneProblemBase):
 
     # ------------------------------------------------------------------ residual
     def _condensed(self, omega: float, derivative: bool):
-        last, D, dD = self._cached
-        if last == omega and (dD is not None or not derivative):
-            return D, dD
+        """(D, dD, sgn det S_oo,k (H+1,)) at Ω (:class:`SetCondensation`)."""
+        last, kept = self._cached
+        if last == omega and (kept[1] is not None or not derivative):
+            return kept
         D, dD = self.cond.dynamic_stiffness(omega, self.H, derivative=derivative)
-        self._cached = (omega, D, dD)
-        return D, dD
+        kept = (D, dD, self.cond.pole_signs.copy())
+        self._cached = (omega, kept)
+        return kept
 
     def _evaluate(self, u: np.ndarray, jacobian: bool):
         """Scaled residual ((H+1) n_s,) and, if asked, its Jacobian ((H+1) n_s, (H+1) n_s + 1)."""
         self.evaluations += 1
         a, omega = self.unpack(u)
-        D, dD = self._condensed(omega, jacobian)
+        D, dD, signs = self._condensed(omega, jacobian)
         n_r = self.n_unknowns - 1
         R = np.empty(n_r)
         J = np.empty((n_r, n_r + 1)) if jacobian else np.empty((1, 1))
@@ -247,12 +249,23 @@ class ElementBackboneProblem(OneEvaluation, BackboneProblemBase):
                      self._sin_table, self._tau, rows, cols, jacobian, R, J, *self._work)
         F, dF = self.aft.evaluate(a, jacobian)
         R += F.ravel()
-        R /= self.rowscale
+        # the first row of harmonic k times sgn det S_oo,k: det J keeps its sign through a pole
+        # of D_k (the zeros are the same)
+        rows = self._row_scale(signs)
+        R /= rows
         if not jacobian:
             return R
         J[:, :-1] += dF.reshape(n_r, n_r)
-        J *= self.colscale[None, :] / self.rowscale[:, None]
+        J *= self.colscale[None, :] / rows[:, None]
         return R, J
+
+    def _row_scale(self, signs: np.ndarray) -> np.ndarray:
+        """The row scale with the first row of each harmonic k signed by sgn det S_oo,k."""
+        if np.all(signs > 0):
+            return self.rowscale
+        rows = self.rowscale.copy()
+        rows[np.arange(self.H + 1) * self.n_s] *= signs
+        return rows
 
     # ------------------------------------------------------------------ results
     def coefficients(self, u: np.ndarray) -> np.ndarray:
@@ -276,7 +289,7 @@ class ElementBackboneProblem(OneEvaluation, BackboneProblemBase):
         of structure and elements at the turning point τ = 0, where every velocity
         vanishes), contact_force_max (N, the stops' largest force; 0 without stops)."""
         a, omega = self.unpack(u)
-        D, _ = self._condensed(omega, False)
+        D = self._condensed(omega, False)[0]
         Q = self._coefficients(a, omega)
         q0 = Q[:, 0] + Q[:, 1::2].sum(axis=1)
         energy = 0.5 * float(q0 @ (self.model.K @ q0)) + self.aft.potential(q0[self.cond.s])
