@@ -37,13 +37,14 @@ _CONTINUATION_FIELDS = CONTINUATION_FIELDS
 #: the smooth and piecewise-linear elements (``Element.kind``) that MMS-HBM takes by AFT
 _AFT_ELEMENTS = ("cubic_spring", "polynomial_spring", "compliant_stop")
 #: method name -> the element kinds its backbone takes (a method not named takes none)
-METHOD_ELEMENTS = {"mmshbm": _AFT_ELEMENTS, "penalty": _AFT_ELEMENTS, "penalty-reduced": (), "shooting": (),
-                   "epmc": (), "phase_resonance": ()}
+METHOD_ELEMENTS = {"mmshbm": _AFT_ELEMENTS, "penalty": _AFT_ELEMENTS, "penalty-reduced": (),
+                   "shooting": _AFT_ELEMENTS, "epmc": (), "phase_resonance": ()}
 #: forced method name -> the element kinds its frequency response takes
 FORCED_METHOD_ELEMENTS = {"mmshbm": _AFT_ELEMENTS, "penalty": (), "shooting": ()}
 #: method name -> "module:class" of the backbone problem of a model with elements
 ELEMENT_PROBLEMS = {"mmshbm": "mmshbm.methods.mms.smooth:ElementBackboneProblem",
-                    "penalty": "mmshbm.methods.penalty.elements:ElementHBMProblem"}
+                    "penalty": "mmshbm.methods.penalty.elements:ElementHBMProblem",
+                    "shooting": "mmshbm.methods.shooting.elements:ElementShootingProblem"}
 #: forced method name -> "module:class" of the forced problem of a model with elements
 FORCED_ELEMENT_PROBLEMS = {"mmshbm": "mmshbm.methods.mms.smooth_forced:ElementForcedProblem"}
 
