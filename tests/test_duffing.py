@@ -234,3 +234,19 @@ def test_shooting_baseline_converges_to_the_exact_backbone():
     exact = exact_frequency(2.0)
     assert (omega[256] / exact - 1) / (omega[512] / exact - 1) == pytest.approx(4.0, rel=0.02)
     assert (4 * omega[512] - omega[256]) / 3 == pytest.approx(exact, rel=1e-8)
+
+
+def test_damped_nonlinear_mode_of_the_duffing_oscillator():
+    """EPMC (mmshbm.backbone on the damped model dispatches to it): with mass-proportional
+    damping C = αM the term −ξM q' cancels it exactly, so ξ = α along the whole mode (to
+    round-off) and Ω is the conservative backbone: the closed form at H = 1 (1e-9) and the
+    exact elliptic one at H = 15 (1e-8); the damping ratio is α/(2Ω)."""
+    model = duffing().with_damping(rayleigh=(0.05, 0.0))
+    for H, reference in ((1, lambda A: np.sqrt(1 + 0.75 * A**2)), (15, exact_frequency)):
+        b = mmshbm.backbone(model, harmonics=H, max_amplitude=2.0)
+        assert b.method == "epmc" and b.metadata["requested_method"] == "mmshbm"
+        assert b.amplitude[-1] == pytest.approx(2.0, rel=1e-9)
+        np.testing.assert_allclose(b.records["xi"], 0.05, rtol=1e-12, atol=0)
+        tolerance = 1e-8 if H > 1 else 1e-9
+        np.testing.assert_allclose(2 * np.pi * b.frequency, reference(b.amplitude), rtol=tolerance)
+        np.testing.assert_allclose(b.damping_ratio, 0.05 / (4 * np.pi * b.frequency), rtol=1e-12)

@@ -38,13 +38,14 @@ _CONTINUATION_FIELDS = CONTINUATION_FIELDS
 _AFT_ELEMENTS = ("cubic_spring", "polynomial_spring", "compliant_stop")
 #: method name -> the element kinds its backbone takes (a method not named takes none)
 METHOD_ELEMENTS = {"mmshbm": _AFT_ELEMENTS, "penalty": _AFT_ELEMENTS, "penalty-reduced": (),
-                   "shooting": _AFT_ELEMENTS, "epmc": (), "phase_resonance": ()}
+                   "shooting": _AFT_ELEMENTS, "epmc": _AFT_ELEMENTS, "phase_resonance": ()}
 #: forced method name -> the element kinds its frequency response takes
 FORCED_METHOD_ELEMENTS = {"mmshbm": _AFT_ELEMENTS, "penalty": (), "shooting": ()}
 #: method name -> "module:class" of the backbone problem of a model with elements
 ELEMENT_PROBLEMS = {"mmshbm": "mmshbm.methods.mms.smooth:ElementBackboneProblem",
                     "penalty": "mmshbm.methods.penalty.elements:ElementHBMProblem",
-                    "shooting": "mmshbm.methods.shooting.elements:ElementShootingProblem"}
+                    "shooting": "mmshbm.methods.shooting.elements:ElementShootingProblem",
+                    "epmc": "mmshbm.methods.mms.smooth_epmc:ElementEPMCProblem"}
 #: forced method name -> "module:class" of the forced problem of a model with elements
 FORCED_ELEMENT_PROBLEMS = {"mmshbm": "mmshbm.methods.mms.smooth_forced:ElementForcedProblem"}
 

@@ -5,9 +5,12 @@ smooth element needs no massless DOF: its DOFs may carry mass, and the structure
 condensed exactly onto the set ``s`` of the element DOFs (and the contact and amplitude
 DOFs), every other DOF ``o`` eliminated per harmonic k from the dynamic stiffness
 
-    S_k(Ω) = K − (kΩ)² M + i kΩ C        (n, n), symmetric,
+    S_k(Ω) = K − (kΩ)² M + i kΩ (C − ξ M)        (n, n), symmetric,
     X_k = S_oo⁻¹ S_os,   D_k = S_ss − S_so X_k = T_kᵀ S_k T_k,   T_k = [I; −X_k],
-    ∂D_k/∂Ω = T_kᵀ (∂S_k/∂Ω) T_k,        ∂S_k/∂Ω = −2k²Ω M + i k C.
+    ∂D_k/∂Ω = T_kᵀ (∂S_k/∂Ω) T_k,        ∂S_k/∂Ω = −2k²Ω M + i k (C − ξ M),
+
+and likewise ∂D_k/∂ξ = T_kᵀ (−ikΩ M) T_k (ξ: the negative mass-proportional damping of
+the extended periodic motion concept, 0 elsewhere).
 
 A load F on the DOFs (harmonic k) condenses to P_k = T_kᵀ F = F_s − X_kᵀ F_o with
 Y_k = S_oo⁻¹ F_o, ∂P_k/∂Ω = −T_kᵀ (∂S_k/∂Ω) [0; Y_k]; the eliminated DOFs follow as
@@ -68,22 +71,27 @@ class SetCondensation:
             so = A[s][:, o].toarray()
             oo = A[o][:, o]
             self._blocks[name] = (ss, so, oo.toarray() if self.dense else oo.tocsc())
-        #: Ω -> per-harmonic (X_k (n_o, n_s), solver of S_oo) of the last evaluation
+        #: Ω -> per-harmonic (X_k (n_o, n_s), solver of S_oo) of the last evaluation, and its ξ
         self._last = (None, None, None)
+        self._last_xi = 0.0
+        self.dD_dxi = None
 
     # ------------------------------------------------------------------ matrices
-    def _parts(self, k: int, omega: float, damped: bool):
-        """(S_ss, S_so, S_oo) and their Ω-derivatives at harmonic k."""
+    def _parts(self, k: int, omega: float, damped: bool, xi: float = 0.0):
+        """(S_ss, S_so, S_oo), their Ω-derivatives and their ξ-derivatives at harmonic k."""
         w = k * omega
         Kss, Kso, Koo = self._blocks["K"]
         Mss, Mso, Moo = self._blocks["M"]
         S = [Kss - w * w * Mss, Kso - w * w * Mso, Koo - w * w * Moo]
         dS = [-2.0 * k * w * Mss, -2.0 * k * w * Mso, -2.0 * k * w * Moo]
+        dS_xi = [-1j * w * Mss, -1j * w * Mso, -1j * w * Moo]
         if damped and self.damped:
             Css, Cso, Coo = self._blocks["C"]
-            S = [S[0] + 1j * w * Css, S[1] + 1j * w * Cso, S[2] + 1j * w * Coo]
-            dS = [dS[0] + 1j * k * Css, dS[1] + 1j * k * Cso, dS[2] + 1j * k * Coo]
-        return S, dS
+            S = [S[0] + 1j * w * (Css - xi * Mss), S[1] + 1j * w * (Cso - xi * Mso),
+                 S[2] + 1j * w * (Coo - xi * Moo)]
+            dS = [dS[0] + 1j * k * (Css - xi * Mss), dS[1] + 1j * k * (Cso - xi * Mso),
+                  dS[2] + 1j * k * (Coo - xi * Moo)]
+        return S, dS, dS_xi
 
     def _factor(self, S_oo, k: int, omega: float):
         """(a solver of S_oo x = b, sgn det S_oo (1.0 for a complex S_oo));
@@ -115,53 +123,63 @@ class SetCondensation:
                 f"Ω = {omega:.9g} rad/s: kΩ sits on one of its eigenfrequencies")
 
     # ------------------------------------------------------------------ condensation
-    def dynamic_stiffness(self, omega: float, harmonics: int, derivative: bool = True, damped: bool = False):
+    def dynamic_stiffness(self, omega: float, harmonics: int, derivative: bool = True, damped: bool = False,
+                          xi: float = 0.0):
         """(D, dD): D_k and ∂D_k/∂Ω for k = 0..H, shape (H+1, n_s, n_s); real undamped
         (``damped=False``, the damping left out), complex with ``damped`` on a damped
-        model; dD None unless ``derivative``. Keeps X_k for :meth:`recover` and
-        :meth:`condensed_load`."""
+        model (with the negative damping ``xi`` (1/s), 1/s: C − ξM); dD None unless
+        ``derivative``, which also sets :attr:`dD_dxi` (∂D_k/∂ξ; damped only). Keeps X_k
+        for :meth:`recover` and :meth:`condensed_load`."""
         cplx = damped and self.damped
         dtype = complex if cplx else float
         H1 = harmonics + 1
         D = np.empty((H1, self.n_s, self.n_s), dtype=dtype)
         dD = np.empty_like(D) if derivative else None
+        dD_xi = np.empty((H1, self.n_s, self.n_s), dtype=complex) if derivative and cplx else None
         X_all, solvers = [], []
         signs = np.ones(H1)
         for k in range(H1):
-            S, dS = self._parts(k, omega, damped)
+            S, dS, dS_xi = self._parts(k, omega, damped, xi)
             if self.n_o:
                 solve, signs[k] = self._factor(S[2], k, omega)
                 X = solve(np.asarray(S[1].T, dtype=dtype))
                 X = X.reshape(self.n_o, self.n_s)
                 D[k] = S[0] - S[1] @ X
                 if derivative:
-                    dSoo_X = dS[2] @ X
-                    D_part = dS[0] - dS[1] @ X - X.T @ dS[1].T + X.T @ dSoo_X
-                    dD[k] = D_part
+                    dD[k] = _congruence(dS, X)
+                    if dD_xi is not None:
+                        dD_xi[k] = _congruence(dS_xi, X)
             else:
                 solve, X = None, np.zeros((0, self.n_s), dtype=dtype)
                 D[k] = S[0]
                 if derivative:
                     dD[k] = dS[0]
+                    if dD_xi is not None:
+                        dD_xi[k] = dS_xi[0]
             X_all.append(X)
             solvers.append(solve)
+        #: ∂D_k/∂ξ (H+1, n_s, n_s) of the last damped call with ``derivative`` (else None)
+        self.dD_dxi = dD_xi
         self._last = (float(omega), (cplx, X_all), solvers)
+        self._last_xi = float(xi)
         #: sgn det S_oo,k (H+1,) of the last call (1 where complex or nothing is eliminated)
         self.pole_signs = signs
         return D, dD
 
-    def _kept(self, omega: float, harmonics: int, damped: bool):
+    def _kept(self, omega: float, harmonics: int, damped: bool, xi: float = 0.0):
         last, kept, solvers = self._last
         cplx = damped and self.damped
-        if last != float(omega) or kept is None or kept[0] != cplx or len(kept[1]) < harmonics + 1:
-            self.dynamic_stiffness(omega, harmonics, derivative=False, damped=damped)
+        if (last != float(omega) or kept is None or kept[0] != cplx or len(kept[1]) < harmonics + 1
+                or self._last_xi != xi):
+            self.dynamic_stiffness(omega, harmonics, derivative=False, damped=damped, xi=xi)
             last, kept, solvers = self._last
         return kept[1], solvers
 
-    def recover(self, omega: float, harmonics: int, damped: bool = False) -> list[np.ndarray]:
+    def recover(self, omega: float, harmonics: int, damped: bool = False,
+                xi: float = 0.0) -> list[np.ndarray]:
         """[X_k (n_o, n_s)] for k = 0..H: the eliminated DOFs of a free harmonic follow as
         q_o,k = −X_k q_s,k."""
-        return self._kept(omega, harmonics, damped)[0][: harmonics + 1]
+        return self._kept(omega, harmonics, damped, xi)[0][: harmonics + 1]
 
     def condensed_load(self, omega: float, k: int, load: np.ndarray, harmonics: int, damped: bool = True):
         """(P_k (n_s,), ∂P_k/∂Ω (n_s,), Y_k (n_o,)) of the load ``load`` (n_dof,) at harmonic
@@ -179,10 +197,16 @@ class SetCondensation:
             F_o = np.asarray(F_o, dtype=complex)
             Y = (np.asarray(solve(np.ascontiguousarray(F_o.real))).reshape(self.n_o)
                  + 1j * np.asarray(solve(np.ascontiguousarray(F_o.imag))).reshape(self.n_o))
-        _, dS = self._parts(k, omega, damped)
+        dS = self._parts(k, omega, damped)[1]
         P = F_s - X.T @ F_o
         dP = -(dS[1] @ Y - X.T @ (dS[2] @ Y))
         return P, dP, Y
+
+
+def _congruence(dS, X: np.ndarray) -> np.ndarray:
+    """T_kᵀ dS T_k = dS_ss − dS_so X − Xᵀ dS_os + Xᵀ dS_oo X (dS = [dS_ss, dS_so, dS_oo],
+    symmetric)."""
+    return dS[0] - dS[1] @ X - X.T @ dS[1].T + X.T @ (dS[2] @ X)
 
 
 def _parity(perm: np.ndarray) -> float:

@@ -36,12 +36,67 @@ from .forced import Excitation, harmonic_force
 from .set_condense import SetCondensation
 from .smooth import element_length, element_set
 
-__all__ = ["ElementForcedProblem"]
+__all__ = ["ElementForcedProblem", "harmonic_balance"]
 
 #: Runge–Kutta steps per sample of the AFT grid in the monodromy
 _STEPS_PER_SAMPLE = 4
 #: stability "auto": at most this many DOFs with mass
 _AUTO_STABILITY_DOFS = 50
+
+
+def harmonic_balance(aft: ElementForces, x: np.ndarray, D: np.ndarray, load, parameters=(), jacobian=True):
+    """The balance of every harmonic on the condensed set, in the full basis (module docstring).
+
+    Parameters
+    ----------
+    aft : ElementForces
+        The elements' AFT (full basis).
+    x : ndarray (2H+1, n_s)
+        NLvib-ordered coefficients of the set's DOFs.
+    D : ndarray (H+1, n_s, n_s), complex
+        The condensed dynamic stiffness.
+    load : ndarray (n_s,), complex, or None
+        The condensed load of harmonic 1 (already times σ(Ω)).
+    parameters : sequence of (∂D/∂p (H+1, n_s, n_s), ∂load/∂p (n_s,) or None)
+        One per parameter p whose column is asked.
+
+    Returns
+    -------
+    R : ndarray (2H+1, n_s)
+        Re Z_k + F^c_k and −Im Z_k + F^s_k (F^c_0 + D_0 c_0 for k = 0).
+    J : ndarray (2H+1, n_s, 2H+1, n_s) or None
+        ∂R/∂x.
+    dR : list of ndarray (2H+1, n_s)
+        ∂R/∂p for each of ``parameters``.
+    """
+    H, n_s = len(D) - 1, x.shape[1]
+    R, dF = aft.evaluate(x, jacobian)
+    R = R.copy()
+    R[0] += (D[0] @ x[0]).real
+    J = dF if jacobian else None
+    if jacobian:
+        J[0, :, 0, :] += D[0].real
+    dR = [np.zeros((2 * H + 1, n_s)) for _ in parameters]
+    for (dD, _), out in zip(parameters, dR, strict=True):
+        out[0] = (dD[0] @ x[0]).real
+    for k in range(1, H + 1):
+        Q = x[2 * k - 1] - 1j * x[2 * k]
+        Z = D[k] @ Q
+        if k == 1 and load is not None:
+            Z = Z - load
+        R[2 * k - 1] += Z.real
+        R[2 * k] -= Z.imag
+        if jacobian:
+            J[2 * k - 1, :, 2 * k - 1, :] += D[k].real
+            J[2 * k - 1, :, 2 * k, :] += D[k].imag
+            J[2 * k, :, 2 * k - 1, :] -= D[k].imag
+            J[2 * k, :, 2 * k, :] += D[k].real
+        for (dD, dload), out in zip(parameters, dR, strict=True):
+            dZ = dD[k] @ Q
+            if k == 1 and dload is not None:
+                dZ = dZ - dload
+            out[2 * k - 1], out[2 * k] = dZ.real, -dZ.imag
+    return R, J, dR
 
 
 class ElementForcedProblem(OneEvaluation, ForcedProblemBase):
@@ -182,33 +237,11 @@ class ElementForcedProblem(OneEvaluation, ForcedProblemBase):
         self.evaluations += 1
         x, omega = self.unpack(u)
         D, P, dD, dP = self._condensed(omega, jacobian)
-        H, n_s = self.H, self.n_s
-        R, dF = self.aft.evaluate(x, jacobian)
-        R = R.copy()
-        R[0] += D[0].real @ x[0]
-        if jacobian:
-            J = np.zeros((2 * H + 1, n_s, 2 * H + 1, n_s))
-            J[:, :, :, :] = dF
-            J[0, :, 0, :] += D[0].real
-            dW = np.zeros((2 * H + 1, n_s))
-            dW[0] = dD[0].real @ x[0]
-        for k in range(1, H + 1):
-            Q = x[2 * k - 1] - 1j * x[2 * k]
-            Z = D[k] @ Q
-            if k == 1:
-                Z = Z - P
-            R[2 * k - 1] += Z.real
-            R[2 * k] -= Z.imag
-            if jacobian:
-                J[2 * k - 1, :, 2 * k - 1, :] += D[k].real
-                J[2 * k - 1, :, 2 * k, :] += D[k].imag
-                J[2 * k, :, 2 * k - 1, :] -= D[k].imag
-                J[2 * k, :, 2 * k, :] += D[k].real
-                dZ = dD[k] @ Q - (dP if k == 1 else 0.0)
-                dW[2 * k - 1], dW[2 * k] = dZ.real, -dZ.imag
+        R, J, dR = harmonic_balance(self.aft, x, D, P, [(dD, dP)] if jacobian else [], jacobian)
         R = R.ravel() / self.rowscale
         if not jacobian:
             return R
+        dW = dR[0]
         Jm = np.empty((self.n_x, self.n_x + 1))
         Jm[:, :-1] = J.reshape(self.n_x, self.n_x) * self.xscale[None, :]
         Jm[:, -1] = dW.ravel() * self.omega_ref
