@@ -348,3 +348,32 @@ def test_damped_nonlinear_mode_of_the_cubic_beam():
     u = b.states[len(b) // 2]
     R, J = problem.residual_and_jacobian(u)
     assert_jacobian(problem.residual, u, J, 1e-5 * np.abs(u).max())
+
+
+def test_element_problems_satisfy_the_continuation_protocol():
+    """Every element problem (the backbones of mmshbm, penalty, shooting and EPMC, the
+    forced response of mmshbm) is a ContinuationProblemBase with every capability declared,
+    its start of the right shape, and R of residual() that of residual_and_jacobian()."""
+    from mmshbm.core import problem as protocol
+    from mmshbm.methods.frequency_response import make_forced_problem
+    from mmshbm.methods.registry import make_problem
+
+    capabilities = (protocol.StepControl, protocol.PinnedSolves, protocol.FamilyEvents,
+                    protocol.BranchRecords)
+    beam = cubic_beam(4)
+    damped = beam.with_damping(modal_ratio=0.01)
+    force = np.zeros(beam.n_dof)
+    force[beam.l[-2]] = 1.0
+    problems = [("backbone", make_problem(beam, m, harmonics=3)) for m in ("mmshbm", "penalty")]
+    problems += [("backbone", make_problem(beam, "shooting", steps_per_period=32)),
+                 ("backbone", make_problem(damped, "epmc", harmonics=3)),
+                 ("forced", make_forced_problem(damped, force, "mmshbm", 3))]
+    for kind, p in problems:
+        start = protocol.AmplitudeStart if kind == "backbone" else protocol.FrequencyStart
+        for proto in (protocol.ContinuationProblem, *capabilities, start):
+            assert isinstance(p, proto), (type(p).__name__, proto.__name__)
+        u = p.linear_mode_point(1e-4) if kind == "backbone" else p.linear_response_point(40.0)
+        R, J = p.residual_and_jacobian(u)
+        assert u.shape == (p.n_unknowns,) and np.shape(J) == (p.n_unknowns - 1, p.n_unknowns)
+        np.testing.assert_array_equal(p.residual(u), R)
+    assert len({type(p).__name__ for _, p in problems}) == 5
