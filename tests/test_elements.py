@@ -377,3 +377,20 @@ def test_element_problems_satisfy_the_continuation_protocol():
         assert u.shape == (p.n_unknowns,) and np.shape(J) == (p.n_unknowns - 1, p.n_unknowns)
         np.testing.assert_array_equal(p.residual(u), R)
     assert len({type(p).__name__ for _, p in problems}) == 5
+
+
+def test_elements_survive_the_model_transforms_and_files(tmp_path):
+    """A model's elements carry over through with_gap, with_damping, with_contact_layer
+    (which keeps the DOF numbers) and a save_npz / from_npz round trip (the file keeps the
+    recorded transforms)."""
+    spring = CubicSpring(dof=2, stiffness=1e9)
+    beam = mmshbm.default_beam().model(4)
+    model = mmshbm.Model.from_matrices(beam.M, beam.K, 4, 1e-3).with_element(spring)  # the stop has mass
+    assert model.with_gap(2e-3).elements == (spring,)
+    assert model.with_damping(modal_ratio=0.01).elements == (spring,)
+    layered = model.with_contact_layer()
+    assert layered.elements == (spring,) and layered.n_dof == model.n_dof + 1
+    path = tmp_path / "model.npz"
+    model.save_npz(path)
+    loaded = mmshbm.Model.from_npz(path)
+    assert loaded.elements == (spring,) and loaded.fingerprint() == model.fingerprint()

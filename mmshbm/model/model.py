@@ -147,7 +147,19 @@ class Model(StopsMixin, PartitionMixin, ModesMixin):
             from .friction import add_friction
 
             model = add_friction(model, friction)
-        return model
+        return model._with_recorded_elements()
+
+    def _with_recorded_elements(self) -> Model:
+        """The model with the elements its ``description["transforms"]`` records
+        (:meth:`with_element`) when it has none: what a file that keeps the description
+        but not the elements needs to get them back."""
+        if self.elements:
+            return self
+        from ..elements import from_json
+
+        elements = tuple(from_json(step["args"]["element"]) for step in self.description.get("transforms", [])
+                         if step.get("name") == "with_element")
+        return replace(self, elements=elements) if elements else self
 
     @classmethod
     def from_matrix_market(cls, M_path, K_path, contact_dof, gap, stop_side=1, *,
