@@ -61,7 +61,7 @@ _LAZY = {
 _SUBMODULES = {
     "model": "mmshbm.model", "fe": "mmshbm.fe", "core": "mmshbm.core", "results": "mmshbm.results",
     "methods": "mmshbm.methods", "analysis": "mmshbm.analysis", "io": "mmshbm.io",
-    "plotting": "mmshbm.plotting", "cli": "mmshbm.cli",
+    "plotting": "mmshbm.plotting", "cli": "mmshbm.cli", "elements": "mmshbm.elements",
     "harmonics": "mmshbm.core.harmonics", "kernels": "mmshbm.core.kernels",
     "condense": "mmshbm.core.condense", "continuation": "mmshbm.core.continuation",
     "checkpoint": "mmshbm.core.checkpoint", "mms_hbm": "mmshbm.methods.mms.conservative",
@@ -71,7 +71,7 @@ _SUBMODULES = {
     "measured": "mmshbm.analysis.measured",
 }
 
-__all__ = sorted(_LAZY) + ["__version__"]
+__all__ = sorted(_LAZY) + ["__version__", "elements"]
 
 
 def __getattr__(name: str):

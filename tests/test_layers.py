@@ -29,6 +29,7 @@ LAYERS = {
     "mmshbm._kernel_cache": 0,
     "mmshbm._entry_points": 0,
     "mmshbm.model": 1,
+    "mmshbm.elements": 1,  # beside the model: a model holds its elements, which know no model
     "mmshbm.fe": 2,
     "mmshbm.core": 3,
     "mmshbm.contact": 3,  # beside core: used by core and methods, uses core's condensation

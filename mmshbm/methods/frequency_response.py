@@ -23,6 +23,7 @@ from ..model.model import Model
 from ..results.response import FrequencyResponse
 from . import runner
 from .mms.forced import Excitation, harmonic_force
+from .registry import FORCED_ELEMENT_PROBLEMS, check_elements
 
 __all__ = ["frequency_response", "FORCED_METHODS", "make_forced_problem"]
 
@@ -55,7 +56,10 @@ def make_forced_problem(model: Model, force, method: str = "mmshbm", harmonics: 
     if isinstance(force, dict):
         force = Excitation.from_json(force)
     module, cls = FORCED_METHODS[method].split(":")
-    if getattr(model, "friction", ()):
+    if getattr(model, "elements", ()):
+        check_elements(model, method, forced=True)
+        module, cls = FORCED_ELEMENT_PROBLEMS[method].split(":")
+    elif getattr(model, "friction", ()):
         module, cls = {"mmshbm": ("mmshbm.methods.mms.friction_forced", "FrictionForcedProblem"),
                        "penalty": ("mmshbm.methods.penalty.jenkins", "JenkinsForcedProblem"),
                        "shooting": ("mmshbm.methods.shooting.friction", "FrictionShootingProblem")}[method]

@@ -3,6 +3,11 @@
 ``METHODS`` maps a method name to the ``module:class`` of its continuation problem;
 :func:`make_problem` builds one (importing only that method's module), validating the
 option names against the class's constructor.
+
+Elements (:mod:`mmshbm.elements`): ``METHOD_ELEMENTS`` and ``FORCED_METHOD_ELEMENTS``
+name the element kinds each method's backbone and forced response take, and
+``ELEMENT_PROBLEMS`` / ``FORCED_ELEMENT_PROBLEMS`` the problem that runs a model with
+elements; :func:`check_elements` refuses any other combination by name.
 """
 
 from __future__ import annotations
@@ -13,7 +18,8 @@ import inspect
 from ..model.model import Model
 from .runner import CONTINUATION_FIELDS, check_option_names
 
-__all__ = ["METHODS", "make_problem", "method_options"]
+__all__ = ["ELEMENT_PROBLEMS", "FORCED_ELEMENT_PROBLEMS", "FORCED_METHOD_ELEMENTS", "METHODS",
+           "METHOD_ELEMENTS", "check_elements", "make_problem", "method_options"]
 
 #: method name -> "module:class" of its continuation problem
 METHODS = {
@@ -27,6 +33,41 @@ METHODS = {
 }
 
 _CONTINUATION_FIELDS = CONTINUATION_FIELDS
+
+#: the smooth and piecewise-linear elements (``Element.kind``) that MMS-HBM takes by AFT
+_AFT_ELEMENTS = ("cubic_spring", "polynomial_spring", "compliant_stop")
+#: method name -> the element kinds its backbone takes (a method not named takes none)
+METHOD_ELEMENTS = {"mmshbm": _AFT_ELEMENTS, "penalty": _AFT_ELEMENTS, "penalty-reduced": (),
+                   "shooting": _AFT_ELEMENTS, "epmc": _AFT_ELEMENTS, "phase_resonance": ()}
+#: forced method name -> the element kinds its frequency response takes
+FORCED_METHOD_ELEMENTS = {"mmshbm": _AFT_ELEMENTS, "penalty": (), "shooting": ()}
+#: method name -> "module:class" of the backbone problem of a model with elements
+ELEMENT_PROBLEMS = {"mmshbm": "mmshbm.methods.mms.smooth:ElementBackboneProblem",
+                    "penalty": "mmshbm.methods.penalty.elements:ElementHBMProblem",
+                    "shooting": "mmshbm.methods.shooting.elements:ElementShootingProblem",
+                    "epmc": "mmshbm.methods.mms.smooth_epmc:ElementEPMCProblem"}
+#: forced method name -> "module:class" of the forced problem of a model with elements
+FORCED_ELEMENT_PROBLEMS = {"mmshbm": "mmshbm.methods.mms.smooth_forced:ElementForcedProblem"}
+
+
+def check_elements(model: Model, method: str, forced: bool = False) -> None:
+    """NotImplementedError naming the elements of ``model`` that ``method`` (its backbone,
+    or with ``forced`` its frequency response) does not take, and the methods that do;
+    also for elements beside friction contacts, which no method takes yet."""
+    elements = getattr(model, "elements", ())
+    if not elements:
+        return
+    table = FORCED_METHOD_ELEMENTS if forced else METHOD_ELEMENTS
+    what = "frequency response" if forced else "backbone"
+    if getattr(model, "friction", ()):
+        raise NotImplementedError(f"no {what} method takes elements together with friction contacts yet")
+    taken = table.get(method, ())
+    refused = sorted({e.kind for e in elements if e.kind not in taken})
+    if refused:
+        able = sorted(m for m, kinds in table.items() if set(refused) <= set(kinds))
+        hint = f": use method {' or '.join(repr(m) for m in able)}" if able else ""
+        raise NotImplementedError(f"method {method!r} ({what}) does not take the element"
+                                  f"{'s' if len(refused) > 1 else ''} {', '.join(refused)}{hint}")
 
 
 def make_problem(model: Model, method: str = "mmshbm", **options):
@@ -44,7 +85,10 @@ def make_problem(model: Model, method: str = "mmshbm", **options):
     if not isinstance(method, str) or method not in METHODS:
         raise ValueError(f"unknown method {method!r}; choose one of {sorted(METHODS)}")
     module, cls = METHODS[method].split(":")
-    if getattr(model, "friction", ()):
+    if getattr(model, "elements", ()):
+        check_elements(model, method)
+        module, cls = ELEMENT_PROBLEMS[method].split(":")
+    elif getattr(model, "friction", ()):
         if method != "epmc":
             raise NotImplementedError(f"method {method!r} does not yet take friction contacts: use 'mmshbm'")
         module, cls = "mmshbm.methods.mms.friction_epmc", "FrictionEPMCProblem"

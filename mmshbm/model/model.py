@@ -78,6 +78,9 @@ class Model(StopsMixin, PartitionMixin, ModesMixin):
         Viscous damping matrix C (N·s/m), zero on the massless DOFs; None: undamped.
     friction : tuple of FrictionContact
         Coulomb friction contacts on massless DOFs (:meth:`with_friction`); empty: none.
+    elements : tuple of Element
+        Smooth or piecewise-linear nonlinear elements (:mod:`mmshbm.elements`, added by
+        :meth:`with_element`); empty: none.
     """
 
     M: sp.csr_matrix
@@ -87,6 +90,7 @@ class Model(StopsMixin, PartitionMixin, ModesMixin):
     damping: sp.csr_matrix | None = None
     _amplitude_dof: int | None = None
     friction: tuple = ()
+    elements: tuple = ()
 
     # ------------------------------------------------------------------ builders
     @classmethod
@@ -163,7 +167,19 @@ class Model(StopsMixin, PartitionMixin, ModesMixin):
             from .friction import add_friction
 
             model = add_friction(model, friction)
-        return model
+        return model._with_recorded_elements()
+
+    def _with_recorded_elements(self) -> Model:
+        """The model with the elements its ``description["transforms"]`` records
+        (:meth:`with_element`) when it has none: what a file that keeps the description
+        but not the elements needs to get them back."""
+        if self.elements:
+            return self
+        from ..elements import from_json
+
+        elements = tuple(from_json(step["args"]["element"]) for step in self.description.get("transforms", [])
+                         if step.get("name") == "with_element")
+        return replace(self, elements=elements) if elements else self
 
     @classmethod
     def from_matrix_market(cls, M_path, K_path, contact_dof, gap, stop_side=1, *,
@@ -241,6 +257,35 @@ class Model(StopsMixin, PartitionMixin, ModesMixin):
 
         return with_friction(self, dof, mu, normal_load, normal_contact, preload, tangential_stiffness)
 
+    def with_element(self, element) -> Model:
+        """The same model with the nonlinear ``element`` added (an
+        :class:`~mmshbm.elements.Element`, e.g. ``mmshbm.elements.CubicSpring(dof=0,
+        stiffness=k3)``, or its JSON form); several calls add several. The call is recorded
+        in ``description["transforms"]``. A model without contacts measures its amplitude
+        at the first element's first DOF unless it names an amplitude DOF.
+
+        Raises
+        ------
+        TypeError, ValueError
+            Not an element, or an element on a DOF the model does not have.
+        """
+        from ..elements import Element, from_json
+
+        if isinstance(element, dict):
+            element = from_json(element)
+        if not isinstance(element, Element):
+            raise TypeError(f"element must be an mmshbm.elements.Element (e.g. CubicSpring), "
+                            f"got {type(element).__name__} {element!r}")
+        element.check_model(self.n_dof)
+        description = dict(self.description)
+        description["transforms"] = list(description.get("transforms", [])) + [
+            {"name": "with_element", "args": {"element": element.to_json()}}]
+        amplitude_dof = self._amplitude_dof
+        if amplitude_dof is None and not self.contacts:
+            amplitude_dof = element.dofs[0]
+        return replace(self, elements=self.elements + (element,), description=description,
+                       _amplitude_dof=amplitude_dof)
+
     def with_amplitude_dof(self, dof: int) -> Model:
         """The same model with its amplitude measured at ``dof``."""
         dof = check.integer("amplitude_dof", dof)
@@ -294,6 +339,8 @@ class Model(StopsMixin, PartitionMixin, ModesMixin):
             from .friction import friction_to_json
 
             h.update(friction_to_json(self.friction).encode())
+        if self.elements:
+            h.update(json.dumps([e.to_json() for e in self.elements]).encode())
         digest = self.__dict__["_memo_fingerprint"] = h.hexdigest()
         return digest
 
@@ -302,7 +349,7 @@ class Model(StopsMixin, PartitionMixin, ModesMixin):
         if not isinstance(other, Model) or self.M.shape != other.M.shape:
             return False
         if (self.contacts != other.contacts or self._amplitude_dof != other._amplitude_dof
-                or self.friction != other.friction):
+                or self.friction != other.friction or self.elements != other.elements):
             return False
         if (self.damping is None) != (other.damping is None):
             return False
@@ -320,4 +367,6 @@ class Model(StopsMixin, PartitionMixin, ModesMixin):
         extra = "" if self.damping is None else ", damped"
         if self.friction:
             extra += ", friction on DOFs " + str([fc.dof for fc in self.friction])
+        if self.elements:
+            extra += ", elements [" + ", ".join(f"{e.kind} on {list(e.dofs)}" for e in self.elements) + "]"
         return f"Model(n_dof={self.n_dof}, massless={self.c.tolist()}, {contact}{extra})"

@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import numbers
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -307,4 +308,6 @@ def _build(model, M, K, contacts, description, damping, amplitude_dof):
         from .friction import add_friction, friction_args
 
         new = add_friction(new, [friction_args(fc) for fc in model.friction])
+    if model.elements:  # so do the elements
+        new = replace(new, elements=model.elements)
     return new
