@@ -80,7 +80,7 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
         (neither a stop nor friction: its backbone is its linear mode).
     """
     runner.check_model(model)
-    runner.check_has_contact(model, "backbone")
+    runner.check_is_nonlinear(model, "backbone")
     runner.check_method(method, METHODS)
     requested = method
     method = backbone_method(model, method)

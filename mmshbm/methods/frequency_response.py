@@ -125,7 +125,7 @@ def frequency_response(model: Model, force, frequency_range, harmonics: int = 5,
         range, a force of the wrong length or on a massless DOF, an unknown method or option.
     """
     runner.check_model(model)
-    runner.check_has_contact(model, "forced response")
+    runner.check_is_nonlinear(model, "forced response")
     f0, f1 = _frequency_range(frequency_range)
     if not model_has_damping(model):
         raise ValueError("the model has no damping: its forced response grows along the backbone without "

@@ -38,7 +38,7 @@ from ..core.status import Status
 from ..model.model import Model
 
 __all__ = ["CONTINUATION_FIELDS", "Run", "run", "jsonable", "continuation_options", "check_option_names",
-           "check_has_contact", "checkpoint_header", "mark_grazing", "run_metadata"]
+           "check_is_nonlinear", "checkpoint_header", "mark_grazing", "run_metadata"]
 
 log = logging.getLogger(__name__)
 
@@ -55,19 +55,20 @@ def check_model(model) -> None:
         raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
 
 
-def check_has_contact(model: Model, what: str) -> None:
-    """ValueError when ``model`` has neither a unilateral contact nor a friction contact:
-    ``what`` (a backbone, a forced response) of a linear structure is linear and needs no
-    continuation."""
-    if model.contacts or model.friction:
+def check_is_nonlinear(model: Model, what: str) -> None:
+    """ValueError when ``model`` has no nonlinearity (no unilateral contact, no friction
+    contact, no element of :mod:`mmshbm.elements`): ``what`` (a backbone, a forced response)
+    of a linear structure is linear and needs no continuation."""
+    if model.contacts or model.friction or model.elements:
         return
     hints = {"backbone": "a backbone of a linear model is its linear mode, at every amplitude: "
                          "model.linear_modes(n) gives its frequencies (Hz) and shapes",
              "forced response": "the forced response of a linear model is linear: "
                                 "(K - Ω² M + iΩ C)⁻¹ F̂ at each frequency, with no continuation"}
-    raise ValueError(f"the model has no contact (no stop and no friction): {hints[what]}; add a "
-                     "stop with Model.from_matrices(M, K, contact_dof=..., gap=...) or friction with "
-                     "model.with_friction(...)")
+    raise ValueError(f"the model has no contact and no nonlinear element (no stop, no friction, no "
+                     f"element): {hints[what]}; add a stop with Model.from_matrices(M, K, contact_dof=..., "
+                     "gap=...), friction with model.with_friction(...) or an element with "
+                     "model.with_element(mmshbm.elements.CubicSpring(...))")
 
 
 def check_method(method, methods) -> None:

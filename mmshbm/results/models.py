@@ -102,6 +102,5 @@ def _model_from_arrays(arrays: dict, info: dict):
     friction = [saved_friction(step) for step in model.description.get("transforms", [])
                 if step.get("name") == "with_friction"]
     if friction:  # recorded by Model.with_friction; added here without recording them again
-
         model = add_friction(model, friction)
-    return model
+    return model._with_recorded_elements()  # recorded by Model.with_element
