@@ -30,10 +30,12 @@ falls back to the dense LU of the bordered matrix (logged at DEBUG, counted in
 :attr:`KrylovCorrector.fallbacks`): the corrector never fails where the dense one would
 not.
 
-The tangent at the converged point is solved the same way and handed to the
-continuation (the problem's ``solved_tangent``). The sign of det [J; tᵀ] (branch-point
-detection) is not computed on this path: it is reported as 0, "unknown", as the
-continuation does for any system above its dense limit.
+The preconditioner is built at the corrector's first iterate and kept for the later
+solves of the call and for the tangent (it needs to be near J, not equal: GMRES's
+stopping test is on the true residual). The tangent at the converged point is solved
+the same way and handed to the continuation (the problem's ``solved_tangent``). The
+sign of det [J; tᵀ] (branch-point detection) is not computed on this path: it is reported
+as 0, "unknown", as the continuation does for any system above its dense limit.
 """
 
 from __future__ import annotations
@@ -213,6 +215,7 @@ class KrylovCorrector:
         hist = []
         du_norm = math.inf
         problem._solved_tangent = None
+        pre = None  # the first iterate's preconditioner, kept for the later solves of the call
         for it in range(max_iter + 1):
             R, J = problem._evaluate(u, True)
             arc = float(t @ (u - u_pred))
@@ -221,14 +224,16 @@ class KrylovCorrector:
                 raise ArithmeticError("non-finite residual")
             hist.append(norm)
             if norm <= tol or (du_norm <= step_tol and norm <= math.sqrt(tol)):
-                self._tangent(J, t)
+                self._tangent(J, t, pre)
                 return u, it, np.array(hist), J
             if it == max_iter:
                 break
             rhs = np.empty(n)
             rhs[:-1] = R
             rhs[-1] = arc
-            du = self.solve(J, t, rhs)
+            if pre is None:
+                pre = self._preconditioner(J, t)
+            du = self.solve(J, t, rhs, pre)
             du_norm = float(np.abs(du).max())
             if not math.isfinite(du_norm):
                 raise ArithmeticError("singular Jacobian")
@@ -239,16 +244,16 @@ class KrylovCorrector:
                     predicted = norm * (norm / r_prev) ** 2
                     if predicted <= 0.1 * tol:
                         hist.append(predicted)
-                        self._tangent(J, t)
+                        self._tangent(J, t, pre)
                         return u, it + 1, np.array(hist), J
         raise ArithmeticError(f"no convergence in {max_iter} iterations (residual {hist[-1]:.2e})")
 
-    def _tangent(self, J, t):
+    def _tangent(self, J, t, pre=None):
         """[J; tᵀ] x = e_n at the returned Jacobian, kept for the continuation's tangent
         (sign 0: not computed)."""
         e = np.zeros(J.shape[1])
         e[-1] = 1.0
-        x = self.solve(J, t, e)
+        x = self.solve(J, t, e, pre)
         if np.all(np.isfinite(x)):
             self.problem._solved_tangent = (J, t, x, 0.0)
 
