@@ -115,3 +115,20 @@ def test_linear_solver_option():
     assert MMSHBMProblem(contact_string(32), 5).linear_solver == "krylov"
     with pytest.raises(ValueError, match="linear_solver"):
         MMSHBMProblem(contact_string(4), 3, linear_solver="gmres")
+
+
+def test_krylov_on_the_banded_back_end():
+    """The Krylov corrector takes the problem's own residual and Jacobian, so it runs on a
+    back end without the compiled corrector (banded LU; the dense path is then the Python
+    Newton loop): the same branch within the bound of the Newton tolerance."""
+    model = contact_string(8)
+    kw = dict(harmonics=5, max_amplitude=1.5, max_steps=60, backend="banded")
+    dense = mmshbm.backbone(model, linear_solver="dense", **kw)
+    krylov = mmshbm.backbone(model, linear_solver="krylov", **kw)
+    assert krylov.solver.cond.backend == "banded" and krylov.solver.krylov.solves > 0
+    assert dense.status == krylov.status and len(dense.states) == len(krylov.states)
+    problem = MMSHBMProblem(model, 5, backend="banded", linear_solver="dense")
+    for i in range(1, len(dense.states)):
+        u, v = dense.states[i], krylov.states[i]
+        t = (u - dense.states[i - 1]) / np.linalg.norm(u - dense.states[i - 1])
+        assert float(np.abs(u - v).max()) <= 4.0 * _inverse_norm(problem, u, t) * TOL, i
