@@ -22,20 +22,19 @@ Right-preconditioned GMRES (:func:`_right_gmres`, whose residual is the true one
 left-preconditioned GMRES stalls on the preconditioned residual above the round-off floor)
 then solves the bordered system with the Jacobian applied as a dense product (O(n²) per
 application) to a relative residual of ``rtol`` (default 1e-10), or to a backward error
-of 1e-13 √n ‖[J; tᵀ]‖∞ ‖x‖∞ where that is larger (the round-off floor: near
-convergence the right-hand side is small): an inexact Newton step whose error is ~rtol times the step,
-far below the Newton tolerance, so the converged points are those of the dense path to
-that tolerance. A solve that GMRES does not finish within ``max_krylov`` iterations
-falls back to the dense LU of the bordered matrix (logged at DEBUG, counted in
-:attr:`KrylovCorrector.fallbacks`): the corrector never fails where the dense one would
-not.
+of 1e-13 √n ‖[J; tᵀ]‖∞ ‖x‖∞ where that is larger (the round-off floor: near convergence
+the right-hand side is small). The next Newton residual then carries at most ~rtol times
+the current one from the inexact solve, far below the Newton tolerance, so the converged
+points are those of the dense path to that tolerance. A solve that GMRES does not finish
+within ``max_krylov`` iterations falls back to the dense LU of the bordered matrix (logged
+at DEBUG, counted in :attr:`KrylovCorrector.fallbacks`): it costs an LU, not the step.
 
 The preconditioner is built at the corrector's first iterate and kept for the later
 solves of the call and for the tangent (it needs to be near J, not equal: GMRES's
 stopping test is on the true residual). The tangent at the converged point is solved
 the same way and handed to the continuation (the problem's ``solved_tangent``). The
 sign of det [J; tᵀ] (branch-point detection) is not computed on this path: it is reported
-as 0, "unknown", as the continuation does for any system above its dense limit.
+as 0, "unknown", as for the sparse Jacobians of :mod:`mmshbm.core.bordered`.
 """
 
 from __future__ import annotations
