@@ -60,6 +60,7 @@ from .family import FamilyMixin
 from .fast import fast_data
 from .fixed import _FIXED, _FIXED_CONTACTS, _FIXED_SCALING, _own, fixed_contacts, fixed_scaling, kept_entries
 from .held import _HELD, _held_frequency, _held_frequency_solve  # noqa: F401  (earlier home)
+from .krylov import KrylovCorrector, check_linear_solver, resolve_linear_solver
 from .signals import SignalsMixin
 from .tables import _TABLES_KEPT, _compute_tables, _kept_tables, _tables, _tables_kept  # noqa: F401  (earlier home)
 
@@ -103,6 +104,15 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         Linear solver of the condensation (:func:`~mmshbm.core.condense.make_condensation`).
     projection : {"exact", "sampled"}
         Harmonic projection of the contact law (see the module docstring).
+    linear_solver : {"auto", "dense", "krylov"}
+        The corrector's linear solve. "dense": the LU of the whole bordered Jacobian (the
+        compiled corrector on the modal back end; exact, O(((H+1) n_c)³) per iteration).
+        "krylov": preconditioned GMRES with one n_c × n_c factorisation per harmonic
+        (:mod:`~mmshbm.methods.mms.krylov`; the same points to the Newton tolerance, the
+        sign of det [J; t] not tracked). "auto" (default): "krylov" from
+        :data:`~mmshbm.methods.mms.krylov.KRYLOV_MIN_UNKNOWNS` (300) unknowns on
+        ((H+1)·n_c + n_p + 1 with the pole unknowns; 32 contacts on the contact string
+        at H = 5).
     poles : bool
         Carry the poles of D_k that the backbone's frequency range contains as extra
         unknowns η_jk (:mod:`mmshbm.core.poles`), so that kΩ = ω_j (an eigenfrequency
@@ -126,9 +136,12 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
     _floquet_solver = None
     #: (fine τ, cos kτ on it) of :meth:`_fine_grid`; None until first used
     _fine: tuple | None = None
+    #: the Newton–Krylov corrector (``linear_solver="krylov"``); None: the dense one
+    krylov = None
 
     def __init__(self, model: Model, harmonics: int = 5, n_samples: int | None = None,
-                 r=None, mode: int = 1, backend: str = "auto", projection: str = "exact", poles: bool = True):
+                 r=None, mode: int = 1, backend: str = "auto", projection: str = "exact", poles: bool = True,
+                 linear_solver: str = "auto"):
         if not isinstance(model, Model):
             raise TypeError(f"model must be an mmshbm.Model, got {type(model).__name__}")
         model.require_massless_contacts("MMS-HBM")
@@ -143,6 +156,7 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         self.projection = projection
         self.cond = make_condensation(model, backend, harmonics=self.H, mode=self.mode)
         self.n_c = len(model.c)
+        check_linear_solver(linear_solver)
         # the numbers fixed by (model, H, N, mode, back end, projection, poles) with a named r
         # (the default, "static" or "residual"): computed once per model, each problem its own
         # copies
@@ -181,6 +195,7 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
             for name in _FIXED_SCALING:
                 setattr(self, name, _own(fixed[name]))
         self.n_unknowns = (self.H + 1) * self.n_c + n_p + 1
+        self.linear_solver = resolve_linear_solver(linear_solver, self.n_unknowns)
 
         H, N = self.H, self.N
         # sample grid, its cosine and sine tables (each problem its own copies: the kernels take
@@ -208,6 +223,7 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         #: residual (+ Jacobian) evaluations so far, the compiled corrector's included
         self.evaluations = 0
         self._modal = None  # open-contact modes for the energy shares (built on first use)
+        self.krylov = KrylovCorrector(self) if self.linear_solver == "krylov" else None
 
     @property
     def _tau_fine(self) -> np.ndarray:
@@ -312,7 +328,10 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         condensation only; None otherwise, and the continuation's Python loop runs).
 
         Returns (u, iterations, residual history, Jacobian at u), or raises ArithmeticError
-        with the reason (the continuation's failure)."""
+        with the reason (the continuation's failure). With ``linear_solver="krylov"`` the
+        Newton–Krylov corrector (:mod:`~mmshbm.methods.mms.krylov`) on any back end."""
+        if self.krylov is not None:
+            return self.krylov.newton(u0, u_pred, tangent, tol, max_iter, step_tol)
         fast = self._fast
         if fast is None:
             fast = self._fast_setup()

@@ -1,0 +1,174 @@
+"""Many contacts: the dense and the Newton–Krylov MMS-HBM correctors against the number of
+contact DOFs n_c and H, on the contact string (:func:`mmshbm.fe.contact_string.contact_string`:
+n masses on n massless contact nodes, every pair of contacts coupled; docs/scale.md).
+
+asv suites:
+
+* ``InterfaceIteration``: one Newton iteration (residual, Jacobian and the bordered solve:
+  LAPACK's LU for "dense", preconditioned GMRES for "krylov") at a contact point of the
+  branch (1.5 gaps), per linear solver, n_c and H.
+* ``InterfaceCorrector``: one corrector call (the continuation's, the compiled loop for
+  "dense") from a predictor 5 % beyond a step of the branch, with its iteration count.
+* ``InterfaceBackbone``: the backbone to 1.5 gaps (H = 5): its time, its points and the
+  cost per point (``track_ms_per_point``, timed in one process).
+
+The table of docs/scale.md comes from the script entry point:
+
+    OPENBLAS_NUM_THREADS=1 python -m benchmarks.bench_interfaces 8 16 32 64
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+import timeit
+
+import numpy as np
+
+#: contact counts of the suites
+CONTACTS = (8, 16, 32, 64)
+SOLVERS = ("dense", "krylov")
+#: the backbone's amplitude bound (gaps)
+MAX_GAPS = 1.5
+
+
+def _branch(n: int, harmonics: int, solver: str):
+    import mmshbm
+    from mmshbm.fe.contact_string import contact_string
+
+    model = contact_string(n)
+    return model, mmshbm.backbone(model, harmonics=harmonics, max_amplitude=MAX_GAPS, max_steps=200,
+                                  linear_solver=solver)
+
+
+def _predictor(branch):
+    """(u_prev + 1.05 ds t, t) at the branch's step two thirds along (contacts closed)."""
+    i = max(1, 2 * len(branch.states) // 3)
+    u_prev, u = branch.states[i - 1], branch.states[i]
+    ds = float(np.linalg.norm(u - u_prev))
+    t = (u - u_prev) / ds
+    return u_prev + 1.05 * ds * t, t, u
+
+
+def _setup(n: int, harmonics: int, solver: str):
+    import warnings
+
+    from mmshbm.methods.mms.conservative import MMSHBMProblem
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model, branch = _branch(n, harmonics, "dense")
+    problem = MMSHBMProblem(model, harmonics, linear_solver=solver)
+    u_pred, t, u = _predictor(branch)
+    return problem, u_pred, t, u
+
+
+def _seconds(f, number: int = 5, repeat: int = 5) -> float:
+    """Fastest of ``repeat`` means over ``number`` calls (s)."""
+    return min(timeit.repeat(f, number=number, repeat=repeat)) / number
+
+
+class InterfaceIteration:
+    """One Newton iteration at a contact point (residual, Jacobian, bordered solve)."""
+
+    params = [SOLVERS, CONTACTS, (3, 5)]
+    param_names = ["solver", "contacts", "harmonics"]
+    timeout = 600
+
+    def setup(self, solver, contacts, harmonics):
+        problem, u_pred, t, u = _setup(contacts, harmonics, solver)
+        if solver == "krylov":
+            corrector = problem.krylov
+
+            def iterate():
+                R, J = problem.residual_and_jacobian(u_pred)
+                return corrector.solve(J, t, np.append(R, 0.0))
+        else:
+            def iterate():
+                R, J = problem.residual_and_jacobian(u_pred)
+                return np.linalg.solve(np.vstack([J, t]), np.append(R, 0.0))
+        iterate()
+        self.iterate = iterate
+
+    def time_iteration(self, solver, contacts, harmonics):
+        self.iterate()
+
+
+class InterfaceCorrector:
+    """One corrector call of the continuation from a predictor off the branch."""
+
+    params = [SOLVERS, CONTACTS, (3, 5)]
+    param_names = ["solver", "contacts", "harmonics"]
+    timeout = 600
+
+    def setup(self, solver, contacts, harmonics):
+        self.problem, self.u_pred, self.t, _ = _setup(contacts, harmonics, solver)
+        self.call()
+
+    def call(self):
+        return self.problem.fast_newton(self.u_pred.copy(), self.u_pred, self.t, 1e-10, 12, 0.0)
+
+    def time_corrector(self, solver, contacts, harmonics):
+        self.call()
+
+    def track_iterations(self, solver, contacts, harmonics):
+        return self.call()[1]
+
+
+class InterfaceBackbone:
+    """The backbone of the contact string to 1.5 gaps at H = 5."""
+
+    params = [SOLVERS, CONTACTS]
+    param_names = ["solver", "contacts"]
+    timeout = 900
+
+    def setup(self, solver, contacts):
+        import warnings
+
+        warnings.simplefilter("ignore")
+        _branch(contacts, 5, solver)  # kernels compiled, the reduction cached
+
+    def time_backbone(self, solver, contacts):
+        _branch(contacts, 5, solver)
+
+    def track_points(self, solver, contacts):
+        return len(_branch(contacts, 5, solver)[1].states)
+
+    def track_ms_per_point(self, solver, contacts):
+        start = time.perf_counter()
+        branch = _branch(contacts, 5, solver)[1]
+        return 1e3 * (time.perf_counter() - start) / len(branch.states)
+
+    track_ms_per_point.unit = "ms"
+
+
+def main(argv: list[str]) -> None:
+    """Print, per n_c: the bordered system's size, the corrector call and iterations, the
+    iteration, and the backbone's points and cost per point, dense beside Krylov."""
+    import warnings
+
+    warnings.simplefilter("ignore")
+    contacts = [int(a) for a in argv] or list(CONTACTS)
+    print("| n_c | unknowns | solver | corrector call (ms) | iterations | iteration (ms) | points "
+          "| per point (ms) |")
+    print("|---:|---:|---|---:|---:|---:|---:|---:|")
+    for n in contacts:
+        for solver in SOLVERS:
+            corr = InterfaceCorrector()
+            corr.setup(solver, n, 5)
+            t_call = _seconds(corr.call)
+            its = corr.call()[1]
+            it = InterfaceIteration()
+            it.setup(solver, n, 5)
+            t_it = _seconds(it.iterate)
+            bb = InterfaceBackbone()
+            bb.setup(solver, n)
+            start = time.perf_counter()
+            branch = _branch(n, 5, solver)[1]
+            per_point = (time.perf_counter() - start) / len(branch.states)
+            print(f"| {n} | {corr.problem.n_unknowns} | {solver} | {1e3 * t_call:.2f} | {its} | "
+                  f"{1e3 * t_it:.2f} | {len(branch.states)} | {1e3 * per_point:.2f} |", flush=True)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
