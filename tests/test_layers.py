@@ -25,7 +25,6 @@ LAYERS = {
     "mmshbm._files": 0,
     "mmshbm._threads": 0,
     "mmshbm._progress": 0,
-    "mmshbm._aliases": 0,
     "mmshbm._kernel_cache": 0,
     "mmshbm._entry_points": 0,
     "mmshbm.model": 1,

@@ -13,7 +13,7 @@ from ..model.model import Model
 from ..results.branch import Branch
 from . import runner
 from .limits import check_resources
-from .registry import _CONTINUATION_FIELDS, METHODS, make_problem, method_options  # noqa: F401 - public here since 0.1
+from .registry import METHODS, make_problem
 
 __all__ = ["backbone", "backbone_method", "amplitude_range"]
 

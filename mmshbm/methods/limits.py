@@ -100,7 +100,7 @@ def estimate_memory(model, method: str, harmonics: int = 5, n_samples: int | Non
     H = int(harmonics)
     if n_samples is None:
         if method == "penalty":
-            from .penalty.hbm import DEFAULT_PENALTY_FACTOR, penalty_n_samples
+            from .penalty.defaults import DEFAULT_PENALTY_FACTOR, penalty_n_samples
 
             n_samples = penalty_n_samples(H, penalty_factor or DEFAULT_PENALTY_FACTOR)
         else:
