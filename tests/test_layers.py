@@ -27,6 +27,7 @@ LAYERS = {
     "mmshbm._progress": 0,
     "mmshbm._kernel_cache": 0,
     "mmshbm._entry_points": 0,
+    "mmshbm._method_info": 0,
     "mmshbm.model": 1,
     "mmshbm.fe": 2,
     "mmshbm.core": 3,

@@ -1,8 +1,10 @@
 """The continuation problems of the methods, by name.
 
-``METHODS`` maps a method name to the ``module:class`` of its continuation problem;
-:func:`make_problem` builds one (importing only that method's module), validating the
-option names against the class's constructor.
+``METHODS`` maps a method name to the ``module:class`` of its continuation problem and
+``METHOD_INFO`` to its capabilities (:class:`MethodInfo`; the table lives in the
+dependency-free :mod:`mmshbm._method_info`, so that the CLI and the results read it
+without importing the methods); :func:`make_problem` builds a problem (importing only that
+method's module), validating the option names against the class's constructor.
 """
 
 from __future__ import annotations
@@ -10,10 +12,19 @@ from __future__ import annotations
 import importlib
 import inspect
 
+from .._method_info import (
+    METHOD_INFO,
+    MethodInfo,
+    backbone_methods,
+    forced_methods,
+    is_harmonic_balance,
+    method_info,
+)
 from ..model.model import Model
 from .runner import CONTINUATION_FIELDS, check_option_names
 
-__all__ = ["METHODS", "make_problem", "method_options"]
+__all__ = ["METHODS", "METHOD_INFO", "MethodInfo", "make_problem", "method_options", "method_info",
+           "is_harmonic_balance", "backbone_methods", "forced_methods"]
 
 #: method name -> "module:class" of its continuation problem
 METHODS = {
@@ -70,3 +81,4 @@ def _check_option_names(method: str, problem_class, options: dict) -> None:
 
 _BACKBONE_ARGUMENTS = ("harmonics", "method", "max_amplitude", "start_amplitude", "bounds", "verbose",
                        "callback", "checkpoint", "resume")
+

@@ -22,6 +22,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from .._method_info import is_harmonic_balance
 from .archive import read_archive, write_archive
 from .base import FORMAT_VERSION, ResultBase, SolverSlot, entry_point, result_from_payload, result_payload
 from .family_points import amplitude_in_m, family_front, frequency_at, solve_at, warn_outside_front
@@ -150,7 +151,7 @@ class Branch(ResultBase):
         return super().attach_solver(**method_options)
 
     def _build_solver(self, model, options: dict):
-        if self.method != "shooting":
+        if is_harmonic_balance(self.method):
             options.setdefault("harmonics", self.harmonics)
         return entry_point("make_problem")(model, self.method, **options)
 
