@@ -19,7 +19,7 @@ class ProximalContact:
     param_names = ["N"]
 
     def setup(self, N):
-        from mmshbm.core.kernels import _proximal_contact
+        from mmshbm.contact.unilateral import _proximal_contact
 
         rng = np.random.default_rng(0)
         self.lam = rng.standard_normal(N)
@@ -63,8 +63,8 @@ class CosineProductMatrix:
     param_names = ["H"]
 
     def setup(self, H):
+        from mmshbm.contact.projection import _cosine_product_matrix
         from mmshbm.core.harmonics import default_n_samples
-        from mmshbm.core.kernels import _cosine_product_matrix
 
         N = default_n_samples(H)
         self.S = np.random.default_rng(0).standard_normal(N)
@@ -84,7 +84,7 @@ class MMSHBMResidual:
     param_names = ["model", "H"]
 
     def setup(self, name, H):
-        from mmshbm.methods.backbone import make_problem
+        from mmshbm.methods.registry import make_problem
 
         check_feasible(name, "mmshbm", H)
         warm_up("mmshbm")

@@ -12,7 +12,7 @@ CORRECTOR_MODELS = ("oscillator", "beam8", "beam21")
 
 
 def _iteration_setup(self, name, method, harmonics=None, steps=None):
-    from mmshbm.methods.backbone import make_problem
+    from mmshbm.methods.registry import make_problem
 
     check_feasible(name, method, harmonics, single_iteration=True)
     warm_up(method)

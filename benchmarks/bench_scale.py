@@ -49,7 +49,7 @@ def _problem(elements: int, backend: str, harmonics: int = 5):
 def _iteration(problem):
     """A callable doing one Newton iteration at 1.5 gaps (Ω perturbed in the last digits so
     that no condensation is reused, as in a real iteration)."""
-    from mmshbm.core.continuation import _bordered_solve
+    from mmshbm.core.bordered import bordered_solve as _bordered_solve
 
     u0 = problem.linear_point(1.5 * problem.model.gap)
     t = problem.initial_tangent()

@@ -46,7 +46,7 @@ class ReducedGrid:
         warm_up("mmshbm")
 
     def time_reduced_grid(self):
-        from mmshbm import studies
+        from mmshbm.analysis import studies
 
         studies.run_study(harmonics=(5, 7), elements=(8, 21), max_amplitude=10.0, unit="gap",
                           executor="serial")
@@ -60,7 +60,7 @@ class ConvergenceGrid:
     timeout = 900
 
     def setup_cache(self):
-        from mmshbm import studies
+        from mmshbm.analysis import studies
         from mmshbm.analysis.skips import cell_summary
 
         _quiet()

@@ -38,7 +38,7 @@ SKIP_REASONS = {
 
 def available(method: str) -> bool:
     """Whether ``method``'s module imports (shooting may be missing on old commits)."""
-    from mmshbm.methods.backbone import METHODS
+    from mmshbm.methods.registry import METHODS
 
     try:
         importlib.import_module(METHODS[method].split(":")[0])

@@ -17,9 +17,8 @@ from __future__ import annotations
 
 import importlib
 
-from . import _aliases, _entry_points
+from . import _entry_points
 
-_aliases.install()
 # the results call functions of the methods layer above them (to rebuild a solver, redo a
 # run), which the methods package registers when imported: import it when one is missing
 _entry_points.add_loader(lambda: importlib.import_module("mmshbm.methods"))
@@ -57,18 +56,12 @@ _LAZY = {
     "BranchWarning": "mmshbm._warnings",
     "ModelWarning": "mmshbm._warnings",
 }
-# submodule attribute -> module (the layered packages, and the flat names of 0.1)
+# submodule attribute -> module (the layered packages, and the exact reference)
 _SUBMODULES = {
     "model": "mmshbm.model", "fe": "mmshbm.fe", "core": "mmshbm.core", "results": "mmshbm.results",
     "methods": "mmshbm.methods", "analysis": "mmshbm.analysis", "io": "mmshbm.io",
     "plotting": "mmshbm.plotting", "cli": "mmshbm.cli", "elements": "mmshbm.elements",
-    "harmonics": "mmshbm.core.harmonics", "kernels": "mmshbm.core.kernels",
-    "condense": "mmshbm.core.condense", "continuation": "mmshbm.core.continuation",
-    "checkpoint": "mmshbm.core.checkpoint", "mms_hbm": "mmshbm.methods.mms.conservative",
-    "exact": "mmshbm.methods.exact", "api": "mmshbm.methods.backbone",
-    "examples": "mmshbm.fe.oscillator", "studies": "mmshbm.analysis.studies",
-    "benchmarking": "mmshbm.analysis.benchmarking", "identification": "mmshbm.analysis.identification",
-    "measured": "mmshbm.analysis.measured",
+    "exact": "mmshbm.methods.exact",
 }
 
 __all__ = sorted(_LAZY) + ["__version__", "elements"]

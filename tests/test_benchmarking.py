@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from mmshbm import benchmarking as bm
+from mmshbm.analysis import benchmarking as bm
 from mmshbm.fe.oscillator import OneDofOscillator
 
 TARGET = 1e-4

@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 
 import mmshbm
-from mmshbm.methods import mms_hbm
+from mmshbm.methods.mms import held
 from mmshbm.methods.registry import make_problem
 
 
@@ -35,8 +35,8 @@ def test_kept_values_equal_fresh_ones():
     assert same.fingerprint() == first and "_memo_fingerprint" not in dataclasses.replace(model).__dict__
     assert model.with_gap(2e-3).fingerprint() != first
     dofs = tuple(c.dof for c in model.contacts)
-    kept = mms_hbm._held_frequency(model, dofs, 1)
-    assert kept == mms_hbm._held_frequency_solve(model, dofs, 1)
+    kept = held._held_frequency(model, dofs, 1)
+    assert kept == held._held_frequency_solve(model, dofs, 1)
     a, b = _problem(model), _problem(model)
     assert a._modal_basis() is b._modal_basis()
     assert a.tracked_frequencies is not a._modal_basis()[0]

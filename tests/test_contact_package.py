@@ -1,11 +1,9 @@
-"""The contact laws' package and the per-point measures: every name that moved is the same
-object at its old path; the peak measure, the harmonic content and the energy are each
+"""The per-point measures: the peak measure, the harmonic content and the energy are each
 defined once (in mmshbm.core.measures) and give the closed-form values."""
 
 from __future__ import annotations
 
 import ast
-import importlib
 import pathlib
 
 import numpy as np
@@ -16,76 +14,6 @@ from mmshbm import Model
 from mmshbm.core import measures
 
 PACKAGE = pathlib.Path(__file__).resolve().parents[1] / "mmshbm"
-
-#: old module path -> {name: (new module path, name there)}
-MOVED = {
-    "mmshbm.core.kernels": {
-        "proximal_contact": ("mmshbm.contact.unilateral", "proximal_contact"),
-        "_proximal_contact": ("mmshbm.contact.unilateral", "_proximal_contact"),
-        "cosine_product_matrix": ("mmshbm.contact.projection", "cosine_product_matrix"),
-        "_cosine_product_matrix": ("mmshbm.contact.projection", "_cosine_product_matrix"),
-        "JIT_OPTIONS": ("mmshbm._kernel_cache", "JIT_OPTIONS"),
-    },
-    "mmshbm.kernels": {"proximal_contact": ("mmshbm.contact.unilateral", "proximal_contact")},
-    "mmshbm.core.projection": {
-        name: ("mmshbm.contact.projection", name)
-        for name in ("contact_spectrum", "sample_tables", "_product_matrix", "_add_product_matrix",
-                     "_check_samples")
-    } | {
-        "project_contact": ("mmshbm.contact.unilateral", "project_contact"),
-        "_project": ("mmshbm.contact.unilateral", "_project"),
-        "_contact_rows": ("mmshbm.core.contact_kernels", "_contact_rows"),
-        "_damped_residual": ("mmshbm.core.contact_kernels", "_damped_residual"),
-        "_block_times": ("mmshbm.core.contact_kernels", "_block_times"),
-    },
-    "mmshbm.core.contact_kernels": {
-        name: ("mmshbm.contact.trig", name) for name in ("_TWO_PI", "_trig_eval", "_refine", "_zeros")
-    } | {
-        name: ("mmshbm.contact.projection", name)
-        for name in ("_spectrum", "_arc_spectrum", "_sampled_spectrum")
-    } | {"_series_peak": ("mmshbm.core.measures", "_series_peak")},
-    "mmshbm.methods.shooting._contact_kernels": {
-        name: ("mmshbm.contact.lcp", name)
-        for name in ("lcp_solve", "_lcp_path", "_lcp_point", "_lcp_jacobian", "_inverse_sub")
-    },
-    "mmshbm.methods._shooting_contact_kernels": {"lcp_solve": ("mmshbm.contact.lcp", "lcp_solve")},
-    "mmshbm.methods._contacts": {
-        name: ("mmshbm.contact.table", name)
-        for name in ("DEFAULT_PENALTY_FACTOR", "ContactTable", "contact_table", "static_contact_stiffness",
-                     "penalty_values", "contact_law", "start_mode")
-    } | {
-        "amplitude_sign": ("mmshbm.core.measures", "amplitude_sign"),
-        "refined_peak": ("mmshbm.core.measures", "amplitude_peak"),
-    },
-    "mmshbm.methods.exact.system": {"_lcp_active_sets": ("mmshbm.contact.lcp", "lcp_active_sets")},
-    "mmshbm.methods.signals": {
-        name: ("mmshbm.contact.static", name)
-        for name in ("StaticContact", "admissible_signals", "branch_signals", "MAX_ENUMERATED_CONTACTS")
-    },
-    "mmshbm.methods.mms.conservative": {
-        "_mean_energy": ("mmshbm.core.measures", "mean_energy"),
-        "_condensed_energy": ("mmshbm.core.measures", "condensed_energy"),
-        "_refined_max": ("mmshbm.core.measures", "refined_max"),
-    },
-    "mmshbm.mms_hbm": {"_mean_energy": ("mmshbm.core.measures", "mean_energy")},
-    "mmshbm.methods.mms.damped": {"refined_max": ("mmshbm.core.measures", "refined_max"),
-                                  "contact_projection": ("mmshbm.contact.unilateral", "contact_projection")},
-    "mmshbm.methods.mms.signals": {"_cosine_peak": ("mmshbm.core.measures", "_cosine_peak")},
-}
-
-
-@pytest.mark.parametrize("old", sorted(MOVED))
-def test_moved_names_are_the_same_objects_at_their_old_paths(old):
-    module = importlib.import_module(old)
-    for name, (new, new_name) in MOVED[old].items():
-        assert getattr(module, name) is getattr(importlib.import_module(new), new_name), f"{old}.{name}"
-
-
-def test_moved_modules_are_the_same_module_objects():
-    for old, new in (("mmshbm.methods._contacts", "mmshbm.contact.table"),
-                     ("mmshbm.methods.signals", "mmshbm.contact.static")):
-        assert importlib.import_module(old) is importlib.import_module(new)
-
 
 # ---------------------------------------------------------------------------- defined once
 #: the measures, by every name they had; each may be defined only in core/measures.py

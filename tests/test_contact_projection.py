@@ -8,7 +8,8 @@ from finite_differences import assert_jacobian
 from scipy.integrate import quad
 from scipy.optimize import brentq
 
-from mmshbm.core.projection import contact_spectrum, project_contact
+from mmshbm.contact.projection import contact_spectrum
+from mmshbm.contact.unilateral import project_contact
 
 
 def _p(coefs, tau):

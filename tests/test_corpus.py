@@ -154,7 +154,7 @@ def test_a_clearance_jump_lands_where_the_backbone_climbs_towards_the_held_frequ
     refused or left the trust region. The far search's window reaches the problem's
     frequency limit: the branch completes, each landing point is on the family and none
     is above the held frequency."""
-    from mmshbm.methods.mms.conservative import _held_frequency
+    from mmshbm.methods.mms.held import _held_frequency
 
     case = corpus.generate(318, seed=0)[317]
     assert (case.kind, case.contact, case.harmonics) == ("beam", "clearance", 9)

@@ -4,10 +4,10 @@ just above the frontier, and reaches the family farther up."""
 
 import warnings
 
-import mmshbm.exact as ex
 import numpy as np
 
 import mmshbm
+from mmshbm.methods import exact as ex
 from validation import corpus
 
 

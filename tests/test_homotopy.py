@@ -10,7 +10,7 @@ import pytest
 import mmshbm
 from mmshbm.core.homotopy import pinned_homotopy
 from mmshbm.core.pinned import PinnedFailure, solve_at_amplitude
-from mmshbm.methods.mms.family import _raised
+from mmshbm.methods.mms.landings import _raised
 
 
 def _rattling_chain():

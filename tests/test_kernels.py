@@ -7,12 +7,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from naive import proximal_contact_loop
 
-from mmshbm.core.kernels import (
-    _band_quadratic_form,
-    _band_solve,
-    cosine_product_matrix,
-    proximal_contact,
-)
+from mmshbm.contact.projection import cosine_product_matrix
+from mmshbm.contact.unilateral import proximal_contact
+from mmshbm.core.kernels import _band_quadratic_form, _band_solve
 
 
 @settings(max_examples=60, deadline=None)

@@ -25,9 +25,9 @@ LAYERS = {
     "mmshbm._files": 0,
     "mmshbm._threads": 0,
     "mmshbm._progress": 0,
-    "mmshbm._aliases": 0,
     "mmshbm._kernel_cache": 0,
     "mmshbm._entry_points": 0,
+    "mmshbm._method_info": 0,
     "mmshbm.model": 1,
     "mmshbm.elements": 1,  # beside the model: a model holds its elements, which know no model
     "mmshbm.fe": 2,

@@ -1,10 +1,12 @@
-"""Module paths and names of earlier releases keep working: every public function and class
-that a 0.1 module defined is importable from that module's old dotted path, as the same
-object the layered package holds now; ``dir(mmshbm)`` lists the lazy names."""
+"""The public contract of ``mmshbm``'s top level: every name in ``mmshbm.__all__`` resolves
+(lazily), ``mmshbm.exact`` is the exact reference, ``import mmshbm`` loads none of the heavy
+libraries, and the module paths and names of earlier releases are gone (CHANGELOG.md says what
+replaces each)."""
 
 from __future__ import annotations
 
 import importlib
+import pathlib
 import subprocess
 import sys
 
@@ -12,88 +14,104 @@ import pytest
 
 import mmshbm
 
-#: 0.1 module path -> public functions and classes it defined (read from its source at the
-#: last commit before the layered packages; loggers left out)
-OLD_NAMES = {
-    "mmshbm.exact": ["Phase", "PiecewiseLinearSystem", "Event", "Trajectory", "integrate", "PeriodicOrbit",
-                     "periodic_orbit", "Backbone", "backbone"],
-    "mmshbm.api": ["make_problem", "method_options", "backbone"],
-    "mmshbm.studies": ["RunSpec", "build_model", "execute", "Study", "FrequencyTable", "ConvergenceFit",
-                       "format_convergence", "run_study", "grid_specs", "figure2_study"],
-    "mmshbm.baselines.shooting": ["ShootingProblem"],
-    "mmshbm.baselines.penalty_hbm": ["PenaltyHBMProblem", "penalty_n_samples"],
-    "mmshbm.continuation": ["ContinuationProblem", "ContinuationOptions", "ContinuationResult",
-                            "ContinuationState", "newton", "continue_branch"],
-    "mmshbm.condense": ["SingularDynamicStiffness", "Condensation"],
-    "mmshbm.harmonics": ["check_harmonics", "default_n_samples", "HarmonicTransform", "transform"],
-    "mmshbm.kernels": ["proximal_contact", "cosine_product_matrix"],
-    "mmshbm.checkpoint": ["model_fingerprint", "Checkpoint", "read_checkpoint", "CheckpointWriter"],
-    "mmshbm.mms_hbm": ["MMSHBMProblem"],
-    "mmshbm.examples": ["OneDofOscillator", "one_dof_oscillator"],
-    "mmshbm.benchmarking": ["load_model", "compare_methods", "format_table", "write_results",
-                            "element_scaling", "format_scaling"],
-    "mmshbm.identification": ["FitReport", "beam_frequencies", "fit_material"],
-    "mmshbm.measured": ["MeasuredBackbone", "load_measured"],
-    "mmshbm.model": ["Model"],
-    # ``load`` read a Branch or a Study: it is ``mmshbm.load`` now (results sit below studies)
-    "mmshbm.results": ["Branch", "rebuild_model", "versions", "branch_payload", "branch_from_payload",
-                       "write_archive", "read_archive"],
+#: module paths of 0.1 and 0.2 (flat modules, methods side by side, the contact laws'
+#: old homes); each now raises ModuleNotFoundError
+OLD_PATHS = [
+    "mmshbm.exact", "mmshbm.api", "mmshbm.baselines", "mmshbm.baselines.shooting", "mmshbm.benchmarking",
+    "mmshbm.checkpoint", "mmshbm.condense", "mmshbm.continuation", "mmshbm.examples", "mmshbm.harmonics",
+    "mmshbm.identification", "mmshbm.kernels", "mmshbm.measured", "mmshbm.mms_hbm", "mmshbm.studies",
+    "mmshbm.methods.mms_hbm", "mmshbm.methods.mms_hbm_family", "mmshbm.methods.mms_hbm_signals",
+    "mmshbm.methods._damped_hbm", "mmshbm.methods.forced", "mmshbm.methods.epmc",
+    "mmshbm.methods.phase_resonance", "mmshbm.methods.stability", "mmshbm.methods.filtered",
+    "mmshbm.methods.friction_forced", "mmshbm.methods.friction_epmc", "mmshbm.methods.friction_stability",
+    "mmshbm.methods.penalty_hbm", "mmshbm.methods.penalty_forced", "mmshbm.methods.penalty_reduced",
+    "mmshbm.methods._penalty_kernels", "mmshbm.methods._penalty_reduced_kernels",
+    "mmshbm.methods.friction_penalty", "mmshbm.methods.shooting_forced", "mmshbm.methods._shooting_kernels",
+    "mmshbm.methods._shooting_contact_kernels", "mmshbm.methods._forced_shooting_kernels",
+    "mmshbm.methods._shooting_signals", "mmshbm.methods.friction_shooting", "mmshbm.methods.friction_impact",
+    "mmshbm.methods._contacts", "mmshbm.methods.signals", "mmshbm.core.projection",
+]
+
+#: the flat submodule attributes of 0.1 on ``mmshbm`` (``mmshbm.studies``, ...)
+OLD_ATTRIBUTES = ["harmonics", "kernels", "condense", "continuation", "checkpoint", "mms_hbm", "api",
+                  "examples", "studies", "benchmarking", "identification", "measured"]
+
+#: module -> names that were re-exported there for old import paths only
+OLD_REEXPORTS = {
+    "mmshbm.core.kernels": ["proximal_contact", "cosine_product_matrix"],
+    "mmshbm.core.continuation": ["_bordered_solve", "SKIP_MIN_TOL"],
+    "mmshbm.methods.backbone": ["method_options", "_CONTINUATION_FIELDS"],
+    "mmshbm.methods.mms.conservative": ["_mean_energy", "_held_frequency_solve", "_compute_tables"],
+    "mmshbm.methods.shooting": ["ShootingProblem"],
+    "mmshbm.methods.shooting._contact_kernels": ["lcp_solve"],
+    "mmshbm.plotting.studies": ["plot_convergence", "plot_family_grid"],
 }
 
-
-@pytest.mark.parametrize("path", sorted(OLD_NAMES))
-def test_old_module_path_imports(path):
-    module = importlib.import_module(path)
-    for name in OLD_NAMES[path]:
-        assert hasattr(module, name), f"{path}.{name}"
+#: the layered packages reachable as attributes of ``mmshbm``
+PACKAGES = ["model", "fe", "core", "results", "methods", "analysis", "io", "plotting", "cli"]
 
 
-def test_old_path_is_the_same_module_object():
-    import mmshbm.exact
-    from mmshbm.exact import periodic_orbit
-
-    from mmshbm.methods import exact
-
-    assert mmshbm.exact is exact and periodic_orbit is exact.periodic_orbit
-    import mmshbm.exact.orbits
-
-    assert mmshbm.exact.orbits is importlib.import_module("mmshbm.methods.exact.orbits")
+@pytest.mark.parametrize("name", sorted(set(mmshbm.__all__) - {"__version__"}))
+def test_every_public_name_resolves(name):
+    value = getattr(mmshbm, name)
+    assert value is not None
+    module = importlib.import_module(mmshbm._LAZY[name])
+    assert value is getattr(module, name)
 
 
-def test_unknown_paths_still_fail():
-    with pytest.raises(ModuleNotFoundError):
-        importlib.import_module("mmshbm.no_such_module")
-    with pytest.raises(ModuleNotFoundError):
-        importlib.import_module("mmshbm.exact.no_such_module")
-
-
-def test_old_path_in_a_fresh_interpreter():
-    code = "from mmshbm.exact import periodic_orbit; import mmshbm.exact as e; print(e.__name__)"
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert out.stdout.strip() == "mmshbm.methods.exact"
-
-
-def test_dir_lists_the_lazy_names():
+def test_version_and_dir():
+    assert isinstance(mmshbm.__version__, str)
     names = dir(mmshbm)
-    assert {"backbone", "Branch", "default_beam", "exact", "studies"} <= set(names)
+    assert set(mmshbm.__all__) | set(PACKAGES) | {"exact"} <= set(names)
     assert names == sorted(names)
 
 
-#: 0.2 method module -> a public class it defined (the methods stood side by side in 0.2)
-METHOD_PATHS_02 = {
-    "mmshbm.methods.mms_hbm": ("mmshbm.methods.mms.conservative", "MMSHBMProblem"),
-    "mmshbm.methods.forced": ("mmshbm.methods.mms.forced", "ForcedResponseProblem"),
-    "mmshbm.methods.epmc": ("mmshbm.methods.mms.epmc", "EPMCProblem"),
-    "mmshbm.methods.penalty_hbm": ("mmshbm.methods.penalty.hbm", "PenaltyHBMProblem"),
-    "mmshbm.methods.penalty_forced": ("mmshbm.methods.penalty.forced", "PenaltyForcedProblem"),
-    "mmshbm.methods.shooting": ("mmshbm.methods.shooting.conservative", "ShootingProblem"),
-    "mmshbm.methods.shooting_forced": ("mmshbm.methods.shooting.forced", "ShootingForcedProblem"),
-    "mmshbm.methods.friction_forced": ("mmshbm.methods.mms.friction_forced", "FrictionForcedProblem"),
-    "mmshbm.methods.friction_penalty": ("mmshbm.methods.penalty.jenkins", "JenkinsForcedProblem"),
-}
+def test_packages_are_attributes():
+    for name in PACKAGES:
+        assert getattr(mmshbm, name) is importlib.import_module(f"mmshbm.{name}")
 
 
-@pytest.mark.parametrize("old", sorted(METHOD_PATHS_02))
-def test_method_paths_of_0_2_give_the_same_classes(old):
-    new, name = METHOD_PATHS_02[old]
-    assert getattr(importlib.import_module(old), name) is getattr(importlib.import_module(new), name)
+def test_exact_is_the_exact_reference():
+    from mmshbm import exact
+    from mmshbm.methods import exact as methods_exact
+
+    assert mmshbm.exact is methods_exact and exact is methods_exact
+    osc = mmshbm.OneDofOscillator(m=1.0, k1=1.0, k2=4.0, gap=1.0)
+    orbit = mmshbm.exact.periodic_orbit(osc.model(), amplitude=2.0)
+    # the oscillator's closed-form period (one contact per period); both are closed forms
+    # whose phase times are solved to round-off
+    assert orbit.converged and abs(orbit.period / osc.period(2.0) - 1) < 1e-12
+
+
+def test_import_is_cheap():
+    """A fresh interpreter importing mmshbm loads none of numba, scipy, matplotlib, pyfftw."""
+    code = ("import sys, mmshbm; heavy = ('numba', 'scipy', 'matplotlib', 'pyfftw');"
+            "print(sorted(m for m in sys.modules if m.split('.')[0] in heavy))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
+
+
+@pytest.mark.parametrize("path", OLD_PATHS)
+def test_old_module_paths_are_gone(path):
+    with pytest.raises(ModuleNotFoundError):
+        importlib.import_module(path)
+
+
+def test_no_alias_finder():
+    """The finder that answered old paths is gone from the package and from sys.meta_path
+    (checked by file: an editable install's own finder may map any name it once saw)."""
+    assert not (pathlib.Path(mmshbm.__file__).parent / "_aliases.py").exists()
+    assert not any(type(f).__name__ == "AliasFinder" for f in sys.meta_path)
+
+
+def test_old_attributes_are_gone():
+    for name in OLD_ATTRIBUTES:
+        assert not hasattr(mmshbm, name), name
+        assert name not in dir(mmshbm)
+
+
+@pytest.mark.parametrize("module", sorted(OLD_REEXPORTS))
+def test_old_reexports_are_gone(module):
+    loaded = importlib.import_module(module)
+    for name in OLD_REEXPORTS[module]:
+        assert not hasattr(loaded, name), f"{module}.{name}"

@@ -13,10 +13,10 @@ from finite_differences import assert_jacobian
 import mmshbm
 from mmshbm.core.harmonics import default_n_samples
 from mmshbm.methods.penalty._kernels import _penalty_contacts
+from mmshbm.methods.penalty.defaults import _condensed_contact_stiffness
 from mmshbm.methods.penalty.hbm import (
     DEFAULT_PENALTY_FACTOR,
     PenaltyHBMProblem,
-    _condensed_contact_stiffness,
     penalty_n_samples,
 )
 

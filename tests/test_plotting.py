@@ -7,7 +7,8 @@ import pytest
 from matplotlib.figure import Figure
 
 import mmshbm
-from mmshbm import plotting, studies
+from mmshbm import plotting
+from mmshbm.analysis import studies
 from mmshbm.analysis.measured import MeasuredBackbone
 
 

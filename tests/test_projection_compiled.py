@@ -1,4 +1,4 @@
-"""The compiled projection (mmshbm.core.projection) against the plain-NumPy one of
+"""The compiled projection (mmshbm.contact.projection, .unilateral) against the plain-NumPy one of
 tests/naive.py: the same spectrum composed with a Python product matrix (exact rule), or
 a dense DFT of the sample indicator (sampled rule), and the damped contact residual
 against its Python loop."""
@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 import mmshbm
-from mmshbm.core.projection import contact_spectrum, project_contact, sample_tables
+from mmshbm.contact.projection import contact_spectrum, sample_tables
+from mmshbm.contact.unilateral import project_contact
 from mmshbm.methods.mms.forced import ForcedResponseProblem
 
 CASES = [(1, -np.inf, 0.3), (3, -0.5, 0.2), (5, -0.2, np.inf), (8, -0.4, 0.4), (20, -np.inf, 0.1),

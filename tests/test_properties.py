@@ -22,9 +22,9 @@ from naive import (
 )
 
 import mmshbm
+from mmshbm.contact.unilateral import proximal_contact
 from mmshbm.core.condense import Condensation
 from mmshbm.core.harmonics import HarmonicTransform
-from mmshbm.core.kernels import proximal_contact
 from mmshbm.fe import assembly, element
 from mmshbm.fe.oscillator import OneDofOscillator
 from mmshbm.methods.mms.conservative import MMSHBMProblem

@@ -20,10 +20,10 @@ from scipy.integrate import solve_ivp
 
 import mmshbm
 from mmshbm import ClearanceOscillator, Model, OneDofOscillator
+from mmshbm.contact.lcp import lcp_solve
 from mmshbm.core.continuation import ContinuationOptions, continue_branch
 from mmshbm.methods import exact
 from mmshbm.methods.penalty.hbm import PenaltyHBMProblem
-from mmshbm.methods.shooting._contact_kernels import lcp_solve
 from mmshbm.methods.shooting.conservative import ShootingProblem
 
 CO = ClearanceOscillator(m=1.0, k1=1.0, k2=4.0, gap=1.0)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import mmshbm
-from mmshbm import studies
+from mmshbm.analysis import studies
 from mmshbm.io import load
 
 GRID = {"harmonics": (1, 3), "elements": (4, 6), "max_amplitude": 3.0, "unit": "gap"}

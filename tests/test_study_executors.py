@@ -9,9 +9,8 @@ import warnings
 import numpy as np
 import pytest
 
-from mmshbm import studies
 from mmshbm._warnings import BranchWarning
-from mmshbm.analysis import executors, table_rows
+from mmshbm.analysis import executors, studies, table_rows
 from mmshbm.results.branch import read_archive
 
 GRID = {"harmonics": (3, 5), "elements": (4, 6), "max_amplitude": 3.0, "unit": "gap", "warn": False}

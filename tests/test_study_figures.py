@@ -10,7 +10,8 @@ import pytest
 from matplotlib.text import Text
 
 import mmshbm
-from mmshbm import BranchWarning, ModelWarning, plotting, studies
+from mmshbm import BranchWarning, ModelWarning, plotting
+from mmshbm.analysis import studies
 from mmshbm.cli import main
 
 

@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from mmshbm import studies
 from mmshbm.analysis import skips as sk
+from mmshbm.analysis import studies
 from mmshbm.analysis.convergence import ConvergenceFit, local_order
 from mmshbm.cli import main
 from mmshbm.core.special_points import SpecialPoint

@@ -6,8 +6,8 @@ import warnings
 import pytest
 
 import mmshbm
-from mmshbm import BranchWarning, ModelWarning, studies
-from mmshbm.analysis import runspec
+from mmshbm import BranchWarning, ModelWarning
+from mmshbm.analysis import runspec, studies
 from mmshbm.cli import main
 from mmshbm.core.modal import ModalCondensation
 

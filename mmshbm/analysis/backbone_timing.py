@@ -23,7 +23,7 @@ def backbone_with(model, method: str, amplitude: float, options: dict):
     harmonics = opts.pop("harmonics", 5)
     factor = opts.pop("penalty_factor", None)
     if factor is not None:
-        from ..methods.penalty.hbm import _condensed_contact_stiffness
+        from ..methods.penalty.defaults import _condensed_contact_stiffness
 
         opts["penalty_stiffness"] = factor * _condensed_contact_stiffness(model)
     return mmshbm.backbone(model, harmonics=harmonics, method=method, max_amplitude=amplitude, **opts)

@@ -50,7 +50,6 @@ from pathlib import Path
 
 import numpy as np
 
-from .backbone_timing import REACH_RTOL as _REACH_RTOL  # noqa: F401
 from .backbone_timing import backbone_with as _backbone
 from .backbone_timing import measure as _measure
 from .backbone_timing import reached_frequency as _reached_frequency
@@ -344,7 +343,7 @@ def compare_methods(model: str = "beam21", amplitude_gaps: float | None = None, 
 def _available(method: str) -> bool:
     import importlib
 
-    from ..methods.backbone import METHODS
+    from ..methods.registry import METHODS
 
     try:
         importlib.import_module(METHODS[method].split(":")[0])

@@ -35,7 +35,7 @@ def element_scaling(elements=(8, 21, 100, 1000), harmonics: int = 5, amplitude_g
     import mmshbm
 
     from .. import _validate as check
-    from ..methods.backbone import make_problem
+    from ..methods.registry import make_problem
 
     elements = [check.integer("elements", n, minimum=1) for n in elements]
     if len(elements) < 2:

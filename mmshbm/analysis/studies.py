@@ -32,12 +32,12 @@ import numpy as np
 
 from .. import _validate as check
 from .._warnings import BranchWarning
+from ..results.base import versions
 from ..results.branch import (
     Branch,
     branch_from_payload,
     branch_payload,
     read_archive,
-    versions,
     write_archive,
 )
 from .convergence import ConvergenceFit, format_convergence

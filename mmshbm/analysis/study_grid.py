@@ -27,7 +27,7 @@ def grid_specs(beam=None, *, model=None, harmonics=(1, 3, 5), elements=None, met
                **options) -> list[RunSpec]:
     """The :class:`RunSpec` list of :func:`run_study` (validated, nothing computed)."""
     from ..fe.beam import TimoshenkoBeam, default_beam
-    from ..methods.backbone import METHODS
+    from ..methods.registry import METHODS
     from ..model.model import Model
 
     unit = _unit(unit)

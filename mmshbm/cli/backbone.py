@@ -8,6 +8,7 @@ import sys
 import warnings
 from pathlib import Path
 
+from .._method_info import backbone_methods, method_info
 from . import common
 
 
@@ -16,9 +17,9 @@ def register(sub) -> None:
     p = sub.add_parser("backbone", help="first nonlinear mode: backbone.csv/.npz/.png")
     common.beam_options(p)
     p.add_argument("-H", "--harmonics", type=common.positive_int, default=5, help="harmonics H (default 5)")
-    p.add_argument("--method", default="mmshbm", choices=["mmshbm", "penalty", "shooting"],
-                   help="MMS-HBM, or a baseline: penalty harmonic balance or time-domain shooting (exit "
-                        "code 1 when a baseline's branch turns into another family)")
+    p.add_argument("--method", default="mmshbm", choices=backbone_methods(),
+                   help="MMS-HBM, or a baseline: penalty harmonic balance (full or reduced) or time-domain "
+                        "shooting (exit code 1 when a baseline's branch turns into another family)")
     p.add_argument("--max-amplitude", type=common.positive_float, default=None,
                    help="largest amplitude, in gaps (default 10)")
     p.add_argument("--max-steps", type=common.positive_int, default=None,
@@ -62,7 +63,7 @@ def _run(args, worker, caught: list) -> int:
     if args.follow != "family":
         extra["follow"] = args.follow
     if args.proximal != "static":
-        if args.method != "mmshbm":
+        if not method_info(args.method).proximal_parameter:
             raise ValueError(f"--proximal {args.proximal} applies to --method mmshbm, not {args.method}")
         extra["r"] = args.proximal
     branch = backbone(model, harmonics=args.harmonics, method=args.method, max_amplitude=max_amp,
@@ -119,7 +120,7 @@ def _report(args, branch, gap: float, files: list, caught: list) -> int:
             print(line)
     common.wrote(*files)
     code = common.exit_code([branch])
-    if args.method != "mmshbm" and short:
+    if method_info(args.method).baseline and short:
         code = 1
     return code
 
@@ -134,10 +135,6 @@ def gaps_in_m(gaps: float, model, option: str = "--max-amplitude") -> float:
     return float(gaps) * model.gap
 
 
-#: the methods' names in the summary
-_METHOD_NAMES = {"mmshbm": "MMS-HBM", "penalty": "penalty-HBM", "shooting": "shooting"}
-
-
 def _amp(a: float, gap: float) -> str:
     return f"{a / gap:.3g} gaps" if gap > 0 else f"{a:.3g} m"
 
@@ -146,7 +143,7 @@ def _summary(branch, gap: float, findings: list, short: bool) -> str:
     """One line: what the branch is (complete or not, how far the backbone of linear mode 1
     reaches, its frequency range) and how far to trust its frequency (the truncation
     estimate at the top of the backbone, and whether the truncated series passes the stop)."""
-    head = f"mmshbm backbone: {_METHOD_NAMES.get(branch.method, branch.method)}"
+    head = f"mmshbm backbone: {method_info(branch.method).display_name}"
     head += f", H = {branch.harmonics}: " if branch.harmonics else ": "
     state = "complete" if branch.completed else f"incomplete ({branch.status})"
     front = branch.family_front() if len(branch) else []
@@ -168,7 +165,7 @@ def _trust(branch, top: float, gap: float) -> str:
     """The frequency's truncation error estimate at the amplitude ``top`` (m), in words."""
     if not branch.harmonics:
         return "no truncation in H (time integration)"
-    if branch.method != "mmshbm":  # its re-solves at 2H and 4H take minutes on the beam
+    if not method_info(branch.method).cheap_truncation_estimate:  # re-solves at 2H, 4H: minutes
         return "truncation estimate on request (branch.truncation_error(A))"
     try:
         est = branch.truncation_error(top)
@@ -193,7 +190,7 @@ def _another_family(branch, gap: float, quiet: bool = False) -> bool:
     if quiet:
         return True
     end = int(front[-1]) if len(front) else 0
-    code = "" if branch.method == "mmshbm" else " (exit code 1)"
+    code = " (exit code 1)" if method_info(branch.method).baseline else ""
     print(f"mmshbm backbone: warning: {branch.method} branch: the backbone of linear mode 1 ends at "
           f"{_amp(branch.amplitude[end], gap)} ({branch.frequency[end]:.4g} Hz); up to {_amp(top, gap)} the "
           f"branch is another family of motions, not that mode's backbone{code}", file=sys.stderr)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from .._method_info import forced_methods, is_harmonic_balance
 from . import common
 
 
@@ -14,7 +15,7 @@ def register(sub) -> None:
                                    "the last node with mass.")
     common.beam_options(p)
     p.add_argument("-H", "--harmonics", type=common.positive_int, default=5, help="harmonics (default 5)")
-    p.add_argument("--method", default="mmshbm", choices=["mmshbm", "penalty", "shooting"],
+    p.add_argument("--method", default="mmshbm", choices=forced_methods(),
                    help="MMS-HBM, or a baseline on the same forced problem: penalty harmonic balance or "
                         "time-domain shooting (default mmshbm)")
     p.add_argument("--damping", type=common.non_negative_float, default=0.005,
@@ -71,7 +72,7 @@ def run(args) -> int:
         force = np.zeros(model.n_dof)
         force[dof] = args.force
     extra = {} if args.max_steps is None else {"max_steps": args.max_steps}
-    options = {"harmonics": args.harmonics} if args.method != "shooting" else {}
+    options = {"harmonics": args.harmonics} if is_harmonic_balance(args.method) else {}
     resp = frequency_response(model, force, tuple(args.range), method=args.method,
                               verbose=common.progress(args), **options, **extra)
     out = common.out_dir(args)

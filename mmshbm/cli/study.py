@@ -6,6 +6,7 @@ import sys
 import warnings
 from pathlib import Path
 
+from .._method_info import backbone_methods
 from .._warnings import MmshbmWarning
 from . import common
 
@@ -27,7 +28,7 @@ def register(sub) -> None:
                    help="values of H (default 1 3 5)")
     p.add_argument("--elements", type=common.positive_int, nargs="+", default=None,
                    help="element counts (default 8 21)")
-    p.add_argument("--methods", nargs="+", default=None, choices=["mmshbm", "penalty", "shooting"],
+    p.add_argument("--methods", nargs="+", default=None, choices=backbone_methods(),
                    help="methods (default mmshbm)")
     p.add_argument("--param", action="append", default=None, metavar="NAME=V1,V2",
                    help="a further grid axis: a beam field (gap, E, rho, ...), grading or a backbone option; "

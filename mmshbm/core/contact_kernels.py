@@ -20,10 +20,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-# the trigonometric-polynomial, spectrum and peak kernels that earlier releases defined
-# here are these objects (their homes: contact.trig, contact.projection, core.measures)
-from ..contact.projection import _arc_spectrum, _sampled_spectrum, _spectrum  # noqa: F401
-from ..contact.trig import _TWO_PI, _refine, _trig_eval, _zeros  # noqa: F401
+from ..contact.projection import _spectrum
 from ..contact.unilateral import _project
 from .kernels import JIT_OPTIONS
 from .measures import _series_peak

@@ -29,7 +29,6 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .bordered import bordered_solve as _bordered_solve  # noqa: F401 (the benchmarks' name)
 from .events import BranchEvents, RelocationFailed
 from .family_events import default_events
 from .options import ContinuationOptions, ContinuationProblem, ContinuationResult, ContinuationState
@@ -37,8 +36,6 @@ from .problem import as_problem
 from .special_points import SpecialPoint
 from .status import Status
 from .steps import (
-    SKIP_MIN_TOL,  # noqa: F401 (imported from here before the split)
-    _advance,  # noqa: F401
     _advance_turn,
     _corrector,
     _curvature,
@@ -48,9 +45,7 @@ from .steps import (
     _orientation,
     _orientation_safe,
     _outside,
-    _predicted_converged,  # noqa: F401
     _tangent,
-    _tangent_sign,  # noqa: F401
     newton,
 )
 

@@ -138,8 +138,8 @@ def _newton_modal(u, u_pred, t, tol, step_tol, max_iter, n_c, H, hist, scale, co
         for i in range(n):
             u[i] -= du[i]
         # quadratic convergence predicts the next residual below tol/10: accept the updated
-        # point without evaluating it (as mmshbm.core.continuation._predicted_converged)
-        if it >= 1 and tol >= 1e-11:  # continuation.SKIP_MIN_TOL
+        # point without evaluating it (as mmshbm.core.steps._predicted_converged)
+        if it >= 1 and tol >= 1e-11:  # steps.SKIP_MIN_TOL
             r_prev = hist[it - 1]
             if r_prev > 0.0 and norm <= math.sqrt(tol) and norm <= 0.1 * r_prev:
                 predicted = norm * (norm / r_prev) ** 2

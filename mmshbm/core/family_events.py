@@ -27,7 +27,7 @@ from .options import ContinuationOptions, FamilyOptions
 from .pinned import PinnedFailure
 from .special_points import SpecialPoint
 from .status import Status
-from .steps import _orientation_safe, _pinned_monitor  # noqa: F401 (_orientation_safe: the old home)
+from .steps import _pinned_monitor
 
 __all__ = ["FamilyFollower", "default_events"]
 

@@ -7,10 +7,8 @@ call directly in their inner loops. Caching: every kernel module takes its flags
 :data:`JIT_OPTIONS` (defined with the cache policy in :mod:`mmshbm._kernel_cache`,
 re-exported here), and importing this module installs that policy (a cached kernel is
 stale when any kernel file changes), so kernels may call kernels of other files.
-
-The proximal contact law and the cosine product matrix that earlier releases kept here
-live with the contact laws (:mod:`mmshbm.contact.unilateral`,
-:mod:`mmshbm.contact.projection`); their names here are the same objects.
+The proximal contact law and the cosine product matrix live with the contact laws
+(:mod:`mmshbm.contact.unilateral`, :mod:`mmshbm.contact.projection`).
 """
 
 from __future__ import annotations
@@ -20,11 +18,7 @@ from numba import njit
 from .._kernel_cache import JIT_OPTIONS
 from .._kernel_cache import install as _install_cache_policy
 
-# the contact kernels of earlier releases, at their old path (the same objects)
-from ..contact.projection import _cosine_product_matrix, cosine_product_matrix  # noqa: F401
-from ..contact.unilateral import _proximal_contact, proximal_contact  # noqa: F401
-
-__all__ = ["proximal_contact", "cosine_product_matrix", "JIT_OPTIONS"]
+__all__ = ["JIT_OPTIONS"]
 
 _install_cache_policy()
 

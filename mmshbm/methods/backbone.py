@@ -13,7 +13,7 @@ from ..model.model import Model
 from ..results.branch import Branch
 from . import runner
 from .limits import check_resources
-from .registry import _CONTINUATION_FIELDS, METHODS, make_problem, method_options  # noqa: F401 - public here since 0.1
+from .registry import METHODS, is_harmonic_balance, make_problem, method_info
 
 __all__ = ["backbone", "backbone_method", "amplitude_range"]
 
@@ -96,7 +96,7 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     if bounds is not None and not isinstance(bounds, Mapping):
         raise TypeError(f"bounds must be a dict name -> (lo, hi), got {type(bounds).__name__} {bounds!r}")
     copts = runner.continuation_options(options, {"amplitude": (0.0, max_amplitude), **dict(bounds or {})})
-    if method != "shooting":
+    if is_harmonic_balance(method):
         options["harmonics"] = harmonics
     checkpoint = runner.path_argument("checkpoint", checkpoint)
     resume = runner.path_argument("resume", resume)
@@ -189,8 +189,9 @@ def backbone_method(model: Model, method: str) -> str:
     """The method that computes the backbone asked of ``method``: "mmshbm" on a model with
     damping (viscous, ``model.damping``, or friction contacts) is its damped nonlinear mode,
     "epmc" (:mod:`mmshbm.methods.mms.epmc`); any other name is itself."""
-    if method == "mmshbm" and (model.damping is not None or model.friction):
-        return "epmc"
+    damped = method_info(method).damped_variant
+    if damped is not None and (model.damping is not None or model.friction):
+        return damped
     return method
 
 

@@ -89,8 +89,11 @@ def estimate_memory(model, method: str, harmonics: int = 5, n_samples: int | Non
     penalty_factor : float, optional
         k_p / k_c of penalty-HBM (for its default N).
     """
+    from .._method_info import method_info
+
+    memory = method_info(method).memory_model
     n, n_c, n_l = _sizes(model)
-    if method == "shooting":
+    if memory == "time-march":
         from .shooting.conservative import DEFAULT_STEPS_PER_PERIOD
 
         N = int(steps_per_period or DEFAULT_STEPS_PER_PERIOD)
@@ -99,15 +102,15 @@ def estimate_memory(model, method: str, harmonics: int = 5, n_samples: int | Non
 
     H = int(harmonics)
     if n_samples is None:
-        if method == "penalty":
-            from .penalty.hbm import DEFAULT_PENALTY_FACTOR, penalty_n_samples
+        if memory == "penalty":
+            from .penalty.defaults import DEFAULT_PENALTY_FACTOR, penalty_n_samples
 
             n_samples = penalty_n_samples(H, penalty_factor or DEFAULT_PENALTY_FACTOR)
         else:
             n_samples = default_n_samples(H)
     n_fine = max(512, 8 * int(n_samples))
     grid = 2 * (H + 1) * n_fine
-    if method == "penalty":
+    if memory == "penalty":
         nnz = int(model.K.nnz)
         return _DOUBLE * (grid + 10 * ((H + 1) * nnz + (H + 1) ** 2))
     band = min(n_l, max(8, int(n_l**0.5)))
@@ -127,12 +130,14 @@ def check_resources(model, method: str, options: dict) -> int:
     if est <= _SMALL_RUN_BYTES and not os.environ.get("MMSHBM_MEMORY_LIMIT"):
         return est
     limit = memory_limit()
-    what = (f"steps_per_period = {options.get('steps_per_period')}" if method == "shooting"
+    from .._method_info import is_harmonic_balance
+
+    what = (f"steps_per_period = {options.get('steps_per_period')}" if not is_harmonic_balance(method)
             else f"harmonics = {H}" + (f", n_samples = {options['n_samples']}"
                                        if options.get("n_samples") else ""))
     if est > limit:
         hint = ""
-        if method != "shooting":
+        if is_harmonic_balance(method):
             fits = [h for h in (2000, 1000, 500, 200, 100, 50, 20, 10, 5, 1)
                     if estimate_memory(model, method, h) <= limit]
             hint = f"; about H = {fits[0]} fits" if fits else ""

@@ -1,8 +1,10 @@
 """The continuation problems of the methods, by name.
 
-``METHODS`` maps a method name to the ``module:class`` of its continuation problem;
-:func:`make_problem` builds one (importing only that method's module), validating the
-option names against the class's constructor.
+``METHODS`` maps a method name to the ``module:class`` of its continuation problem and
+``METHOD_INFO`` to its capabilities (:class:`MethodInfo`; the table lives in the
+dependency-free :mod:`mmshbm._method_info`, so that the CLI and the results read it
+without importing the methods); :func:`make_problem` builds a problem (importing only that
+method's module), validating the option names against the class's constructor.
 
 Elements (:mod:`mmshbm.elements`): ``METHOD_ELEMENTS`` and ``FORCED_METHOD_ELEMENTS``
 name the element kinds each method's backbone and forced response take, and
@@ -15,11 +17,20 @@ from __future__ import annotations
 import importlib
 import inspect
 
+from .._method_info import (
+    METHOD_INFO,
+    MethodInfo,
+    backbone_methods,
+    forced_methods,
+    is_harmonic_balance,
+    method_info,
+)
 from ..model.model import Model
 from .runner import CONTINUATION_FIELDS, check_option_names
 
 __all__ = ["ELEMENT_PROBLEMS", "FORCED_ELEMENT_PROBLEMS", "FORCED_METHOD_ELEMENTS", "METHODS",
-           "METHOD_ELEMENTS", "check_elements", "make_problem", "method_options"]
+           "METHOD_ELEMENTS", "METHOD_INFO", "MethodInfo", "backbone_methods", "check_elements",
+           "forced_methods", "is_harmonic_balance", "make_problem", "method_info", "method_options"]
 
 #: method name -> "module:class" of its continuation problem
 METHODS = {
@@ -114,3 +125,4 @@ def _check_option_names(method: str, problem_class, options: dict) -> None:
 
 _BACKBONE_ARGUMENTS = ("harmonics", "method", "max_amplitude", "start_amplitude", "bounds", "verbose",
                        "callback", "checkpoint", "resume")
+

@@ -79,7 +79,9 @@ def check_method(method, methods) -> None:
 
 def check_harmonics(method: str, harmonics) -> None:
     """H >= 1 for the harmonic-balance methods (shooting has none)."""
-    if method != "shooting":
+    from .._method_info import is_harmonic_balance
+
+    if is_harmonic_balance(method):
         check.integer("harmonics", harmonics, minimum=1)
 
 

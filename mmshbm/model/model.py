@@ -27,9 +27,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from .. import _validate as check
-from .contact import Contact, contacts_from  # noqa: F401 - Contact: importable from here as before
+from .contact import contacts_from
 from .friction import no_contacts
-from .linear_modes import ModesMixin, _require_positive_definite, open_contact_modes  # noqa: F401
+from .linear_modes import ModesMixin
 from .partition import PartitionMixin
 from .stops import StopsMixin
 

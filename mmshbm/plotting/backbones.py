@@ -17,14 +17,19 @@ from .common import (
     _overlay_measured,
     _point_label,
     _reference_lines,
-    amplitude_name,
     branch_label,
     distinct_models,
     line_styles,
     log,
-    reference_frequencies,
 )
-from .data import odd_harmonics, resonance_label, resonance_orders, resonances_met
+from .data import (
+    amplitude_name,
+    odd_harmonics,
+    reference_frequencies,
+    resonance_label,
+    resonance_orders,
+    resonances_met,
+)
 
 
 def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=None, model=None,

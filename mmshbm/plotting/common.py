@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from .data import BranchData, _gap, amplitude_name, reference_frequencies  # noqa: F401 (re-exported)
+from .data import _gap, reference_frequencies
 
 log = logging.getLogger(__name__)
 

@@ -11,7 +11,7 @@ from matplotlib.figure import Figure
 from .backbones import plot_backbone
 from .common import _finish, _gap, branch_label, line_styles
 from .data import marked_run
-from .grids import _h_colors, plot_convergence, plot_family_grid  # noqa: F401 (public here)
+from .grids import _h_colors
 from .signals import plot_contact_force, plot_time_signals
 
 

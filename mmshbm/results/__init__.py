@@ -6,7 +6,7 @@ import importlib
 
 # public names of the flat ``mmshbm.results`` module of 0.1 -> the module that holds them now
 _NAMES = {
-    "Branch": "branch", "versions": "branch", "branch_payload": "branch",
+    "Branch": "branch", "versions": "base", "branch_payload": "branch",
     "branch_from_payload": "branch", "rebuild_model": "models",
     "write_archive": "archive", "read_archive": "archive",
     "FrequencyResponse": "response", "ResultBase": "base", "TruncationEstimate": "truncation",

@@ -22,18 +22,11 @@ from typing import ClassVar
 
 import numpy as np
 
-from .archive import read_archive, write_archive  # noqa: F401 - public here since 0.1
-from .base import (  # versions: public here since 0.1
-    FORMAT_VERSION,
-    ResultBase,
-    SolverSlot,
-    entry_point,
-    result_from_payload,
-    result_payload,
-    versions,  # noqa: F401
-)
+from .._method_info import is_harmonic_balance
+from .archive import read_archive, write_archive
+from .base import FORMAT_VERSION, ResultBase, SolverSlot, entry_point, result_from_payload, result_payload
 from .family_points import amplitude_in_m, family_front, frequency_at, solve_at, warn_outside_front
-from .models import rebuild_model  # noqa: F401 - public here since 0.1
+from .models import rebuild_model
 
 __all__ = ["Branch", "rebuild_model", "read_archive", "write_archive", "FORMAT_VERSION"]
 
@@ -158,7 +151,7 @@ class Branch(ResultBase):
         return super().attach_solver(**method_options)
 
     def _build_solver(self, model, options: dict):
-        if self.method != "shooting":
+        if is_harmonic_balance(self.method):
             options.setdefault("harmonics", self.harmonics)
         return entry_point("make_problem")(model, self.method, **options)
 

@@ -50,19 +50,16 @@ from ...core._modal_kernels import _modal_dynamic_stiffness
 from ...core.condense import SingularDynamicStiffness, make_condensation
 from ...core.contact_kernels import _mmshbm_eval, _mmshbm_monitor_multi
 from ...core.harmonics import check_harmonics
-from ...core.measures import condensed_energy as _condensed_energy  # noqa: F401  (earlier private names)
-from ...core.measures import mean_energy as _mean_energy  # noqa: F401
-from ...core.measures import refined_max as _refined_max  # noqa: F401
 from ...core.problem import BackboneProblemBase, OneEvaluation
 from ...model.model import Model
 from . import _family_kernels
 from .family import FamilyMixin
 from .fast import fast_data
 from .fixed import _FIXED, _FIXED_CONTACTS, _FIXED_SCALING, _own, fixed_contacts, fixed_scaling, kept_entries
-from .held import _HELD, _held_frequency, _held_frequency_solve  # noqa: F401  (earlier home)
+from .held import _held_frequency
 from .krylov import KrylovCorrector, check_linear_solver, resolve_linear_solver
 from .signals import SignalsMixin
-from .tables import _TABLES_KEPT, _compute_tables, _kept_tables, _tables, _tables_kept  # noqa: F401  (earlier home)
+from .tables import _tables, _tables_kept
 
 __all__ = ["MMSHBMProblem"]
 

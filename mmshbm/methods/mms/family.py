@@ -13,7 +13,7 @@ from ...core.corrector_kernels import _start_mode_share
 from ...core.modal_energy import kinetic_energy_shares
 from ._family_kernels import family_records, harmonic_energies
 from .held import _held_frequency
-from .landings import LandingsMixin, _raised, _rising_front  # noqa: F401  (kept importable here)
+from .landings import LandingsMixin
 
 __all__ = ["FamilyMixin"]
 

@@ -428,7 +428,7 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         a level that keeps the stops open (the first that converges); the stuck response when
         none does (the continuation's first corrector then tries). ``tol`` as
         :meth:`solve_at`."""
-        guesses = [self.linear_point, self.stuck_point]
+        guesses = [self.linear_response_point, self.stuck_point]
         if self.model.contacts:  # the force raised from a level that keeps the stops open
             guesses.append(lambda f: ForcedResponseProblem.start_point(self, f))
         for guess in guesses:

@@ -97,8 +97,8 @@ from ...core.measures import amplitude_sign
 from ...core.problem import BackboneProblemBase
 from ...model.model import Model
 from ._kernels import _penalty_contacts, _penalty_hbm_jacobian
-from .assembly import _jacobian_pattern, _Pattern  # noqa: F401 - _Pattern: importable from here as before
-from .defaults import _condensed_contact_stiffness, penalty_n_samples  # noqa: F401
+from .assembly import _jacobian_pattern
+from .defaults import penalty_n_samples
 from .signals import PenaltySignalsMixin
 
 __all__ = ["PenaltyHBMProblem", "DEFAULT_PENALTY_FACTOR", "penalty_n_samples"]

@@ -257,7 +257,7 @@ class JenkinsForcedProblem(PenaltyForcedProblem):
         stiffness raised from at most 10 ρ to k_t by factors of 10, each stage started from
         the last (a stiff Jenkins spring from the free-slip guess does not converge); the
         linear response when a stage does not converge."""
-        u0 = self.linear_point(frequency)
+        u0 = self.linear_response_point(frequency)
         target = self.tangential_stiffness.copy()
         k0 = np.minimum(target, 10.0 * self._rho)
         stages = int(np.ceil(np.max(np.log10(target / k0)))) if np.any(target > k0) else 0

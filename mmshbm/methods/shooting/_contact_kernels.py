@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...contact.lcp import _inverse_sub, _lcp_jacobian, _lcp_path, _lcp_point, lcp_solve  # noqa: F401
+from ...contact.lcp import _inverse_sub, _lcp_jacobian, _lcp_path, _lcp_point
 from ...core.kernels import JIT_OPTIONS
 from ._kernels import (
     _band_solve,
@@ -26,7 +26,7 @@ from ._kernels import (
     _block_update,
 )
 
-__all__: list[str] = []  # kernels; lcp_solve (mmshbm.contact.lcp) is re-exported at its old path
+__all__: list[str] = []  # kernels only
 
 _MAX_NEWTON = 60
 # Tangent columns per block (as in _shooting_kernels).
