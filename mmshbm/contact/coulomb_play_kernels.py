@@ -157,9 +157,14 @@ def _play_projection(y, s, r, tau, cos_t, sin_t, jacobian, g, J):
         a, b = A[i], B[i]
         # the spectrum (1/2π)∫_a^b (cos, sin) nτ dτ, n = 0..2H, of the piece's indicator
         Cp[0], Sp[0] = (b - a) * inv2pi, 0.0
+        # cos/sin of qa and qb by rotation (round-off growing as q ε, q <= 2H)
+        ca1, sa1, cb1, sb1 = math.cos(a), math.sin(a), math.cos(b), math.sin(b)
+        ca, sa, cb, sb = 1.0, 0.0, 1.0, 0.0
         for q in range(1, n):
-            Cp[q] = (math.sin(q * b) - math.sin(q * a)) / q * inv2pi
-            Sp[q] = (math.cos(q * a) - math.cos(q * b)) / q * inv2pi
+            ca, sa = ca * ca1 - sa * sa1, sa * ca1 + ca * sa1
+            cb, sb = cb * cb1 - sb * sb1, sb * cb1 + cb * sb1
+            Cp[q] = (sb - sa) / q * inv2pi
+            Sp[q] = (ca - cb) / q * inv2pi
         ind[0] = Cp[0]
         for k in range(1, H + 1):
             ind[2 * k - 1] = 2.0 * Cp[k]
@@ -179,11 +184,12 @@ def _play_projection(y, s, r, tau, cos_t, sin_t, jacobian, g, J):
             for q in range(n):
                 J[q, 0] += r * ind[q]
         else:
-            t = TE[i]
+            c1, s1 = math.cos(TE[i]), math.sin(TE[i])
+            ck, sk = 1.0, 0.0
             for q in range(n):
                 J[q, 0] += r * ind[q]
             for k in range(1, H + 1):
-                ck, sk = math.cos(k * t), math.sin(k * t)
+                ck, sk = ck * c1 - sk * s1, sk * c1 + ck * s1
                 for q in range(n):
                     J[q, 2 * k - 1] += r * ind[q] * ck
                     J[q, 2 * k] += r * ind[q] * sk
