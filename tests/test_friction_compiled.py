@@ -185,3 +185,22 @@ def test_friction_epmc_evaluates_the_compiled_rows_as_the_numpy_ones():
         checked += 1
     assert checked == 12
     assert p.monitor(u)["slip_fraction"] > 0.1  # the last orbits slip
+
+
+@pytest.mark.parametrize("H", [2, 7, 15])
+def test_play_pieces_kernel_is_the_numpy_walk(H):
+    """The stick and slip pieces (the Floquet solver's input) of the compiled walk against
+    the NumPy extrema and walk: the same pattern, arcs and stick positions to round-off
+    (zeros refined to a few ulps of 2π, positions sums of 2H+1 terms of |y|)."""
+    from mmshbm.contact.coulomb import _play_arrays, play_pieces
+
+    for seed in range(6):
+        y = _signal(H, seed)
+        for s in (0.0, 0.4, 2.0, 50.0):
+            pieces = play_pieces(y, s, 1.3)
+            a, b, sg, u, te = _play_arrays(y, s, 1.3)
+            assert [p[2] for p in pieces] == [int(v) for v in sg], (seed, s)
+            got = np.array([[p[0], p[1], p[3], p[4]] for p in pieces])
+            ref = np.column_stack([a, b, u, te])
+            scale = np.array([2 * np.pi, 2 * np.pi, np.abs(y).sum() + s / 1.3, 2 * np.pi])
+            assert_roundoff_close(got, ref, scale[None, :], terms=4 * len(y), err_msg=f"seed {seed}, s {s}")

@@ -47,7 +47,7 @@ from numba import njit
 
 from .._kernel_cache import JIT_OPTIONS
 from .._kernel_cache import install as _install_cache_policy
-from .coulomb_play_kernels import _play_projection, _play_walk
+from .coulomb_play_kernels import _play_pieces, _play_projection, _play_walk
 from .trig import _TWO_PI, _zeros
 
 __all__ = ["coulomb_residual", "coulomb_derivative", "project_coulomb", "project_coulomb_play", "play_pieces",
@@ -258,9 +258,16 @@ def play_pieces(y: np.ndarray, s: float, r: float, n_samples: int | None = None)
     slip in the direction σ (u = y − σ s/r). Full stick (y's range <= 2s/r): one piece
     [0, 2π] at the symmetric position u = mean(y) (mean force zero, τ_e = NaN: ∂u/∂y = e_0),
     or clamped into the band where |r (u − y)| <= s (at y's maximum or minimum, τ_e there).
+    Compiled (:func:`mmshbm.contact.coulomb_play_kernels._play_pieces`; ``_play_arrays``
+    is its NumPy reference).
     """
-    a, b, sg, u, te = _play_arrays(y, s, r, n_samples)
-    return [(float(a[i]), float(b[i]), int(sg[i]), float(u[i]), float(te[i])) for i in range(len(a))]
+    y, s, r, H = _play_args(y, s, r)
+    N = 16 * (2 * H + 1) if n_samples is None else int(n_samples)
+    tau, cos_t, sin_t = _sample_basis(H, N)
+    cap = 2 * (2 * N + 3)
+    a, b, sg, u, te = (np.empty(cap) for _ in range(5))
+    m = _play_pieces(y, s, r, tau, cos_t, sin_t, a, b, sg, u, te)
+    return [(float(a[i]), float(b[i]), int(sg[i]), float(u[i]), float(te[i])) for i in range(m)]
 
 
 def project_coulomb_play(y: np.ndarray, s: float, r: float, n_samples: int | None = None,
