@@ -9,8 +9,12 @@ on those rows (what :func:`~mmshbm.core.contact_kernels._damped_residual` leaves
 row that is not a unilateral contact), so the fused unilateral residual and these rows make
 the whole residual and Jacobian without Python in between.
 
-Kernels only; plain contiguous arrays. The caller is the kernel's only user; it calls the
-play projection of :mod:`mmshbm.contact.coulomb_play_kernels` (the package's cache policy,
+:func:`_tracked_harmonic` is the solve of
+:class:`~mmshbm.methods.mms.friction_tracked.TrackedHarmonic` (harmonic 1 of the amplitude
+DOF with its Ω derivative).
+
+Kernels only; plain contiguous arrays. :func:`_friction_rows` calls the play projection of
+:mod:`mmshbm.contact.coulomb_play_kernels` (the package's cache policy,
 :mod:`mmshbm._kernel_cache`, recompiles it when that file changes).
 """
 

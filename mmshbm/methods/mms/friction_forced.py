@@ -48,6 +48,10 @@ trigonometric polynomial on its closed arcs, 0 on the open ones, continuous); th
 with a time-varying half-width s/ρ (:mod:`mmshbm.contact.coulomb_coupled`), its Jacobian
 including ∂s/∂(the normal contact's coefficients). Play form only.
 
+Evaluation. The play form with constant slip forces runs compiled: the fused unilateral
+residual, then the friction rows in place (:mod:`mmshbm.methods.mms._friction_kernels`);
+the coupled and velocity forms assemble their rows in NumPy (:meth:`FrictionRows.contact_residual`).
+
 Floquet multipliers (``stability=True``, :mod:`mmshbm.methods.mms.friction_stability`), play
 form. Not yet: the velocity form with ``normal_contact=`` or with stability
 (NotImplementedError).
