@@ -16,7 +16,9 @@
   of 10⁴ N/m to ground and between them, 1 % modal damping, 10 N on mass 1) whose mass 2 is
   joined by k_t = 10⁴ N/m to a massless Coulomb slider, μN = 5 N
   (``with_friction(..., tangential_stiffness=)``): MMS-HBM against the Jenkins baseline on
-  the same physical spring; ``track_ms_per_point`` the time per FRF point.
+  the same physical spring; ``track_ms_per_point`` the time per FRF point (MMS-HBM, the
+  friction rows compiled: 1.5 ms on the 2-core development machine, idle; 4.0–5.1 ms with
+  the NumPy rows, docs/friction.md).
 * ``NLvibFrictionBeam``: NLvib's example-08 beam (2 m, 0.1 × 0.3 m, 185 GPa, 7830 kg/m³, 8
   elements; 0.2 N at the tip, C = βK with 1 % at the first stuck mode), μN = 1.5 N at node 4
   behind k_t = 1e7 or 1e9 N/m, or rigid at node 4 made massless; the whole FRF 0.9 ω_free …

@@ -27,10 +27,10 @@ the pieces are integrated in closed form, and its Jacobian G (the projection of 
 indicator of |p| > s) gives ∂proj[clip]/∂p = I − G exactly. This module calls that
 projection and does not copy it; the pointwise kernels below are self-contained (Numba
 caches a kernel per file). The displacement-level projection (:func:`project_coulomb_play`)
-uses the root-finding kernels of :mod:`mmshbm.contact.trig` (``_zeros`` from
-Python, ``_refine`` from the compiled walk over the extrema, ``_play_walk``: the package's
-cache policy, :mod:`mmshbm._kernel_cache`, recompiles a caller when a callee's file
-changes).
+is one compiled call (:mod:`mmshbm.contact.coulomb_play_kernels`: the extrema of y, the
+walk over them, the spectra, the force and its Jacobian); :func:`play_pieces` and the NumPy
+reference of the projection (``_project_play_numpy``) call the root finder of
+:mod:`mmshbm.contact.trig` from Python and the compiled walk.
 
 The Jenkins element of penalty harmonic balance (a spring in series with the slider:
 Coulomb's law at a massless node behind a spring) is evaluated by AFT with the return map
@@ -47,7 +47,8 @@ from numba import njit
 
 from .._kernel_cache import JIT_OPTIONS
 from .._kernel_cache import install as _install_cache_policy
-from .trig import _TWO_PI, _refine, _zeros
+from .coulomb_play_kernels import _play_pieces, _play_projection, _play_walk
+from .trig import _TWO_PI, _zeros
 
 __all__ = ["coulomb_residual", "coulomb_derivative", "project_coulomb", "project_coulomb_play", "play_pieces",
            "derivative_matrix", "jenkins_hysteresis"]
@@ -208,40 +209,6 @@ def _sample_basis(H: int, N: int):
     return out
 
 
-@njit(**JIT_OPTIONS)
-def _play_walk(pts, pv, c, sn, width, A, B, SG, U, TE):
-    """The pieces of the play operator between consecutive extrema ``pts`` (values ``pv``)
-    of y = c_0 + Σ c_k cos kτ + sn_k sin kτ, starting dragged up at pts[0]; written to
-    A, B (arc), SG (σ), U (stick position), TE (extremum that set it). Returns the count."""
-    m = 0
-    u = pv[0] - width
-    t_e = pts[0]
-    gc = c.copy()
-    zero = np.int64(0)
-    for i in range(pts.shape[0] - 1):
-        a, b, ya, yb = pts[i], pts[i + 1], pv[i], pv[i + 1]
-        if b <= a:
-            continue
-        sigma = 1 if yb > ya else -1
-        level = u + sigma * width
-        if sigma * (yb - level) <= 0:  # does not reach the slip threshold: sticks throughout
-            A[m], B[m], SG[m], U[m], TE[m] = a, b, 0, u, t_e
-            m += 1
-            continue
-        if sigma * (ya - level) >= 0:
-            t_sw = a
-        else:
-            gc[0] = c[0] - level
-            t_sw = _refine(gc, sn, a, b, ya - level, zero)
-        if t_sw > a:
-            A[m], B[m], SG[m], U[m], TE[m] = a, t_sw, 0, u, t_e
-            m += 1
-        A[m], B[m], SG[m], U[m], TE[m] = t_sw, b, sigma, np.nan, np.nan
-        m += 1
-        u, t_e = yb - sigma * width, b
-    return m
-
-
 def _play_arrays(y: np.ndarray, s: float, r: float, n_samples: int | None = None):
     """The pieces of :func:`play_pieces` as arrays (a, b, σ, u, τ_e)."""
     y = np.asarray(y, dtype=float)
@@ -291,9 +258,16 @@ def play_pieces(y: np.ndarray, s: float, r: float, n_samples: int | None = None)
     slip in the direction σ (u = y − σ s/r). Full stick (y's range <= 2s/r): one piece
     [0, 2π] at the symmetric position u = mean(y) (mean force zero, τ_e = NaN: ∂u/∂y = e_0),
     or clamped into the band where |r (u − y)| <= s (at y's maximum or minimum, τ_e there).
+    Compiled (:func:`mmshbm.contact.coulomb_play_kernels._play_pieces`; ``_play_arrays``
+    is its NumPy reference).
     """
-    a, b, sg, u, te = _play_arrays(y, s, r, n_samples)
-    return [(float(a[i]), float(b[i]), int(sg[i]), float(u[i]), float(te[i])) for i in range(len(a))]
+    y, s, r, H = _play_args(y, s, r)
+    N = 16 * (2 * H + 1) if n_samples is None else int(n_samples)
+    tau, cos_t, sin_t = _sample_basis(H, N)
+    cap = 2 * (2 * N + 3)
+    a, b, sg, u, te = (np.empty(cap) for _ in range(5))
+    m = _play_pieces(y, s, r, tau, cos_t, sin_t, a, b, sg, u, te)
+    return [(float(a[i]), float(b[i]), int(sg[i]), float(u[i]), float(te[i])) for i in range(m)]
 
 
 def project_coulomb_play(y: np.ndarray, s: float, r: float, n_samples: int | None = None,
@@ -338,9 +312,18 @@ def project_coulomb_play(y: np.ndarray, s: float, r: float, n_samples: int | Non
     slip : float
         Fraction of the period in slip.
     """
-    from .projection import _product_matrix
+    y, s, r, H = _play_args(y, s, r)
+    N = 16 * (2 * H + 1) if n_samples is None else int(n_samples)
+    tau, cos_t, sin_t = _sample_basis(H, N)
+    g = np.empty(2 * H + 1)
+    J = np.empty((2 * H + 1, 2 * H + 1)) if jacobian else np.empty((0, 0))
+    slip = _play_projection(y, s, r, tau, cos_t, sin_t, jacobian, g, J)
+    return g, (J if jacobian else None), float(slip)
 
-    y = np.asarray(y, dtype=float)
+
+def _play_args(y, s, r):
+    """Validated (y as contiguous float64 (2H+1,), s, r, H) of the play projection."""
+    y = np.ascontiguousarray(y, dtype=float)
     if y.ndim != 1 or y.shape[0] % 2 != 1:
         raise ValueError(f"y must be 1-D with 2H+1 entries, got shape {y.shape}")
     s, r = float(s), float(r)
@@ -348,7 +331,17 @@ def project_coulomb_play(y: np.ndarray, s: float, r: float, n_samples: int | Non
         raise ValueError(f"slip force s must be finite and >= 0, got {s!r}")
     if not r > 0:
         raise ValueError(f"r must be > 0, got {r!r}")
-    H = (y.shape[0] - 1) // 2
+    return y, s, r, (y.shape[0] - 1) // 2
+
+
+def _project_play_numpy(y: np.ndarray, s: float, r: float, n_samples: int | None = None,
+                        jacobian: bool = True) -> tuple[np.ndarray, np.ndarray | None, float]:
+    """:func:`project_coulomb_play` evaluated piece by piece in NumPy from
+    :func:`play_pieces`: the readable reference of the compiled kernel
+    (:func:`mmshbm.contact.coulomb_play_kernels._play_projection`)."""
+    from .projection import _product_matrix
+
+    y, s, r, H = _play_args(y, s, r)
     a, b, sigma, u, t_e = _play_arrays(y, s, r, n_samples)
     # spectra C_n = (1/2π)∫_a^b cos nτ, S_n = (1/2π)∫_a^b sin nτ (n = 0..2H) of every
     # piece's indicator, in closed form

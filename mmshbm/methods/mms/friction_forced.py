@@ -48,6 +48,10 @@ trigonometric polynomial on its closed arcs, 0 on the open ones, continuous); th
 with a time-varying half-width s/ρ (:mod:`mmshbm.contact.coulomb_coupled`), its Jacobian
 including ∂s/∂(the normal contact's coefficients). Play form only.
 
+Evaluation. The play form with constant slip forces runs compiled: the fused unilateral
+residual, then the friction rows in place (:mod:`mmshbm.methods.mms._friction_kernels`);
+the coupled and velocity forms assemble their rows in NumPy (:meth:`FrictionRows.contact_residual`).
+
 Floquet multipliers (``stability=True``, :mod:`mmshbm.methods.mms.friction_stability`), play
 form. Not yet: the velocity form with ``normal_contact=`` or with stability
 (NotImplementedError).
@@ -57,7 +61,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...contact.coulomb import derivative_matrix, project_coulomb, project_coulomb_play
+from ...contact.coulomb import _sample_basis, derivative_matrix, project_coulomb, project_coulomb_play
 from ...core.damped_condense import DENSE_LIMIT
 from ...model.model import Model
 from .corrector import at_roundoff, backtrack, corrector_to_roundoff
@@ -65,6 +69,8 @@ from .forced import ForcedResponseProblem
 from .friction_tracked import TrackedHarmonic
 
 __all__ = ["FrictionRows", "FrictionForcedProblem", "check_friction_model", "check_law"]
+
+_EMPTY = np.empty((0, 0))
 
 
 def check_law(law: str, projection: str) -> None:
@@ -113,6 +119,10 @@ class FrictionRows:
         self._Dt = derivative_matrix(self.H)
         self._exact = projection == "exact"
         self.law = law
+        # the play form with constant slip forces runs compiled (:meth:`fused_residual`)
+        self._compiled_rows = law == "play" and all(cp is None for cp in self.coupling)
+        self._friction_rows64 = np.ascontiguousarray(self.friction_rows, dtype=np.int64)
+        self._play_tables = _sample_basis(self.H, 16 * (2 * self.H + 1))
 
     def _coupling(self, model: Model, fc) -> tuple[int, int, float, float, float]:
         """(index into ``contact_rows``, side, gap, μ, preload) of the unilateral contact that
@@ -168,12 +178,38 @@ class FrictionRows:
         return F[idx] - g, (eye + Jy / rho, side * Jz / r_n), (-Jy, -side * Jz), slip
 
     def fused_residual(self, D, x, load, dD=None, dload=None):
-        """The residual with the friction rows (NumPy: the compiled fused kernel knows the
-        unilateral rows only)."""
-        return self.residual_from_blocks(D, x, load, dD, dload)
+        """The residual with the friction rows: compiled for the play form with constant slip
+        forces (the unilateral rows by the fused kernel, which leaves F and its derivatives
+        on the friction rows, then the friction rows in place, :meth:`_compiled_friction`);
+        otherwise :meth:`residual_from_blocks` (NumPy, :meth:`contact_residual`)."""
+        if not self._compiled_rows:
+            return self.residual_from_blocks(D, x, load, dD, dload)
+        R, Jx, Jp = super().fused_residual(D, x, load, dD, dload)
+        self._compiled_friction(x, R, Jx, Jp)
+        return R, Jx, Jp
+
+    def _compiled_friction(self, x: np.ndarray, R: np.ndarray, Jx: np.ndarray | None, Jp: np.ndarray | None):
+        """In place: the friction rows of R, Jx, Jp, which hold F, ∂F/∂x, ∂F/∂params there
+        (:func:`~mmshbm.methods.mms._friction_kernels._friction_rows`; Jp may be None with Jx
+        given)."""
+        from ._friction_kernels import _friction_rows
+
+        jacobian = Jx is not None
+        if jacobian and Jp is None:
+            Jp = np.empty((self.n_x, 0))
+        tau, cos_t, sin_t = self._play_tables
+        _friction_rows(np.ascontiguousarray(x, dtype=float), self._friction_rows64, self.n_c, self.slip_force,
+                       self.rho, tau, cos_t, sin_t, jacobian, R, Jx if jacobian else _EMPTY,
+                       Jp if jacobian else _EMPTY, np.empty(len(self.friction_rows)))
 
     def contact_residual(self, x: np.ndarray, F: np.ndarray, dF: np.ndarray | None, dFp: np.ndarray | None):
+        """R (n_x,), and with ``dF`` ∂R/∂x and ∂R/∂params, with the friction rows: compiled
+        where :meth:`fused_residual` is (set ``_compiled_rows`` False for the NumPy rows,
+        :meth:`friction_law`, the reference of the kernel)."""
         R, Jx, Jp = super().contact_residual(x, F, dF, dFp)
+        if self._compiled_rows:
+            self._compiled_friction(x, R, Jx, Jp)
+            return R, Jx, Jp
         for j, i in enumerate(self.friction_rows):
             idx = self._coef_index[i]
             Rt, A, B, slip = self.friction_law(x, F, j, Jx is not None)

@@ -8,7 +8,7 @@ w = S_1⁻¹ e_t (S_1 complex symmetric, so e_tᵀ S_1⁻¹ = wᵀ), the DOF t's
 
 (:mod:`mmshbm.core.damped_condense`: Q̂_l = Y − Z Q̂_c), and from ∂(S⁻¹) = −S⁻¹ S' S⁻¹ with
 S' = i C_ll − 2Ω M_ll: ∂w/∂Ω = −S_1⁻¹ S' w, so ∂z/∂Ω = (∂w/∂Ω)ᵀ K_lc and
-∂y/∂Ω = (∂w/∂Ω)ᵀ F̂_l. One dense LU of the n_l × n_l matrix S_1 per Ω (the models the
+∂y/∂Ω = (∂w/∂Ω)ᵀ F̂_l. One dense solve with S_1 per Ω (n_l × n_l; the models the
 friction forced response runs have at most a few hundred DOFs with mass; above
 :data:`~mmshbm.core.damped_condense.DENSE_LIMIT` the caller keeps its own recovery).
 """
@@ -16,7 +16,8 @@ friction forced response runs have at most a few hundred DOFs with mass; above
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg as la
+
+from ._friction_kernels import _tracked_harmonic
 
 __all__ = ["TrackedHarmonic"]
 
@@ -42,29 +43,35 @@ class TrackedHarmonic:
         C = blocks.get("C_ll")
         self.C_ll = np.zeros_like(self.K_ll) if C is None else dense(C)
         self.K_lc = dense(blocks["K_lc"])
+        self.K_ll, self.M_ll, self.C_ll = (np.ascontiguousarray(A, dtype=float)
+                                           for A in (self.K_ll, self.M_ll, self.C_ll))
         self.force_l = np.asarray(force_l, dtype=complex)
-        self.e = np.zeros(self.K_ll.shape[0])
-        self.e[row] = 1.0
+        self.row = int(row)
+        e = np.zeros((self.K_ll.shape[0], 1))
+        e[row] = 1.0
+        self._rhs = np.hstack([e, self.K_lc, self.force_l[:, None]]).astype(complex)
         self._memo: tuple | None = None
 
     def at(self, omega: float, derivative: bool = False):
         """(z (n_c,), y, ∂z/∂Ω, ∂y/∂Ω) at Ω (rad/s); the derivatives None without
-        ``derivative``. Raises numpy.linalg.LinAlgError where S_1 is singular."""
+        ``derivative``. Raises numpy.linalg.LinAlgError where S_1 is singular.
+
+        One solve with the right-hand sides [e_t, K_lc, F̂_l]: with S_1 and S′ symmetric,
+        z = (S_1⁻¹K_lc)_t, y = (S_1⁻¹F̂_l)_t, and ∂z/∂Ω = −wᵀ S′ S_1⁻¹K_lc,
+        ∂y/∂Ω = −wᵀ S′ S_1⁻¹F̂_l (w = S_1⁻¹e_t)."""
         memo = self._memo
         if memo is not None and memo[0] == omega and (memo[1][2] is not None or not derivative):
             return memo[1]
-        S = self.K_ll + 1j * omega * self.C_ll - omega**2 * self.M_ll
+        n = self._rhs.shape[1] - 1
+        zy = np.empty(n, dtype=complex)
+        dzy = np.empty(n, dtype=complex)
         try:
-            lu = la.lu_factor(S, check_finite=False)
-        except (ValueError, la.LinAlgError) as err:
+            _tracked_harmonic(self.K_ll, self.M_ll, self.C_ll, self._rhs, self.row, float(omega), derivative,
+                              zy, dzy)
+        except np.linalg.LinAlgError as err:
             raise np.linalg.LinAlgError(f"S_1 singular at Ω = {omega:.6g} rad/s: {err}") from None
-        w = la.lu_solve(lu, self.e.astype(complex), check_finite=False)
-        z, y = w @ self.K_lc, complex(w @ self.force_l)
-        dz = dy = None
-        if derivative:
-            dS = 1j * self.C_ll - 2.0 * omega * self.M_ll
-            dw = -la.lu_solve(lu, dS @ w, check_finite=False)
-            dz, dy = dw @ self.K_lc, complex(dw @ self.force_l)
+        z, y = zy[:-1], complex(zy[-1])
+        dz, dy = (dzy[:-1], complex(dzy[-1])) if derivative else (None, None)
         out = (z, y, dz, dy)
         self._memo = (omega, out)
         return out
