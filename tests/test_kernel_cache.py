@@ -11,12 +11,12 @@ import textwrap
 from pathlib import Path
 
 import mmshbm._kernel_cache as kc
-from mmshbm.core import kernels
+from mmshbm.contact import unilateral
 
 
 def test_package_kernels_use_the_package_locator():
     assert kc.install()
-    impl = kernels._proximal_contact._cache._impl
+    impl = unilateral._proximal_contact._cache._impl
     assert type(impl.locator).__module__ == "mmshbm._kernel_cache"
     stamp = impl.locator.get_source_stamp()
     assert stamp[1] == kc.kernel_fingerprint()
