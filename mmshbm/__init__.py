@@ -61,7 +61,7 @@ _SUBMODULES = {
     "model": "mmshbm.model", "fe": "mmshbm.fe", "core": "mmshbm.core", "results": "mmshbm.results",
     "methods": "mmshbm.methods", "analysis": "mmshbm.analysis", "io": "mmshbm.io",
     "plotting": "mmshbm.plotting", "cli": "mmshbm.cli", "elements": "mmshbm.elements",
-    "exact": "mmshbm.methods.exact",
+    "exact": "mmshbm.exact",
 }
 
 __all__ = sorted(_LAZY) + ["__version__", "elements"]

@@ -35,6 +35,7 @@ LAYERS = {
     "mmshbm.contact": 3,  # beside core: used by core and methods, uses core's condensation
     "mmshbm.results": 4,
     "mmshbm.methods": 5,
+    "mmshbm.exact": 5,  # the public home of methods.exact
     "mmshbm.analysis": 6,
     "mmshbm.io": 7,
     "mmshbm.plotting": 7,

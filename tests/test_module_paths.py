@@ -17,7 +17,7 @@ import mmshbm
 #: module paths of 0.1 and 0.2 (flat modules, methods side by side, the contact laws'
 #: old homes); each now raises ModuleNotFoundError
 OLD_PATHS = [
-    "mmshbm.exact", "mmshbm.api", "mmshbm.baselines", "mmshbm.baselines.shooting", "mmshbm.benchmarking",
+    "mmshbm.api", "mmshbm.baselines", "mmshbm.baselines.shooting", "mmshbm.benchmarking",
     "mmshbm.checkpoint", "mmshbm.condense", "mmshbm.continuation", "mmshbm.examples", "mmshbm.harmonics",
     "mmshbm.identification", "mmshbm.kernels", "mmshbm.measured", "mmshbm.mms_hbm", "mmshbm.studies",
     "mmshbm.methods.mms_hbm", "mmshbm.methods.mms_hbm_family", "mmshbm.methods.mms_hbm_signals",
@@ -72,10 +72,13 @@ def test_packages_are_attributes():
 
 
 def test_exact_is_the_exact_reference():
+    import mmshbm.exact as imported
     from mmshbm import exact
     from mmshbm.methods import exact as methods_exact
 
-    assert mmshbm.exact is methods_exact and exact is methods_exact
+    assert mmshbm.exact is exact is imported
+    assert set(exact.__all__) == set(methods_exact.__all__)
+    assert all(getattr(exact, name) is getattr(methods_exact, name) for name in exact.__all__)
     osc = mmshbm.OneDofOscillator(m=1.0, k1=1.0, k2=4.0, gap=1.0)
     orbit = mmshbm.exact.periodic_orbit(osc.model(), amplitude=2.0)
     # the oscillator's closed-form period (one contact per period); both are closed forms
