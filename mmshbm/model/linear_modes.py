@@ -159,3 +159,26 @@ class ModesMixin:
         f_closed = sub.linear_frequencies(1)[0]  # sparse eigen-solve on large models
         return 2.0 / (1.0 / f_open + 1.0 / f_closed)
 
+
+
+def amplitude_mode(model, mode: int = 1) -> tuple[float, np.ndarray]:
+    """Linear mode ``mode`` (1-based) of ``model`` scaled to a unit motion of its amplitude DOF.
+
+    Returns
+    -------
+    frequency : float
+        The mode's frequency, Hz.
+    shape : ndarray, shape (n_dof,)
+        The mode shape divided by the magnitude of its entry at ``model.amplitude_dof``.
+
+    Raises
+    ------
+    ValueError
+        If the mode does not move the amplitude DOF (its entry below 1e-12 of the largest).
+    """
+    freqs, modes = model.linear_modes(mode)
+    phi = modes[:, -1]
+    ref = phi[int(model.amplitude_dof)]
+    if abs(ref) < 1e-12 * np.max(np.abs(phi)):
+        raise ValueError(f"linear mode {mode} does not move the amplitude DOF {int(model.amplitude_dof)}")
+    return float(freqs[-1]), phi / abs(ref)

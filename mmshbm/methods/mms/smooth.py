@@ -35,6 +35,7 @@ from ...core.contact_kernels import _mmshbm_eval
 from ...core.harmonics import check_harmonics
 from ...core.problem import BackboneProblemBase, OneEvaluation
 from ...model.contact import admissible_intervals
+from ...model.linear_modes import amplitude_mode
 from ...model.model import Model
 from .element_aft import ElementForces, series_peak
 from .set_condense import SetCondensation
@@ -149,15 +150,10 @@ class ElementBackboneProblem(OneEvaluation, BackboneProblemBase):
             static = np.zeros(0)
 
         # the linear mode: frequency, shape on the set (unit motion of the amplitude DOF)
-        freqs, modes = model.linear_modes(self.mode)
-        self.linear_frequency = float(freqs[-1])
+        self.linear_frequency, shape = amplitude_mode(model, self.mode)
         self.omega_ref = 2 * np.pi * self.linear_frequency
-        phi = modes[:, -1]
         self.amplitude_dof = int(model.amplitude_dof)
-        ref = phi[self.amplitude_dof]
-        if abs(ref) < 1e-12 * np.max(np.abs(phi)):
-            raise ValueError(f"linear mode {self.mode} does not move the amplitude DOF {self.amplitude_dof}")
-        self.mode_shape_s = phi[s] / abs(ref)
+        self.mode_shape_s = shape[s]
         self._amp = position[self.amplitude_dof]
         single = len(model.contacts) == 1 and model.contacts[0].dof == self.amplitude_dof
         self._amp_sign = float(-model.contacts[0].side) if single else 0.0

@@ -24,6 +24,7 @@ import scipy.sparse as sp
 from ... import _validate as check
 from ...core.harmonics import check_harmonics
 from ...core.problem import BackboneProblemBase, OneEvaluation
+from ...model.linear_modes import amplitude_mode
 from ...model.model import Model
 from ..mms.element_aft import ElementForces, series_peak
 from ..mms.set_condense import SetCondensation
@@ -75,15 +76,9 @@ class ElementHBMProblem(OneEvaluation, BackboneProblemBase):
         dofs = np.array(sorted({d for e in model.elements for d in e.dofs}), dtype=int)
         self.element_dofs = dofs
         self.aft = ElementForces(model.elements, dofs, self.H, self.N, cosine_only=True)
-        freqs, modes = model.linear_modes(self.mode)
-        self.linear_frequency = float(freqs[-1])
+        self.linear_frequency, self.mode_shape = amplitude_mode(model, self.mode)
         self.omega_ref = 2 * np.pi * self.linear_frequency
-        phi = modes[:, -1]
         self.amplitude_dof = int(model.amplitude_dof)
-        ref = phi[self.amplitude_dof]
-        if abs(ref) < 1e-12 * np.max(np.abs(phi)):
-            raise ValueError(f"linear mode {self.mode} does not move the amplitude DOF {self.amplitude_dof}")
-        self.mode_shape = phi / abs(ref)
         D0 = SetCondensation(model, dofs).dynamic_stiffness(0.0, 0, derivative=False)[0][0]
         length = element_length(model, D0, dofs)
         shape = np.abs(self.mode_shape)

@@ -27,6 +27,7 @@ import numpy as np
 
 from ... import _validate as check
 from ...core.problem import BackboneProblemBase, OneEvaluation
+from ...model.linear_modes import amplitude_mode
 from ...model.model import Model
 from ..mms.set_condense import SetCondensation
 from ..mms.smooth import element_length
@@ -75,15 +76,9 @@ class ElementShootingProblem(OneEvaluation, BackboneProblemBase):
         self.M_ll = model.M.toarray()[np.ix_(self.l, self.l)]
         self.M_ll_inv = np.linalg.inv(self.M_ll)
         self.elements = model.elements
-        freqs, modes = model.linear_modes(self.mode)
-        self.linear_frequency = float(freqs[-1])
+        self.linear_frequency, self.mode_shape = amplitude_mode(model, self.mode)
         self.omega_ref = 2 * np.pi * self.linear_frequency
-        phi = modes[:, -1]
         self.amplitude_dof = int(model.amplitude_dof)
-        ref = phi[self.amplitude_dof]
-        if abs(ref) < 1e-12 * np.max(np.abs(phi)):
-            raise ValueError(f"linear mode {self.mode} does not move the amplitude DOF {self.amplitude_dof}")
-        self.mode_shape = phi / abs(ref)
         dofs = sorted({d for e in model.elements for d in e.dofs})
         D0 = SetCondensation(model, dofs).dynamic_stiffness(0.0, 0, derivative=False)[0][0]
         length = element_length(model, D0, np.array(dofs))
