@@ -40,7 +40,7 @@ class FFTRoundTrip:
     param_names = ["N", "signals"]
 
     def setup(self, N, signals):
-        from mmshbm.core.harmonics import transform
+        from mmshbm.harmonic.harmonics import transform
 
         self.H = max(1, N // 16)
         self.tr = transform(self.H, N, signals)
@@ -64,7 +64,7 @@ class CosineProductMatrix:
 
     def setup(self, H):
         from mmshbm.contact.projection import _cosine_product_matrix
-        from mmshbm.core.harmonics import default_n_samples
+        from mmshbm.harmonic.harmonics import default_n_samples
 
         N = default_n_samples(H)
         self.S = np.random.default_rng(0).standard_normal(N)

@@ -129,21 +129,21 @@ class ModalReductionScale:
         self.model = mmshbm.default_beam().model(elements)
 
     def time_reduction(self, elements):
-        import mmshbm.core.modal_reduction as mr
-        from mmshbm.core.modal import ModalCondensation
+        import mmshbm.harmonic.modal_reduction as mr
+        from mmshbm.harmonic.modal import ModalCondensation
 
         mr._MEMORY.clear()
         ModalCondensation(self.model, harmonics=5)
 
     def peakmem_reduction(self, elements):
-        import mmshbm.core.modal_reduction as mr
-        from mmshbm.core.modal import ModalCondensation
+        import mmshbm.harmonic.modal_reduction as mr
+        from mmshbm.harmonic.modal import ModalCondensation
 
         mr._MEMORY.clear()
         ModalCondensation(self.model, harmonics=5)
 
     def track_modes_kept(self, elements):
-        from mmshbm.core.modal import ModalCondensation
+        from mmshbm.harmonic.modal import ModalCondensation
 
         return ModalCondensation(self.model, harmonics=5).n_modes
 
@@ -165,15 +165,15 @@ class SolidScale:
         self.model = model
 
     def time_reduction(self, model):
-        import mmshbm.core.modal_reduction as mr
-        from mmshbm.core.modal import ModalCondensation
+        import mmshbm.harmonic.modal_reduction as mr
+        from mmshbm.harmonic.modal import ModalCondensation
 
         mr._MEMORY.clear()
         ModalCondensation(model, harmonics=5)
 
     def peakmem_reduction(self, model):
-        import mmshbm.core.modal_reduction as mr
-        from mmshbm.core.modal import ModalCondensation
+        import mmshbm.harmonic.modal_reduction as mr
+        from mmshbm.harmonic.modal import ModalCondensation
 
         mr._MEMORY.clear()
         ModalCondensation(model, harmonics=5)
@@ -279,8 +279,8 @@ def _solid_report(mesh, backbone: bool) -> None:
     import time
 
     import mmshbm
-    import mmshbm.core.modal_reduction as mr
-    from mmshbm.core.modal import ModalCondensation
+    import mmshbm.harmonic.modal_reduction as mr
+    from mmshbm.harmonic.modal import ModalCondensation
 
     mmshbm.backbone(mmshbm.default_beam().model(8), harmonics=3, max_amplitude=2e-3, backend="modal")
     t0 = time.perf_counter()
@@ -358,9 +358,9 @@ def _equal_accuracy(mesh, amplitude_gaps, target, ladder, factors, reference_h, 
     import time
 
     import mmshbm
-    import mmshbm.core.modal_reduction as mr
+    import mmshbm.harmonic.modal_reduction as mr
     from mmshbm.analysis.benchmarking import _backbone, _meets, _reached_frequency, _tune_ladder
-    from mmshbm.core.modal import ModalCondensation
+    from mmshbm.harmonic.modal import ModalCondensation
     from mmshbm.methods.registry import make_problem
 
     mmshbm.backbone(mmshbm.default_beam().model(8), harmonics=3, max_amplitude=2e-3, backend="modal")

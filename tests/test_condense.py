@@ -6,7 +6,7 @@ from finite_differences import assert_derivative
 from naive import condensed_stiffness_dense
 
 import mmshbm
-from mmshbm.core.condense import Condensation, SingularDynamicStiffness
+from mmshbm.harmonic.condense import Condensation, SingularDynamicStiffness
 
 
 @pytest.fixture(scope="module")

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 import mmshbm
-from mmshbm.core.modal_energy import kinetic_energy_shares
 from mmshbm.fe.euler_bernoulli import cantilever_model
+from mmshbm.harmonic.modal_energy import kinetic_energy_shares
 
 L, B, H_SEC, E, RHO, GAP = 0.5, 0.020, 0.0135, 210e9, 7850.0, 1e-3
 K_S = 3 * (E * B * H_SEC**3 / 12) / L**3  # static tip stiffness of the cantilever (N/m)

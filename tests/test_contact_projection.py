@@ -1,4 +1,4 @@
-"""The exact (C¹) harmonic projection of the contact law (mmshbm.core.contact_kernels)
+"""The exact (C¹) harmonic projection of the contact law (mmshbm.methods.mms.contact_kernels)
 against adaptive quadrature between independently located zeros, and its Jacobian
 against finite differences."""
 

@@ -1,5 +1,5 @@
 """The complex condensation of damped structures: both back ends against each other,
-derivatives against finite differences, the undamped limit against core.condense."""
+derivatives against finite differences, the undamped limit against harmonic.condense."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import pytest
 from finite_differences import assert_derivative
 
 import mmshbm
-from mmshbm.core.condense import Condensation
-from mmshbm.core.damped_condense import DampedCondensation
+from mmshbm.harmonic.condense import Condensation
+from mmshbm.methods.mms.condensation.damped_condense import DampedCondensation
 
 FIELDS = ("D", "dD_domega", "dD_dxi", "P", "dP_domega", "dP_dxi", "Z", "Y")
 

@@ -7,7 +7,7 @@ import pytest
 
 import mmshbm
 from mmshbm import BranchWarning
-from mmshbm.core.modal_energy import kinetic_energy_shares
+from mmshbm.harmonic.modal_energy import kinetic_energy_shares
 from mmshbm.results.branch import Branch
 from mmshbm.results.diagnostics import CheckThresholds, _coefficients, check_branch, mode_shares
 

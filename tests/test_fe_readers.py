@@ -284,7 +284,7 @@ def test_a_large_export_is_read_and_reduced_without_densifying(tmp_path, monkeyp
     """A 3-D solid (quadratic elements, > 1000 DOFs: past the dense eigen-solvers' limits) as a
     Matrix Market pair: read, contact on a tip node with its mass (layer), modal condensation:
     no dense n x n array."""
-    from mmshbm.core.condense import make_condensation
+    from mmshbm.harmonic.condense import make_condensation
     solid = mmshbm.solid_beam_model(mmshbm.default_beam(), 24, 1, 1, massless_tip=False)
     M, K = solid.M, solid.K
     scipy.io.mmwrite(str(tmp_path / "solid_M.mtx"), M.tocoo(), symmetry="symmetric")

@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from naive import projection, synthesis_matrix
 
-from mmshbm.core.harmonics import HarmonicTransform, check_harmonics, default_n_samples, transform
+from mmshbm.harmonic.harmonics import HarmonicTransform, check_harmonics, default_n_samples, transform
 
 shapes = st.tuples(st.integers(1, 12), st.integers(0, 40), st.integers(1, 3)).map(
     lambda t: (t[0], 2 * t[0] + 1 + t[1], t[2]))

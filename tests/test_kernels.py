@@ -9,7 +9,7 @@ from naive import proximal_contact_loop
 
 from mmshbm.contact.projection import cosine_product_matrix
 from mmshbm.contact.unilateral import proximal_contact
-from mmshbm.core.kernels import _band_quadratic_form, _band_solve
+from mmshbm.harmonic.kernels import _band_quadratic_form, _band_solve
 
 
 @settings(max_examples=60, deadline=None)

@@ -31,6 +31,7 @@ LAYERS = {
     "mmshbm.model": 1,
     "mmshbm.elements": 1,  # beside the model: a model holds its elements, which know no model
     "mmshbm.fe": 2,
+    "mmshbm.harmonic": 2,  # beside fe: the linear structure per harmonic, uses only the model
     "mmshbm.core": 3,
     "mmshbm.contact": 3,  # beside core: used by core and methods, uses core's condensation
     "mmshbm.results": 4,

@@ -8,10 +8,15 @@ import pytest
 from finite_differences import assert_derivative
 
 import mmshbm
-import mmshbm.core.modal_reduction as mr
-from mmshbm.core.condense import MODAL_CROSSOVER, Condensation, SingularDynamicStiffness, make_condensation
-from mmshbm.core.modal import ModalCondensation
-from mmshbm.core.modal_reduction import ModalReduction, structure_key
+import mmshbm.harmonic.modal_reduction as mr
+from mmshbm.harmonic.condense import (
+    MODAL_CROSSOVER,
+    Condensation,
+    SingularDynamicStiffness,
+    make_condensation,
+)
+from mmshbm.harmonic.modal import ModalCondensation
+from mmshbm.harmonic.modal_reduction import ModalReduction, structure_key
 
 OMEGAS = 2 * np.pi * np.array([0.0, 45.0, 120.0, 300.0])
 

@@ -1,9 +1,9 @@
-"""Kinetic-energy shares per mode and harmonic (mmshbm.core.modal_energy)."""
+"""Kinetic-energy shares per mode and harmonic (mmshbm.harmonic.modal_energy)."""
 
 import numpy as np
 
 import mmshbm
-from mmshbm.core.modal_energy import kinetic_energy_shares
+from mmshbm.harmonic.modal_energy import kinetic_energy_shares
 
 
 def test_shares_of_a_two_mode_motion_are_exact():

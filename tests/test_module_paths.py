@@ -38,7 +38,7 @@ OLD_ATTRIBUTES = ["harmonics", "kernels", "condense", "continuation", "checkpoin
 
 #: module -> names that were re-exported there for old import paths only
 OLD_REEXPORTS = {
-    "mmshbm.core.kernels": ["proximal_contact", "cosine_product_matrix"],
+    "mmshbm.harmonic.kernels": ["proximal_contact", "cosine_product_matrix"],
     "mmshbm.core.continuation": ["_bordered_solve", "SKIP_MIN_TOL"],
     "mmshbm.methods.backbone": ["method_options", "_CONTINUATION_FIELDS"],
     "mmshbm.methods.mms.conservative": ["_mean_energy", "_held_frequency_solve", "_compute_tables"],

@@ -11,7 +11,7 @@ import scipy.sparse as sp
 from finite_differences import assert_jacobian
 
 import mmshbm
-from mmshbm.core.harmonics import default_n_samples
+from mmshbm.harmonic.harmonics import default_n_samples
 from mmshbm.methods.penalty._kernels import _penalty_contacts
 from mmshbm.methods.penalty.defaults import _condensed_contact_stiffness
 from mmshbm.methods.penalty.hbm import (

@@ -1,4 +1,4 @@
-"""Poles of the condensed dynamic stiffness carried by extra unknowns (mmshbm.core.poles):
+"""Poles of the condensed dynamic stiffness carried by extra unknowns (mmshbm.methods.mms.condensation.poles):
 the same residual as without them away from the poles, and a regular, precise problem at
 kΩ = ω_j exactly."""
 

@@ -23,10 +23,10 @@ from naive import (
 
 import mmshbm
 from mmshbm.contact.unilateral import proximal_contact
-from mmshbm.core.condense import Condensation
-from mmshbm.core.harmonics import HarmonicTransform
 from mmshbm.fe import assembly, element
 from mmshbm.fe.oscillator import OneDofOscillator
+from mmshbm.harmonic.condense import Condensation
+from mmshbm.harmonic.harmonics import HarmonicTransform
 from mmshbm.methods.mms.conservative import MMSHBMProblem
 
 seeds = st.integers(0, 2**32 - 1)

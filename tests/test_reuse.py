@@ -9,8 +9,8 @@ import pytest
 import mmshbm
 from mmshbm.core._entry import _type_key, compiled_entry
 from mmshbm.core.bordered import bordered_solve_sign
-from mmshbm.core.kernels import _dense_solve
 from mmshbm.core.steps import _tangent_sign
+from mmshbm.harmonic.kernels import _dense_solve
 from mmshbm.methods.mms.conservative import MMSHBMProblem
 
 
@@ -116,7 +116,7 @@ def test_problems_share_tables_and_selection_by_value_not_by_object(beam):
 def test_projections_shared_between_condensations_project_the_recovery(beam):
     """Two condensations of one reduction share a projector's projections; what they give is
     the projector applied to the recovered motion (cosine coefficients of the DOFs with mass)."""
-    from mmshbm.core.condense import make_condensation
+    from mmshbm.harmonic.condense import make_condensation
 
     c1 = make_condensation(beam, "modal", harmonics=5)
     c2 = make_condensation(beam, "modal", harmonics=5)
@@ -210,8 +210,8 @@ def test_kept_entry_points_are_those_the_arguments_resolve_to(beam, name):
     """The problems built from one set of kept numbers share their kernels' compiled entry
     points; each is the one that describing that problem's own arguments resolves to, and
     the branches they compute are, bit for bit, those of a problem that typed its own."""
-    from mmshbm.core import corrector_kernels as ck
     from mmshbm.core._entry import _ENTRIES
+    from mmshbm.methods.mms import corrector_kernels as ck
     from mmshbm.methods.mms.fixed import _FIXED
 
     if not hasattr(ck._newton_modal, "compile"):
@@ -239,9 +239,9 @@ def test_kept_entry_points_are_those_the_arguments_resolve_to(beam, name):
     D0, B, w2, Rs, keep, static, rtol = fast["cond"]
     stiffness_args = (D0, B, w2, Rs, omega, p.H, keep, rtol, np.empty_like(D), np.empty_like(D), True)
     _, share_args, _, family_args, _ = p._point_records
-    from mmshbm.core._modal_kernels import _modal_dynamic_stiffness
-    from mmshbm.core.contact_kernels import _mmshbm_monitor_multi
+    from mmshbm.harmonic._modal_kernels import _modal_dynamic_stiffness
     from mmshbm.methods.mms import _family_kernels
+    from mmshbm.methods.mms.contact_kernels import _mmshbm_monitor_multi
 
     calls = {ck._newton_modal: newton_args, _mmshbm_monitor_multi: monitor_args,
              _modal_dynamic_stiffness: stiffness_args,

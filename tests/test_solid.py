@@ -8,8 +8,8 @@ import pytest
 import scipy.sparse as sp
 
 import mmshbm
-from mmshbm.core.condense import make_condensation
 from mmshbm.fe.solid import rebuild_solid, solid_beam_matrices
+from mmshbm.harmonic.condense import make_condensation
 from mmshbm.methods.registry import make_problem
 from mmshbm.model.contact import Contact
 from mmshbm.model.model import Model

@@ -9,7 +9,7 @@ import mmshbm
 from mmshbm import BranchWarning, ModelWarning
 from mmshbm.analysis import runspec, studies
 from mmshbm.cli import main
-from mmshbm.core.modal import ModalCondensation
+from mmshbm.harmonic.modal import ModalCondensation
 
 GRID = ["study", "-H", "1", "3", "5", "--elements", "4", "6", "--max-amplitude", "3", "--amplitudes", "2",
         "--executor", "serial"]
@@ -92,10 +92,10 @@ def test_other_warnings_from_the_package_are_one_line(monkeypatch, tmp_path, cap
     """A warning of another category raised in the package's code (here a RuntimeWarning
     from the condensation) is one line on the terminal, named by its category, never the
     interpreter's two lines with the source line."""
-    import mmshbm.core.modal as modal
+    import mmshbm.harmonic.modal as modal
 
     def check_range(self, omega, harmonics):
-        warnings.warn("overflow in a test", UserWarning, stacklevel=1)  # raised in mmshbm/core/modal.py
+        warnings.warn("overflow in a test", UserWarning, stacklevel=1)  # raised in mmshbm/harmonic/modal.py
         return True
 
     monkeypatch.setattr(modal.ModalCondensation, "check_range", check_range)

@@ -18,9 +18,9 @@ import scipy.sparse as sp
 
 import mmshbm
 from mmshbm import Model, TimoshenkoBeam, default_beam
-from mmshbm.core.condense import Condensation
 from mmshbm.fe import assembly, element
 from mmshbm.fe.oscillator import OneDofOscillator
+from mmshbm.harmonic.condense import Condensation
 from mmshbm.methods.mms.conservative import MMSHBMProblem
 
 M2 = np.diag([1.0, 0.0])
@@ -264,7 +264,7 @@ def test_exact_pole_at_the_start_is_regular_with_pole_unknowns():
     pole carried by an unknown (the default) the branch starts there and runs to its
     bound against the closed form; without (poles=False) the start fails with a status
     saying why, not a crash."""
-    from mmshbm.core.condense import SingularDynamicStiffness
+    from mmshbm.harmonic.condense import SingularDynamicStiffness
 
     osc = OneDofOscillator(1.0, 1.0, 3.0, 0.1)
     model = osc.model()
@@ -287,7 +287,7 @@ class PoleWindow:
     factorisation with a pivot threshold would)."""
 
     def __init__(self, width):
-        from mmshbm.core.condense import SingularDynamicStiffness
+        from mmshbm.harmonic.condense import SingularDynamicStiffness
 
         self.osc = OneDofOscillator(1.0, 1.0, 4.0, 1.0)
         # the LU back end: its dynamic_stiffness is what the Python corrector calls (the

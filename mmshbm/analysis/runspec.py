@@ -86,7 +86,7 @@ def build_model(source: dict):
 def execute(spec: RunSpec) -> Branch:
     """Run one grid point (this is what workers execute); the branch comes back without
     its solver, which holds unpicklable FFT plans. Thread executors are safe: every
-    thread has its own FFTW plans and buffers (:func:`mmshbm.core.harmonics.transform`)."""
+    thread has its own FFTW plans and buffers (:func:`mmshbm.harmonic.harmonics.transform`)."""
     return _execute(spec)
 
 

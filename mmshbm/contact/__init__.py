@@ -27,7 +27,7 @@ Shared pieces:
   penalty values, the contacts in terms of the DOFs with mass, the start mode.
 
 The package sits at the layer of the numerical core (:mod:`mmshbm.core`): the core's
-fused MMS-HBM residuals (:mod:`mmshbm.core.contact_kernels`) call its kernels; it uses the
+fused MMS-HBM residuals (:mod:`mmshbm.methods.mms.contact_kernels`) call its kernels; it uses the
 core's condensation for the static stiffness. Kernels take their flags and cache policy
 from :mod:`mmshbm._kernel_cache`. docs/design.md says how to add a law.
 """

@@ -93,7 +93,7 @@ def static_contact_stiffness(model: Model) -> np.ndarray:
     """
     table = contact_table(model)
     if model.massless_contacts:
-        from ..core.condense import Condensation
+        from ..harmonic.condense import Condensation
 
         D0 = Condensation(model).D0
         c = model.c

@@ -24,7 +24,7 @@ times the set's own spectrum. A clearance is the same law with both sides finite
 needs no code of its own.
 
 The MMS-HBM residuals fuse these kernels with the condensed dynamic stiffness
-(:mod:`mmshbm.core.contact_kernels`); the static problem of several stops at one instant
+(:mod:`mmshbm.methods.mms.contact_kernels`); the static problem of several stops at one instant
 is :mod:`mmshbm.contact.lcp` / :mod:`mmshbm.contact.static`.
 """
 

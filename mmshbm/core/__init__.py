@@ -1,3 +1,5 @@
-"""Numerical core: harmonic transforms, condensation of the linear structure, Numba
-kernels, path following, checkpoints, the per-point measures (:mod:`.measures`). Imports
-:mod:`mmshbm.model` below it and the contact laws beside it (:mod:`mmshbm.contact`)."""
+"""Numerical core: path following (predictor, corrector, step control), bordered solves,
+events, statuses, checkpoints and the per-point measures (:mod:`.measures`). Knows no
+method: the condensation and transforms are :mod:`mmshbm.harmonic`, MMS-HBM's kernels
+:mod:`mmshbm.methods.mms`. Imports :mod:`mmshbm.model` and :mod:`mmshbm.harmonic` below it
+and the contact laws beside it (:mod:`mmshbm.contact`)."""

@@ -2,7 +2,7 @@
 
 Numba's dispatcher works out the type of every argument on each call; named tuples of
 arrays take its slow path (≈ 1 µs a tuple), and typing the compiled corrector's full
-argument tuple from scratch (:func:`~mmshbm.core.corrector_kernels.newton_modal_entry`)
+argument tuple from scratch (:func:`~mmshbm.methods.mms.corrector_kernels.newton_modal_entry`)
 costs ≈ 1 ms, once per problem, so once per backbone. :func:`compiled_entry` keys the
 overload on a cheap description of what Numba's ``typeof`` reads from each argument (an
 array's dtype, ndim, layout, writeability and alignment; the class of a scalar, an int's

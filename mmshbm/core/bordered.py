@@ -173,7 +173,7 @@ def _small_dense_solver():
     """The Numba LU kernel (imported on first use: importing numba is not cheap)."""
     global _dense_solve
     if _dense_solve is None:
-        from .kernels import _dense_solve
+        from ..harmonic.kernels import _dense_solve
     return _dense_solve
 
 

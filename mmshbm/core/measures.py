@@ -221,7 +221,7 @@ def condensed_energy(D: np.ndarray, dD: np.ndarray, a: np.ndarray, omega: float)
     E = ½ a_0ᵀD_0 a_0 + ¼ Σ_{k>=1} (a_kᵀ D_k a_k − Ω a_kᵀ ∂D_k/∂Ω a_k), the same number as
     :func:`mean_energy` on the recovered coefficients (up to round-off) without
     recovering any DOF with mass. D, dD: (H+1, n_c, n_c); a: (H+1, n_c). The MMS-HBM
-    monitor kernel (:func:`~mmshbm.core.contact_kernels._mmshbm_monitor_multi`) sums the
+    monitor kernel (:func:`~mmshbm.methods.mms.contact_kernels._mmshbm_monitor_multi`) sums the
     same terms inside its loop, with the pole unknowns' share.
     """
     quad = np.einsum("ki,kij,kj->k", a, D, a)

@@ -98,7 +98,7 @@ def estimate_memory(model, method: str, harmonics: int = 5, n_samples: int | Non
 
         N = int(steps_per_period or DEFAULT_STEPS_PER_PERIOD)
         return _DOUBLE * (2 * N * n_l + 3 * n_l * n_l)
-    from ..core.harmonics import default_n_samples
+    from ..harmonic.harmonics import default_n_samples
 
     H = int(harmonics)
     if n_samples is None:

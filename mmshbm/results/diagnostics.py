@@ -11,7 +11,7 @@ study summaries):
     the fundamental harmonic's share of the motion (``records["fundamental_share"]``,
     MMS-HBM, see docs/resonances.md) or, for the methods without it, the starting mode's
     share of the period-mean kinetic energy (``records["mode_share"]``, 0..1, see
-    :mod:`mmshbm.core.modal_energy`): from there on the motion is mostly another
+    :mod:`mmshbm.harmonic.modal_energy`): from there on the motion is mostly another
     harmonic, a k:1 internal-resonance tongue or another family of periodic motions. The
     message says where it leaves and whether it comes back. A branch followed plainly
     that comes back below its grazing amplitude after passing it is reported too, whatever
@@ -205,7 +205,7 @@ def mode_shares(branch, mode: int | None = None, n_samples: int = 256) -> np.nda
     Uses ``solver.coefficients(u)`` (all DOFs, NLvib order) when the solver has it, else
     the DFT of ``solver.time_signals(u, None, n_samples)``.
     """
-    from ..core.modal_energy import kinetic_energy_shares
+    from ..harmonic.modal_energy import kinetic_energy_shares
 
     solver = branch._require_solver()
     model = branch.get_model()

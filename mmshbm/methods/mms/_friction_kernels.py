@@ -5,7 +5,7 @@ F_t = 0 of each friction DOF t by R_t = F_t − proj[ρ (Play(y) − y)], y = x_
 ∂R_t/∂x = (I + J_g/ρ) ∂F_t/∂x − J_g on x_t's own columns and ∂R_t/∂params = (I + J_g/ρ)
 ∂F_t/∂params, J_g = ∂g/∂y (:func:`~mmshbm.contact.coulomb_play_kernels._play_projection`).
 :func:`_friction_rows` applies this in place to arrays that hold F, ∂F/∂x and ∂F/∂params
-on those rows (what :func:`~mmshbm.core.contact_kernels._damped_residual` leaves on every
+on those rows (what :func:`~mmshbm.methods.mms.contact_kernels._damped_residual` leaves on every
 row that is not a unilateral contact), so the fused unilateral residual and these rows make
 the whole residual and Jacobian without Python in between.
 

@@ -1,7 +1,7 @@
 """The MMS-HBM residual and its semi-analytic Jacobian (Schreyer, Peter & Leine).
 
 Unknowns: the Fourier coefficients of the massless DOFs q_c and the fundamental frequency
-Ω. The linear structure is condensed per harmonic (:mod:`mmshbm.core.condense`):
+Ω. The linear structure is condensed per harmonic (:mod:`mmshbm.harmonic.condense`):
 F_k = D_k(Ω) a_k is the force the structure needs at the massless DOFs. The massless
 DOFs are static, so at each of them that force comes from the stops alone:
 
@@ -10,7 +10,7 @@ DOFs are static, so at each of them that force comes from the stops alone:
                                       p = q − f/r,
 
 the proximal form of the Signorini law on the interval of positions its stop(s) allow
-(:mod:`mmshbm.core.contact_kernels`; one stop: [−inf, gap] or [−gap, inf], a clearance:
+(:mod:`mmshbm.methods.mms.contact_kernels`; one stop: [−inf, gap] or [−gap, inf], a clearance:
 [−gap₋, gap₊]), whose zeros are exactly the complementarity pairs for any r > 0. Newton
 iterates only in these numbers, however many DOFs the FE model has.
 
@@ -44,15 +44,15 @@ from __future__ import annotations
 import numpy as np
 
 from ... import _validate as check
-from ...core import corrector_kernels as ck
 from ...core._entry import compiled_entry
-from ...core._modal_kernels import _modal_dynamic_stiffness
-from ...core.condense import SingularDynamicStiffness, make_condensation
-from ...core.contact_kernels import _mmshbm_eval, _mmshbm_monitor_multi
-from ...core.harmonics import check_harmonics
 from ...core.problem import BackboneProblemBase, OneEvaluation
+from ...harmonic._modal_kernels import _modal_dynamic_stiffness
+from ...harmonic.condense import SingularDynamicStiffness, make_condensation
+from ...harmonic.harmonics import check_harmonics
 from ...model.model import Model
 from . import _family_kernels
+from . import corrector_kernels as ck
+from .contact_kernels import _mmshbm_eval, _mmshbm_monitor_multi
 from .family import FamilyMixin
 from .fast import fast_data
 from .fixed import _FIXED, _FIXED_CONTACTS, _FIXED_SCALING, _own, fixed_contacts, fixed_scaling, kept_entries
@@ -98,7 +98,7 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
     mode : int
         Which linear mode (1-based) the branch starts from.
     backend : {"auto", "banded", "splu", "modal"}
-        Linear solver of the condensation (:func:`~mmshbm.core.condense.make_condensation`).
+        Linear solver of the condensation (:func:`~mmshbm.harmonic.condense.make_condensation`).
     projection : {"exact", "sampled"}
         Harmonic projection of the contact law (see the module docstring).
     linear_solver : {"auto", "dense", "krylov"}
@@ -112,7 +112,7 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         at H = 5).
     poles : bool
         Carry the poles of D_k that the backbone's frequency range contains as extra
-        unknowns η_jk (:mod:`mmshbm.core.poles`), so that kΩ = ω_j (an eigenfrequency
+        unknowns η_jk (:mod:`mmshbm.methods.mms.condensation.poles`), so that kΩ = ω_j (an eigenfrequency
         of the structure with its massless DOFs clamped) is a regular point.
 
     Notes
@@ -174,7 +174,7 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
 
         self.pole_set = None
         if poles:
-            from ...core.poles import PoleSet
+            from .condensation.poles import PoleSet
 
             self.pole_set = PoleSet(self.cond, model, self.H, self._omega_range())
         n_p = self.pole_set.n if self.pole_set is not None else 0
@@ -266,7 +266,8 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         return out
 
     def unpack_eta(self, u: np.ndarray) -> np.ndarray:
-        """The pole unknowns η (n_p,) of the scaled unknowns (see :mod:`mmshbm.core.poles`)."""
+        """The pole unknowns η (n_p,) of the scaled unknowns
+        (see :mod:`mmshbm.methods.mms.condensation.poles`)."""
         n_a = (self.H + 1) * self.n_c
         return np.asarray(u, dtype=float)[n_a:n_a + self.n_poles] * self.eta_scale
 
@@ -312,7 +313,7 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
 
     # ------------------------------------------------------------------ compiled corrector
     def _fast_setup(self):
-        """Data of the compiled corrector (:mod:`mmshbm.core.corrector_kernels`), or False
+        """Data of the compiled corrector (:mod:`mmshbm.methods.mms.corrector_kernels`), or False
         when it does not apply (a back end other than the modal one)."""
         fast = self._fast
         if fast is not None:

@@ -4,7 +4,7 @@ Ansatz and unknowns. The massless DOFs ``c`` carry the full cosine and sine seri
 q_c(τ) = a_0 + Σ_k (a_k cos kτ + b_k sin kτ), τ = Ω t, stored in NLvib's order as one
 vector x = [a_0; a_1; b_1; ...; a_H; b_H] of n_c-blocks (``x[m·n_c + i]`` is coefficient m
 of the i-th massless DOF in ``model.c`` order). The force the structure needs at the
-massless DOFs is, per harmonic (:mod:`mmshbm.core.damped_condense`),
+massless DOFs is, per harmonic (:mod:`mmshbm.methods.mms.condensation.damped_condense`),
 f̂_k = D_k Q̂_k − P̂_k with Q̂_k = a_k − i b_k; in real coefficients F = 𝔇 x − P with
 the 2×2 real blocks of the complex D_k = D_r + i D_i,
 
@@ -37,13 +37,13 @@ import numpy as np
 from ... import _validate as check
 from ...contact.projection import sample_tables
 from ...contact.unilateral import contact_projection
-from ...core.contact_kernels import _contact_rows, _damped_residual
-from ...core.damped_condense import CondensedHarmonics, DampedCondensation
-from ...core.harmonics import check_harmonics
 from ...core.measures import refined_max
 from ...core.problem import ContinuationProblemBase
+from ...harmonic.harmonics import check_harmonics
 from ...model.contact import admissible_intervals
 from ...model.model import Model
+from .condensation.damped_condense import CondensedHarmonics, DampedCondensation
+from .contact_kernels import _contact_rows, _damped_residual
 from .proximal import proximal_parameter
 
 __all__: list[str] = []
@@ -89,12 +89,12 @@ class DampedHBMBase(ContinuationProblemBase):
         H >= 1.
     n_samples : int, optional
         N >= 2H+1 samples of the sampled contact projection (default
-        :func:`~mmshbm.core.harmonics.default_n_samples`).
+        :func:`~mmshbm.harmonic.harmonics.default_n_samples`).
     r : float, optional
         One proximal parameter (N/m) for every contact; default each contact DOF's
         condensed static stiffness 1/(D_0⁻¹)_ii.
     backend : {"auto", "modal", "direct"}
-        Solver of the complex condensation (:mod:`mmshbm.core.damped_condense`).
+        Solver of the complex condensation (:mod:`mmshbm.methods.mms.condensation.damped_condense`).
     projection : {"exact", "sampled"}
         The contact projection: switching instants located and the pieces integrated in
         closed form (C¹ residual, default), or sampled on N points (AFT; kinks where a

@@ -13,7 +13,7 @@ it gives ξ = 0 and the conservative backbone (tests check both).
 
 Here the massless DOFs carry the full cosine and sine series (the damped mode is not
 time-symmetric), the linear structure is condensed per harmonic with
-S_k = K_ll + ikΩ(C_ll − ξM_ll) − (kΩ)²M_ll (:mod:`mmshbm.core.damped_condense`), and the
+S_k = K_ll + ikΩ(C_ll − ξM_ll) − (kΩ)²M_ll (:mod:`mmshbm.methods.mms.condensation.damped_condense`), and the
 contact residual is that of :mod:`mmshbm.methods.mms.damped`. Unknowns
 u = [x, ξ, Ω] (scaled): n_c(2H+1) + 2 numbers. Equations: the n_c(2H+1) projected
 residuals and a *phase anchor*, the sine coefficient of the anchor DOF's fundamental set

@@ -9,9 +9,9 @@ import weakref
 
 import numpy as np
 
-from ...core.corrector_kernels import _start_mode_share
-from ...core.modal_energy import kinetic_energy_shares
+from ...harmonic.modal_energy import kinetic_energy_shares
 from ._family_kernels import family_records, harmonic_energies
+from .corrector_kernels import _start_mode_share
 from .held import _held_frequency
 from .landings import LandingsMixin
 
@@ -202,7 +202,7 @@ class FamilyMixin(LandingsMixin):
     def modal_shares(self, u: np.ndarray) -> np.ndarray:
         """Period-mean kinetic energy share of each tracked open-contact mode j (rows) in
         each harmonic k (columns), shape (n_tracked, H+1)
-        (:func:`~mmshbm.core.modal_energy.kinetic_energy_shares`)."""
+        (:func:`~mmshbm.harmonic.modal_energy.kinetic_energy_shares`)."""
         a, omega = self.unpack(u)
         freqs, Phi, MPhiT, M_ll = self._modal_basis()
         eta = self.unpack_eta(u)
@@ -272,7 +272,7 @@ class FamilyMixin(LandingsMixin):
 
     def _share_setup(self):
         """(row, s0, s, sv, pole_j): the starting mode's projections for
-        :func:`~mmshbm.core.corrector_kernels._start_mode_share` (modal back end; built once)."""
+        :func:`~mmshbm.methods.mms.corrector_kernels._start_mode_share` (modal back end; built once)."""
         data = self._share_data
         if data is None:
             cond = self.cond

@@ -1,12 +1,12 @@
-"""The data of the compiled corrector (:mod:`mmshbm.core.corrector_kernels`) for an
+"""The data of the compiled corrector (:mod:`mmshbm.methods.mms.corrector_kernels`) for an
 MMS-HBM problem: its arguments grouped as the corrector's named tuples."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from ...core import corrector_kernels as ck
 from ...core.bordered import _SMALL_DENSE
+from . import corrector_kernels as ck
 
 __all__ = ["fast_data"]
 
@@ -22,7 +22,7 @@ def fast_data(problem) -> dict | bool:
     cond = self.cond
     if cond.backend != "modal":
         return False
-    from ...core.modal import _POLE_RTOL
+    from ...harmonic.modal import _POLE_RTOL
 
     H, n_c, m = self.H, self.n_c, cond.n_modes
     keep = np.ones((H + 1, m), dtype=np.uint8)

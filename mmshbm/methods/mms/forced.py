@@ -10,7 +10,7 @@ responses are outside the ansatz; Floquet multipliers say when the periodic one 
 stability). Unknowns: the cosine *and* sine coefficients of the massless DOFs up to
 harmonic H (n_c (2H+1) numbers) and Ω, the continuation parameter; the equations are
 the projected contact residual of :mod:`mmshbm.methods.mms.damped` with the force
-condensed per harmonic onto the massless DOFs (:mod:`mmshbm.core.damped_condense`):
+condensed per harmonic onto the massless DOFs (:mod:`mmshbm.methods.mms.condensation.damped_condense`):
 
     F = 𝔇(Ω) x − σ(Ω) P(Ω),    P̂_1 = −Z_1ᵀ F̂_l,     ∂F/∂Ω = (∂𝔇/∂Ω) x − σ ∂P/∂Ω − σ' P,
 

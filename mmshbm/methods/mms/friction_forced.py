@@ -62,8 +62,8 @@ from __future__ import annotations
 import numpy as np
 
 from ...contact.coulomb import _sample_basis, derivative_matrix, project_coulomb, project_coulomb_play
-from ...core.damped_condense import DENSE_LIMIT
 from ...model.model import Model
+from .condensation.damped_condense import DENSE_LIMIT
 from .corrector import at_roundoff, backtrack, corrector_to_roundoff
 from .forced import ForcedResponseProblem
 from .friction_tracked import TrackedHarmonic

@@ -6,11 +6,11 @@ w = S_1⁻¹ e_t (S_1 complex symmetric, so e_tᵀ S_1⁻¹ = wᵀ), the DOF t's
 
     Q̂_t = −z·Û_c + σ(Ω) y,     z = wᵀ K_lc (n_c,),   y = wᵀ F̂_l
 
-(:mod:`mmshbm.core.damped_condense`: Q̂_l = Y − Z Q̂_c), and from ∂(S⁻¹) = −S⁻¹ S' S⁻¹ with
+(:mod:`mmshbm.methods.mms.condensation.damped_condense`: Q̂_l = Y − Z Q̂_c), and from ∂(S⁻¹) = −S⁻¹ S' S⁻¹ with
 S' = i C_ll − 2Ω M_ll: ∂w/∂Ω = −S_1⁻¹ S' w, so ∂z/∂Ω = (∂w/∂Ω)ᵀ K_lc and
 ∂y/∂Ω = (∂w/∂Ω)ᵀ F̂_l. One dense solve with S_1 per Ω (n_l × n_l; the models the
 friction forced response runs have at most a few hundred DOFs with mass; above
-:data:`~mmshbm.core.damped_condense.DENSE_LIMIT` the caller keeps its own recovery).
+:data:`~mmshbm.methods.mms.condensation.damped_condense.DENSE_LIMIT` the caller keeps its own recovery).
 """
 
 from __future__ import annotations

@@ -1,13 +1,13 @@
 """A Newton–Krylov corrector for MMS-HBM with many contact DOFs.
 
-The dense corrector (:mod:`mmshbm.core.corrector_kernels`) factorises the bordered
+The dense corrector (:mod:`mmshbm.methods.mms.corrector_kernels`) factorises the bordered
 Jacobian of all contact harmonics, n = (H+1)·n_c + n_p + 1 unknowns, by LU at every Newton
 iteration: O(n³), 8× per doubling of the contact DOFs. This corrector keeps the same
 residual, Jacobian and convergence tests and replaces only that solve.
 
 Structure. With P the block-diagonal (per contact DOF, (H+1) × (H+1)) projection of the
 active set and 𝔻 = diag_k(D_k) the condensed dynamic stiffness (n_c × n_c per harmonic),
-the contact rows of the Jacobian are (I − P) 𝔻 + r P (:mod:`mmshbm.core.contact_kernels`).
+the contact rows of the Jacobian are (I − P) 𝔻 + r P (:mod:`mmshbm.methods.mms.contact_kernels`).
 P_mk = ε_m/2 (C_|m−k| + C_m+k), C the active set's cosine spectrum, so its diagonal is
 the time-averaged active set (C_0) plus C_2k, and the coupling between harmonics lives in
 the off-diagonal entries. The preconditioner keeps the diagonal blocks: per harmonic k
@@ -201,7 +201,7 @@ class KrylovCorrector:
 
     # ------------------------------------------------------------------ Newton
     def newton(self, u0, u_pred, t, tol: float, max_iter: int, step_tol: float):
-        """The dense corrector's loop (:func:`mmshbm.core.corrector_kernels._newton_modal`:
+        """The dense corrector's loop (:func:`mmshbm.methods.mms.corrector_kernels._newton_modal`:
         the same convergence tests and quadratic-convergence skip) with Krylov solves.
 
         Returns (u, iterations, residual history, Jacobian at the last evaluated iterate)

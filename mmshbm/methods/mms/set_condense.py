@@ -1,6 +1,6 @@
 """The linear structure condensed per harmonic onto a chosen set of DOFs (with or without mass).
 
-MMS-HBM condenses the structure onto its massless DOFs (:mod:`mmshbm.core.condense`). A
+MMS-HBM condenses the structure onto its massless DOFs (:mod:`mmshbm.harmonic.condense`). A
 smooth element needs no massless DOF: its DOFs may carry mass, and the structure is
 condensed exactly onto the set ``s`` of the element DOFs (and the contact and amplitude
 DOFs), every other DOF ``o`` eliminated per harmonic k from the dynamic stiffness
@@ -17,7 +17,7 @@ Y_k = S_oo⁻¹ F_o, ∂P_k/∂Ω = −T_kᵀ (∂S_k/∂Ω) [0; Y_k]; the elimi
 q_o,k = Y_k − X_k q_s,k. The formulas use S_k = S_kᵀ (K, M, C symmetric).
 
 D_k has poles where kΩ is an eigenfrequency of the structure with the set held: there
-S_oo is singular and :class:`~mmshbm.core._errors.SingularDynamicStiffness` (an
+S_oo is singular and :class:`~mmshbm.harmonic._errors.SingularDynamicStiffness` (an
 ArithmeticError: the continuation retries a smaller step) is raised. Through a pole det D_k
 changes sign through infinity (det S_k = det S_oo det D_k); the undamped condensation
 returns sgn det S_oo,k with D_k (:attr:`SetCondensation.pole_signs`), so that a residual can
@@ -32,7 +32,7 @@ import scipy.linalg as la
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ...core._errors import SingularDynamicStiffness
+from ...harmonic._errors import SingularDynamicStiffness
 
 __all__ = ["SetCondensation"]
 

@@ -78,8 +78,8 @@ class SignalsMixin:
         dD = np.empty(shape) if derivative else None
         fast = self._fast_setup()
         if fast:  # the modal kernel straight into the slices (as _condensed, without its cache)
-            from ...core._modal_kernels import _modal_dynamic_stiffness
-            from ...core.condense import SingularDynamicStiffness
+            from ...harmonic._modal_kernels import _modal_dynamic_stiffness
+            from ...harmonic.condense import SingularDynamicStiffness
 
             D0, B, w2, Rs, keep, static, rtol = fast["cond"]
             known = self._by_omega  # those computed before (the same numbers)

@@ -10,7 +10,7 @@ on that set alone, the elements' forces by alternating frequency–time
     proj_k[ f + r ((p − hi)₊ − (lo − p)₊) ] = 0,  f = D_k a_k    (rows of a contact DOF),
 
 the contact rows being MMS-HBM's proximal Signorini law (the fused kernel
-:func:`~mmshbm.core.contact_kernels._mmshbm_eval` with no pole unknowns). The
+:func:`~mmshbm.methods.mms.contact_kernels._mmshbm_eval` with no pole unknowns). The
 Jacobian is analytic: D_k, ∂D_k/∂Ω from the condensation, ∂F/∂a from the sampled φ'(δ).
 
 As for MMS-HBM on stops (:mod:`~mmshbm.methods.mms.conservative`) the ansatz is
@@ -31,12 +31,12 @@ from __future__ import annotations
 import numpy as np
 
 from ... import _validate as check
-from ...core.contact_kernels import _mmshbm_eval
-from ...core.harmonics import check_harmonics
 from ...core.problem import BackboneProblemBase, OneEvaluation
+from ...harmonic.harmonics import check_harmonics
 from ...model.contact import admissible_intervals
 from ...model.linear_modes import amplitude_mode
 from ...model.model import Model
+from .contact_kernels import _mmshbm_eval
 from .element_aft import ElementForces, series_peak
 from .set_condense import SetCondensation
 from .tables import _tables
@@ -96,7 +96,7 @@ class ElementBackboneProblem(OneEvaluation, BackboneProblemBase):
         H >= 1.
     n_samples : int, optional
         Samples per period N >= 2H+1 of the AFT and of the stops' bracketing grid; default
-        :func:`~mmshbm.core.harmonics.default_n_samples` (16 H rounded up to a power of
+        :func:`~mmshbm.harmonic.harmonics.default_n_samples` (16 H rounded up to a power of
         two: at least (d + 1) H + 1, the exact count for a polynomial of degree d <= 15).
     r : float or "static", optional
         The proximal parameter (N/m) of the stops, one or one per contact DOF; default each

@@ -19,9 +19,9 @@ from __future__ import annotations
 import numpy as np
 
 from ... import _validate as check
-from ...core.harmonics import check_harmonics
 from ...core.measures import mean_energy
 from ...core.problem import BackboneProblemBase, OneEvaluation
+from ...harmonic.harmonics import check_harmonics
 from ...model.model import Model
 from .element_aft import ElementForces, series_peak
 from .epmc import fundamental_share

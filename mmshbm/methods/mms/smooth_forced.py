@@ -27,9 +27,9 @@ from __future__ import annotations
 import numpy as np
 
 from ... import _validate as check
-from ...core.harmonics import check_harmonics
 from ...core.measures import mean_energy
 from ...core.problem import ForcedProblemBase, OneEvaluation
+from ...harmonic.harmonics import check_harmonics
 from ...model.model import Model
 from .element_aft import ElementForces, series_peak
 from .forced import Excitation, harmonic_force
@@ -114,7 +114,7 @@ class ElementForcedProblem(OneEvaluation, ForcedProblemBase):
         H >= 1.
     n_samples : int, optional
         AFT samples per period N >= 2H+1 (default
-        :func:`~mmshbm.core.harmonics.default_n_samples`).
+        :func:`~mmshbm.harmonic.harmonics.default_n_samples`).
     stability : bool or "auto"
         Floquet multipliers at every point; "auto": with at most 50 DOFs with mass.
 

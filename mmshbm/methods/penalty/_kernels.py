@@ -1,7 +1,7 @@
 """Numba kernels of the penalty harmonic-balance baseline (:mod:`mmshbm.methods.penalty.hbm`).
 
 They take plain contiguous float64/int64 arrays and know nothing of models. Neither calls
-another kernel, so they can live apart from :mod:`mmshbm.core.kernels` without defeating
+another kernel, so they can live apart from :mod:`mmshbm.harmonic.kernels` without defeating
 numba's on-disk cache; they share its compilation flags (``JIT_OPTIONS``).
 """
 
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from numba import njit
 
-from ...core.kernels import JIT_OPTIONS
+from ...harmonic.kernels import JIT_OPTIONS
 
 __all__: list[str] = []
 

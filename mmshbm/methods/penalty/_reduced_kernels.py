@@ -2,14 +2,14 @@
 (:mod:`mmshbm.methods.penalty.reduced`).
 
 One kernel, no callees in other files (numba's on-disk cache does not see edits to a callee
-elsewhere); it shares :data:`~mmshbm.core.kernels.JIT_OPTIONS`.
+elsewhere); it shares :data:`~mmshbm.harmonic.kernels.JIT_OPTIONS`.
 """
 
 from __future__ import annotations
 
 from numba import njit
 
-from ...core.kernels import JIT_OPTIONS
+from ...harmonic.kernels import JIT_OPTIONS
 
 __all__: list[str] = []
 

@@ -7,7 +7,7 @@ import numpy as np
 
 from ... import _validate as check
 from ...contact.table import DEFAULT_PENALTY_FACTOR, static_contact_stiffness
-from ...core.harmonics import check_harmonics, default_n_samples
+from ...harmonic.harmonics import check_harmonics, default_n_samples
 from ...model.model import Model
 
 __all__ = ["DEFAULT_PENALTY_FACTOR", "penalty_n_samples"]

@@ -22,8 +22,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from ... import _validate as check
-from ...core.harmonics import check_harmonics
 from ...core.problem import BackboneProblemBase, OneEvaluation
+from ...harmonic.harmonics import check_harmonics
 from ...model.linear_modes import amplitude_mode
 from ...model.model import Model
 from ..mms.element_aft import ElementForces, series_peak
@@ -44,7 +44,7 @@ class ElementHBMProblem(OneEvaluation, BackboneProblemBase):
     harmonics : int
         H >= 1.
     n_samples : int, optional
-        AFT samples N >= 2H+1 (default :func:`~mmshbm.core.harmonics.default_n_samples`).
+        AFT samples N >= 2H+1 (default :func:`~mmshbm.harmonic.harmonics.default_n_samples`).
     mode : int
         The linear mode (1-based) the branch starts from.
 

@@ -31,9 +31,9 @@ import scipy.sparse as sp
 
 from ... import _validate as check
 from ...contact.unilateral import contact_projection
-from ...core.harmonics import check_harmonics
 from ...core.measures import check_dof, harmonic_content, mean_energy, refined_max
 from ...core.problem import ForcedProblemBase, OneEvaluation
+from ...harmonic.harmonics import check_harmonics
 from ...model.contact import admissible_intervals
 from ...model.model import Model
 from ..mms.damped import fine_samples

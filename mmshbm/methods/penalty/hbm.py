@@ -30,7 +30,7 @@ Conventions follow :mod:`mmshbm.methods.mms.conservative`:
   equations in n(H+1)+1 unknowns (the Q_k of all DOFs and Ω) have full row rank along the
   branch.
 * Alternating frequency-time on the contact DOF only: it is the only DOF with a nonlinear
-  force. Its cosine series is synthesised on N samples (pyfftw, :func:`~mmshbm.core.harmonics.transform`),
+  force. Its cosine series is synthesised on N samples (pyfftw, :func:`~mmshbm.harmonic.harmonics.transform`),
   the penalty force and its active set s_j = [g_N(τ_j) < 0] are evaluated by a Numba kernel,
   and λ is projected back on harmonics 0..H.
 * Analytic, sparse Jacobian. Harmonic k's block is K − (kΩ)² M (sparse, the pattern of the
@@ -92,9 +92,9 @@ from ...contact.table import (
     start_mode,
     static_contact_stiffness,
 )
-from ...core.harmonics import check_harmonics, transform
 from ...core.measures import amplitude_sign
 from ...core.problem import BackboneProblemBase
+from ...harmonic.harmonics import check_harmonics, transform
 from ...model.model import Model
 from ._kernels import _penalty_contacts, _penalty_hbm_jacobian
 from .assembly import _jacobian_pattern
@@ -119,7 +119,7 @@ class PenaltyHBMProblem(PenaltySignalsMixin, BackboneProblemBase):
     n_samples : int, optional
         Time samples per period N >= 2H+1 for the contact DOFs' AFT. Default
         :func:`~mmshbm.methods.penalty.defaults.penalty_n_samples`: MMS-HBM's
-        :func:`~mmshbm.core.harmonics.default_n_samples` up to k_p = 10³ k_c, doubled per
+        :func:`~mmshbm.harmonic.harmonics.default_n_samples` up to k_p = 10³ k_c, doubled per
         further decade of k_p (the penetration window narrows as k_p grows and must stay
         resolved by the samples).
     penalty_stiffness : float or sequence of float, optional

@@ -34,8 +34,8 @@ import scipy.sparse as sp
 
 from ... import _validate as check
 from ...contact.coulomb import jenkins_hysteresis
-from ...core.harmonics import check_harmonics
 from ...core.measures import refined_max
+from ...harmonic.harmonics import check_harmonics
 from ...model.model import Model
 from ..mms.damped import fine_samples
 from ..mms.forced import Excitation, harmonic_force

@@ -3,7 +3,7 @@
 The fair version of :mod:`mmshbm.methods.penalty.hbm` at scale. Like pyHarm's reduction to
 the nonlinear DOFs, the linear structure is condensed exactly, harmonic by harmonic, onto
 the massless DOFs ``c`` (which hold every contact DOF), with the *same* condensation
-MMS-HBM uses (:func:`~mmshbm.core.condense.make_condensation`: banded/sparse LU or the
+MMS-HBM uses (:func:`~mmshbm.harmonic.condense.make_condensation`: banded/sparse LU or the
 modal back end). What is left differs from MMS-HBM only in the contact law:
 
     D_k(Ω) a_k + Σ_i e_i proj_k f_i(q_i(τ)) = 0,    k = 0..H,
@@ -35,10 +35,10 @@ import logging
 import numpy as np
 
 from ... import _validate as check
-from ...core.condense import make_condensation
-from ...core.harmonics import check_harmonics
 from ...core.measures import amplitude_peak, check_dof, condensed_energy, harmonic_content, refined_max
 from ...core.problem import BackboneProblemBase, OneEvaluation
+from ...harmonic.condense import make_condensation
+from ...harmonic.harmonics import check_harmonics
 from ...model.contact import admissible_intervals
 from ...model.model import Model
 from ._reduced_kernels import _penalty_reduced_residual
@@ -66,7 +66,7 @@ class ReducedPenaltyHBMProblem(OneEvaluation, BackboneProblemBase):
     mode : int
         Which linear mode (1-based) the branch starts from.
     backend : {"auto", "banded", "splu", "modal"}
-        Condensation back end (:func:`~mmshbm.core.condense.make_condensation`).
+        Condensation back end (:func:`~mmshbm.harmonic.condense.make_condensation`).
 
     Attributes
     ----------

@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit
 
 from ...contact.lcp import _inverse_sub, _lcp_jacobian, _lcp_path, _lcp_point
-from ...core.kernels import JIT_OPTIONS
+from ...harmonic.kernels import JIT_OPTIONS
 from ._kernels import (
     _band_solve,
     _band_symv,

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...core.kernels import JIT_OPTIONS
+from ...harmonic.kernels import JIT_OPTIONS
 from ._kernels import _contact_root, _force_sum, _start_gap
 
 __all__: list[str] = []

@@ -24,7 +24,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ...core.kernels import JIT_OPTIONS
+from ...harmonic.kernels import JIT_OPTIONS
 
 __all__ = ["band_cholesky", "band_solve", "band_symv"]
 

@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...core.kernels import JIT_OPTIONS
+from ...harmonic.kernels import JIT_OPTIONS
 
 
 @njit(**JIT_OPTIONS)

@@ -20,10 +20,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..contact.projection import _spectrum
-from ..contact.unilateral import _project
-from .kernels import JIT_OPTIONS
-from .measures import _series_peak
+from ...contact.projection import _spectrum
+from ...contact.unilateral import _project
+from ...core.measures import _series_peak
+from ...harmonic.kernels import JIT_OPTIONS
 
 __all__: list[str] = []  # kernels only; the projections as functions: mmshbm.contact.unilateral
 
@@ -33,7 +33,7 @@ def _mmshbm_eval(D, dD, a, eta, omega, pole_k, pole_b, pole_w2, cdof, lo, hi, r,
                  tau_t, rowscale, colscale, jacobian, R, J, F, dF, pc, ps, gc, g_t, dg_t, roots, C_hi, C_lo,
                  S_w, P):
     """Scaled cosine-only MMS-HBM residual (and Jacobian) for any number of contact DOFs,
-    with the poles of D_k carried by extra unknowns η (:mod:`mmshbm.core.poles`).
+    with the poles of D_k carried by extra unknowns η (:mod:`mmshbm.methods.mms.condensation.poles`).
 
     D, dD     : (H+1, n_c, n_c) condensed dynamic stiffness (its regular part for the
                 harmonics with poles) and ∂D_k/∂Ω (dD read only if ``jacobian``)

@@ -1,8 +1,9 @@
-"""Numba kernel of the damped modal condensation (:mod:`mmshbm.core.damped_condense`, modal
-back end): D_k, P̂_1 and their derivatives in Ω and ξ, without the recovery.
+"""Numba kernel of the damped modal condensation
+(:mod:`mmshbm.methods.mms.condensation.damped_condense`, modal back end):
+D_k, P̂_1 and their derivatives in Ω and ξ, without the recovery.
 
 The kernel and its helpers live in this one file (numba's on-disk cache does not see
-edits to a callee elsewhere); it shares :data:`~mmshbm.core.kernels.JIT_OPTIONS`.
+edits to a callee elsewhere); it shares :data:`~mmshbm.harmonic.kernels.JIT_OPTIONS`.
 """
 
 from __future__ import annotations
@@ -10,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .kernels import JIT_OPTIONS
+from ....harmonic.kernels import JIT_OPTIONS
 
 
 @njit(**JIT_OPTIONS)

@@ -4,10 +4,10 @@ For small dense problems (MMS-HBM's usual case: (H+1)·n_c + n_p + 1 unknowns) t
 a corrector step is dominated by Python: unpacking, the condensation call, the residual
 call, assembling and solving the bordered system. :func:`_newton_modal` does all of it in
 Numba — the condensed dynamic stiffness from fixed-interface modes
-(:func:`~mmshbm.core._modal_kernels._modal_dynamic_stiffness`, with the pole pairs left out
-and their static part added back, :mod:`mmshbm.core.poles`), the fused residual and
-Jacobian (:func:`~mmshbm.core.contact_kernels._mmshbm_eval`), the bordered LU
-(:func:`~mmshbm.core.kernels._dense_solve`) and the convergence test of
+(:func:`~mmshbm.harmonic._modal_kernels._modal_dynamic_stiffness`, with the pole pairs left out
+and their static part added back, :mod:`mmshbm.methods.mms.condensation.poles`), the fused residual and
+Jacobian (:func:`~mmshbm.methods.mms.contact_kernels._mmshbm_eval`), the bordered LU
+(:func:`~mmshbm.harmonic.kernels._dense_solve`) and the convergence test of
 :func:`mmshbm.core.continuation.newton` — so that an iteration costs its arithmetic. The
 numbers are those of the Python loop (the same kernels, in the same order).
 
@@ -22,9 +22,9 @@ from collections import namedtuple
 
 from numba import njit
 
-from ._modal_kernels import _modal_dynamic_stiffness
+from ...harmonic._modal_kernels import _modal_dynamic_stiffness
+from ...harmonic.kernels import JIT_OPTIONS, _dense_solve
 from .contact_kernels import _mmshbm_eval
-from .kernels import JIT_OPTIONS, _dense_solve
 
 __all__ = ["ModalCondensation", "PoleTerms", "ContactLaw", "Sampling", "Scaling", "NewtonWork", "EvalWork",
            "newton_modal_entry"]
@@ -40,7 +40,8 @@ CONVERGED, NO_CONVERGENCE, NON_FINITE, SINGULAR, POLE, SKIPPED = 0, 1, 2, 3, 4, 
 #: unknown), static (H+1, n_c, n_c) the static part b_j b_jᵀ/ω_j² of those terms, pole_rtol
 #: the relative distance to a fixed-interface eigenfrequency that counts as a pole.
 ModalCondensation = namedtuple("ModalCondensation", "D0 B w2 Rs keep static pole_rtol")
-#: The pole unknowns η_jk (:mod:`mmshbm.core.poles`): harmonic k (n_p,) int64, b (n_p, n_c), w2 (n_p,).
+#: The pole unknowns η_jk (:mod:`mmshbm.methods.mms.condensation.poles`): harmonic k (n_p,) int64,
+#: b (n_p, n_c), w2 (n_p,).
 PoleTerms = namedtuple("PoleTerms", "k b w2")
 #: The contact law: cdof (n_contacts,) int64 rows of the contact DOFs, lo/hi their admissible
 #: intervals (m), r (n_contacts,) the proximal parameters (N/m), exact the closed-form projection.
@@ -54,7 +55,7 @@ Scaling = namedtuple("Scaling", "colscale rowscale")
 #: point: tx (n,) or (0,) for none, t_sign (1,) the sign of its determinant, t_info (1,) 0 or
 #: the solve's nonzero return (singular).
 NewtonWork = namedtuple("NewtonWork", "D dD R J A rhs LU du a eta sign tx t_sign t_info")
-#: Work arrays of :func:`~mmshbm.core.contact_kernels._mmshbm_eval` (its last twelve arguments).
+#: Work arrays of :func:`~mmshbm.methods.mms.contact_kernels._mmshbm_eval` (its last twelve arguments).
 EvalWork = namedtuple("EvalWork", "F dF pc ps gc g_t dg_t roots C_hi C_lo S_w P")
 
 
@@ -186,7 +187,7 @@ def newton_modal_entry(args: tuple):
     """
     if not hasattr(_newton_modal, "compile"):
         return _newton_modal
-    from ._entry import compiled_entry
+    from ...core._entry import compiled_entry
 
     return compiled_entry(_newton_modal, args)
 

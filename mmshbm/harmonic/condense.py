@@ -24,7 +24,7 @@ K_lc. Two back ends:
     order; used for matrices without a narrow band.
 ``"modal"``
     Fixed-interface normal modes plus the static correction
-    (:class:`~mmshbm.core.modal.ModalCondensation`): O(m n_c²) per harmonic after a
+    (:class:`~mmshbm.harmonic.modal.ModalCondensation`): O(m n_c²) per harmonic after a
     one-time reduction, independent of the model's size. :func:`make_condensation`
     builds any of the three and picks the fastest with ``"auto"``.
 
@@ -255,7 +255,7 @@ def make_condensation(model: Model, backend: str = "auto", *, harmonics: int = 5
         The solver's H and the branch's linear mode: they set the modal truncation's
         design range (ignored by the LU back ends).
     **modal_options
-        Options of :class:`~mmshbm.core.modal.ModalCondensation` (``tol``, ``cutoff``,
+        Options of :class:`~mmshbm.harmonic.modal.ModalCondensation` (``tol``, ``cutoff``,
         ``n_modes``, ``max_frequency``, ``cache``, ...); TypeError with an LU back end.
 
     Returns

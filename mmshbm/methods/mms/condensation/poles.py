@@ -31,8 +31,8 @@ import numpy as np
 import scipy.linalg as la
 import scipy.sparse.linalg as spla
 
-from .condense import Condensation, SingularDynamicStiffness
-from .kernels import _band_solve
+from ....harmonic.condense import Condensation, SingularDynamicStiffness
+from ....harmonic.kernels import _band_solve
 
 __all__ = ["PoleSet"]
 
@@ -77,7 +77,7 @@ class PoleSet:
         self.cond = cond
         self.H = int(harmonics)
         lo, hi = float(omega_range[0]) * 0.97, float(omega_range[1]) * 1.03
-        # the modal back end (mmshbm.core.modal) has its modes and leaves a term out itself
+        # the modal back end (mmshbm.harmonic.modal) has its modes and leaves a term out itself
         self.modal = cond.backend == "modal"
         if self.modal:
             w, phi = np.asarray(cond.omega_j, dtype=float), np.asarray(cond.phi_j, dtype=float)

@@ -1,9 +1,9 @@
 """Modal condensation onto the massless DOFs (``backend="modal"``).
 
 With the massless DOFs clamped, the DOFs with mass have M_ll-orthonormal modes (φ_j, ω_j)
-and b_j = K_cl φ_j (:mod:`mmshbm.core.modal_reduction`). Since
+and b_j = K_cl φ_j (:mod:`mmshbm.harmonic.modal_reduction`). Since
 (K_ll − ω² M_ll)⁻¹ = Σ_j φ_j φ_jᵀ/(ω_j² − ω²), the condensed dynamic stiffness of
-:mod:`mmshbm.core.condense` is, for harmonic k (ω = kΩ),
+:mod:`mmshbm.harmonic.condense` is, for harmonic k (ω = kΩ),
 
     D_k  = D_0 − Σ_j b_j b_jᵀ ω² / (ω_j² (ω_j² − ω²))
     ∂D_k/∂Ω = −Σ_j b_j b_jᵀ 2k²Ω / (ω_j² − ω²)²
@@ -15,7 +15,7 @@ harmonic costs O(m n_c²) whatever the size of the FE model.
 Truncation. Keeping the m lowest modes, the left-out ones are replaced by the first P
 terms of their low-frequency expansion (the static, residual-flexibility correction:
 D_0 is exact, and the missing modes' residual inertia and its higher moments are added
-in closed form, :mod:`mmshbm.core.modal_reduction`):
+in closed form, :mod:`mmshbm.harmonic.modal_reduction`):
 
     D_k ≈ D_0 − Σ_{j<=m} b_j b_jᵀ ω²/(ω_j²(ω_j² − ω²)) − Σ_{p=1..P} ω^{2p} R(p+1),
     R(p) = Σ_{j>m} b_j b_jᵀ/ω_j^{2p}.
@@ -79,7 +79,7 @@ _LEFT_OUT_WARNING = 0.8
 class ModalCondensation:
     """Per-harmonic condensation onto the massless DOFs from fixed-interface modes.
 
-    Same interface as :class:`~mmshbm.core.condense.Condensation` (``D0``, ``n_l``,
+    Same interface as :class:`~mmshbm.harmonic.condense.Condensation` (``D0``, ``n_l``,
     ``n_c``, ``backend``, :meth:`dynamic_stiffness`, :meth:`recover`), plus the modes
     (:attr:`omega_j`, :attr:`phi_j`, :attr:`b_j`) for pole handling.
 
@@ -107,9 +107,9 @@ class ModalCondensation:
         A precomputed reduction of this model (e.g. :meth:`ModalReduction.load`).
     cache : str or Path, optional
         Directory or ``.npz`` file where the reduction is kept between runs
-        (:mod:`mmshbm.core.modal_reduction`).
+        (:mod:`mmshbm.harmonic.modal_reduction`).
     dense_limit, max_modes, eigen_tol, maxiter
-        Eigen-solver controls (:func:`~mmshbm.core.modal_reduction.reduce_model`).
+        Eigen-solver controls (:func:`~mmshbm.harmonic.modal_reduction.reduce_model`).
 
     Attributes
     ----------
@@ -275,7 +275,7 @@ class ModalCondensation:
 
     def dynamic_stiffness(self, omega: float, harmonics: int, derivative: bool = True, exclude=()):
         """Condensed dynamic stiffness for k = 0..H (as
-        :meth:`Condensation.dynamic_stiffness <mmshbm.core.condense.Condensation.dynamic_stiffness>`).
+        :meth:`Condensation.dynamic_stiffness <mmshbm.harmonic.condense.Condensation.dynamic_stiffness>`).
 
         Parameters
         ----------

@@ -1,7 +1,7 @@
-"""Numba kernel of the modal condensation (:mod:`mmshbm.core.modal`).
+"""Numba kernel of the modal condensation (:mod:`mmshbm.harmonic.modal`).
 
 One kernel, no callees in other files (numba's on-disk cache does not see edits to a
-callee elsewhere); it shares :data:`~mmshbm.core.kernels.JIT_OPTIONS`.
+callee elsewhere); it shares :data:`~mmshbm.harmonic.kernels.JIT_OPTIONS`.
 """
 
 from __future__ import annotations

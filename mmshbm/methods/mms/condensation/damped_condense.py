@@ -21,7 +21,7 @@ external load condensed onto the massless DOFs. With ∂S_k/∂Ω = ik(C_ll − 
 
     ∂D_k/∂Ω = Z_kᵀ (∂S_k/∂Ω) Z_k,   ∂P̂_k/∂Ω = Z_kᵀ (∂S_k/∂Ω) Y_k,   and the same in ξ.
 
-Without damping and with ξ = 0 this is :class:`mmshbm.core.condense.Condensation`'s D_k.
+Without damping and with ξ = 0 this is :class:`mmshbm.harmonic.condense.Condensation`'s D_k.
 
 Two back ends, identical in exact arithmetic (tests compare them):
 
@@ -55,9 +55,9 @@ import scipy.linalg as la
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..model.model import Model
+from ....harmonic.condense import SingularDynamicStiffness
+from ....model.model import Model
 from ._damped_modal_kernels import _damped_modal
-from .condense import SingularDynamicStiffness
 
 __all__ = ["DampedCondensation", "CondensedHarmonics", "DENSE_LIMIT"]
 
@@ -199,7 +199,8 @@ class DampedCondensation:
         update (module docstring): D_k = B − (Bφ)(Bφ)ᵀ/g, B = A⁻¹, A = K_cc⁻¹ + Σ_{m≠j}
         φ_m d_m φ_mᵀ, g = 1/d_j + φᵀBφ, with φ = φ_c,j of the mode j nearest kΩ: regular
         even where d_j is infinite (a harmonic on an undamped open mode, the linear EPMC).
-        Without the recovery, the compiled kernel (:mod:`mmshbm.core._damped_modal_kernels`)."""
+        Without the recovery, the compiled kernel
+        (:mod:`mmshbm.methods.mms.condensation._damped_modal_kernels`)."""
         if not recover:
             return self._evaluate_modal_compiled(omega, H, xi, derivative, xi_derivative)
         k = np.arange(1, H + 1, dtype=float)
