@@ -69,7 +69,9 @@ runners call them directly and never probe a problem for attributes.
     ``branch_records(states) -> dict`` (records computed once for a whole branch; None
     when not offered), ``tracked_frequencies`` (Hz of the modes whose energy shares are
     recorded; None), ``H`` and ``N`` (harmonics and samples; 0 where they do not apply),
-    ``solver_settings()`` (the numbers that fix the discretisation, for checkpoints).
+    ``setting_names`` and ``solver_settings()`` (the attributes, and their numbers, that
+    fix the discretisation, for checkpoints), ``state_convention()`` (how the states are to
+    be read, e.g. the scaling of extra unknowns; empty by default).
 
 A problem that only has the required protocol (a test problem, a user's) goes through
 :func:`as_problem`, which wraps it in a :class:`ContinuationProblemBase` with every
@@ -195,12 +197,11 @@ class BranchRecords(Protocol):
     tracked_frequencies: Any
     H: int
     N: int
+    setting_names: tuple[str, ...]
 
     def solver_settings(self) -> dict: ...
 
-
-#: the problem attributes a checkpoint header records (a resumed run must agree on them)
-_SETTINGS = ("H", "N", "r", "mode", "penalty_stiffness", "steps_per_period")
+    def state_convention(self) -> dict: ...
 
 
 
@@ -236,12 +237,6 @@ class ContinuationProblemBase:
     #: True for a nonsmooth branch whose corners (a tangent turning past 90° within one
     #: step) are crossed at fixed parameter (``core.steps._advance``)
     corner_parameter: bool = False
-    #: how the unknowns of pole terms are scaled, when the problem has them (recorded with a
-    #: result and a checkpoint: files from before it was recorded scaled them by force)
-    pole_scaling: str | None = None
-    #: states of a result saved before ``pole_scaling`` was recorded, converted to this
-    #: problem's scaling (None: nothing to convert)
-    states_from_force_scaling: Callable[[np.ndarray], np.ndarray] | None = None
     # PinnedSolves
     amplitude_and_gradient: Callable[[np.ndarray], tuple[float, np.ndarray]] | None = None
     amplitude_value: Callable[[np.ndarray], float] | None = None
@@ -264,6 +259,8 @@ class ContinuationProblemBase:
     tracked_frequencies: Any = None
     H: int = 0
     N: int = 0
+    #: the attributes whose numbers fix the discretisation (:meth:`solver_settings`)
+    setting_names: tuple[str, ...] = ()
 
     def residual(self, u: np.ndarray) -> np.ndarray:
         """The scaled residual R(u), shape (n−1,).
@@ -295,15 +292,21 @@ class ContinuationProblemBase:
         raise NotImplementedError(f"{type(self).__name__} has no initial tangent")
 
     def solver_settings(self) -> dict:
-        """The numbers among H, N, r, mode, penalty_stiffness and steps_per_period that
-        this problem holds (a checkpoint's ``solver`` entry: a resumed run must match)."""
-        own = vars(self)
+        """The scalar numbers among the attributes the class names in ``setting_names``
+        (a checkpoint's ``solver`` entry: a resumed run must match); an attribute that holds
+        no single number (None, an array) is left out."""
         out = {}
-        for name in _SETTINGS:
-            value = own.get(name)
+        for name in self.setting_names:
+            value = getattr(self, name)
             if isinstance(value, int | float | np.number) and not isinstance(value, bool):
                 out[name] = value.item() if isinstance(value, np.generic) else value
         return out
+
+    def state_convention(self) -> dict:
+        """How this problem's states are to be read, beyond its settings (recorded with a
+        result and a checkpoint header, so that a loaded or resumed run reads them alike):
+        name -> str. Empty by default."""
+        return {}
 
 
 class BackboneProblemBase(ContinuationProblemBase):

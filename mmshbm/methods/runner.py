@@ -196,8 +196,7 @@ def checkpoint_header(model: Model, method: str, problem, options: dict, **extra
             "model_description": model.description, "solver": resolved,
             "method_options": jsonable({k: v for k, v in options.items()
                                         if k not in ("harmonics", "n_samples", "r", "mode")}),
-            **({"pole_scaling": problem.pole_scaling} if problem.pole_scaling else {}),
-            **jsonable(extra)}
+            **problem.state_convention(), **jsonable(extra)}
 
 
 def check_resumable(stored: dict, current: dict, path) -> None:
@@ -411,5 +410,4 @@ def run_metadata(model: Model, method: str, problem, options: dict, copts: Conti
     return {"model": model.description, "method": method, "harmonics": int(problem.H),
             "n_samples": int(problem.N), **fields, "method_options": jsonable(options),
             "continuation": _options_record(copts), "elapsed_s": done.elapsed_s,
-            "python": _PYTHON, "numpy": np.__version__, **done.metadata(),
-            **({"pole_scaling": problem.pole_scaling} if problem.pole_scaling else {})}
+            "python": _PYTHON, "numpy": np.__version__, **done.metadata(), **problem.state_convention()}

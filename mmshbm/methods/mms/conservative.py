@@ -123,6 +123,10 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
     """
 
     method = "mmshbm"
+    setting_names = ("H", "N", "r", "mode")
+    #: how the pole unknowns are scaled (:func:`~mmshbm.methods.mms.fixed`; recorded with a
+    #: result and a checkpoint: files from before it was recorded scaled them by force)
+    pole_scaling: str | None = None
     #: the continuation's step rule for this problem (ContinuationOptions.step_control="auto")
     step_control = "residual"
     #: the compiled corrector's data (:meth:`_fast_setup`): None until built, False when it does not apply
@@ -255,6 +259,10 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         n_h, n_c = self.H + 1, self.n_c
         n_a = n_h * n_c
         return x[:n_a].reshape(n_h, n_c), float(x[-1]), x[n_a:n_a + self.n_poles]
+
+    def state_convention(self) -> dict:
+        """``{"pole_scaling": ...}`` once the pole unknowns are scaled (see :attr:`pole_scaling`)."""
+        return {"pole_scaling": self.pole_scaling} if self.pole_scaling else {}
 
     def states_from_force_scaling(self, states: np.ndarray) -> np.ndarray:
         """Scaled unknowns (n_points, n_unknowns) of a branch saved when the pole unknowns

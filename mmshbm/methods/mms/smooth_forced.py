@@ -128,6 +128,7 @@ class ElementForcedProblem(OneEvaluation, ForcedProblemBase):
     """
 
     method = "mmshbm"
+    setting_names = ("H", "N")
 
     def __init__(self, model: Model, force, harmonics: int = 5, n_samples: int | None = None,
                  stability: bool | str = "auto"):

@@ -56,6 +56,7 @@ class ElementHBMProblem(OneEvaluation, BackboneProblemBase):
     """
 
     method = "penalty"
+    setting_names = ("H", "N", "mode")
 
     def __init__(self, model: Model, harmonics: int = 5, n_samples: int | None = None, mode: int = 1):
         if not isinstance(model, Model):

@@ -67,6 +67,7 @@ class PenaltyForcedProblem(OneEvaluation, ForcedProblemBase):
     """
 
     method = "penalty"
+    setting_names = ("H", "N", "penalty_stiffness")
 
     def __init__(self, model: Model, force, harmonics: int = 5, penalty_stiffness: float | None = None,
                  n_samples: int | None = None, projection: str = "exact", stability: bool = False):

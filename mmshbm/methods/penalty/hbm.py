@@ -155,6 +155,7 @@ class PenaltyHBMProblem(PenaltySignalsMixin, BackboneProblemBase):
     """
 
     method = "penalty"
+    setting_names = ("H", "N", "mode", "penalty_stiffness")
 
     def __init__(self, model: Model, harmonics: int = 5, n_samples: int | None = None,
                  penalty_stiffness=None, mode: int = 1):

@@ -107,6 +107,7 @@ class JenkinsForcedProblem(PenaltyForcedProblem):
     """
 
     method = "penalty"
+    setting_names = ("H", "N")
 
     def __init__(self, model: Model, force, harmonics: int = 5, tangential_stiffness=None,
                  n_samples: int | None = None, stability: bool = False):

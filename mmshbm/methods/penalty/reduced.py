@@ -80,6 +80,7 @@ class ReducedPenaltyHBMProblem(OneEvaluation, BackboneProblemBase):
     """
 
     method = "penalty-reduced"
+    setting_names = ("H", "N", "mode", "penalty_stiffness")
 
     def __init__(self, model: Model, harmonics: int = 5, n_samples: int | None = None,
                  penalty_stiffness: float | None = None, mode: int = 1, backend: str = "auto"):

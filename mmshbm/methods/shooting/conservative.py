@@ -173,6 +173,7 @@ class ShootingProblem(ShootingSignals, BackboneProblemBase):
     """
 
     method = "shooting"
+    setting_names = ("N", "mode")
     H = 0
 
     def __init__(self, model: Model, steps_per_period: int = DEFAULT_STEPS_PER_PERIOD, mode: int = 1,

@@ -52,6 +52,7 @@ class ElementShootingProblem(OneEvaluation, BackboneProblemBase):
     """
 
     method = "shooting"
+    setting_names = ("mode", "steps_per_period")
 
     def __init__(self, model: Model, steps_per_period: int = 512, mode: int = 1):
         if not isinstance(model, Model):

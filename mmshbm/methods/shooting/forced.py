@@ -49,6 +49,7 @@ class ShootingForcedProblem(OneEvaluation, ForcedProblemBase):
     """
 
     method = "shooting"
+    setting_names = ("N",)
     H = 0
 
     def __init__(self, model: Model, force, steps_per_period: int = 256, stability: bool = True):
