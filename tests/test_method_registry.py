@@ -22,7 +22,7 @@ SWITCHING = ["methods/limits.py", "methods/runner.py", "methods/backbone.py", "r
 def test_every_method_has_its_capabilities():
     assert set(METHOD_INFO) == NAMES
     for name, info in METHOD_INFO.items():
-        assert info.display_name and info.memory_model in {"condensed", "penalty", "time-march"}, name
+        assert info.display_name and info.memory_model in {"condensed", "assembled", "time-march"}, name
         assert info.damped_variant is None or info.damped_variant in NAMES
         assert info.harmonic_balance == (info.memory_model != "time-march"), name
 

@@ -50,6 +50,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._method_info import benchmarked_methods, is_harmonic_balance, method_info
 from .backbone_timing import backbone_with as _backbone
 from .backbone_timing import measure as _measure
 from .backbone_timing import reached_frequency as _reached_frequency
@@ -60,8 +61,8 @@ __all__ = ["compare_methods", "format_table", "write_results", "element_scaling"
 
 log = logging.getLogger(__name__)
 
-#: display names of the methods
-METHOD_NAMES = {"mmshbm": "MMS-HBM", "penalty": "penalty-HBM", "shooting": "shooting"}
+#: display names of the compared methods (:func:`~mmshbm._method_info.benchmarked_methods`)
+METHOD_NAMES = {name: method_info(name).display_name for name in benchmarked_methods()}
 
 # ladders of the resolution parameters: (full, quick)
 _H_LADDER = ((1, 3, 5, 7, 9, 11, 13, 15, 20, 25, 30, 40), (3, 5, 9, 15, 25))
@@ -210,16 +211,17 @@ def _exact_orbit(model, branch, amplitude):
 # ---------------------------------------------------------------------- ladders
 def _ladders(method: str, quick: bool, beam: bool, equal_h: bool) -> list[list[dict]]:
     q = 1 if quick else 0
-    if method == "mmshbm":
+    resolution = method_info(method).resolution
+    if resolution == "harmonics":
         if equal_h:
             return [[{"harmonics": _EQUAL_H}] + [{"harmonics": _EQUAL_H, "n_samples": n} for n in (256, 512)]]
         return [[{"harmonics": H} for H in _H_LADDER[q]]]
-    if method == "penalty":
+    if resolution == "harmonics and penalty":
         Hs = (_EQUAL_H,) if equal_h else _PENALTY_H[q]
         if equal_h:
             return [[{"harmonics": _EQUAL_H, "penalty_factor": f} for f in _PENALTY_FACTORS[q]]]
         return [[{"harmonics": H, "penalty_factor": f} for H in Hs] for f in _PENALTY_FACTORS[q]]
-    if method == "shooting":
+    if resolution == "time steps":
         steps = _BEAM_STEPS[q] if beam else _STEPS[q]
         return [[{"steps_per_period": s} for s in steps]]
     raise ValueError(f"unknown method {method!r}; choose from {sorted(METHOD_NAMES)}")
@@ -227,7 +229,7 @@ def _ladders(method: str, quick: bool, beam: bool, equal_h: bool) -> list[list[d
 
 def _setting(method: str, options: dict) -> str:
     parts = []
-    if method != "shooting":
+    if is_harmonic_balance(method):
         parts.append(f"H={options.get('harmonics', 5)}")
     if "n_samples" in options:
         parts.append(f"N={options['n_samples']}")
@@ -253,7 +255,7 @@ def default_amplitude(model: str) -> float:
 
 
 def compare_methods(model: str = "beam21", amplitude_gaps: float | None = None, target: float = 1e-4,
-                    methods=("mmshbm", "penalty", "shooting"), repeats: int = 3,
+                    methods=None, repeats: int = 3,
                     quick: bool = False) -> list[dict]:
     """Tune each method to ``target`` and measure its cost (module docstring).
 
@@ -267,8 +269,9 @@ def compare_methods(model: str = "beam21", amplitude_gaps: float | None = None, 
         :data:`DEFAULT_AMPLITUDE_GAPS` (oscillator 2, beam 1.5).
     target : float
         Relative frequency error to reach, in (0, 1).
-    methods : sequence of {"mmshbm", "penalty", "shooting"}
-        A method that is not installed is skipped with a warning.
+    methods : sequence of {"mmshbm", "penalty", "shooting"}, optional
+        Default all three (:data:`METHOD_NAMES`). A method that is not installed is
+        skipped with a warning.
     repeats : int
         Timed whole-backbone runs per method (the fastest counts), >= 1.
     quick : bool
@@ -285,6 +288,8 @@ def compare_methods(model: str = "beam21", amplitude_gaps: float | None = None, 
     """
     from .. import _validate as check
 
+    if methods is None:
+        methods = tuple(METHOD_NAMES)
     if isinstance(methods, str):
         methods = (methods,)
     methods = tuple(methods)
@@ -307,8 +312,8 @@ def compare_methods(model: str = "beam21", amplitude_gaps: float | None = None, 
 
     rows = []
     for method in methods:
-        if method == "shooting" and not _available("shooting"):
-            log.warning("shooting is not available: skipped")
+        if not _available(method):
+            log.warning("%s is not available: skipped", method)
             continue
         runs, candidates = [], []
         for ladder in _ladders(method, quick, osc is None, ref.equal_h):
@@ -322,7 +327,7 @@ def compare_methods(model: str = "beam21", amplitude_gaps: float | None = None, 
         solver = branch.solver
         rows.append({
             "model": model, "method": method, "setting": _setting(method, pick.options),
-            "harmonics": int(pick.options.get("harmonics", 0)) if method != "shooting" else 0,
+            "harmonics": int(pick.options.get("harmonics", 0)) if is_harmonic_balance(method) else 0,
             "penalty_factor": pick.options.get("penalty_factor", math.nan),
             "steps_per_period": int(pick.options.get("steps_per_period", 0)),
             "n_samples": int(pick.options.get("n_samples", 0)),
@@ -333,7 +338,8 @@ def compare_methods(model: str = "beam21", amplitude_gaps: float | None = None, 
             "amplitude_gaps": amplitude_gaps, "reference": ref.label, "status": branch.status,
             "settings_tried": len(runs),
         })
-    base = next((r["time_s"] for r in rows if r["method"] == "mmshbm"), None)
+    # the times relative to the method the baselines are compared with
+    base = next((r["time_s"] for r in rows if not method_info(r["method"]).baseline), None)
     if base:
         for r in rows:
             r["time_ratio"] = r["time_s"] / base

@@ -36,6 +36,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import least_squares
 
+from .._method_info import is_harmonic_balance
+
 __all__ = ["fit_contact_stiffness", "ContactFitReport", "backbone_frequencies"]
 
 log = logging.getLogger(__name__)
@@ -157,7 +159,7 @@ def backbone_frequencies(model, amplitudes, harmonics: int = 5, method: str = "m
     cont = {k: options.pop(k) for k in list(options) if k in fields}
     branch = backbone(model, harmonics=harmonics, method=method, max_amplitude=float(A.max()) * (1 + 1e-6),
                       **cont, **options)
-    if method != "shooting":
+    if is_harmonic_balance(method):
         options["harmonics"] = harmonics
     problem = make_problem(model, method, **options)
     copts = ContinuationOptions(**{k: v for k, v in cont.items() if k != "bounds"})

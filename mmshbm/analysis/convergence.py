@@ -27,6 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._method_info import DEFAULT_METHOD
+
 __all__ = ["ConvergenceFit", "local_order", "format_convergence"]
 
 #: relative agreement of the two finest local orders for a reported rate
@@ -178,7 +180,7 @@ def format_convergence(fits: Sequence[ConvergenceFit]) -> str:
             "|f_n - f_inf| est.", "note")
     rows = []
     for fit in fits:
-        fixed = " ".join(f"{k}={v}" for k, v in fit.fixed.items() if k != "method" or v != "mmshbm")
+        fixed = " ".join(f"{k}={v}" for k, v in fit.fixed.items() if k != "method" or v != DEFAULT_METHOD)
         unit = "gap" if fit.unit == "gap" else "m"
         note = "; ".join(n for n in (fit.rate_note, fit.note) if n)
         rows.append((fit.vary, fixed, f"{fit.amplitude:g} {unit}", ",".join(f"{v:g}" for v in fit.values),

@@ -35,6 +35,7 @@ import threading
 import time
 
 from .. import _validate as check
+from .._method_info import DEFAULT_METHOD, is_harmonic_balance
 from .runspec import execute
 
 __all__ = ["open_executor", "run_specs", "auto_chunksize", "plan_chunks", "estimated_cost", "longest_first",
@@ -167,7 +168,7 @@ def estimated_cost(spec) -> float:
     size (the condensation's modes)."""
     coords = getattr(spec, "coords", {}) or {}
     size = float(coords.get("elements", 21) or 21)
-    if getattr(spec, "method", "mmshbm") == "shooting":
+    if not is_harmonic_balance(getattr(spec, "method", DEFAULT_METHOD)):
         return 50.0 * size
     return max(int(getattr(spec, "harmonics", 1) or 1), 1) ** 2.5 * (1.0 + size / 400.0)
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from .._method_info import benchmarked_methods
 from . import common
 
 
@@ -14,7 +15,7 @@ def register(sub) -> None:
                    help="the benchmark model")
     p.add_argument("--target", type=common.positive_float, default=None,
                    help="relative frequency accuracy (default 1e-4)")
-    p.add_argument("--methods", nargs="+", default=None, choices=["mmshbm", "penalty", "shooting"],
+    p.add_argument("--methods", nargs="+", default=None, choices=benchmarked_methods(),
                    help="methods (default all three)")
     p.add_argument("--repeats", type=common.positive_int, default=None, help="timing repeats (default 3)")
     p.add_argument("--amplitude", type=common.positive_float, default=None,

@@ -7,6 +7,7 @@ import functools
 
 import numpy as np
 
+from .._method_info import DEFAULT_METHOD
 from . import common
 
 #: defaults of the study's further parameters: friction coefficient, position of the force
@@ -23,7 +24,7 @@ def run_normal_load(args, params: dict) -> int:
     unknown = sorted(set(params) - {"normal_load", "mu", "at", "band", "force"})
     if unknown:
         raise ValueError(f"the normal-load study takes normal_load, mu, at, band and force, got {unknown}")
-    if args.figure2 or args.model_file or args.methods not in (None, ["mmshbm"]):
+    if args.figure2 or args.model_file or args.methods not in (None, [DEFAULT_METHOD]):
         raise ValueError("the normal-load study runs MMS-HBM on the beam with a tip damper: drop --figure2, "
                          "--model-file and --methods")
     if args.harmonics and len(args.harmonics) > 1:

@@ -23,18 +23,11 @@ from ..model.model import Model
 from ..results.response import FrequencyResponse
 from . import runner
 from .mms.forced import Excitation, harmonic_force
-from .registry import FORCED_ELEMENT_PROBLEMS, check_elements
+from .registry import FORCED_ELEMENT_PROBLEMS, FORCED_FRICTION_PROBLEMS, FORCED_METHODS, check_elements
 
 __all__ = ["frequency_response", "FORCED_METHODS", "make_forced_problem"]
 
 log = logging.getLogger(__name__)
-
-#: method name -> "module:class" of its forced-response problem
-FORCED_METHODS = {
-    "mmshbm": "mmshbm.methods.mms.forced:ForcedResponseProblem",
-    "penalty": "mmshbm.methods.penalty.forced:PenaltyForcedProblem",
-    "shooting": "mmshbm.methods.shooting.forced:ShootingForcedProblem",
-}
 
 #: continuation defaults of a frequency response (scaled units: coefficients in gaps, Ω in ω_1);
 #: branch_point_ds: a change of orientation on a longer step is a jump across a fold (a
@@ -60,9 +53,7 @@ def make_forced_problem(model: Model, force, method: str = "mmshbm", harmonics: 
         check_elements(model, method, forced=True)
         module, cls = FORCED_ELEMENT_PROBLEMS[method].split(":")
     elif getattr(model, "friction", ()):
-        module, cls = {"mmshbm": ("mmshbm.methods.mms.friction_forced", "FrictionForcedProblem"),
-                       "penalty": ("mmshbm.methods.penalty.jenkins", "JenkinsForcedProblem"),
-                       "shooting": ("mmshbm.methods.shooting.friction", "FrictionShootingProblem")}[method]
+        module, cls = FORCED_FRICTION_PROBLEMS[method].split(":")
     problem_class = getattr(importlib.import_module(module), cls)
     options = dict(options or {})
     valid = runner.check_option_names(problem_class, options, what=f"the forced method {method!r}", skip=2)

@@ -102,7 +102,7 @@ def estimate_memory(model, method: str, harmonics: int = 5, n_samples: int | Non
 
     H = int(harmonics)
     if n_samples is None:
-        if memory == "penalty":
+        if memory == "assembled":
             from .penalty.defaults import DEFAULT_PENALTY_FACTOR, penalty_n_samples
 
             n_samples = penalty_n_samples(H, penalty_factor or DEFAULT_PENALTY_FACTOR)
@@ -110,7 +110,7 @@ def estimate_memory(model, method: str, harmonics: int = 5, n_samples: int | Non
             n_samples = default_n_samples(H)
     n_fine = max(512, 8 * int(n_samples))
     grid = 2 * (H + 1) * n_fine
-    if memory == "penalty":
+    if memory == "assembled":
         nnz = int(model.K.nnz)
         return _DOUBLE * (grid + 10 * ((H + 1) * nnz + (H + 1) ** 2))
     band = min(n_l, max(8, int(n_l**0.5)))

@@ -1,7 +1,8 @@
 """The continuation problems of the methods, by name.
 
-``METHODS`` maps a method name to the ``module:class`` of its continuation problem and
-``METHOD_INFO`` to its capabilities (:class:`MethodInfo`; the table lives in the
+``METHODS`` maps a method name to the ``module:class`` of its continuation problem,
+``FORCED_METHODS`` (``FORCED_FRICTION_PROBLEMS`` with friction contacts) to that of its
+forced-response problem, and ``METHOD_INFO`` to its capabilities (:class:`MethodInfo`; the table lives in the
 dependency-free :mod:`mmshbm._method_info`, so that the CLI and the results read it
 without importing the methods); :func:`make_problem` builds a problem (importing only that
 method's module), validating the option names against the class's constructor.
@@ -28,7 +29,8 @@ from .._method_info import (
 from ..model.model import Model
 from .runner import CONTINUATION_FIELDS, check_option_names
 
-__all__ = ["ELEMENT_PROBLEMS", "FORCED_ELEMENT_PROBLEMS", "FORCED_METHOD_ELEMENTS", "METHODS",
+__all__ = ["ELEMENT_PROBLEMS", "FORCED_ELEMENT_PROBLEMS", "FORCED_FRICTION_PROBLEMS", "FORCED_METHODS",
+           "FORCED_METHOD_ELEMENTS", "METHODS",
            "METHOD_ELEMENTS", "METHOD_INFO", "MethodInfo", "backbone_methods", "check_elements",
            "forced_methods", "is_harmonic_balance", "make_problem", "method_info", "method_options"]
 
@@ -41,6 +43,19 @@ METHODS = {
     # damped nonlinear modes: mmshbm.backbone(damped_model) dispatches here
     "epmc": "mmshbm.methods.mms.epmc:EPMCProblem",
     "phase_resonance": "mmshbm.methods.mms.phase_resonance:PhaseResonanceProblem",
+}
+
+#: forced method name -> "module:class" of its forced-response problem
+FORCED_METHODS = {
+    "mmshbm": "mmshbm.methods.mms.forced:ForcedResponseProblem",
+    "penalty": "mmshbm.methods.penalty.forced:PenaltyForcedProblem",
+    "shooting": "mmshbm.methods.shooting.forced:ShootingForcedProblem",
+}
+#: forced method name -> "module:class" of the forced problem of a model with friction contacts
+FORCED_FRICTION_PROBLEMS = {
+    "mmshbm": "mmshbm.methods.mms.friction_forced:FrictionForcedProblem",
+    "penalty": "mmshbm.methods.penalty.jenkins:JenkinsForcedProblem",
+    "shooting": "mmshbm.methods.shooting.friction:FrictionShootingProblem",
 }
 
 _CONTINUATION_FIELDS = CONTINUATION_FIELDS

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from .._method_info import DEFAULT_METHOD
 from .data import _gap, reference_frequencies
 
 log = logging.getLogger(__name__)
@@ -117,7 +118,7 @@ def branch_label(branch) -> str:
     """A short legend label: method, H and elements, e.g. "H5, 21 el."."""
     meta = branch.metadata.get("model", {})
     parts = []
-    if branch.method != "mmshbm":
+    if branch.method != DEFAULT_METHOD:
         parts.append(branch.method)
     if branch.harmonics:
         parts.append(f"H{branch.harmonics}")

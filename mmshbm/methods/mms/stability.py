@@ -42,6 +42,7 @@ import numpy as np
 import scipy.linalg as la
 from scipy.optimize import brentq
 
+from ..._method_info import METHOD_INFO, method_info
 from ...core.special_points import SpecialPoint
 from ...model.contact import admissible_intervals
 from ...model.model import Model
@@ -382,16 +383,15 @@ def branch_stability(branch, tol: float = 1e-6):
     special : list of SpecialPoint
         As :func:`classify`.
     """
+    trivial = method_info(branch.method).floquet_trivial
+    if trivial not in (1, 2):
+        able = sorted(m for m, info in METHOD_INFO.items() if info.floquet_trivial)
+        raise ValueError(f"branch_stability handles backbones of the methods {able}, got {branch.method!r}")
     solver = branch._require_solver()
-    if branch.method == "epmc":
+    if trivial == 1:  # a damped mode's flow
         mu = np.array([solver.floquet_multipliers(u) for u in branch.states])
-        trivial = 1
-    elif branch.method == "mmshbm":
+    else:  # a conservative flow
         mu = np.array([conservative_multipliers(solver, u) for u in branch.states])
-        trivial = 2
-    else:
-        raise ValueError(f"branch_stability handles MMS-HBM backbones ('mmshbm', 'epmc'), "
-                         f"got {branch.method!r}")
     folds = [p.index for p in branch.special_points if p.kind == "fold"]
     stable, special = classify(mu, trivial=trivial, tol=tol, folds=folds)
     return mu, stable, special
