@@ -5,6 +5,7 @@ import json
 import math
 
 import pytest
+from locations import ROOT
 
 from validation import asv_tables
 from validation.__main__ import main
@@ -180,9 +181,8 @@ def test_record_command_selects_what_the_tables_read():
     benchmarks the rows read (asv matches with re.search, on ``name(params)`` for
     parameterized ones)."""
     import re
-    from pathlib import Path
 
-    root = Path(__file__).resolve().parents[1]
+    root = ROOT
     regex = asv_tables.RECORD_BENCH
     for doc in ("docs/validation.md", "docs/benchmarks.md"):
         assert f'--bench "{regex}"' in (root / doc).read_text(), doc

@@ -3,15 +3,15 @@
 model's modes."""
 
 import csv
-from pathlib import Path
 
 import numpy as np
 import pytest
+from locations import DATA as TEST_DATA
 
 from mmshbm.cli import main
 from mmshbm.results.branch import Branch
 
-DATA = Path(__file__).parent / "data" / "fe"
+DATA = TEST_DATA / "fe"
 ABAQUS = [str(DATA / "beam_MASS1.mtx"), str(DATA / "beam_STIF1.mtx")]
 SAME_CANTILEVER = {
     "abaqus": ABAQUS,

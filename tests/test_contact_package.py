@@ -4,16 +4,16 @@ defined once (in mmshbm.core.measures) and give the closed-form values."""
 from __future__ import annotations
 
 import ast
-import pathlib
 
 import numpy as np
 import pytest
+from locations import PACKAGE as PACKAGE_DIR
 from roundoff import assert_roundoff_close
 
 from mmshbm import Model
 from mmshbm.core import measures
 
-PACKAGE = pathlib.Path(__file__).resolve().parents[1] / "mmshbm"
+PACKAGE = PACKAGE_DIR
 
 # ---------------------------------------------------------------------------- defined once
 #: the measures, by every name they had; each may be defined only in core/measures.py

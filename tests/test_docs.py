@@ -3,11 +3,11 @@ installation page states the Python the package requires."""
 
 import doctest
 import re
-from pathlib import Path
 
 import pytest
+from locations import ROOT
 
-DOCS = Path(__file__).parent.parent / "docs"
+DOCS = ROOT / "docs"
 
 
 @pytest.mark.parametrize("name", ["tutorial.md"])

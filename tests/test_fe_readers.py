@@ -5,17 +5,17 @@ exports without densifying, and the optional readers (skipped where not installe
 import importlib.util
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 import scipy.io
 import scipy.sparse as sp
+from locations import DATA as TEST_DATA
 
 import mmshbm
 from mmshbm.model.readers import FEMatrices, ReadError, read_fe
 
-DATA = Path(__file__).parent / "data" / "fe"
+DATA = TEST_DATA / "fe"
 sys.path.insert(0, str(DATA))
 import make_fixtures  # noqa: E402
 

@@ -15,8 +15,9 @@ import ast
 import pathlib
 
 import pytest
+from locations import PACKAGE as PACKAGE_DIR
 
-PACKAGE = pathlib.Path(__file__).resolve().parents[1] / "mmshbm"
+PACKAGE = PACKAGE_DIR
 
 #: prefix of a dotted module name -> layer (the longest prefix wins)
 LAYERS = {

@@ -4,15 +4,15 @@
 from __future__ import annotations
 
 import ast
-import pathlib
 
 import pytest
+from locations import PACKAGE as PACKAGE_DIR
 
 from mmshbm.cli import build_parser
 from mmshbm.methods.frequency_response import FORCED_METHODS
 from mmshbm.methods.registry import METHOD_INFO, METHODS, backbone_methods, forced_methods, method_info
 
-PACKAGE = pathlib.Path(__file__).resolve().parents[1] / "mmshbm"
+PACKAGE = PACKAGE_DIR
 NAMES = set(METHODS)
 #: the modules whose method switches go through the registry
 SWITCHING = ["methods/limits.py", "methods/runner.py", "methods/backbone.py", "results/branch.py",

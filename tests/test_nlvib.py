@@ -15,18 +15,18 @@ frequency reaches its maximum (58.982 Hz at 2.271 mm) and the branch turns back 
 5:1 internal resonance with mode 2 (f2/5 = 56.55 Hz).
 """
 
-from pathlib import Path
 
 import numpy as np
 import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from locations import DATA as TEST_DATA
 
 import mmshbm
 from mmshbm.fe.euler_bernoulli import cantilever_model
 from mmshbm.methods.registry import make_problem
 
-DATA = Path(__file__).parent / "data"
+DATA = TEST_DATA
 L, B, H_SEC, E, RHO, GAP = 0.5, 0.020, 0.0135, 210e9, 7850.0, 1e-3
 K_P = 1e3 * 3 * (E * B * H_SEC**3 / 12) / L**3
 H, N = 5, 1024

@@ -8,11 +8,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from locations import ROOT
 
 import mmshbm
 from mmshbm.cli import build_parser, main
 
-README = " ".join((Path(__file__).parent.parent / "README.md").read_text().split())
+README = " ".join((ROOT / "README.md").read_text().split())
 
 
 def _chain(tmp_path, with_contact=True) -> Path:

@@ -4,6 +4,7 @@ import sys
 
 import numpy as np
 import pytest
+from locations import TESTS
 from matplotlib.figure import Figure
 
 import mmshbm
@@ -131,7 +132,7 @@ def test_a_family_that_turns_back_in_amplitude_after_grazing_is_drawn_as_the_fam
     backbone's line runs through them; only the tongue's excursion is drawn thin."""
     import warnings
 
-    sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
+    sys.path.insert(0, str(TESTS))
     from test_homotopy import _rattling_chain
 
     model = _rattling_chain()

@@ -4,14 +4,14 @@ import os
 import re
 import shlex
 import warnings
-from pathlib import Path
 
 import pytest
+from locations import ROOT
 
 from mmshbm import BranchWarning
 from mmshbm.cli import main
 
-README = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+README = (ROOT / "README.md").read_text()
 
 
 def _python_blocks() -> list[str]:
@@ -70,7 +70,7 @@ def test_quick_start_commands_are_documented():
 def test_readme_is_a_front_door():
     """At most 250 lines, and every page it links to exists."""
     assert len(README.splitlines()) <= 250
-    root = Path(__file__).resolve().parents[1]
+    root = ROOT
     links = re.findall(r"\]\(((?:docs|examples)/[^)#]+)", README)
     assert len(links) >= 10
     assert [link for link in links if not (root / link).exists()] == []

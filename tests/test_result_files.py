@@ -7,17 +7,16 @@ from each file reproduces the stored points."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
+from locations import DATA as TEST_DATA
 
 import mmshbm
 from mmshbm.io import load
 from mmshbm.results.branch import Branch
 from mmshbm.results.response import FrequencyResponse
 
-FILES = Path(__file__).parent / "data" / "results"
+FILES = TEST_DATA / "results"
 VERSIONS = ["v0.2", "main"]
 
 
