@@ -3,22 +3,16 @@ measurements made with a known stiffness."""
 
 import numpy as np
 import pytest
+from shared_models import GAP, H_SEC, B, E, L
 
 import mmshbm
 from mmshbm.analysis.contact_fit import backbone_frequencies
 from mmshbm.analysis.identification import fit_contact_stiffness
 from mmshbm.analysis.measured import MeasuredBackbone
-from mmshbm.fe.euler_bernoulli import cantilever_model
 
-L, B, H_SEC, E, RHO, GAP = 0.5, 0.020, 0.0135, 210e9, 7850.0, 1e-3
 K_S = 3 * (E * B * H_SEC**3 / 12) / L**3
 K_TRUE = 150 * K_S  # a compliant contact element: 3.1e6 N/m
 AMPLITUDES = np.linspace(1.2, 2.0, 9) * GAP  # above grazing, below the first corner
-
-
-@pytest.fixture(scope="module")
-def full_mass():
-    return cantilever_model(L, B, H_SEC, E, RHO, 21, GAP)
 
 
 @pytest.fixture(scope="module")

@@ -3,19 +3,13 @@ the rigid limit of the layer, 10 gaps on the first-mode family, the CLI road."""
 
 import numpy as np
 import pytest
+from shared_models import GAP, H_SEC, B, E, L
 
 import mmshbm
-from mmshbm.fe.euler_bernoulli import cantilever_model
 from mmshbm.harmonic.modal_energy import kinetic_energy_shares
 
-L, B, H_SEC, E, RHO, GAP = 0.5, 0.020, 0.0135, 210e9, 7850.0, 1e-3
 K_S = 3 * (E * B * H_SEC**3 / 12) / L**3  # static tip stiffness of the cantilever (N/m)
 K_P = 1e3 * K_S  # NLvib's penalty spring
-
-
-@pytest.fixture(scope="module")
-def full_mass():
-    return cantilever_model(L, B, H_SEC, E, RHO, 21, GAP)
 
 
 def mode_shares(branch, model, point, n_modes=4, n_samples=64):

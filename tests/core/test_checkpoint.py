@@ -30,11 +30,6 @@ mmshbm.backbone(model, harmonics=5, checkpoint=sys.argv[1], callback=slow)
 
 
 @pytest.fixture(scope="module")
-def beam8():
-    return mmshbm.default_beam().model(8)
-
-
-@pytest.fixture(scope="module")
 def beam_full(beam8):
     """The uninterrupted reference run."""
     return mmshbm.backbone(beam8, harmonics=5)

@@ -9,11 +9,6 @@ import mmshbm
 from mmshbm.harmonic.condense import Condensation, SingularDynamicStiffness
 
 
-@pytest.fixture(scope="module")
-def beam21():
-    return mmshbm.default_beam().model(21)
-
-
 def test_one_dof_closed_form():
     """D_k = k2 − k2²/(k1 + k2 − (kΩ)² m) for the massless-node oscillator."""
     m, k1, k2 = 2.0, 3.0, 5.0

@@ -22,11 +22,6 @@ OMEGAS = 2 * np.pi * np.array([0.0, 45.0, 120.0, 300.0])
 
 
 @pytest.fixture(scope="module")
-def beam21():
-    return mmshbm.default_beam().model(21)
-
-
-@pytest.fixture(scope="module")
 def complete21(beam21):
     return ModalCondensation(beam21, n_modes="all")
 

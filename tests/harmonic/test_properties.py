@@ -1,6 +1,6 @@
 """Property-based tests (hypothesis): identities that must hold for every input.
 
-They extend tests/test_harmonics.py, test_kernels.py and test_fe.py (which check the same
+They extend tests/harmonic/test_harmonics.py, test_kernels.py and test_fe.py (which check the same
 objects at chosen points) with: time-shift equivariance of the transforms and of the
 MMS-HBM residual, the min-form of the proximal map, random sections and meshes for the
 element matrices, and the condensation kernel at random frequencies.
@@ -189,7 +189,7 @@ def test_assembled_beam_has_two_rigid_modes_free_and_none_clamped(n, grading, s)
 @cache
 def _problem(name: str, projection: str = "sampled") -> MMSHBMProblem:
     """Sampled projection by default: the naive loop-over-samples reference is that rule;
-    no pole unknowns (the reference has none; tests/test_poles.py checks them)."""
+    no pole unknowns (the reference has none; tests/methods/test_poles.py checks them)."""
     if name == "oscillator":
         return MMSHBMProblem(OneDofOscillator(1.0, 1.0, 4.0, 1.0).model(), 5, projection=projection,
                              poles=False)

@@ -21,13 +21,12 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from locations import DATA as TEST_DATA
+from shared_models import GAP, H_SEC, B, E, L
 
 import mmshbm
-from mmshbm.fe.euler_bernoulli import cantilever_model
 from mmshbm.methods.registry import make_problem
 
 DATA = TEST_DATA
-L, B, H_SEC, E, RHO, GAP = 0.5, 0.020, 0.0135, 210e9, 7850.0, 1e-3
 K_P = 1e3 * 3 * (E * B * H_SEC**3 / 12) / L**3
 H, N = 5, 1024
 TIP = 40
@@ -85,11 +84,6 @@ def solve_at_amplitude(problem, u, amplitude, max_iter=20):
             return u
         previous = step
     raise AssertionError(f"no convergence at amplitude {amplitude}")
-
-
-@pytest.fixture(scope="module")
-def full_mass():
-    return cantilever_model(L, B, H_SEC, E, RHO, 21, GAP)
 
 
 def test_penalty_hbm_reproduces_nlvib_to_the_first_corner(full_mass):

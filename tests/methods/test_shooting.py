@@ -19,11 +19,6 @@ from mmshbm.methods.shooting.conservative import ShootingProblem
 OSC = OneDofOscillator(m=1.0, k1=1.0, k2=4.0, gap=1.0)
 
 
-@pytest.fixture(scope="module")
-def beam8():
-    return mmshbm.default_beam().model(8)
-
-
 def discrete_linear_frequency(f: float, N: int) -> float:
     """Frequency (Hz) of the trapezoidal rule's periodic orbit of a linear oscillator of
     frequency f with N steps per period: tan(ω̃h/2) = ωh/2 with ω̃h = 2π/N."""

@@ -10,11 +10,6 @@ from mmshbm.model.damping import modal_damping_ratios
 from mmshbm.results.branch import rebuild_model
 
 
-@pytest.fixture(scope="module")
-def beam8():
-    return mmshbm.default_beam().model(8)
-
-
 def _modal_matrix(model):
     freqs, modes = model.linear_modes(len(model.l))
     return 2 * np.pi * freqs, modes.T @ (model.damping @ modes)

@@ -1,6 +1,6 @@
 """Bad input at every public entry point: the right exception, and a message naming the value.
 
-Run as a script (``python tests/test_validation.py``) to print the table "bad input →
+Run as a script (``python tests/package/test_validation.py``) to print the table "bad input →
 message" of docs/reliability.md from these very cases.
 """
 

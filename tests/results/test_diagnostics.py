@@ -12,11 +12,6 @@ from mmshbm.results.branch import Branch
 from mmshbm.results.diagnostics import CheckThresholds, _coefficients, check_branch, mode_shares
 
 
-@pytest.fixture(scope="module")
-def beam21():
-    return mmshbm.default_beam().model(21)
-
-
 def _run(*args, **kwargs):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", BranchWarning)

@@ -34,7 +34,7 @@ uncoupled substructures) are taken one after the other with zero-length phases b
 Contact DOFs must be massless (``model.require_massless_contacts``: a ValueError names
 ``with_contact_layer`` and ``with_massless_contact``).
 
-Facts this module relies on (derived here, checked in ``tests/test_exact.py``)
+Facts this module relies on (derived here, checked in ``tests/methods/test_exact.py``)
 -------------------------------------------------------------------------------
 * At fixed ``q_l`` the contact problem of the massless DOFs is a scalar LCP whose
   solution is ``λ = k_c max(0, -h(q_l))`` with the *free gap* ``h(q_l) = gap + a·q_l``

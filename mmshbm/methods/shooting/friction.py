@@ -18,7 +18,7 @@ K_eff q = rhs ± s w (both matrices factored once per Ω). The periodic orbit: N
 the period map of the state (q_l, q_l', u) with a forward-difference Jacobian (the map is
 piecewise affine: the differences are exact away from a change of the step's branch).
 Error against the exact orbit: O(Δt²) on smooth phases, the switches located to within a
-step (tests/test_friction_shooting.py measures the rate).
+step (tests/friction/test_friction_shooting.py measures the rate).
 """
 
 from __future__ import annotations

@@ -18,7 +18,7 @@ the combination whose inequalities hold (λ >= 0 or g_N >= 0; |g| <= S; the node
 against the force): a 2 × 2 linear solve each, the previous step's state tried first. This
 is the exact proximal point of the node's laws over the step. Periodic orbits: Newton on
 the period map of (q_l, q_l', u_t), forward differences. No exact reference exists for this
-case; tests/test_friction_impact.py checks the limits (μ = 0 is the impact model, a stop
+case; tests/friction/test_friction_impact.py checks the limits (μ = 0 is the impact model, a stop
 that is never reached is constant-load friction) and the convergence in Δt.
 """
 

@@ -1,4 +1,4 @@
-"""Write the result files of tests/test_result_files.py with whichever mmshbm is on
+"""Write the result files of tests/results/test_result_files.py with whichever mmshbm is on
 PYTHONPATH: ``PYTHONPATH=<tree> python write_files.py <tag> <folder>`` (tags used: ``v0.2``,
 the tree of the 0.2.0 commit; ``main``, the tree before results shared one base class)."""
 
