@@ -173,6 +173,27 @@ def test_capabilities_not_offered_are_none(models):
     assert shooting.H == 0 and shooting.solver_settings() == {"N": shooting.N, "mode": 1}
 
 
+#: the numbers a resumed backbone of each method must match (its checkpoint's "solver" entry)
+SETTINGS = {"mmshbm": {"H", "N", "r", "mode"}, "penalty": {"H", "N", "mode", "penalty_stiffness"},
+            "penalty-reduced": {"H", "N", "mode", "penalty_stiffness"}, "shooting": {"N", "mode"},
+            "epmc": {"H", "N", "mode"}}
+
+
+@pytest.mark.parametrize("method", sorted(SETTINGS))
+def test_solver_settings_name_what_a_resume_must_match(models, method):
+    """Each problem class names its settings (setting_names): a class that forgot one
+    would let a checkpoint resume with another penalty stiffness, proximal parameter or
+    mode. The pole scaling is MMS-HBM's own convention, not a member of the base."""
+    beam, damped, _ = models
+    options = {} if method == "shooting" else {"harmonics": 3}
+    p = make_problem(damped if method == "epmc" else beam, method, **options)
+    settings = p.solver_settings()
+    assert set(settings) == SETTINGS[method]
+    assert all(isinstance(v, int | float) and not isinstance(v, bool) for v in settings.values())
+    assert p.state_convention() == ({"pole_scaling": "force-or-motion"} if method == "mmshbm" else {})
+    assert "pole_scaling" not in vars(protocol.ContinuationProblemBase)
+
+
 class Circle:
     """x² + y² = 1: a problem with the required protocol only."""
 

@@ -8,6 +8,7 @@ import ast
 import pytest
 from locations import PACKAGE as PACKAGE_DIR
 
+from mmshbm._method_info import benchmarked_methods
 from mmshbm.cli import build_parser
 from mmshbm.methods.frequency_response import FORCED_METHODS
 from mmshbm.methods.registry import METHOD_INFO, METHODS, backbone_methods, forced_methods, method_info
@@ -47,10 +48,39 @@ def test_no_method_name_switches_outside_the_registry():
     assert sum(len(v) for v in found.values()) <= 5, found
 
 
+def _dispatch_tables(rel: str) -> list[int]:
+    """Lines of dict literals keyed by two or more method names with "module:class" values."""
+    lines = []
+    for node in ast.walk(ast.parse((PACKAGE / rel).read_text())):
+        if isinstance(node, ast.Dict):
+            keys = [k.value for k in node.keys if isinstance(k, ast.Constant)]
+            paths = [v.value for v in node.values if isinstance(v, ast.Constant) and isinstance(v.value, str)]
+            if sum(k in NAMES for k in keys) >= 2 and any(":" in v for v in paths):
+                lines.append(node.lineno)
+    return lines
+
+
+def test_method_switches_in_the_whole_package_read_the_registry():
+    """Outside the registry (and its table in _method_info.py) at most five comparisons
+    of a method name, and no table of problem classes by method name."""
+    modules = [str(p.relative_to(PACKAGE)) for p in sorted(PACKAGE.rglob("*.py"))]
+    modules = [m for m in modules if m not in ("methods/registry.py", "_method_info.py")]
+    found = {rel: lines for rel in modules if (lines := _name_comparisons(rel) + _dispatch_tables(rel))}
+    assert sum(len(v) for v in found.values()) <= 5, found
+
+
+def test_the_probes_see_a_switch_and_a_table(tmp_path, monkeypatch):
+    (tmp_path / "probe.py").write_text('T = {"mmshbm": "a.b:C", "penalty": "a.c:D"}\n'
+                                       'def f(method):\n    return method == "shooting"\n')
+    monkeypatch.setitem(globals(), "PACKAGE", tmp_path)
+    assert _name_comparisons("probe.py") == [3] and _dispatch_tables("probe.py") == [1]
+
+
 @pytest.mark.parametrize("command, option, expected", [
     ("backbone", "--method", backbone_methods()),
     ("study", "--methods", backbone_methods()),
     ("frf", "--method", forced_methods()),
+    ("bench", "--methods", benchmarked_methods()),
 ])
 def test_cli_method_choices_come_from_the_registry(command, option, expected):
     parser = build_parser()
@@ -58,6 +88,20 @@ def test_cli_method_choices_come_from_the_registry(command, option, expected):
     action = next(a for a in sub.choices[command]._actions if option in a.option_strings)
     assert list(action.choices) == expected
     assert "penalty-reduced" in backbone_methods() and "mmshbm" in expected
+
+
+def test_stability_and_bench_read_capabilities():
+    from mmshbm.analysis.benchmarking import METHOD_NAMES
+    from mmshbm.methods.mms.stability import branch_stability
+
+    assert benchmarked_methods() == ["mmshbm", "penalty", "shooting"] == list(METHOD_NAMES)
+    assert {m for m, info in METHOD_INFO.items() if info.floquet_trivial} == {"mmshbm", "epmc"}
+
+    class PenaltyBranch:
+        method = "penalty"
+
+    with pytest.raises(ValueError, match=r"methods \['epmc', 'mmshbm'\], got 'penalty'"):
+        branch_stability(PenaltyBranch())
 
 
 def test_capabilities_of_the_switches():
