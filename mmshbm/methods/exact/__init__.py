@@ -35,7 +35,7 @@ Contact DOFs must be massless (``model.require_massless_contacts``: a ValueError
 ``with_contact_layer`` and ``with_massless_contact``).
 
 Facts this module relies on (derived here, checked in ``tests/methods/test_exact.py``)
--------------------------------------------------------------------------------
+--------------------------------------------------------------------------------------
 * At fixed ``q_l`` the contact problem of the massless DOFs is a scalar LCP whose
   solution is ``λ = k_c max(0, -h(q_l))`` with the *free gap* ``h(q_l) = gap + a·q_l``
   (the gap the open condensation would give, ``a = -K_lc K_cc⁻¹ w_c``) and the condensed
