@@ -5,6 +5,7 @@ import csv
 from pathlib import Path
 
 import pytest
+from locations import ROOT
 
 from mmshbm.cli import main
 from validation import tables as vt
@@ -130,7 +131,7 @@ def test_published_blocks_are_the_generators_output():
     the committed asv record gives (rerunning the generator changes nothing)."""
     from validation import asv_tables
 
-    root = Path(__file__).resolve().parents[1]
+    root = ROOT
     text = (root / "docs" / "validation.md").read_text()
     for name in ("grid", "corpus", "exact"):
         begin, end = vt.markers(name)
