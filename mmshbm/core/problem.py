@@ -40,7 +40,7 @@ runners call them directly and never probe a problem for attributes.
     with the amplitude pinned (:mod:`mmshbm.core.pinned`); None: the amplitude is
     differenced from ``monitor(u)["amplitude"]``.
 :class:`FamilyEvents`
-    What the jumps over internal-resonance tongues use (:mod:`mmshbm.core.family`):
+    What the jumps over internal-resonance tongues use (:mod:`mmshbm.family.stages`):
     ``frequency_of(u)`` (Hz, no evaluation), ``family_frequency_limit()`` (Hz, where the
     starting mode's backbone tends far above the gaps: the far search's window),
     ``family_frequency_ceiling()`` (Hz, above which no landing of the harmonic ladder
@@ -51,7 +51,7 @@ runners call them directly and never probe a problem for attributes.
     (None where ``fundamental=True`` names no ladder of its own),
     ``homotopy_landing(A, A_max, tol=, max_iter=, admissible=) -> (u, f_start)`` (the orbit
     reached by a homotopy from another family's orbit of frequency f_start, Hz;
-    :mod:`mmshbm.core.family_landings`), ``with_frequency(u, f)`` (``u`` with its
+    :mod:`mmshbm.family.landings`), ``with_frequency(u, f)`` (``u`` with its
     frequency set to f, Hz), ``scan_starts(u_front, A_front, A) -> list`` (states to
     start Newton from at amplitude A, frequency aside) and ``leads_fundamental(u) ->
     bool`` (the starting mode holds the largest share of the fundamental harmonic's

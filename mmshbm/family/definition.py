@@ -1,0 +1,46 @@
+"""The definition of the first nonlinear mode's family, as a predicate on one orbit.
+
+docs/resonances.md states it: a periodic orbit at amplitude A belongs to the family of the
+starting mode when its fundamental harmonic carries at least ``family_share`` of the
+period-mean kinetic energy,
+
+    s(u) = T_1 / Σ_{k>=1} T_k  >=  family_share,
+
+where T_k is the kinetic energy of harmonic k (all DOFs together). The measure is the
+record ``"fundamental_share"`` of a converged point (MMS-HBM:
+:meth:`mmshbm.methods.mms.family.FamilyMixin.fundamental_share`). It depends on the orbit
+only: not on how the continuation reached it, and not on the time origin or the
+direction of time (each T_k is invariant under a shift t -> t + τ, which multiplies the
+complex amplitude of harmonic k by e^{ikΩτ}), and not on a common scale of all DOFs.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+__all__ = ["FAMILY_RECORD", "family_value", "on_family"]
+
+#: the record that decides membership of the family: the fundamental harmonic's share of
+#: the period-mean kinetic energy (MMS-HBM's ``fundamental_share``)
+FAMILY_RECORD = "fundamental_share"
+
+
+def family_value(rec: Mapping) -> float | None:
+    """The family measure of a point's record: ``rec["fundamental_share"]``, or the
+    starting mode's share ``rec["mode_share"]`` for records without it (branches saved by
+    earlier versions); None when the record has neither."""
+    value = rec.get(FAMILY_RECORD)
+    if value is None:
+        value = rec.get("mode_share")
+    return None if value is None else float(value)
+
+
+def on_family(rec: Mapping, family_share: float) -> bool | None:
+    """The definition's predicate: whether the orbit with record ``rec`` belongs to the
+    first mode's family, i.e. its fundamental share (:func:`family_value`) is at least
+    ``family_share`` (0..1). None when the record carries no family measure (a problem
+    that does not record it: every orbit counts)."""
+    value = family_value(rec)
+    if value is None:
+        return None
+    return bool(value >= family_share)
