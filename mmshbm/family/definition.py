@@ -6,7 +6,11 @@ period-mean kinetic energy,
 
     s(u) = T_1 / Σ_{k>=1} T_k  >=  family_share,
 
-where T_k is the kinetic energy of harmonic k (all DOFs together). The measure is the
+where T_k is the kinetic energy of harmonic k (all DOFs together), and its frequency lies
+in the first mode's band, from the open-contact linear mode's to the first mode's with
+every contact held (contacts only stiffen the structure; for one contact the band ends
+below the second open-contact mode, by interlacing, which separates the second mode's
+orbits whose fundamental also dominates). The measure is the
 record ``"fundamental_share"`` of a converged point (MMS-HBM:
 :meth:`mmshbm.methods.mms.family.FamilyMixin.fundamental_share`). It depends on the orbit
 only: not on how the continuation reached it, and not on the time origin or the
@@ -16,6 +20,7 @@ complex amplitude of harmonic k by e^{ikΩτ}), and not on a common scale of all
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 __all__ = ["FAMILY_RECORD", "family_value", "on_family"]
@@ -35,12 +40,18 @@ def family_value(rec: Mapping) -> float | None:
     return None if value is None else float(value)
 
 
-def on_family(rec: Mapping, family_share: float) -> bool | None:
+def on_family(rec: Mapping, family_share: float, band: tuple[float, float] | None = None) -> bool | None:
     """The definition's predicate: whether the orbit with record ``rec`` belongs to the
-    first mode's family, i.e. its fundamental share (:func:`family_value`) is at least
-    ``family_share`` (0..1). None when the record carries no family measure (a problem
-    that does not record it: every orbit counts)."""
+    first mode's family: its fundamental share (:func:`family_value`) is at least
+    ``family_share`` (0..1) and, given the first mode's frequency ``band`` (lo, hi) in Hz
+    (:func:`mmshbm.family.deflation.frequency_band`), its ``rec["frequency"]`` lies in it.
+    None when the record carries no family measure (a problem that does not record it:
+    every orbit counts)."""
     value = family_value(rec)
     if value is None:
         return None
+    if band is not None:
+        f = float(rec.get("frequency", math.nan))
+        if not band[0] <= f <= band[1]:
+            return False
     return bool(value >= family_share)

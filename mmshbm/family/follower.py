@@ -28,6 +28,7 @@ from ..core.special_points import SpecialPoint
 from ..core.status import Status
 from ..core.steps import _pinned_monitor
 from .definition import FAMILY_RECORD, family_value
+from .deflation import FamilyStarts, search_beyond
 from .end import FamilyEnded
 from .guard import FamilyGuard
 from .stages import jump
@@ -49,10 +50,15 @@ class FamilyFollower:
         amplitude bound and the options of the backfill.
     follow : callable
         The path follower of the backfill (:func:`mmshbm.core.continuation.continue_branch`).
+    starts : FamilyStarts, optional
+        The starts of the deflated search (``family.search == "deflated"``); default
+        :class:`~mmshbm.family.deflation.ProblemStarts` of the problem.
     """
 
-    def __init__(self, family: FamilyOptions, options: ContinuationOptions, follow: Callable):
+    def __init__(self, family: FamilyOptions, options: ContinuationOptions, follow: Callable,
+                 starts: FamilyStarts | None = None):
         self.family = family
+        self.starts = starts
         self.options = options
         self.follow = follow
         self.guard = FamilyGuard(family.family_share, family.max_excursion)
@@ -102,12 +108,20 @@ class FamilyFollower:
         point (:func:`_backfill`); the points in increasing amplitude, the landing last."""
         opt, guard = self.options, self.guard
         try:
-            u_j, nit_j, hist_j, rec_j, t_j, target, i_from = jump(
-                problem, guard, points, records, step=self.family.jump_step, amplitude_max=self.amplitude_max,
-                newton_tol=opt.newton_tol, max_newton=opt.max_newton, monitor=_pinned_monitor,
-                coexisting=lambda u, t, a, rec: _coexisting(self.follow, problem, u, t, a, rec, opt,
-                                                            self.family, self.amplitude_max),
-                descend=lambda u, t, a, a_to: _descend(self.follow, problem, u, t, a, a_to, opt, self.family))
+            if self.family.search == "deflated":
+                u_j, nit_j, hist_j, rec_j, t_j, target, i_from = search_beyond(
+                    problem, guard, points, records, options=self.family, amplitude_max=self.amplitude_max,
+                    newton_tol=opt.newton_tol, max_newton=opt.max_newton, monitor=_pinned_monitor,
+                    starts=self.starts)
+            else:
+                u_j, nit_j, hist_j, rec_j, t_j, target, i_from = jump(
+                    problem, guard, points, records, step=self.family.jump_step,
+                    amplitude_max=self.amplitude_max, newton_tol=opt.newton_tol, max_newton=opt.max_newton,
+                    monitor=_pinned_monitor,
+                    coexisting=lambda u, t, a, rec: _coexisting(self.follow, problem, u, t, a, rec, opt,
+                                                                self.family, self.amplitude_max),
+                    descend=lambda u, t, a, a_to: _descend(self.follow, problem, u, t, a, a_to, opt,
+                                                           self.family))
         except FamilyEnded as err:
             end = err.end
             raise RelocationFailed(end.detail(), kind=Status.FAMILY_ENDED if end.ended else None,

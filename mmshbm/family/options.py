@@ -51,10 +51,12 @@ class FamilyOptions:
         Orbits the deflated search finds at one target before it goes on to the next
         (each found orbit is deflated, so Newton from the same start must go elsewhere).
         Default 3.
-    deflation_shift : float
-        σ of the deflation operator M(u) = Π_k (‖u − u_k‖⁻² + σ) (dimensionless, in the
-        scaled unknowns): how far from a known orbit the deflated residual returns to
-        the undeflated one's scale. Default 1.
+    band_slack : float
+        Relative margin of the first mode's frequency band (the definition's second
+        condition, :func:`mmshbm.family.deflation.frequency_band`): an orbit of the
+        family has its frequency between the linear mode's and the first mode's with
+        every contact held, each widened by this (the truncated Fourier series of a
+        contact orbit can lie slightly outside). Default 0.01.
     """
 
     family_share: float = 0.5
@@ -64,7 +66,7 @@ class FamilyOptions:
     search: str = "stages"
     max_targets: int = 12
     max_roots: int = 3
-    deflation_shift: float = 1.0
+    band_slack: float = 0.01
 
     def __post_init__(self):
         share = check.real_number("family_share", self.family_share)
@@ -77,4 +79,4 @@ class FamilyOptions:
             raise ValueError(f"search must be one of {SEARCHES}, got {self.search!r}")
         check.integer("max_targets", self.max_targets, minimum=1)
         check.integer("max_roots", self.max_roots, minimum=1)
-        check.positive("deflation_shift", self.deflation_shift)
+        check.non_negative("band_slack", self.band_slack)

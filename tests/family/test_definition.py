@@ -11,8 +11,8 @@ from mmshbm.family.definition import FAMILY_RECORD, family_value, on_family
 
 @pytest.fixture(scope="module")
 def beam7():
-    """The default beam on 21 elements at H = 7, to 3 gaps (past grazing, before the
-    first tongue)."""
+    """The default beam on 21 elements at H = 7, to 3 gaps (past grazing and the 6:1
+    and 5:1 tongues)."""
     model = mmshbm.default_beam().model(21)
     return mmshbm.backbone(model, harmonics=7, max_amplitude=3 * model.gap)
 
@@ -87,3 +87,30 @@ def test_the_predicate_reads_the_share_with_its_threshold():
     assert on_family({FAMILY_RECORD: np.nextafter(0.5, 0.0)}, 0.5) is False
     assert on_family({"amplitude": 1.0}, 0.5) is None
     assert family_value({"mode_share": 0.7}) == 0.7 and on_family({"mode_share": 0.7}, 0.6) is True
+
+
+def test_an_orbit_outside_the_first_modes_band_is_not_of_the_family():
+    """Condition 2: a dominant fundamental above the band (the second mode's own orbits)
+    or below it fails; inside, the share decides."""
+    band = (45.0, 75.0)
+    assert on_family({FAMILY_RECORD: 0.99, "frequency": 290.0}, 0.5, band) is False
+    assert on_family({FAMILY_RECORD: 0.99, "frequency": 44.0}, 0.5, band) is False
+    assert on_family({FAMILY_RECORD: 0.99, "frequency": 60.0}, 0.5, band) is True
+    assert on_family({FAMILY_RECORD: 0.4, "frequency": 60.0}, 0.5, band) is False
+
+
+def test_the_band_ends_below_the_second_open_mode_for_one_contact(beam7):
+    """Interlacing (one contact: the held structure is a rank-one stiffening of the open
+    one): f₁ ≤ f₁^held ≤ f₂. Checked on the beam against its open-contact eigenfrequencies
+    computed independently by scipy.linalg.eigh of (K_ll − K_lc K_cc⁻¹ K_cl, M_ll)."""
+    import scipy.linalg as la
+
+    from mmshbm.family.deflation import frequency_band
+
+    model = beam7.solver.model
+    dense = {k: (v.toarray() if hasattr(v, "toarray") else np.asarray(v)) for k, v in model.blocks.items()}
+    K = dense["K_ll"] - dense["K_lc"] @ np.linalg.solve(dense["K_cc"], dense["K_lc"].T)
+    f = np.sqrt(la.eigh(K, dense["M_ll"], eigvals_only=True)[:2]) / (2 * np.pi)
+    lo, hi = frequency_band(beam7.solver, [{"frequency": f[0]}], 0.0)
+    assert len(model.contacts) == 1
+    assert lo == f[0] and f[0] < hi <= f[1] * (1 + 1e-9)
