@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
-__all__ = ["FAMILY_RECORD", "family_value", "on_family"]
+__all__ = ["FAMILY_RECORD", "family_value", "frequency_band", "on_family"]
 
 #: the record that decides membership of the family: the fundamental harmonic's share of
 #: the period-mean kinetic energy (MMS-HBM's ``fundamental_share``)
@@ -44,7 +44,7 @@ def on_family(rec: Mapping, family_share: float, band: tuple[float, float] | Non
     """The definition's predicate: whether the orbit with record ``rec`` belongs to the
     first mode's family: its fundamental share (:func:`family_value`) is at least
     ``family_share`` (0..1) and, given the first mode's frequency ``band`` (lo, hi) in Hz
-    (:func:`mmshbm.family.deflation.frequency_band`), its ``rec["frequency"]`` lies in it.
+    (:func:`frequency_band`), its ``rec["frequency"]`` lies in it.
     None when the record carries no family measure (a problem that does not record it:
     every orbit counts)."""
     value = family_value(rec)
@@ -55,3 +55,16 @@ def on_family(rec: Mapping, family_share: float, band: tuple[float, float] | Non
         if not band[0] <= f <= band[1]:
             return False
     return bool(value >= family_share)
+
+
+def frequency_band(problem, recs: list, slack: float) -> tuple[float, float]:
+    """The first mode's frequency band (Hz), widened by ``slack`` (relative): from the
+    branch's first point (the linear mode: contacts only stiffen the structure) to the
+    problem's ``family_frequency_ceiling`` (the first mode with every contact DOF held;
+    for one contact, by interlacing, at most the second open-contact mode). (0, inf)
+    where the problem offers neither."""
+    f0 = float(recs[0].get("frequency", math.nan)) if recs else math.nan
+    lo = f0 * (1.0 - slack) if math.isfinite(f0) else 0.0
+    ceiling = problem.family_frequency_ceiling or problem.family_frequency_limit
+    hi = float(ceiling()) * (1.0 + slack) if ceiling is not None else math.inf
+    return lo, hi

@@ -13,7 +13,7 @@ goes to another orbit or fails. With d the Newton step of G, the Newton step of 
 d / (1 − ∇log M·d) (Sherman–Morrison on the rank-one change of the Jacobian), so one
 bordered solve per iteration serves both. At the first target where orbits of the
 family are found (:func:`mmshbm.family.definition.on_family` with the first mode's
-frequency band, :func:`frequency_band`), the one of largest fundamental share is the
+frequency band, :func:`~mmshbm.family.definition.frequency_band`), the one of largest fundamental share is the
 landing (the backbone rule of docs/resonances.md); the follower fills the family back
 down from it to the frontier. When none is found up to the last target the search ends
 the branch with a :class:`~mmshbm.family.end.FamilyEnd` that lists every solve.
@@ -32,13 +32,13 @@ import numpy as np
 from ..core.bordered import bordered_solve
 from ..core.pinned import PinnedFailure, StartOutside, amplitude_and_gradient
 from ..core.problem import as_problem
-from .definition import family_value, on_family
+from .definition import family_value, frequency_band, on_family
 from .end import Attempt, FamilyEnd, FamilyEnded, crossing, turned_back
 from .guard import FamilyGuard
 from .options import FamilyOptions
 
 __all__ = ["POWER", "SHIFT", "FamilyStarts", "KnownOrbit", "ProblemStarts", "deflated_solve", "deflation",
-           "frequency_band", "search_beyond"]
+           "search_beyond"]
 
 log = logging.getLogger(__name__)
 
@@ -176,21 +176,13 @@ def _deflated_norm(problem, u: np.ndarray, amplitude: float, known: list, shift:
     return deflation(u, known, shift)[0] * max(r, abs(A / amplitude - 1.0))
 
 
-def frequency_band(problem, recs: list, slack: float) -> tuple[float, float]:
-    """The first mode's frequency band (Hz), widened by ``slack`` (relative): from the
-    branch's first point (the linear mode: contacts only stiffen the structure) to the
-    problem's ``family_frequency_ceiling`` (the first mode with every contact DOF held;
-    for one contact, by interlacing, at most the second open-contact mode). (0, inf)
-    where the problem offers neither."""
-    f0 = float(recs[0].get("frequency", math.nan)) if recs else math.nan
-    lo = f0 * (1.0 - slack) if math.isfinite(f0) else 0.0
-    ceiling = problem.family_frequency_ceiling or problem.family_frequency_limit
-    hi = float(ceiling()) * (1.0 + slack) if ceiling is not None else math.inf
-    return lo, hi
-
-
 class FamilyStarts(Protocol):
     """What the deflated search starts Newton from (supplied by composition)."""
+
+    def landings(self, us: list, recs: list, guard: FamilyGuard,
+                 amplitude_max: float) -> list[tuple[str, np.ndarray, float]]:
+        """(name, u0, amplitude) per start that picks its own amplitude (m) beyond the
+        frontier (MMS-HBM: the resonance passed with the resonant harmonic filtered out)."""
 
     def starts(self, us: list, recs: list, guard: FamilyGuard, amplitude: float,
                amplitude_max: float) -> list[tuple[str, np.ndarray]]:
@@ -209,6 +201,30 @@ class ProblemStarts:
 
     def __init__(self, problem):
         self.problem = problem
+        self._landed = []  # (u0, amplitude) of the landings of the current search
+
+    def landings(self, us: list, recs: list, guard: FamilyGuard,
+                 amplitude_max: float) -> list[tuple[str, np.ndarray, float]]:
+        """The problem's own landing (``family_landing``) from each origin of the guard,
+        past the excursion that followed the frontier."""
+        p = self.problem
+        self._landed = []
+        if p.family_landing is None:
+            return []
+        i = guard.frontier_index
+        frontier = float(recs[i]["amplitude"])
+        excursion = us[i + 1:]
+        out = []
+        for origin in guard.origins(lambda j: float(recs[j]["amplitude"])):
+            try:
+                u0, target = p.family_landing(us[origin], recs[origin], excursion, amplitude_max, frontier)
+            except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as err:
+                log.debug("no landing from %d: %s", origin, err)
+                continue
+            if frontier < target <= amplitude_max:
+                out.append(("filtered landing", u0, float(target)))
+                self._landed.append((u0, float(target)))
+        return out
 
     def starts(self, us: list, recs: list, guard: FamilyGuard, amplitude: float,
                amplitude_max: float) -> list[tuple[str, np.ndarray]]:
@@ -216,6 +232,10 @@ class ProblemStarts:
         i = guard.frontier_index
         A_f = float(recs[i]["amplitude"])
         out = [("extrapolated", extrapolated(us, recs, guard.clean, amplitude))]
+        for u_l, A_l in self._landed:  # between the frontier and a landing beyond
+            if A_f < amplitude < A_l:
+                s = (amplitude - A_f) / (A_l - A_f)
+                out.append(("toward the landing", (1.0 - s) * us[i] + s * u_l))
         if p.scaled_state is not None and A_f > 0:
             out.append(("scaled", p.scaled_state(us[i], amplitude / A_f)))
             origin = guard.origins(lambda j: float(recs[j]["amplitude"]))[0]
@@ -290,10 +310,12 @@ def search_beyond(problem, guard: FamilyGuard, us: list, recs: list, *, options:
             return band[0] <= frequency_of(u) <= band[1]
 
     tried = []
-    targets = _targets(frontier, amplitude_max, options)
+    landings = starts.landings(us, recs, guard, amplitude_max)
+    targets = sorted(set(_targets(frontier, amplitude_max, options)) | {a for _, _, a in landings})
     for target in targets:
         found = []  # (u, iterations, history, record, tangent) of every orbit found at target
-        for name, u0 in starts.starts(us, recs, guard, target, amplitude_max):
+        own = [(name, u0) for name, u0, a in landings if a == target]
+        for name, u0 in own + starts.starts(us, recs, guard, target, amplitude_max):
             while len(found) < options.max_roots:
                 try:
                     u, nit, hist, t = deflated_solve(

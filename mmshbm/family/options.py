@@ -53,7 +53,7 @@ class FamilyOptions:
         Default 3.
     band_slack : float
         Relative margin of the first mode's frequency band (the definition's second
-        condition, :func:`mmshbm.family.deflation.frequency_band`): an orbit of the
+        condition, :func:`mmshbm.family.definition.frequency_band`): an orbit of the
         family has its frequency between the linear mode's and the first mode's with
         every contact held, each widened by this (the truncated Fourier series of a
         contact orbit can lie slightly outside). Default 0.01.

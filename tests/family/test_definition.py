@@ -105,7 +105,7 @@ def test_the_band_ends_below_the_second_open_mode_for_one_contact(beam7):
     computed independently by scipy.linalg.eigh of (K_ll − K_lc K_cc⁻¹ K_cl, M_ll)."""
     import scipy.linalg as la
 
-    from mmshbm.family.deflation import frequency_band
+    from mmshbm.family.definition import frequency_band
 
     model = beam7.solver.model
     dense = {k: (v.toarray() if hasattr(v, "toarray") else np.asarray(v)) for k, v in model.blocks.items()}

@@ -77,6 +77,9 @@ class _Start:
     def __init__(self, y):
         self.y = y
 
+    def landings(self, us, recs, guard, amplitude_max):
+        return []
+
     def starts(self, us, recs, guard, amplitude, amplitude_max):
         return [("fixed", np.array([amplitude - 2.0, self.y]))]
 
