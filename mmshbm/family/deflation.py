@@ -53,6 +53,12 @@ SHIFT = 1.0
 #: a round-off bound of Newton's convergence, far below any two distinct orbits
 _SAME_ORBIT_ROUNDOFF = 1e-8
 
+#: the trust region of Newton's iterates: the first mode's frequency band widened by this
+#: factor either way (a numerical safeguard, not an acceptance rule: the path to an orbit
+#: in the band may leave it, but an iterate far beyond it evaluates harmonics above the
+#: modes the condensation kept)
+_TRUST_FACTOR = 2.0
+
 #: Newton's step halvings per iteration (the last step, λ = 1/32, is taken whatever its
 #: residual, as in :func:`mmshbm.core.pinned.solve_at_amplitude`)
 _HALVINGS = 6
@@ -191,13 +197,14 @@ class FamilyStarts(Protocol):
 
 class ProblemStarts:
     """The fixed starts of the deflated search, from the branch and the problem's
-    capabilities: the frontier orbit extrapolated in amplitude (a polynomial of degree
-    <= 2 through the last family points), the frontier orbit scaled to the target
-    (``scaled_state``: the homogeneous limit far above the gap), the same from the family
-    point of largest share below the frontier (before an internal resonance drew energy
-    from it; :meth:`FamilyGuard.origins`), the method's family predictor (MMS-HBM: along
-    an auxiliary low-harmonic branch) and the linear mode at the target
-    (``linear_mode_point``)."""
+    capabilities. From the frontier and from the family points of largest share in the
+    windows below it (before an internal resonance drew energy from them;
+    :meth:`FamilyGuard.origins`): the method's family predictor (MMS-HBM: along an
+    auxiliary low-harmonic branch), the orbit extrapolated in amplitude (a polynomial of
+    degree <= 2 through the last family points up to it) and the orbit scaled to the
+    target (``scaled_state``: the homogeneous limit far above the gap); then the linear
+    mode at the target (``linear_mode_point``). With a landing of the method beyond the
+    target (:meth:`landings`), first the state interpolated between the frontier and it."""
 
     def __init__(self, problem):
         self.problem = problem
@@ -231,22 +238,25 @@ class ProblemStarts:
         p = self.problem
         i = guard.frontier_index
         A_f = float(recs[i]["amplitude"])
-        out = [("extrapolated", extrapolated(us, recs, guard.clean, amplitude))]
+        out = []
         for u_l, A_l in self._landed:  # between the frontier and a landing beyond
             if A_f < amplitude < A_l:
                 s = (amplitude - A_f) / (A_l - A_f)
                 out.append(("toward the landing", (1.0 - s) * us[i] + s * u_l))
-        if p.scaled_state is not None and A_f > 0:
-            out.append(("scaled", p.scaled_state(us[i], amplitude / A_f)))
-            origin = guard.origins(lambda j: float(recs[j]["amplitude"]))[0]
+        for origin in [i] + [j for j in guard.origins(lambda j: float(recs[j]["amplitude"])) if j != i]:
             A_o = float(recs[origin]["amplitude"])
-            if origin != i and A_o > 0:
-                out.append(("scaled from the largest share", p.scaled_state(us[origin], amplitude / A_o)))
-        if p.family_predictor is not None:
-            try:
-                out.append(("family predictor", p.family_predictor(us[i], A_f, amplitude, amplitude_max)))
-            except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
-                pass
+            at = "the frontier" if origin == i else f"{A_o / A_f:.2f} of the frontier"
+            if p.family_predictor is not None:
+                try:
+                    out.append((f"family predictor from {at}", p.family_predictor(us[origin], A_o, amplitude,
+                                                                                  amplitude_max)))
+                except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
+                    pass
+            clean = [j for j in guard.clean if j <= origin]
+            if clean:
+                out.append((f"extrapolated from {at}", extrapolated(us, recs, clean, amplitude)))
+            if p.scaled_state is not None and A_o > 0:
+                out.append((f"scaled from {at}", p.scaled_state(us[origin], amplitude / A_o)))
         linear = getattr(p, "linear_mode_point", None)
         if linear is not None:
             try:
@@ -306,8 +316,10 @@ def search_beyond(problem, guard: FamilyGuard, us: list, recs: list, *, options:
     frequency_of = problem.frequency_of
     admissible = None
     if frequency_of is not None and math.isfinite(band[1]):
+        lo, hi = band[0] / _TRUST_FACTOR, band[1] * _TRUST_FACTOR
+
         def admissible(u):
-            return band[0] <= frequency_of(u) <= band[1]
+            return lo <= frequency_of(u) <= hi
 
     tried = []
     landings = starts.landings(us, recs, guard, amplitude_max)
