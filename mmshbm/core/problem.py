@@ -55,8 +55,10 @@ runners call them directly and never probe a problem for attributes.
     frequency set to f, Hz), ``scan_starts(u_front, A_front, A) -> list`` (states to
     start Newton from at amplitude A, frequency aside) and ``leads_fundamental(u) ->
     bool`` (the starting mode holds the largest share of the fundamental harmonic's
-    kinetic energy among the tracked modes): the frequency scan above a tongue. Each is
-    None when not offered.
+    kinetic energy among the tracked modes): the frequency scan above a tongue; and
+    ``family_starts()``, the object that supplies the starts of the deflated search
+    (:class:`mmshbm.family.deflation.FamilyStarts`; MMS-HBM's adds the filtered passage,
+    the predictor and the scaled orbit). Each is None when not offered.
 :class:`AmplitudeStart` (backbones, :class:`BackboneProblemBase`)
     ``linear_mode_point(amplitude)`` (the linear mode at that amplitude, m),
     ``initial_tangent()``, ``open_amplitude()`` (the amplitude at which the linear mode
@@ -163,6 +165,7 @@ class FamilyEvents(Protocol):
     with_frequency: Callable[[np.ndarray, float], np.ndarray] | None
     scan_starts: Callable[[np.ndarray, float, float], list] | None
     leads_fundamental: Callable[[np.ndarray], bool] | None
+    family_starts: Callable[[], Any] | None
 
 
 @runtime_checkable
@@ -257,6 +260,7 @@ class ContinuationProblemBase:
     with_frequency: Callable[[np.ndarray, float], np.ndarray] | None = None
     scan_starts: Callable[[np.ndarray, float, float], list] | None = None
     leads_fundamental: Callable[[np.ndarray], bool] | None = None
+    family_starts: Callable[[], Any] | None = None
     # AmplitudeStart
     open_amplitude: Callable[[], float] | None = None
     # BranchRecords

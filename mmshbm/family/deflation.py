@@ -3,8 +3,9 @@
 Where the branch has left the family (docs/resonances.md), the family's continuation is
 sought at amplitudes A_i = frontier·(1 + jump_step·2^i), i < ``max_targets`` (capped at the
 amplitude bound), by Newton on the pinned system G(u) = [R(u); A(u)/A_i − 1] = 0
-(:mod:`mmshbm.core.pinned`) from a fixed set of starts (:class:`ProblemStarts`). Every
-orbit u_k found at A_i is *deflated*: Newton then solves F(u) = M(u) G(u) = 0 with
+(:mod:`mmshbm.core.pinned`) from a fixed set of starts (:class:`BranchStarts`; a method's
+own through the problem's ``family_starts()``). Every orbit u_k found at A_i is
+*deflated*: Newton then solves F(u) = M(u) G(u) = 0 with
 
     M(u) = Π_k (‖u − u_k‖⁻ᵖ + σ),      p = :data:`POWER`, σ = :data:`SHIFT`,
 
@@ -37,7 +38,7 @@ from .end import Attempt, FamilyEnd, FamilyEnded, crossing, turned_back
 from .guard import FamilyGuard
 from .options import FamilyOptions
 
-__all__ = ["POWER", "SHIFT", "FamilyStarts", "KnownOrbit", "ProblemStarts", "deflated_solve", "deflation",
+__all__ = ["POWER", "SHIFT", "FamilyStarts", "KnownOrbit", "BranchStarts", "deflated_solve", "deflation",
            "search_beyond"]
 
 log = logging.getLogger(__name__)
@@ -195,75 +196,54 @@ class FamilyStarts(Protocol):
         """(name, u0) per start at the pinned ``amplitude`` (m), best first."""
 
 
-class ProblemStarts:
-    """The fixed starts of the deflated search, from the branch and the problem's
-    capabilities. From the frontier and from the family points of largest share in the
-    windows below it (before an internal resonance drew energy from them;
-    :meth:`FamilyGuard.origins`): the method's family predictor (MMS-HBM: along an
-    auxiliary low-harmonic branch), the orbit extrapolated in amplitude (a polynomial of
-    degree <= 2 through the last family points up to it) and the orbit scaled to the
-    target (``scaled_state``: the homogeneous limit far above the gap); then the linear
-    mode at the target (``linear_mode_point``). With a landing of the method beyond the
-    target (:meth:`landings`), first the state interpolated between the frontier and it."""
+class BranchStarts:
+    """The method-agnostic starts of the deflated search, from the branch alone: from the
+    frontier and from the family points of largest share in the windows below it (before
+    an internal resonance drew energy from them; :meth:`FamilyGuard.origins`), the orbit
+    extrapolated in amplitude (a polynomial of degree <= 2 through the last family points
+    up to it); then the linear mode at the target (``linear_mode_point``, where the
+    problem has one). A method adds its own by subclassing (:meth:`origin_starts`,
+    :meth:`landings`) and offers the object as the problem's ``family_starts()``
+    (MMS-HBM: :class:`mmshbm.methods.mms.family_starts.MMSHBMStarts`)."""
 
     def __init__(self, problem):
         self.problem = problem
-        self._landed = []  # (u0, amplitude) of the landings of the current search
 
     def landings(self, us: list, recs: list, guard: FamilyGuard,
                  amplitude_max: float) -> list[tuple[str, np.ndarray, float]]:
-        """The problem's own landing (``family_landing``) from each origin of the guard,
-        past the excursion that followed the frontier."""
-        p = self.problem
-        self._landed = []
-        if p.family_landing is None:
-            return []
-        i = guard.frontier_index
-        frontier = float(recs[i]["amplitude"])
-        excursion = us[i + 1:]
-        out = []
-        for origin in guard.origins(lambda j: float(recs[j]["amplitude"])):
-            try:
-                u0, target = p.family_landing(us[origin], recs[origin], excursion, amplitude_max, frontier)
-            except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as err:
-                log.debug("no landing from %d: %s", origin, err)
-                continue
-            if frontier < target <= amplitude_max:
-                out.append(("filtered landing", u0, float(target)))
-                self._landed.append((u0, float(target)))
-        return out
+        """None here: no start that picks its own amplitude."""
+        return []
+
+    def origin_starts(self, us: list, recs: list, guard: FamilyGuard, origin: int, amplitude: float,
+                      amplitude_max: float) -> list[tuple[str, np.ndarray]]:
+        """The method's starts at ``amplitude`` from the family point ``origin`` (none here)."""
+        return []
 
     def starts(self, us: list, recs: list, guard: FamilyGuard, amplitude: float,
                amplitude_max: float) -> list[tuple[str, np.ndarray]]:
-        p = self.problem
         i = guard.frontier_index
         A_f = float(recs[i]["amplitude"])
-        out = []
-        for u_l, A_l in self._landed:  # between the frontier and a landing beyond
-            if A_f < amplitude < A_l:
-                s = (amplitude - A_f) / (A_l - A_f)
-                out.append(("toward the landing", (1.0 - s) * us[i] + s * u_l))
+        out = self.before(us, recs, guard, amplitude)
         for origin in [i] + [j for j in guard.origins(lambda j: float(recs[j]["amplitude"])) if j != i]:
             A_o = float(recs[origin]["amplitude"])
             at = "the frontier" if origin == i else f"{A_o / A_f:.2f} of the frontier"
-            if p.family_predictor is not None:
-                try:
-                    out.append((f"family predictor from {at}", p.family_predictor(us[origin], A_o, amplitude,
-                                                                                  amplitude_max)))
-                except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
-                    pass
+            own = self.origin_starts(us, recs, guard, origin, amplitude, amplitude_max)
+            out += [(f"{name} from {at}", u0) for name, u0 in own]
             clean = [j for j in guard.clean if j <= origin]
             if clean:
                 out.append((f"extrapolated from {at}", extrapolated(us, recs, clean, amplitude)))
-            if p.scaled_state is not None and A_o > 0:
-                out.append((f"scaled from {at}", p.scaled_state(us[origin], amplitude / A_o)))
-        linear = getattr(p, "linear_mode_point", None)
+        linear = getattr(self.problem, "linear_mode_point", None)
         if linear is not None:
             try:
                 out.append(("linear mode", linear(amplitude)))
             except (NotImplementedError, ArithmeticError, ValueError):
                 pass
         return out
+
+    def before(self, us: list, recs: list, guard: FamilyGuard,
+               amplitude: float) -> list[tuple[str, np.ndarray]]:
+        """Starts tried first at ``amplitude`` (none here)."""
+        return []
 
 
 def extrapolated(us: list, recs: list, clean: list, amplitude: float) -> np.ndarray:
@@ -308,7 +288,8 @@ def search_beyond(problem, guard: FamilyGuard, us: list, recs: list, *, options:
     if guard.frontier_index < 0:
         raise PinnedFailure("the branch has no family point to jump from")
     problem = as_problem(problem)
-    starts = ProblemStarts(problem) if starts is None else starts
+    if starts is None:
+        starts = problem.family_starts() if problem.family_starts is not None else BranchStarts(problem)
     i = guard.frontier_index
     frontier = float(recs[i]["amplitude"])
     f_frontier = float(recs[i].get("frequency", math.nan))

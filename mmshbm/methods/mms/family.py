@@ -87,6 +87,13 @@ class FamilyMixin(LandingsMixin):
         fundamental = self.modal_shares(u)[:, 1]
         return bool(fundamental[self.mode - 1] >= fundamental.max())
 
+    def family_starts(self):
+        """The starts of the deflated search beyond a frontier
+        (:class:`~mmshbm.methods.mms.family_starts.MMSHBMStarts`, a new one per call)."""
+        from .family_starts import MMSHBMStarts
+
+        return MMSHBMStarts(self)
+
     def scaled_state(self, u: np.ndarray, factor: float) -> np.ndarray:
         """``u`` with every displacement coefficient (and pole unknown) times ``factor``,
         Ω kept: far above the gap a piecewise-linear system is nearly homogeneous, so
