@@ -60,6 +60,11 @@ _SAME_ORBIT_ROUNDOFF = 1e-8
 #: modes the condensation kept)
 _TRUST_FACTOR = 2.0
 
+#: a pinned solve's iterations in units of the corrector's ``max_newton``: a start away
+#: from the branch needs more than a predictor on it (on the nonsmooth residual a solve
+#: can creep for 20–28 iterations before it converges; :mod:`mmshbm.core.pinned`)
+_NEWTON_FACTOR = 3
+
 #: Newton's step halvings per iteration (the last step, λ = 1/32, is taken whatever its
 #: residual, as in :func:`mmshbm.core.pinned.solve_at_amplitude`)
 _HALVINGS = 6
@@ -313,7 +318,7 @@ def search_beyond(problem, guard: FamilyGuard, us: list, recs: list, *, options:
                 try:
                     u, nit, hist, t = deflated_solve(
                         problem, u0, target, [f[0] for f in found],
-                        tol=newton_tol, max_iter=3 * max_newton, admissible=admissible)
+                        tol=newton_tol, max_iter=_NEWTON_FACTOR * max_newton, admissible=admissible)
                 except StartOutside:
                     tried.append(Attempt("deflated", name, target, "outside"))
                     break
