@@ -1,5 +1,5 @@
 """A jump whose searches, capped by the amplitude bound, miss the family there: the
-family found above the bound and followed back down onto it (``mmshbm.core.family``'s
+family found above the bound and followed back down onto it (``mmshbm.family.stages``'s
 search above the bound, ``family_events._descend``)."""
 
 import warnings

@@ -1,4 +1,4 @@
-"""Jumps that land by continuing the orbit in the harmonics (mmshbm.core.family's last
+"""Jumps that land by continuing the orbit in the harmonics (mmshbm.family.stages's last
 resort, MMS-HBM's ``harmonic_landing``)."""
 
 import numpy as np

@@ -1,11 +1,11 @@
-"""Where a jump over an internal resonance lands (mmshbm.core.family, family_events)."""
+"""Where a jump over an internal resonance lands (mmshbm.family.stages, family_events)."""
 
 import warnings
 
 import numpy as np
 
 import mmshbm
-import mmshbm.core.family_events as family_events
+import mmshbm.family.follower as family_events
 
 
 def test_a_nearer_landing_on_a_coexisting_tongue_side_is_refused(monkeypatch):

@@ -47,7 +47,7 @@ log = logging.getLogger(__name__)
 #: guard, Numba and the kernels' modules): imported by :func:`preload` before a fork
 RUN_MODULES = ("mmshbm.methods.backbone", "mmshbm.methods.runner", "mmshbm.methods.mms.conservative",
                "mmshbm.methods.mms.family", "mmshbm.methods.mms.filtered", "mmshbm.core.continuation",
-               "mmshbm.core.family_events", "mmshbm.harmonic.condense", "mmshbm.results.coexisting")
+               "mmshbm.family.follower", "mmshbm.harmonic.condense", "mmshbm.results.coexisting")
 
 
 def start_method() -> str:

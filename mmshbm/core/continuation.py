@@ -7,7 +7,7 @@ capabilities a problem declares (its step rule, a compiled corrector, the record
 caps the step). MMS-HBM, penalty-HBM and shooting all implement it, so they share this
 driver and its step control. It reads no record by name: what a branch means (the
 family of a nonlinear mode, its jumps over internal resonances) is an event plug-in
-(:mod:`mmshbm.core.events`; :mod:`mmshbm.core.family_events` by default).
+(:mod:`mmshbm.core.events`; :mod:`mmshbm.family.follower` by default).
 
 Algorithm: tangent predictor u_p = u + ds·t; Newton corrector on [R(u); t·(u − u_p)] = 0
 with the bordered Jacobian [J; tᵀ]; the new tangent solves [J; tᵀ] t' = [0; 1]. Step
@@ -29,8 +29,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ..family.follower import default_events
 from .events import BranchEvents, RelocationFailed
-from .family_events import default_events
 from .options import ContinuationOptions, ContinuationProblem, ContinuationResult, ContinuationState
 from .problem import as_problem
 from .special_points import SpecialPoint
@@ -94,7 +94,7 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
     events : BranchEvents, optional
         The event plug-in (:mod:`mmshbm.core.events`); default the one ``options`` ask
         for (the family following for ``follow="family"``,
-        :func:`mmshbm.core.family_events.default_events`).
+        :func:`mmshbm.family.follower.default_events`).
 
     Returns
     -------
@@ -119,7 +119,8 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
         try:
             moved = events.relocate(problem, pts.us, pts.recs, reason, len(pts.us))
         except RelocationFailed as err:
-            return Status(err.kind, str(err)) if err.kind else failed(str(err))
+            status = Status(err.kind, str(err)) if err.kind else failed(str(err))
+            return status if err.cause is None else status.with_cause(err.cause)
         for n, (u_p, nit_p, hist_p, rec_p, t_p) in enumerate(moved.points):
             events.register(len(pts.us), rec_p, n == 0)
             last = n == len(moved.points) - 1

@@ -20,7 +20,7 @@ takes the branch elsewhere, is an event plug-in with the protocol :class:`Branch
 The driver accepts a relocation's points in order (the first one carries its special
 point), goes on from the last one with the initial step, and ends the branch there if
 the relocation says so. :class:`NoEvents` is plain path following; the family of a
-nonlinear mode is followed by :class:`mmshbm.core.family_events.FamilyFollower`.
+nonlinear mode is followed by :class:`mmshbm.family.follower.FamilyFollower`.
 """
 
 from __future__ import annotations
@@ -37,11 +37,13 @@ __all__ = ["BranchEvents", "NoEvents", "Relocation", "RelocationFailed"]
 class RelocationFailed(ArithmeticError):
     """A plug-in could not relocate the branch (the message says why). ``kind``, when
     given, is the status kind that ends the branch instead of the caller's (e.g.
-    ``Status.FAMILY_ENDED``)."""
+    ``Status.FAMILY_ENDED``); ``cause``, when given, the structured reason the message
+    is built from (it becomes the final status's :attr:`~mmshbm.core.status.Status.cause`)."""
 
-    def __init__(self, message: str = "", kind: str | None = None):
+    def __init__(self, message: str = "", kind: str | None = None, cause: object = None):
         super().__init__(message)
         self.kind = kind
+        self.cause = cause
 
 
 @dataclass

@@ -9,45 +9,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import _validate as check
+from ..family.options import FamilyOptions
 from .problem import ContinuationProblem
 from .status import Status
 
 __all__ = ["ContinuationOptions", "ContinuationProblem", "ContinuationResult", "ContinuationState",
            "FamilyOptions"]
-
-
-@dataclass(frozen=True)
-class FamilyOptions:
-    """Options of the family following (:mod:`mmshbm.core.family_events`). Validated on
-    creation; ``ContinuationOptions(follow="family", family_share=..., ...)`` builds them
-    (:attr:`ContinuationOptions.family`).
-
-    Attributes
-    ----------
-    family_share : float
-        Share (0..1) of the kinetic energy in the fundamental harmonic above which a point
-        is on the starting mode's family (below it, a point that continues the family
-        without a fold or a locked frequency still is; docs/resonances.md).
-    max_excursion : int
-        Steps the branch may spend off the family (or below its frontier) before a jump.
-    jump_step : float
-        First relative amplitude step of a jump beyond the frontier (doubled per retry).
-    max_jumps : int
-        Jumps allowed per branch.
-    """
-
-    family_share: float = 0.5
-    max_excursion: int = 60
-    jump_step: float = 0.02
-    max_jumps: int = 50
-
-    def __post_init__(self):
-        share = check.real_number("family_share", self.family_share)
-        if not 0.0 < share < 1.0:
-            raise ValueError(f"family_share must be in (0, 1), got {self.family_share!r}")
-        check.integer("max_excursion", self.max_excursion, minimum=1)
-        check.positive("jump_step", self.jump_step)
-        check.integer("max_jumps", self.max_jumps, minimum=0)
 
 
 @dataclass(frozen=True)
@@ -107,11 +74,13 @@ class ContinuationOptions:
     follow : {"family", "path"}
         ``"family"`` (default): stay on the starting mode's family, jumping over
         internal-resonance tongues the path follower cannot come back from
-        (:mod:`mmshbm.core.family_events`; acts on problems that record the fundamental
+        (:mod:`mmshbm.family.follower`; acts on problems that record the fundamental
         harmonic's share). ``"path"``: plain path following (to study a tongue).
     family_share, max_excursion, jump_step, max_jumps
-        The family following's options, forwarded to :class:`FamilyOptions`
-        (:attr:`family`).
+        The family following's options, forwarded to
+        :class:`~mmshbm.family.options.FamilyOptions` (:attr:`family`).
+    family_search : {"stages", "deflated"}
+        Forwarded to ``FamilyOptions.search``: how the family is sought beyond a frontier.
     """
 
     ds: float = 0.1
@@ -133,6 +102,7 @@ class ContinuationOptions:
     max_excursion: int = 60
     jump_step: float = 0.02
     max_jumps: int = 50
+    family_search: str = "stages"
 
     def __post_init__(self):
         ds_min = check.positive("ds_min", self.ds_min)
@@ -169,7 +139,8 @@ class ContinuationOptions:
 
     def _family_options(self) -> FamilyOptions:
         return FamilyOptions(family_share=self.family_share, max_excursion=self.max_excursion,
-                             jump_step=self.jump_step, max_jumps=self.max_jumps)
+                             jump_step=self.jump_step, max_jumps=self.max_jumps,
+                             search=self.family_search)
 
     @property
     def family(self) -> FamilyOptions | None:

@@ -40,7 +40,7 @@ runners call them directly and never probe a problem for attributes.
     with the amplitude pinned (:mod:`mmshbm.core.pinned`); None: the amplitude is
     differenced from ``monitor(u)["amplitude"]``.
 :class:`FamilyEvents`
-    What the jumps over internal-resonance tongues use (:mod:`mmshbm.core.family`):
+    What the jumps over internal-resonance tongues use (:mod:`mmshbm.family.stages`):
     ``frequency_of(u)`` (Hz, no evaluation), ``family_frequency_limit()`` (Hz, where the
     starting mode's backbone tends far above the gaps: the far search's window),
     ``family_frequency_ceiling()`` (Hz, above which no landing of the harmonic ladder
@@ -51,12 +51,14 @@ runners call them directly and never probe a problem for attributes.
     (None where ``fundamental=True`` names no ladder of its own),
     ``homotopy_landing(A, A_max, tol=, max_iter=, admissible=) -> (u, f_start)`` (the orbit
     reached by a homotopy from another family's orbit of frequency f_start, Hz;
-    :mod:`mmshbm.core.family_landings`), ``with_frequency(u, f)`` (``u`` with its
+    :mod:`mmshbm.family.landings`), ``with_frequency(u, f)`` (``u`` with its
     frequency set to f, Hz), ``scan_starts(u_front, A_front, A) -> list`` (states to
     start Newton from at amplitude A, frequency aside) and ``leads_fundamental(u) ->
     bool`` (the starting mode holds the largest share of the fundamental harmonic's
-    kinetic energy among the tracked modes): the frequency scan above a tongue. Each is
-    None when not offered.
+    kinetic energy among the tracked modes): the frequency scan above a tongue; and
+    ``family_starts()``, the object that supplies the starts of the deflated search
+    (:class:`mmshbm.family.deflation.FamilyStarts`; MMS-HBM's adds the filtered passage,
+    the predictor and the scaled orbit). Each is None when not offered.
 :class:`AmplitudeStart` (backbones, :class:`BackboneProblemBase`)
     ``linear_mode_point(amplitude)`` (the linear mode at that amplitude, m),
     ``initial_tangent()``, ``open_amplitude()`` (the amplitude at which the linear mode
@@ -165,6 +167,7 @@ class FamilyEvents(Protocol):
     with_frequency: Callable[[np.ndarray, float], np.ndarray] | None
     scan_starts: Callable[[np.ndarray, float, float], list] | None
     leads_fundamental: Callable[[np.ndarray], bool] | None
+    family_starts: Callable[[], Any] | None
 
 
 @runtime_checkable
@@ -252,6 +255,7 @@ class ContinuationProblemBase:
     with_frequency: Callable[[np.ndarray, float], np.ndarray] | None = None
     scan_starts: Callable[[np.ndarray, float, float], list] | None = None
     leads_fundamental: Callable[[np.ndarray], bool] | None = None
+    family_starts: Callable[[], Any] | None = None
     # AmplitudeStart
     open_amplitude: Callable[[], float] | None = None
     # BranchRecords

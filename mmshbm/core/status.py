@@ -44,6 +44,10 @@ class Status(str):
         What stopped the branch (see the module docstring).
     detail : str
         What the kind needs to be specific: the bound's name, a failure's message.
+    cause : object, optional
+        The structured reason behind the text, when the part that stopped the branch
+        gives one (the family following: a :class:`mmshbm.family.end.FamilyEnd`, whose
+        message the detail is); None otherwise. Not part of the text, nor of equality.
     """
 
     MAX_STEPS = "max_steps"
@@ -55,7 +59,7 @@ class Status(str):
     START_OUTSIDE = "start outside bounds"
     INTERRUPTED = "interrupted"
 
-    def __new__(cls, kind: str, detail: str = ""):
+    def __new__(cls, kind: str, detail: str = "", cause: object = None):
         kind, detail = str(kind), str(detail)
         if not detail:
             text = kind
@@ -63,13 +67,14 @@ class Status(str):
             text = f"{kind}:{detail}"
         else:
             text = f"{kind}: {detail}"
-        return cls._make(text, kind, detail)
+        return cls._make(text, kind, detail, cause)
 
     @classmethod
-    def _make(cls, text: str, kind: str, detail: str) -> Status:
+    def _make(cls, text: str, kind: str, detail: str, cause: object = None) -> Status:
         self = str.__new__(cls, text)
         self.__dict__["_kind"] = kind
         self.__dict__["_detail"] = detail
+        self.__dict__["_cause"] = cause
         return self
 
     @classmethod
@@ -98,15 +103,27 @@ class Status(str):
     def detail(self) -> str:
         return self.__dict__["_detail"]
 
+    @property
+    def cause(self) -> object:
+        """The structured reason behind the text (see the class docstring), or None."""
+        return self.__dict__.get("_cause")
+
     def with_detail(self, more: str) -> Status:
         """The same kind, ``"; " + more`` appended to the detail (a rescue that failed too)."""
-        return Status._make(f"{self}; {more}", self.kind, f"{self.detail}; {more}" if self.detail else more)
+        return Status._make(f"{self}; {more}", self.kind, f"{self.detail}; {more}" if self.detail else more,
+                            self.cause)
+
+    def with_cause(self, cause: object) -> Status:
+        """The same status with the structured reason ``cause``."""
+        return Status._make(str(self), self.kind, self.detail, cause)
 
     def __setattr__(self, name, value):
         raise AttributeError("Status is immutable")
 
     def __reduce__(self):
-        return (Status.parse, (str(self),))
+        if self.cause is None:
+            return (Status.parse, (str(self),))
+        return (Status._make, (str(self), self.kind, self.detail, self.cause))
 
     def __str__(self) -> str:
         return str.__str__(self)

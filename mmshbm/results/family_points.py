@@ -1,6 +1,6 @@
 """The starting mode's backbone inside a branch: its family front and exact points on it.
 
-A branch continued with ``follow="family"`` (:mod:`mmshbm.core.family`) holds, besides
+A branch continued with ``follow="family"`` (:mod:`mmshbm.family.stages`) holds, besides
 the first-mode backbone, the points of the internal-resonance tongues it followed out and
 back (``records["on_family"] = 0``). :func:`family_front` picks the backbone's points;
 :func:`frequency_at` solves the backbone at a given amplitude, and returns NaN where the
@@ -17,7 +17,7 @@ import warnings
 import numpy as np
 
 from .._warnings import BranchWarning
-from ..core.family import family_value
+from ..family.definition import family_value
 
 __all__ = ["family_front", "frequency_at", "family_point", "amplitude_in_m", "warn_outside_front",
            "solve_at"]
@@ -141,8 +141,8 @@ def warn_outside_front(branch, amplitude: float, stacklevel: int = 3) -> bool:
 
 
 def _share_record(branch):
-    """The branch's family measure per point (:func:`mmshbm.core.family.family_value`)."""
-    from ..core.family import FAMILY_RECORD
+    """The branch's family measure per point (:func:`mmshbm.family.stages.family_value`)."""
+    from ..family.definition import FAMILY_RECORD
 
     share = branch.records.get(FAMILY_RECORD)
     return branch.records.get("mode_share") if share is None else share

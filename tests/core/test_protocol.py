@@ -15,10 +15,10 @@ import mmshbm
 from mmshbm.core import problem as protocol
 from mmshbm.core.continuation import ContinuationOptions, continue_branch
 from mmshbm.core.events import BranchEvents, NoEvents, Relocation
-from mmshbm.core.family_events import FamilyFollower, default_events
 from mmshbm.core.options import FamilyOptions
 from mmshbm.core.special_points import SpecialPoint
 from mmshbm.core.status import Status
+from mmshbm.family.follower import FamilyFollower, default_events
 from mmshbm.methods.frequency_response import FORCED_METHODS, make_forced_problem
 from mmshbm.methods.registry import METHODS, make_problem
 

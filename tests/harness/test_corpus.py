@@ -273,7 +273,7 @@ def test_the_time_limit_holds_inside_a_jump(monkeypatch):
     time: with a 0.5 s limit the case is interrupted inside the first one, not after it."""
     import time
 
-    import mmshbm.core.family as family
+    import mmshbm.family.stages as family
 
     original = family.solve_at_amplitude
 

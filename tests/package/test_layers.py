@@ -35,6 +35,7 @@ LAYERS = {
     "mmshbm.harmonic": 2,  # beside fe: the linear structure per harmonic, uses only the model
     "mmshbm.core": 3,
     "mmshbm.contact": 3,  # beside core: used by core and methods, uses core's condensation
+    "mmshbm.family": 3,  # beside core: its default event plug-in; uses the continuation core only
     "mmshbm.results": 4,
     "mmshbm.methods": 5,
     "mmshbm.exact": 5,  # the public home of methods.exact

@@ -1,6 +1,6 @@
 """How an MMS-HBM branch stays on its family: modal energy shares per point, and the
 landings of the jumps over internal-resonance tongues (a mixin of
-:class:`~mmshbm.methods.mms.conservative.MMSHBMProblem`, used by :mod:`mmshbm.core.family`;
+:class:`~mmshbm.methods.mms.conservative.MMSHBMProblem`, used by :mod:`mmshbm.family.stages`;
 the last-resort landings from low-harmonic families: :mod:`mmshbm.methods.mms.landings`)."""
 
 from __future__ import annotations
@@ -87,6 +87,13 @@ class FamilyMixin(LandingsMixin):
         fundamental = self.modal_shares(u)[:, 1]
         return bool(fundamental[self.mode - 1] >= fundamental.max())
 
+    def family_starts(self):
+        """The starts of the deflated search beyond a frontier
+        (:class:`~mmshbm.methods.mms.family_starts.MMSHBMStarts`, a new one per call)."""
+        from .family_starts import MMSHBMStarts
+
+        return MMSHBMStarts(self)
+
     def scaled_state(self, u: np.ndarray, factor: float) -> np.ndarray:
         """``u`` with every displacement coefficient (and pole unknown) times ``factor``,
         Ω kept: far above the gap a piecewise-linear system is nearly homogeneous, so
@@ -126,7 +133,7 @@ class FamilyMixin(LandingsMixin):
         the one whose energy share peaked over the ``excursion`` states; the branch is
         continued with harmonic k filtered out past kΩ = ω_j and released there
         (:func:`mmshbm.methods.mms.filtered.pass_resonance`). Returns (u, amplitude). Used by
-        the jumps of :mod:`mmshbm.core.family`; the landing lies above ``amplitude_min``."""
+        the jumps of :mod:`mmshbm.family.stages`; the landing lies above ``amplitude_min``."""
         from .filtered import pass_resonance
 
         freqs = self.tracked_frequencies
@@ -214,7 +221,7 @@ class FamilyMixin(LandingsMixin):
 
     def mode_share(self, u: np.ndarray) -> float:
         """Share of the period-mean kinetic energy in the starting mode at the fundamental
-        harmonic (the family test of :mod:`mmshbm.core.family`); with the modal back end
+        harmonic (the family test of :mod:`mmshbm.family.stages`); with the modal back end
         from one projected row, else from :meth:`modal_shares`."""
         fast = self._fast_setup()
         if not fast:
@@ -247,7 +254,7 @@ class FamilyMixin(LandingsMixin):
     def fundamental_share(self, u: np.ndarray) -> float:
         """Share (0..1) of the period-mean kinetic energy in the fundamental harmonic (k = 1),
         all DOFs together (:meth:`harmonic_energies`): the family measure of
-        :mod:`mmshbm.core.family` (see docs/resonances.md). A change of the fundamental's
+        :mod:`mmshbm.family.stages` (see docs/resonances.md). A change of the fundamental's
         shape (toward the closed-contact mode) leaves it unchanged; energy moving into a
         harmonic k >= 2 (near an internal resonance kΩ ≈ ω_j) lowers it."""
         energies = self.harmonic_energies(u)

@@ -11,7 +11,7 @@ the full problem with the amplitude pinned releases the filter there.
 
 :class:`FilteredProblem` wraps a continuation problem; :func:`pass_resonance` does the
 continuation and the release. Used by MMS-HBM's ``family_landing`` (the jumps of
-:mod:`mmshbm.core.family`).
+:mod:`mmshbm.family.stages`).
 """
 
 from __future__ import annotations
@@ -19,10 +19,10 @@ from __future__ import annotations
 import numpy as np
 
 from ...core.continuation import ContinuationOptions, continue_branch
-from ...core.family import FAMILY_RECORD, family_value
 from ...core.pinned import PinnedFailure, amplitude_and_gradient, solve_at_amplitude
 from ...core.problem import ContinuationProblemBase, as_problem
 from ...core.status import Status
+from ...family.definition import FAMILY_RECORD, family_value
 
 __all__ = ["FilteredProblem", "pass_resonance"]
 

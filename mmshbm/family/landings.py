@@ -12,7 +12,7 @@ the starting mode's family resumes above the fold, often at a lower frequency. N
 predictor taken from the branch below converges to it; the problem's
 ``homotopy_landing(A, A_max, tol=, max_iter=, admissible=) -> (u, f_start)`` reaches it
 from the orbit of the family of the fundamental alone at the same amplitude
-(:mod:`mmshbm.core.homotopy`). A landing counts as any other (``accept``: on the family,
+(:mod:`mmshbm.family.homotopy`). A landing counts as any other (``accept``: on the family,
 in the frequency window) and, since the homotopy continues the fundamental family's
 orbit, within ``_NEAR`` of that orbit's frequency ``f_start`` — a curve that wandered off
 to another mode's orbit lands far from it.
@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from .pinned import PinnedFailure, StartOutside
+from ..core.pinned import PinnedFailure, StartOutside
 
 log = logging.getLogger(__name__)
 

@@ -1,27 +1,14 @@
 """The family guard: which points of a branch belong to the starting mode's family, and
-when the branch must jump (see :mod:`mmshbm.core.family` for the whole picture and
-docs/resonances.md for why the fundamental harmonic's share of the kinetic energy decides)."""
+when the branch must jump (see :mod:`mmshbm.family.stages` for the whole picture and
+docs/resonances.md for the definition, :func:`mmshbm.family.definition.on_family`)."""
 
 from __future__ import annotations
 
 import math
 
+from .definition import FAMILY_RECORD, family_value, on_family
+
 __all__ = ["FAMILY_RECORD", "FamilyGuard", "family_value"]
-
-#: the record that decides membership of the family: the fundamental harmonic's share of
-#: the motion (MMS-HBM's ``fundamental_share``; see docs/resonances.md)
-FAMILY_RECORD = "fundamental_share"
-
-
-def family_value(rec: dict) -> float | None:
-    """The family measure of a point's record: ``rec["fundamental_share"]``, or the
-    starting mode's share ``rec["mode_share"]`` for records without it (branches saved by
-    earlier versions); None when the record has neither."""
-    value = rec.get(FAMILY_RECORD)
-    if value is None:
-        value = rec.get("mode_share")
-    return None if value is None else float(value)
-
 
 #: a branch that left the family and comes back onto it this far (relative) below the
 #: frontier is going back down the family: a loop (a passage may dip less than this)
@@ -86,14 +73,13 @@ class FamilyGuard:
         """Register the accepted point ``index`` with record ``rec``; sets
         ``rec["on_family"]`` (and resets it on the points of a pending stretch that
         turns out to be a tongue) and returns ``"jump"`` when a jump is due, else None."""
-        share = rec.get(FAMILY_RECORD)  # family_value(rec), its call saved for the usual record
-        share = family_value(rec) if share is None else float(share)
-        if share is None:
+        on = on_family(rec, self.family_share)
+        if on is None:
             return None
+        share = family_value(rec)
         self.active = True
         amplitude = float(rec["amplitude"])
         frequency = float(rec.get("frequency", math.nan))
-        on = bool(share >= self.family_share)
         if self.pending:
             _, a_last, f_last, _ = self.pending[-1]
             # a fold turns the frequency back, or the amplitude with the frequency no

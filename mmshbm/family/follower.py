@@ -1,9 +1,9 @@
 """Following the family of a nonlinear mode: the event plug-in of the driver.
 
 :class:`FamilyFollower` implements :class:`mmshbm.core.events.BranchEvents` with the
-bookkeeping of :class:`mmshbm.core.family.FamilyGuard`: it marks every point on or off
+bookkeeping of :class:`mmshbm.family.stages.FamilyGuard`: it marks every point on or off
 the starting mode's family (``record["on_family"]``) and asks for a jump
-(:func:`mmshbm.core.family.jump`) when the branch has left the family for good (an
+(:func:`mmshbm.family.stages.jump`) when the branch has left the family for good (an
 excursion, a loop), when a tongue climbs to a bound, or when the step size fails at
 ``ds_min``. A jump lands beyond the family's frontier; the family below the landing is
 filled back down by plain path following (:func:`_backfill`) and joins the branch in
@@ -21,13 +21,17 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .events import NoEvents, Relocation, RelocationFailed
-from .family import FAMILY_RECORD, FamilyEnded, FamilyGuard, family_value, jump
-from .options import ContinuationOptions, FamilyOptions
-from .pinned import PinnedFailure
-from .special_points import SpecialPoint
-from .status import Status
-from .steps import _pinned_monitor
+from ..core.events import NoEvents, Relocation, RelocationFailed
+from ..core.options import ContinuationOptions, FamilyOptions
+from ..core.pinned import PinnedFailure
+from ..core.special_points import SpecialPoint
+from ..core.status import Status
+from ..core.steps import _pinned_monitor
+from .definition import FAMILY_RECORD, family_value
+from .deflation import FamilyStarts, search_beyond
+from .end import FamilyEnded
+from .guard import FamilyGuard
+from .stages import jump
 
 __all__ = ["FamilyFollower", "default_events"]
 
@@ -46,10 +50,15 @@ class FamilyFollower:
         amplitude bound and the options of the backfill.
     follow : callable
         The path follower of the backfill (:func:`mmshbm.core.continuation.continue_branch`).
+    starts : FamilyStarts, optional
+        The starts of the deflated search (``family.search == "deflated"``); default
+        :class:`~mmshbm.family.deflation.ProblemStarts` of the problem.
     """
 
-    def __init__(self, family: FamilyOptions, options: ContinuationOptions, follow: Callable):
+    def __init__(self, family: FamilyOptions, options: ContinuationOptions, follow: Callable,
+                 starts: FamilyStarts | None = None):
         self.family = family
+        self.starts = starts
         self.options = options
         self.follow = follow
         self.guard = FamilyGuard(family.family_share, family.max_excursion)
@@ -99,17 +108,24 @@ class FamilyFollower:
         point (:func:`_backfill`); the points in increasing amplitude, the landing last."""
         opt, guard = self.options, self.guard
         try:
-            u_j, nit_j, hist_j, rec_j, t_j, target, i_from = jump(
-                problem, guard, points, records, step=self.family.jump_step, amplitude_max=self.amplitude_max,
-                newton_tol=opt.newton_tol, max_newton=opt.max_newton, monitor=_pinned_monitor,
-                coexisting=lambda u, t, a, rec: _coexisting(self.follow, problem, u, t, a, rec, opt,
-                                                            self.family, self.amplitude_max),
-                descend=lambda u, t, a, a_to: _descend(self.follow, problem, u, t, a, a_to, opt, self.family))
+            if self.family.search == "deflated":
+                u_j, nit_j, hist_j, rec_j, t_j, target, i_from = search_beyond(
+                    problem, guard, points, records, options=self.family, amplitude_max=self.amplitude_max,
+                    newton_tol=opt.newton_tol, max_newton=opt.max_newton, monitor=_pinned_monitor,
+                    starts=self.starts)
+            else:
+                u_j, nit_j, hist_j, rec_j, t_j, target, i_from = jump(
+                    problem, guard, points, records, step=self.family.jump_step,
+                    amplitude_max=self.amplitude_max, newton_tol=opt.newton_tol, max_newton=opt.max_newton,
+                    monitor=_pinned_monitor,
+                    coexisting=lambda u, t, a, rec: _coexisting(self.follow, problem, u, t, a, rec, opt,
+                                                                self.family, self.amplitude_max),
+                    descend=lambda u, t, a, a_to: _descend(self.follow, problem, u, t, a, a_to, opt,
+                                                           self.family))
         except FamilyEnded as err:
-            text = str(err)
-            prefix = "family ended at "
-            raise RelocationFailed("at " + text[len(prefix):] if text.startswith(prefix) else text,
-                                   kind=Status.FAMILY_ENDED) from None
+            end = err.end
+            raise RelocationFailed(end.detail(), kind=Status.FAMILY_ENDED if end.ended else None,
+                                   cause=end) from None
         except PinnedFailure as err:
             raise RelocationFailed(str(err)) from None
         A_from = float(records[i_from]["amplitude"])

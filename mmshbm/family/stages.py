@@ -34,10 +34,10 @@ in a far search up to the bound (30 more), and last by continuing the orbit in t
 harmonics (``problem.harmonic_landing``: a low-harmonic family's orbit at the target,
 solved again with more and more harmonics; at most 8 targets), then above the bound,
 followed back down onto it, and last by a homotopy from the orbit of the fundamental's
-family raised to H (``problem.homotopy_landing``, :mod:`mmshbm.core.family_landings`; at
+family raised to H (``problem.homotopy_landing``, :mod:`mmshbm.family.landings`; at
 most 4 targets). When nothing lands and the starting mode's own orbit lost the
 fundamental's majority at the frontier, the family ended there
-(:class:`~mmshbm.core.family_end.FamilyEnded`). The
+(:class:`~mmshbm.family.end.FamilyEnded`). The
 continuation goes on from there; the skipped interval is recorded as a ``"jump"``
 special point. Points of the excursion stay on the branch with
 ``record["on_family"] = 0``.
@@ -50,9 +50,11 @@ import math
 
 import numpy as np
 
-from .family_end import FamilyEnded, end_of_family, turned_back
-from .family_guard import FAMILY_RECORD, FamilyGuard, family_value
-from .family_landings import (
+from ..core.pinned import PinnedFailure, solve_at_amplitude
+from .definition import FAMILY_RECORD, family_value, on_family
+from .end import Attempt, FamilyEnd, FamilyEnded, crossing, turned_back
+from .guard import FamilyGuard
+from .landings import (
     LIMIT_SLACK,
     MAX_FAR_TARGETS,
     MAX_LADDERS,
@@ -63,7 +65,6 @@ from .family_landings import (
     harmonic_search,
     homotopy_search,
 )
-from .pinned import PinnedFailure, solve_at_amplitude
 
 __all__ = ["FAMILY_RECORD", "FamilyEnded", "FamilyGuard", "family_value", "jump"]
 
@@ -83,10 +84,24 @@ class _Outside(PinnedFailure):
     """A predictor outside the jump's trust region (not solved, not counted)."""
 
 
-class _OffFamily(PinnedFailure):
+class _Converged(PinnedFailure):
+    """A pinned solve that converged to an orbit the jump refuses; ``orbit`` is its
+    (frequency Hz, fundamental share)."""
+
+    def __init__(self, message: str, orbit: tuple[float, float]):
+        super().__init__(message)
+        self.orbit = orbit
+
+
+class _OffFamily(_Converged):
     """A pinned solve that converged to a point off the family (by its fundamental share).
     The far search does not repeat it: only its wider trust region could change where
     Newton goes from the same start, which is rare for a solve that converged."""
+
+
+class _Rejected(_Converged):
+    """A pinned solve that converged on the family outside the jump's frequency window
+    (another branch)."""
 
 
 
@@ -170,13 +185,13 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     than a filtered passage's (:func:`_nearer_landing`). When all of these fail, the
     problem's ``harmonic_landing`` (if any) gives the orbit at each target continued in
     the harmonics from a low-harmonic family, up to the problem's
-    ``family_frequency_ceiling`` (:func:`~mmshbm.core.family_landings.harmonic_search`);
+    ``family_frequency_ceiling`` (:func:`~mmshbm.family.landings.harmonic_search`);
     when that fails too, the
     family is sought above the bound and followed back down onto it by ``descend(u,
     tangent, amplitude, amplitude_max)`` (None or the tuple (u, iterations, history,
     record, tangent) at ``amplitude_max``; :func:`_beyond_bound`), and last
     ``homotopy_landing`` gives the orbit reached by a homotopy from the fundamental's
-    family (:func:`~mmshbm.core.family_landings.homotopy_search`).
+    family (:func:`~mmshbm.family.landings.homotopy_search`).
 
     Returns
     -------
@@ -186,7 +201,7 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     ------
     FamilyEnded
         If no attempt lands and the branch's point after the frontier has lost the
-        fundamental's share (:func:`~mmshbm.core.family_end.end_of_family`).
+        fundamental's share (:func:`~mmshbm.family.end.end_of_family`).
     PinnedFailure
         If no attempt lands on the family otherwise.
     """
@@ -219,7 +234,32 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
 
     solves = [0, _MAX_SOLVES]  # solves made, solves allowed
 
+    tried = []  # the Attempt of every pinned solve
+    stage = ["filtered"]  # the search now running
+
     def accept(u0, target, f_pred):
+        try:
+            u, nit, hist, rec, t = solved(u0, target, f_pred)
+        except _Outside:
+            raise
+        except _Exhausted:
+            raise
+        except _OffFamily as err:
+            tried.append(Attempt(stage[0], stage[0], float(target), "off the family", *err.orbit))
+            raise
+        except _Rejected as err:
+            tried.append(Attempt(stage[0], stage[0], float(target), "rejected", *err.orbit))
+            raise
+        except (PinnedFailure, ArithmeticError, ValueError):
+            tried.append(Attempt(stage[0], stage[0], float(target), "failed"))
+            raise
+        share = family_value(rec)
+        f = float(rec.get("frequency", math.nan))
+        share = math.nan if share is None else share
+        tried.append(Attempt(stage[0], stage[0], float(target), "landed", f, share))
+        return u, nit, hist, rec, t
+
+    def solved(u0, target, f_pred):
         f_hi = window["hi"]
         if admissible is not None and not admissible(u0):
             raise _Outside("the predictor lies outside the trust region")
@@ -231,8 +271,9 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
         rec = monitor(problem, u)
         f = rec.get("frequency", math.nan)
         share = family_value(rec)
-        if share is not None and share < guard.family_share:
-            raise _OffFamily(f"landed off the family (fundamental share {share:.3f}) at {target:.4g}")
+        orbit = (float(f), math.nan if share is None else float(share))
+        if on_family(rec, guard.family_share) is False:
+            raise _OffFamily(f"landed off the family (fundamental share {share:.3f}) at {target:.4g}", orbit)
         # near the predicted frequency, or on the rising side of the frontier: a backbone
         # with rigid stops only stiffens, so the family beyond the frontier lies at or
         # above the frontier's frequency (a predictor taken from a point near grazing
@@ -240,10 +281,10 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
         near = math.isfinite(f_pred) and abs(f - f_pred) <= 0.15 * abs(f_pred)
         rising = math.isfinite(f_frontier) and f >= f_frontier * (1.0 - 1e-6)
         if math.isfinite(f_pred) and not (near or rising):
-            raise PinnedFailure(f"landed on another branch ({f:.4g} instead of about {f_pred:.4g})")
+            raise _Rejected(f"landed on another branch ({f:.4g} instead of about {f_pred:.4g})", orbit)
         if math.isfinite(f_lo) and not 0.7 * f_lo <= f <= _WINDOW_SLACK * f_hi:
-            raise PinnedFailure(f"landed on another branch ({f:.4g} Hz, the family was at "
-                                f"{f_frontier:.4g} Hz, expected up to {f_hi:.4g} Hz)")
+            raise _Rejected(f"landed on another branch ({f:.4g} Hz, the family was at "
+                            f"{f_frontier:.4g} Hz, expected up to {f_hi:.4g} Hz)", orbit)
         return u, nit, hist, rec, t
 
     if landing is not None:  # the problem's own landing (MMS-HBM: filtering the resonant harmonic)
@@ -262,6 +303,7 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
             except (PinnedFailure, ArithmeticError, ValueError, RuntimeError) as err:
                 last_error = f"filtered passage: {err}"
                 log.debug("jump from %d by filtering: %s", origin, last_error)
+    stage[0] = "near"
     origins = guard.origins(lambda i: float(recs[i]["amplitude"]))
     settled = set()  # attempts that landed off the family: the far search does not repeat them
     try:
@@ -292,6 +334,7 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
             far.append(target)
     window["hi"] = max(_frequency_window(recs, guard, far[-1])[1], f_limit if math.isfinite(f_limit) else 0.0)
     solves[:] = [0, _MAX_FAR_SOLVES]
+    stage[0] = "far"
     try:
         return _search(problem, us, recs, guard, origins, far, amplitude_max, accept, frequency_of,
                        monitor, settled)
@@ -302,6 +345,7 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     if ladder is not None:
         try:
             solves[:] = [0, MAX_LADDERS]
+            stage[0] = "harmonics"
             u, nit, hist, rec, t, target = harmonic_search(
                 ladder, guard, far, amplitude_max, newton_tol, max_newton, admissible, accept, frequency_of,
                 monitor, problem, f_ceiling)
@@ -311,6 +355,7 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     beyond = ""
     window_near = window["hi"]
     if far[-1] >= amplitude_max * (1 - 1e-12):
+        stage[0] = "above the bound"
         beyond, down = _beyond_bound(problem, us, recs, guard, origins, amplitude_max, accept, frequency_of,
                                      monitor, settled, window, solves, f_limit, descend)
         if down is not None:
@@ -319,6 +364,7 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     if homotopy is not None:
         window["hi"] = window_near  # the far search's window, not the one above the bound
         solves[:] = [0, MAX_TARGETS + MAX_FAR_TARGETS]  # one acceptance per homotopy
+        stage[0] = "homotopy"
         try:
             u, nit, hist, rec, t, target = homotopy_search(
                 homotopy, guard, far, amplitude_max, accept, frequency_of, monitor, problem, tol=newton_tol,
@@ -329,6 +375,7 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     if problem.with_frequency is not None:
         window["hi"] = f_ceiling * (1.0 + LIMIT_SLACK)
         solves[:] = [0, 2 * MAX_SCAN_TARGETS * N_SCAN_FREQUENCIES]  # two starts
+        stage[0] = "frequency scan"
         try:
             u, nit, hist, rec, t, target = frequency_search(problem, guard, us, recs, far, f_ceiling, accept,
                                                             descend)
@@ -337,10 +384,11 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
             far_error += f"; in frequency up to {f_ceiling:.4g} Hz: {err}"
     message = (f"jump from amplitude {frontier:.4g} failed{reason}{last_error}; the far search "
                f"up to {far[-1]:.4g}: {far_error}{beyond}")
-    end = "" if beyond else end_of_family(recs, guard, problem)
-    if end:
-        raise FamilyEnded(f"{end}; no orbit on the family found beyond it up to {far[-1]:.4g} ({message})")
-    raise PinnedFailure(turned_back(recs, guard) + message)
+    cross = None if beyond else crossing(recs, guard, problem)
+    end = FamilyEnd(ended=cross is not None, frontier=frontier, frontier_frequency=f_frontier,
+                    searched_to=float(far[-1]), crossing=cross, attempts=tuple(tried),
+                    notes=message if cross is not None else turned_back(recs, guard) + message)
+    raise FamilyEnded(end)
 
 
 #: pinned solves of the search above the bound (where the family resumes)

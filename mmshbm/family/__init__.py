@@ -1,0 +1,25 @@
+"""The family of a nonlinear mode: which orbits belong to it and how a backbone stays on it.
+
+Method-agnostic; it uses the continuation core (:mod:`mmshbm.core`) and nothing above it.
+
+* :mod:`~mmshbm.family.definition`: the definition, a predicate on one orbit
+  (docs/resonances.md);
+* :mod:`~mmshbm.family.options`: :class:`~mmshbm.family.options.FamilyOptions`, every
+  threshold of the decisions;
+* :mod:`~mmshbm.family.guard`: which points of a branch are on the family, and when the
+  branch has left it;
+* :mod:`~mmshbm.family.follower`: the continuation driver's event plug-in (search beyond
+  the frontier, backfill);
+* :mod:`~mmshbm.family.deflation`: the deflated pinned search beyond a frontier;
+* :mod:`~mmshbm.family.stages`, :mod:`~mmshbm.family.landings`,
+  :mod:`~mmshbm.family.homotopy`: the staged search (the default);
+* :mod:`~mmshbm.family.end`: why a family ends, as a value
+  (:class:`~mmshbm.family.end.FamilyEnd`).
+
+Importing the package imports only the options and the definition.
+"""
+
+from .definition import FAMILY_RECORD, family_value, on_family
+from .options import FamilyOptions
+
+__all__ = ["FAMILY_RECORD", "FamilyOptions", "family_value", "on_family"]

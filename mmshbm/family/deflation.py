@@ -1,0 +1,353 @@
+"""The one search for the family beyond a frontier: deflated Newton at pinned amplitudes.
+
+Where the branch has left the family (docs/resonances.md), the family's continuation is
+sought at amplitudes A_i = frontier·(1 + jump_step·2^i), i < ``max_targets`` (capped at the
+amplitude bound), by Newton on the pinned system G(u) = [R(u); A(u)/A_i − 1] = 0
+(:mod:`mmshbm.core.pinned`) from a fixed set of starts (:class:`BranchStarts`; a method's
+own through the problem's ``family_starts()``). Every orbit u_k found at A_i is
+*deflated*: Newton then solves F(u) = M(u) G(u) = 0 with
+
+    M(u) = Π_k (‖u − u_k‖⁻ᵖ + σ),      p = :data:`POWER`, σ = :data:`SHIFT`,
+
+which has the same roots as G except the u_k (M → ∞ there), so from the same start Newton
+goes to another orbit or fails. With d the Newton step of G, the Newton step of F is
+d / (1 − ∇log M·d) (Sherman–Morrison on the rank-one change of the Jacobian), so one
+bordered solve per iteration serves both. At the first target where orbits of the
+family are found (:func:`mmshbm.family.definition.on_family` with the first mode's
+frequency band, :func:`~mmshbm.family.definition.frequency_band`), the one of largest fundamental share is the
+landing (the backbone rule of docs/resonances.md); the follower fills the family back
+down from it to the frontier. When none is found up to the last target the search ends
+the branch with a :class:`~mmshbm.family.end.FamilyEnd` that lists every solve.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+from collections.abc import Callable
+from typing import Protocol
+
+import numpy as np
+
+from ..core.bordered import bordered_solve
+from ..core.pinned import PinnedFailure, StartOutside, amplitude_and_gradient
+from ..core.problem import as_problem
+from .definition import family_value, frequency_band, on_family
+from .end import Attempt, FamilyEnd, FamilyEnded, crossing, turned_back
+from .guard import FamilyGuard
+from .options import FamilyOptions
+
+__all__ = ["POWER", "SHIFT", "FamilyStarts", "KnownOrbit", "BranchStarts", "deflated_solve", "deflation",
+           "search_beyond"]
+
+log = logging.getLogger(__name__)
+
+#: p of the deflation operator (2: M grows like the inverse squared distance to a known orbit)
+POWER = 2
+
+#: σ of the deflation operator (dimensionless, the unknowns are scaled to order one): far
+#: from every known orbit M tends to σ^(number known), a constant factor of the residual
+SHIFT = 1.0
+
+#: relative distance (to the orbit's norm) below which a converged orbit is the known one:
+#: a round-off bound of Newton's convergence, far below any two distinct orbits
+_SAME_ORBIT_ROUNDOFF = 1e-8
+
+#: the trust region of Newton's iterates: the first mode's frequency band widened by this
+#: factor either way (a numerical safeguard, not an acceptance rule: the path to an orbit
+#: in the band may leave it, but an iterate far beyond it evaluates harmonics above the
+#: modes the condensation kept)
+_TRUST_FACTOR = 2.0
+
+#: a pinned solve's iterations in units of the corrector's ``max_newton``: a start away
+#: from the branch needs more than a predictor on it (on the nonsmooth residual a solve
+#: can creep for 20–28 iterations before it converges; :mod:`mmshbm.core.pinned`)
+_NEWTON_FACTOR = 3
+
+#: Newton's step halvings per iteration (the last step, λ = 1/32, is taken whatever its
+#: residual, as in :func:`mmshbm.core.pinned.solve_at_amplitude`)
+_HALVINGS = 6
+
+
+class KnownOrbit(PinnedFailure):
+    """A deflated solve converged onto an orbit already found (within round-off)."""
+
+
+def deflation(u: np.ndarray, known: list, shift: float) -> tuple[float, np.ndarray]:
+    """(M(u), ∇log M(u)) of the deflation operator over the ``known`` orbits (shape (n,)
+    each) with shift σ = ``shift``; (1, 0) without known orbits."""
+    M = 1.0
+    w = np.zeros(len(u))
+    for uk in known:
+        e = u - uk
+        r2 = float(e @ e)
+        if r2 == 0.0:
+            return math.inf, w
+        r_p = r2 ** (-POWER / 2)
+        m = r_p + shift
+        M *= m
+        w += (-POWER * r_p / r2 / m) * e
+    return M, w
+
+
+def deflated_solve(problem, u0: np.ndarray, amplitude: float, known: list, *, shift: float = SHIFT,
+                   tol: float = 1e-10, max_iter: int = 30, step_tol: float = 1e-8,
+                   admissible: Callable[[np.ndarray], bool] | None = None):
+    """Newton on the deflated pinned system M(u)·[R(u); A(u)/A* − 1] = 0 from ``u0``.
+
+    Converged when the undeflated residual's infinity norm is at most ``tol`` (or the
+    step at most ``step_tol`` with the residual at most √tol, as
+    :func:`mmshbm.core.pinned.solve_at_amplitude`), so the result is an orbit of the
+    undeflated problem. ``admissible(u)`` is the trust region of the iterates (a step
+    that leaves it is halved; a start outside it raises
+    :class:`~mmshbm.core.pinned.StartOutside`).
+
+    Returns
+    -------
+    u, iterations, residual history, unit tangent at u (oriented to growing amplitude)
+
+    Raises
+    ------
+    KnownOrbit
+        Converged within round-off of a known orbit (deflation makes this rare).
+    PinnedFailure
+        No convergence, a singular system, a non-finite residual or the trust region left.
+    """
+    if not amplitude > 0:
+        raise ValueError(f"amplitude must be positive, got {amplitude!r}")
+    problem = as_problem(problem)
+    gradient = problem.amplitude_and_gradient or (lambda v: amplitude_and_gradient(problem, v))
+    u = np.array(u0, dtype=float)
+    if admissible is not None and not admissible(u):
+        raise StartOutside("the start lies outside the trust region")
+    history = []
+    du_norm = math.inf
+    for it in range(max_iter + 1):
+        try:
+            R, J = problem.residual_and_jacobian(u)
+            A, g = gradient(u)
+        except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError) as err:
+            raise PinnedFailure(f"evaluation failed: {err}") from None
+        c = A / amplitude - 1.0
+        norm = max(float(np.abs(R).max()) if R.size else 0.0, abs(c))
+        history.append(norm)
+        if not math.isfinite(norm):
+            raise PinnedFailure("non-finite residual")
+        if norm <= tol or (du_norm <= step_tol and norm <= math.sqrt(tol)):
+            _check_new(u, known)
+            rhs = np.zeros(len(u))
+            rhs[-1] = 1.0
+            t = bordered_solve(J, g / amplitude, rhs)
+            if not np.all(np.isfinite(t)):
+                raise PinnedFailure("singular system at the solution")
+            return u, it, np.array(history), t / np.linalg.norm(t)
+        if it == max_iter:
+            break
+        rhs = np.empty(len(u))
+        rhs[:-1] = R
+        rhs[-1] = c
+        du = bordered_solve(J, g / amplitude, rhs)  # the undeflated step is −du
+        if not np.isfinite(du).all():
+            raise PinnedFailure("singular system")
+        M, w = deflation(u, known, shift)
+        denominator = 1.0 + float(w @ du)
+        if not (math.isfinite(M) and denominator != 0.0):
+            raise PinnedFailure("the deflated step is undefined (at a known orbit)")
+        du = du / denominator
+        du_norm = float(np.abs(du).max())
+        lam = 1.0
+        for halving in range(_HALVINGS + 1):
+            trial = u - lam * du
+            last = halving == _HALVINGS
+            if admissible is not None and not admissible(trial):
+                if last:
+                    raise PinnedFailure(f"Newton left the trust region (iteration {it + 1})")
+            elif last or _deflated_norm(problem, trial, amplitude, known, shift) < M * norm:
+                break
+            lam *= 0.5
+        u = u - lam * du
+    raise PinnedFailure(f"no convergence in {max_iter} iterations (residual {history[-1]:.2e})")
+
+
+def _check_new(u: np.ndarray, known: list) -> None:
+    scale = max(float(np.abs(u).max()), 1.0)
+    for uk in known:
+        if float(np.abs(u - uk).max()) <= _SAME_ORBIT_ROUNDOFF * scale:
+            raise KnownOrbit("converged onto an orbit already found")
+
+
+def _deflated_norm(problem, u: np.ndarray, amplitude: float, known: list, shift: float) -> float:
+    """M(u)·‖G(u)‖∞ (inf where the evaluation fails)."""
+    try:
+        r = float(np.abs(problem.residual(u)).max())
+        A = (problem.amplitude_value(u) if problem.amplitude_value is not None
+             else amplitude_and_gradient(problem, u)[0])
+    except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError):
+        return math.inf
+    return deflation(u, known, shift)[0] * max(r, abs(A / amplitude - 1.0))
+
+
+class FamilyStarts(Protocol):
+    """What the deflated search starts Newton from (supplied by composition)."""
+
+    def landings(self, us: list, recs: list, guard: FamilyGuard,
+                 amplitude_max: float) -> list[tuple[str, np.ndarray, float]]:
+        """(name, u0, amplitude) per start that picks its own amplitude (m) beyond the
+        frontier (MMS-HBM: the resonance passed with the resonant harmonic filtered out)."""
+
+    def starts(self, us: list, recs: list, guard: FamilyGuard, amplitude: float,
+               amplitude_max: float) -> list[tuple[str, np.ndarray]]:
+        """(name, u0) per start at the pinned ``amplitude`` (m), best first."""
+
+
+class BranchStarts:
+    """The method-agnostic starts of the deflated search, from the branch alone: from the
+    frontier and from the family points of largest share in the windows below it (before
+    an internal resonance drew energy from them; :meth:`FamilyGuard.origins`), the orbit
+    extrapolated in amplitude (a polynomial of degree <= 2 through the last family points
+    up to it); then the linear mode at the target (``linear_mode_point``, where the
+    problem has one). A method adds its own by subclassing (:meth:`origin_starts`,
+    :meth:`landings`) and offers the object as the problem's ``family_starts()``
+    (MMS-HBM: :class:`mmshbm.methods.mms.family_starts.MMSHBMStarts`)."""
+
+    def __init__(self, problem):
+        self.problem = problem
+
+    def landings(self, us: list, recs: list, guard: FamilyGuard,
+                 amplitude_max: float) -> list[tuple[str, np.ndarray, float]]:
+        """None here: no start that picks its own amplitude."""
+        return []
+
+    def origin_starts(self, us: list, recs: list, guard: FamilyGuard, origin: int, amplitude: float,
+                      amplitude_max: float) -> list[tuple[str, np.ndarray]]:
+        """The method's starts at ``amplitude`` from the family point ``origin`` (none here)."""
+        return []
+
+    def starts(self, us: list, recs: list, guard: FamilyGuard, amplitude: float,
+               amplitude_max: float) -> list[tuple[str, np.ndarray]]:
+        i = guard.frontier_index
+        A_f = float(recs[i]["amplitude"])
+        out = self.before(us, recs, guard, amplitude)
+        for origin in [i] + [j for j in guard.origins(lambda j: float(recs[j]["amplitude"])) if j != i]:
+            A_o = float(recs[origin]["amplitude"])
+            at = "the frontier" if origin == i else f"{A_o / A_f:.2f} of the frontier"
+            own = self.origin_starts(us, recs, guard, origin, amplitude, amplitude_max)
+            out += [(f"{name} from {at}", u0) for name, u0 in own]
+            clean = [j for j in guard.clean if j <= origin]
+            if clean:
+                out.append((f"extrapolated from {at}", extrapolated(us, recs, clean, amplitude)))
+        linear = getattr(self.problem, "linear_mode_point", None)
+        if linear is not None:
+            try:
+                out.append(("linear mode", linear(amplitude)))
+            except (NotImplementedError, ArithmeticError, ValueError):
+                pass
+        return out
+
+    def before(self, us: list, recs: list, guard: FamilyGuard,
+               amplitude: float) -> list[tuple[str, np.ndarray]]:
+        """Starts tried first at ``amplitude`` (none here)."""
+        return []
+
+
+def extrapolated(us: list, recs: list, clean: list, amplitude: float) -> np.ndarray:
+    """u at ``amplitude`` by a polynomial in the amplitude (degree <= 2) through the last
+    three family points ``clean`` (indices)."""
+    idx = clean[-3:]
+    A = np.array([recs[i]["amplitude"] for i in idx], dtype=float)
+    U = np.array([us[i] for i in idx])
+    if len(idx) == 1 or np.ptp(A) == 0:
+        return U[-1].copy()
+    deg = min(len(idx) - 1, 2)
+    x = (A - A[-1]) / abs(A[-1])
+    coef = np.polyfit(x, U, deg)
+    xt = (amplitude - A[-1]) / abs(A[-1])
+    return sum(c * xt ** (deg - p) for p, c in enumerate(coef))
+
+
+def _targets(frontier: float, amplitude_max: float, options: FamilyOptions) -> list[float]:
+    out = []
+    for i in range(options.max_targets):
+        target = min(frontier * (1.0 + options.jump_step * 2.0**i), amplitude_max)
+        if not out or target > out[-1]:
+            out.append(target)
+    return out
+
+
+def search_beyond(problem, guard: FamilyGuard, us: list, recs: list, *, options: FamilyOptions,
+                  amplitude_max: float, newton_tol: float, max_newton: int, monitor,
+                  starts: FamilyStarts | None = None) -> tuple:
+    """The family's continuation beyond the frontier (see the module docstring).
+
+    Returns
+    -------
+    (u, iterations, history, record, tangent, target, origin) of the landing, as
+    :func:`mmshbm.family.stages.jump`.
+
+    Raises
+    ------
+    FamilyEnded
+        No orbit of the family found; ``err.end`` lists every solve.
+    """
+    if guard.frontier_index < 0:
+        raise PinnedFailure("the branch has no family point to jump from")
+    problem = as_problem(problem)
+    if starts is None:
+        starts = problem.family_starts() if problem.family_starts is not None else BranchStarts(problem)
+    i = guard.frontier_index
+    frontier = float(recs[i]["amplitude"])
+    f_frontier = float(recs[i].get("frequency", math.nan))
+    band = frequency_band(problem, recs, options.band_slack)
+    frequency_of = problem.frequency_of
+    admissible = None
+    if frequency_of is not None and math.isfinite(band[1]):
+        lo, hi = band[0] / _TRUST_FACTOR, band[1] * _TRUST_FACTOR
+
+        def admissible(u):
+            return lo <= frequency_of(u) <= hi
+
+    tried = []
+    landings = starts.landings(us, recs, guard, amplitude_max)
+    targets = sorted(set(_targets(frontier, amplitude_max, options)) | {a for _, _, a in landings})
+    for target in targets:
+        found = []  # (u, iterations, history, record, tangent) of every orbit found at target
+        own = [(name, u0) for name, u0, a in landings if a == target]
+        for name, u0 in own + starts.starts(us, recs, guard, target, amplitude_max):
+            while len(found) < options.max_roots:
+                try:
+                    u, nit, hist, t = deflated_solve(
+                        problem, u0, target, [f[0] for f in found],
+                        tol=newton_tol, max_iter=_NEWTON_FACTOR * max_newton, admissible=admissible)
+                except StartOutside:
+                    tried.append(Attempt("deflated", name, target, "outside"))
+                    break
+                except KnownOrbit:
+                    tried.append(Attempt("deflated", name, target, "known"))
+                    break
+                except PinnedFailure:
+                    tried.append(Attempt("deflated", name, target, "failed"))
+                    break
+                rec = monitor(problem, u)
+                f = float(rec.get("frequency", math.nan))
+                share = family_value(rec)
+                share = math.nan if share is None else share
+                member = on_family(rec, options.family_share, band) is not False
+                tried.append(Attempt("deflated", name, target, "landed" if member else "off the family", f,
+                                     share))
+                found.append((u, nit, hist, rec, t, member))
+                log.debug("deflated search at %.4g from the %s start: %.4g Hz, share %.3f (%s)", target, name,
+                          f, share, "family" if member else "not the family")
+            if len(found) >= options.max_roots:
+                break
+        family = [x for x in found if x[5]]
+        if family:
+            # the tangent solves [J; ∇A/A*] t = e_n: oriented to growing amplitude
+            u, nit, hist, rec, t, _ = max(family, key=lambda x: family_value(x[3]) or 0.0)
+            return u, nit, hist, rec, t, target, i
+    cross = crossing(recs, guard, problem)
+    end = FamilyEnd(ended=cross is not None, frontier=frontier, frontier_frequency=f_frontier,
+                    searched_to=float(targets[-1]), crossing=cross, attempts=tuple(tried))
+    if cross is None:
+        end = dataclasses.replace(end, notes=turned_back(recs, guard) + end.tried())
+    raise FamilyEnded(end)

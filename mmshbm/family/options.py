@@ -1,0 +1,82 @@
+"""The options of the family following: every threshold of its decisions, in one object.
+
+:class:`FamilyOptions` is built by ``ContinuationOptions(follow="family", ...)``
+(:attr:`mmshbm.core.options.ContinuationOptions.family`). The definition it serves is in
+docs/resonances.md and :mod:`mmshbm.family.definition`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .. import _validate as check
+
+__all__ = ["FamilyOptions", "SEARCHES"]
+
+#: the searches beyond a frontier: ``"stages"``, the staged jump of
+#: :mod:`mmshbm.family.stages`; ``"deflated"``, the one deflated pinned search of
+#: :mod:`mmshbm.family.deflation`
+SEARCHES = ("stages", "deflated")
+
+
+@dataclass(frozen=True)
+class FamilyOptions:
+    """Options of the family following (:mod:`mmshbm.family.follower`). Validated on creation.
+
+    Attributes
+    ----------
+    family_share : float
+        The definition's threshold (docs/resonances.md): an orbit belongs to the first
+        mode's family when its fundamental harmonic carries at least this share (0..1) of
+        the period-mean kinetic energy (:func:`mmshbm.family.definition.on_family`).
+        Default 0.5, a majority.
+    max_excursion : int
+        Steps the branch may spend off the family (or below its frontier) before the
+        search beyond the frontier; also the longest backfill. Default 60.
+    jump_step : float
+        Relative amplitude step of the first search target beyond the frontier; the
+        targets are ``frontier·(1 + jump_step·2^i)``. Default 0.02.
+    max_jumps : int
+        Searches beyond a frontier allowed per branch. Default 50.
+    search : {"stages", "deflated"}
+        How the family's continuation beyond a frontier is sought: ``"stages"`` (default),
+        the staged jump (:func:`mmshbm.family.stages.jump`); ``"deflated"``, Newton at
+        pinned amplitudes from a fixed set of starts with the orbits already found
+        deflated (:func:`mmshbm.family.deflation.search_beyond`).
+    max_targets : int
+        Amplitude targets of the deflated search (``i = 0 .. max_targets − 1``, capped at
+        the amplitude bound). Default 12: the last target is 1 + 0.02·2¹¹ ≈ 42 times the
+        frontier, beyond any amplitude bound a backbone is run to.
+    max_roots : int
+        Orbits the deflated search finds at one target before it goes on to the next
+        (each found orbit is deflated, so Newton from the same start must go elsewhere).
+        Default 3.
+    band_slack : float
+        Relative margin of the first mode's frequency band (the definition's second
+        condition, :func:`mmshbm.family.definition.frequency_band`): an orbit of the
+        family has its frequency between the linear mode's and the first mode's with
+        every contact held, each widened by this (the truncated Fourier series of a
+        contact orbit can lie slightly outside). Default 0.01.
+    """
+
+    family_share: float = 0.5
+    max_excursion: int = 60
+    jump_step: float = 0.02
+    max_jumps: int = 50
+    search: str = "stages"
+    max_targets: int = 12
+    max_roots: int = 3
+    band_slack: float = 0.01
+
+    def __post_init__(self):
+        share = check.real_number("family_share", self.family_share)
+        if not 0.0 < share < 1.0:
+            raise ValueError(f"family_share must be in (0, 1), got {self.family_share!r}")
+        check.integer("max_excursion", self.max_excursion, minimum=1)
+        check.positive("jump_step", self.jump_step)
+        check.integer("max_jumps", self.max_jumps, minimum=0)
+        if self.search not in SEARCHES:
+            raise ValueError(f"search must be one of {SEARCHES}, got {self.search!r}")
+        check.integer("max_targets", self.max_targets, minimum=1)
+        check.integer("max_roots", self.max_roots, minimum=1)
+        check.non_negative("band_slack", self.band_slack)

@@ -1,0 +1,72 @@
+"""MMS-HBM's starts of the deflated search beyond a frontier
+(:mod:`mmshbm.family.deflation`), supplied by composition: the problem's
+``family_starts()`` returns a :class:`MMSHBMStarts`."""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from ...family.deflation import BranchStarts
+from ...family.guard import FamilyGuard
+
+__all__ = ["MMSHBMStarts"]
+
+log = logging.getLogger(__name__)
+
+
+class MMSHBMStarts(BranchStarts):
+    """The branch's starts (:class:`~mmshbm.family.deflation.BranchStarts`) and MMS-HBM's:
+    the resonance passed with its harmonic filtered out (``family_landing``, a start that
+    picks its own amplitude, and the state interpolated between the frontier and it at
+    the targets below), the orbit along the auxiliary low-harmonic branch
+    (``family_predictor``) and the orbit scaled to the target (``scaled_state``: far above
+    the gap the system is nearly homogeneous)."""
+
+    def __init__(self, problem):
+        super().__init__(problem)
+        self._landed: list[tuple[np.ndarray, float]] = []  # (u0, amplitude) of this search's landings
+
+    def landings(self, us: list, recs: list, guard: FamilyGuard,
+                 amplitude_max: float) -> list[tuple[str, np.ndarray, float]]:
+        p = self.problem
+        i = guard.frontier_index
+        frontier = float(recs[i]["amplitude"])
+        excursion = us[i + 1:]
+        self._landed = []
+        out = []
+        for origin in guard.origins(lambda j: float(recs[j]["amplitude"])):
+            try:
+                u0, target = p.family_landing(us[origin], recs[origin], excursion, amplitude_max, frontier)
+            except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as err:
+                log.debug("no filtered landing from %d: %s", origin, err)
+                continue
+            if frontier < target <= amplitude_max:
+                out.append(("filtered landing", u0, float(target)))
+                self._landed.append((u0, float(target)))
+        return out
+
+    def before(self, us: list, recs: list, guard: FamilyGuard,
+               amplitude: float) -> list[tuple[str, np.ndarray]]:
+        i = guard.frontier_index
+        A_f = float(recs[i]["amplitude"])
+        out = []
+        for u_l, A_l in self._landed:
+            if A_f < amplitude < A_l:
+                s = (amplitude - A_f) / (A_l - A_f)
+                out.append(("toward the filtered landing", (1.0 - s) * us[i] + s * u_l))
+        return out
+
+    def origin_starts(self, us: list, recs: list, guard: FamilyGuard, origin: int, amplitude: float,
+                      amplitude_max: float) -> list[tuple[str, np.ndarray]]:
+        p = self.problem
+        A_o = float(recs[origin]["amplitude"])
+        out = []
+        try:
+            out.append(("family predictor", p.family_predictor(us[origin], A_o, amplitude, amplitude_max)))
+        except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
+            pass
+        if A_o > 0:
+            out.append(("scaled", p.scaled_state(us[origin], amplitude / A_o)))
+        return out

@@ -1,0 +1,131 @@
+"""The deflated search beyond a frontier (:mod:`mmshbm.family.deflation`) on a problem
+whose orbits are known in closed form: at amplitude A the circle x² + y² = 1 meets the
+line x = A − 2 in exactly two points, y = ±√(1 − (A − 2)²)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from mmshbm.core.pinned import PinnedFailure
+from mmshbm.family.deflation import KnownOrbit, deflated_solve, deflation, search_beyond
+from mmshbm.family.end import FamilyEnded
+from mmshbm.family.guard import FamilyGuard
+from mmshbm.family.options import FamilyOptions
+
+
+class Circle:
+    """u = (x, y); R(u) = x² + y² − 1; amplitude x + 2; frequency 1 + y Hz; fundamental
+    share ``share0 + share1·y``."""
+
+    n_unknowns = 2
+
+    def __init__(self, share0: float, share1: float):
+        self.share0, self.share1 = share0, share1
+
+    def residual(self, u):
+        return np.array([u[0] ** 2 + u[1] ** 2 - 1.0])
+
+    def residual_and_jacobian(self, u):
+        return self.residual(u), np.array([[2 * u[0], 2 * u[1]]])
+
+    def monitor(self, u):
+        return {"amplitude": float(u[0] + 2.0), "frequency": float(1.0 + u[1]),
+                "fundamental_share": float(self.share0 + self.share1 * u[1])}
+
+
+def _roots(A):
+    x = A - 2.0
+    y = math.sqrt(1.0 - x * x)
+    return np.array([x, y]), np.array([x, -y])
+
+
+def test_deflation_finds_both_orbits_from_one_start_and_then_none():
+    """From one start Newton finds one orbit; with it deflated, the other; with both
+    deflated it fails: it never returns a known orbit (to 1e-12, Newton's tolerance times
+    the condition, both orbits being well separated)."""
+    A = 1.53
+    up, down = _roots(A)
+    problem = Circle(0.6, 0.1)
+    start = np.array([A - 2.0, 0.3])
+    u1 = deflated_solve(problem, start, A, [])[0]
+    u2 = deflated_solve(problem, start, A, [u1])[0]
+    assert min(np.abs(u1 - up).max(), np.abs(u1 - down).max()) < 1e-12
+    other = down if np.abs(u1 - up).max() < 1e-12 else up
+    assert np.abs(u2 - other).max() < 1e-12
+    rng = np.random.default_rng(5)
+    for u0 in rng.uniform(-1.5, 1.5, size=(20, 2)):
+        with pytest.raises(PinnedFailure):
+            deflated_solve(problem, u0, A, [u1, u2])
+
+
+def test_deflation_operator_is_infinite_at_a_known_orbit_and_tends_to_the_shift_far_away():
+    """M(u) = Π (‖u − u_k‖⁻² + σ): the known orbit is a pole, far from it M → σ, and the
+    gradient of log M is that of −log ‖u − u_k‖² near it (finite differences, 1e-6)."""
+    uk = np.array([0.2, -0.4])
+    assert deflation(uk, [uk], 1.0)[0] == math.inf
+    assert abs(deflation(uk + 1e6, [uk], 1.0)[0] - 1.0) < 1e-11
+    u = np.array([0.5, 0.1])
+    _, w = deflation(u, [uk], 1.0)
+    h = 1e-6
+    log_m = [math.log(deflation(u + s * h * e, [uk], 1.0)[0]) for e in np.eye(2) for s in (1, -1)]
+    fd = [(log_m[2 * i] - log_m[2 * i + 1]) / (2 * h) for i in range(2)]
+    assert np.abs(w - fd).max() < 1e-6
+
+
+class _Start:
+    def __init__(self, y):
+        self.y = y
+
+    def landings(self, us, recs, guard, amplitude_max):
+        return []
+
+    def starts(self, us, recs, guard, amplitude, amplitude_max):
+        return [("fixed", np.array([amplitude - 2.0, self.y]))]
+
+
+def _branch(problem, amplitudes):
+    us = [_roots(a)[0] for a in amplitudes]
+    recs = [problem.monitor(u) for u in us]
+    guard = FamilyGuard(0.5, 60)
+    for i, rec in enumerate(recs):
+        guard.observe(i, rec)
+    return us, recs, guard
+
+
+def test_the_search_returns_both_coexisting_orbits_and_lands_on_the_larger_share():
+    """Both orbits at the first target hold the family's share (0.6 ± 0.1·y): the search
+    finds both (two "landed" attempts, then a failure with both deflated) and lands on
+    the one of larger share, y > 0."""
+    problem = Circle(0.6, 0.1)
+    us, recs, guard = _branch(problem, [1.3, 1.4, 1.5])
+    options = FamilyOptions(search="deflated")
+    u, _, _, rec, t, target, origin = search_beyond(
+        problem, guard, us, recs, options=options, amplitude_max=2.5, newton_tol=1e-12, max_newton=10,
+        monitor=lambda p, v: p.monitor(v), starts=_Start(-0.2))
+    assert target == pytest.approx(1.5 * 1.02, rel=1e-15) and origin == 2
+    assert np.abs(u - _roots(target)[0]).max() < 1e-12
+    assert abs(rec["fundamental_share"] - (0.6 + 0.1 * u[1])) < 1e-15
+
+
+def test_a_search_that_finds_only_orbits_off_the_family_ends_it_with_what_it_tried():
+    """Shares 0.45 ± 0.04·y: every orbit fails the predicate. The search tries each target
+    (deflating what it found), ends with a FamilyEnd whose attempts list both orbits per
+    target as off the family, and the last target is the bound."""
+    problem = Circle(0.45, 0.04)
+    us, recs, guard = _branch(problem, [1.3, 1.4, 1.5])
+    for rec in recs:
+        rec["fundamental_share"] = 0.9  # the branch below was on the family
+    guard = FamilyGuard(0.5, 60)
+    for i, rec in enumerate(recs):
+        guard.observe(i, rec)
+    options = FamilyOptions(search="deflated", max_targets=4)
+    with pytest.raises(FamilyEnded) as info:
+        search_beyond(problem, guard, us, recs, options=options, amplitude_max=1.6, newton_tol=1e-12,
+                      max_newton=10, monitor=lambda p, v: p.monitor(v), starts=_Start(0.2))
+    end = info.value.end
+    assert not end.ended and end.searched_to == 1.6 and end.frontier == 1.5
+    assert end.outcomes()["off the family"] == 2 * len({a.amplitude for a in end.attempts})
+    assert "landed" not in end.outcomes()
+    with pytest.raises(KnownOrbit):
+        deflated_solve(problem, us[-1], 1.5, [us[-1]], max_iter=0)
