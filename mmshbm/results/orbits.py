@@ -398,5 +398,8 @@ def orbits_at(branch, amplitude: float, *, search: bool = False, tol: float = 1e
             add(orbit)
     ordered = (found[:n_backbone] + sorted(found[n_backbone:n_branch], key=lambda o: o.frequency)
                + sorted(found[n_branch:], key=lambda o: o.frequency))
-    reason = "" if ordered else "no orbit of the family converged at this amplitude"
+    reason = ""
+    if not ordered:
+        reason = ("no orbit of the family converged at this amplitude"
+                  + ("" if n_backbone else " (the backbone has none: frequency_at is NaN here)"))
     return OrbitsAt(a, tuple(ordered), reason, searched, tuple(o.frequency for o in rejected))
