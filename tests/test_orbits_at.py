@@ -163,7 +163,8 @@ def test_deflation_sends_newton_to_the_other_root():
 def test_bad_amplitudes_are_refused_or_answered_with_a_reason():
     """A non-positive or non-finite amplitude, or an unknown unit, is a ValueError naming
     it; an amplitude beyond the branch gets no orbit, a reason and a BranchWarning; a
-    search on a solver without harmonics is refused."""
+    search on a solver that records no fundamental share (shooting, penalty-HBM) is
+    refused, its backbone's orbit listed without it."""
     model = mmshbm.OneDofOscillator(1, 1, 4, 1).model()
     b = _backbone(model, harmonics=5, max_amplitude=3.0)
     for bad in (0.0, -1.0, math.nan):
@@ -176,6 +177,10 @@ def test_bad_amplitudes_are_refused_or_answered_with_a_reason():
     assert len(r) == 0 and "outside" in r.reason
     r = b.orbits_at(2.0, search=True)
     assert len(r) >= 1 and r[0].source == "backbone" and r[0].frequency == pytest.approx(b.frequency_at(2.0))
-    s = _backbone(model, method="shooting", max_amplitude=3.0)
-    with pytest.raises(ValueError, match="search"):
-        s.orbits_at(2.0, search=True)
+    for method in ("shooting", "penalty"):  # no fundamental share to search by: refused
+        other = _backbone(model, method=method, harmonics=5, max_amplitude=3.0)
+        with pytest.raises(ValueError, match="search"):
+            other.orbits_at(2.0, search=True)
+        plain = other.orbits_at(2.0)
+        assert len(plain) == 1 and plain[0].source == "backbone"
+        assert plain[0].frequency == pytest.approx(other.frequency_at(2.0), rel=1e-12)

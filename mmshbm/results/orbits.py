@@ -74,7 +74,8 @@ class Orbit:
     frequency : float
         Its frequency (Hz).
     fundamental_share : float
-        The fundamental harmonic's share of the kinetic energy (0..1).
+        The fundamental harmonic's share of the kinetic energy (0..1; NaN where the solver
+        does not record it, e.g. penalty-HBM: such an orbit is listed only as the backbone's).
     state : ndarray, shape (n_unknowns,)
         The solver's scaled unknowns (the layout of ``Branch.states``; read-only).
     source : str
@@ -98,8 +99,10 @@ class Orbit:
 
     def same_as(self, other: Orbit, rtol: float = SAME_ORBIT_RTOL) -> bool:
         """Whether ``other`` is this orbit: frequencies and fundamental shares within ``rtol``."""
-        return (abs(self.frequency - other.frequency) <= rtol * abs(self.frequency)
-                and abs(self.fundamental_share - other.fundamental_share) <= max(rtol, 1e-12))
+        if not abs(self.frequency - other.frequency) <= rtol * abs(self.frequency):
+            return False
+        shares = (self.fundamental_share, other.fundamental_share)
+        return not all(math.isfinite(x) for x in shares) or abs(shares[0] - shares[1]) <= max(rtol, 1e-12)
 
 
 @dataclass(frozen=True)
@@ -147,9 +150,9 @@ class OrbitsAt:
 class Deflated(ContinuationProblemBase):
     """The residual of ``problem`` deflated at the states ``known``: R_d(u) = M(u) R(u) with
     M(u) = Π_k (‖u − u_k‖^−p + σ) (module docstring). M ≥ σ^K, so ‖R‖ ≤ ‖R_d‖ / σ^K: a
-    deflated solve that converges has converged on R too; at a known state R_d does not
-    vanish (for p ≥ 1 the product tends to a non-zero limit along every direction). The
-    amplitude and the monitor are the problem's."""
+    deflated solve that converges has converged on R too; toward a known (regular) root
+    ‖R_d‖ does not tend to zero for p ≥ 1 (R shrinks like ‖u − u_k‖, the factor grows
+    like ‖u − u_k‖^−p). The amplitude and the monitor are the problem's."""
 
     def __init__(self, problem, known, power: float = DEFLATION_POWER, shift: float = DEFLATION_SHIFT):
         self.problem = as_problem(problem)
@@ -211,10 +214,13 @@ def _orbit(solver, u, amplitude: float, source: str, origin: str) -> Orbit | Non
 
 def _half_period_shift(solver, u: np.ndarray) -> np.ndarray | None:
     """``u`` with the time origin moved by half a period (cosine coefficient k times
-    (−1)^k), for a harmonic balance solver with ``unpack``/``pack``; None otherwise."""
+    (−1)^k), for a harmonic balance solver whose ``unpack`` gives one row per harmonic
+    0..H; None otherwise."""
     if not (hasattr(solver, "unpack") and hasattr(solver, "pack")):
         return None
     a, omega = solver.unpack(u)
+    if np.ndim(a) != 2 or a.shape[0] != int(getattr(solver, "H", -1)) + 1:
+        return None
     sign = (-1.0) ** np.arange(a.shape[0])
     return np.asarray(solver.pack(a * sign[:, None], omega), dtype=float)
 
@@ -303,6 +309,21 @@ def _outside(branch, amplitude: float) -> str:
     return f"{amplitude:.4g} m lies outside the amplitudes the branch covers, {span}"
 
 
+def _searchable(branch, solver, amplitude: float) -> bool:
+    """Whether the search can run on ``solver``: harmonic balance with ``unpack``/``pack``
+    and a linear start, whose monitor records ``fundamental_share`` (the family rule)."""
+    from .._method_info import is_harmonic_balance
+
+    if not (is_harmonic_balance(branch.method) and int(branch.harmonics) >= 1
+            and all(hasattr(solver, n) for n in ("unpack", "pack", "linear_mode_point"))):
+        return False
+    try:
+        start = np.asarray(solver.linear_mode_point(amplitude), dtype=float)
+        return "fundamental_share" in solver.monitor(start)
+    except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
+        return False
+
+
 def orbits_at(branch, amplitude: float, *, search: bool = False, tol: float = 1e-10) -> OrbitsAt:
     """The starting mode's family's orbits at ``amplitude`` (m) that ``branch`` knows, and
     with ``search`` also those a deflated Newton search finds there (module docstring).
@@ -314,8 +335,8 @@ def orbits_at(branch, amplitude: float, *, search: bool = False, tol: float = 1e
     amplitude : float
         The amplitude (m), > 0.
     search : bool
-        Also search for orbits the branch did not visit (harmonic balance solvers with
-        ``unpack``/``pack``: MMS-HBM, penalty-HBM).
+        Also search for orbits the branch did not visit (harmonic balance solvers that
+        record the fundamental's share: MMS-HBM).
     tol : float
         Newton tolerance of every solve.
 
@@ -331,7 +352,6 @@ def orbits_at(branch, amplitude: float, *, search: bool = False, tol: float = 1e
         For an amplitude that is not a positive number, or ``search`` with a solver that
         does not expose its harmonics.
     """
-    from .._method_info import is_harmonic_balance
     from .._warnings import BranchWarning
 
     a = float(amplitude)
@@ -343,11 +363,10 @@ def orbits_at(branch, amplitude: float, *, search: bool = False, tol: float = 1e
         warnings.warn(f"orbits_at: {why}: no orbit listed", BranchWarning, stacklevel=3)
         return OrbitsAt(a, (), why)
     solver = branch._require_solver()
-    if search and not (is_harmonic_balance(branch.method) and int(branch.harmonics) >= 1
-                       and all(hasattr(solver, n) for n in ("unpack", "pack", "linear_mode_point"))):
+    if search and not _searchable(branch, solver, a):
         raise ValueError(f"search=True needs a harmonic balance branch whose solver exposes its harmonics "
-                         f"(unpack, pack, linear_mode_point); this one is {branch.method!r} "
-                         f"({type(solver).__name__}): call orbits_at without search")
+                         f"(unpack, pack, linear_mode_point) and records the fundamental's share; this one "
+                         f"is {branch.method!r} ({type(solver).__name__}): call orbits_at without search")
     found: list[Orbit] = []
     rejected: list[Orbit] = []
     known_states: list[np.ndarray] = []
