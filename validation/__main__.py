@@ -2,7 +2,7 @@
 writes their tables.
 
     python -m validation corpus N [--seed S] [--compare-path] [--workers W] [--out DIR]
-    python -m validation exact N [--seed S] [--contact-decades LO HI] [--proximal residual]
+    python -m validation exact N [--seed S] [--contact-decades LO HI] [--proximal residual] [--workers W]
     python -m validation throughput N [-H 3] [--elements 8] [--workers 2]
     python -m validation tables [RUNS] --update docs/validation.md docs/benchmarks.md
 
@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import functools
 import sys
 from pathlib import Path
 
@@ -68,11 +69,20 @@ def _exact(args) -> int:
     cases = corpus_exact.chains(args.n, seed=args.seed,
                                 contact_decades=tuple(args.contact_decades) if args.contact_decades else None)
     results = []
-    for case in cases:
-        r = corpus_exact.compare(case, options=_proximal(args))
+    compare = functools.partial(corpus_exact.compare, options=_proximal(args))
+    if args.workers > 1:  # each chain in its own task; the lines still in chain order
+        from concurrent.futures import ProcessPoolExecutor
+
+        pool = ProcessPoolExecutor(args.workers)
+        outcomes = pool.map(compare, cases)
+    else:
+        pool, outcomes = None, map(compare, cases)
+    for case, r in zip(cases, outcomes, strict=True):
         results.append(r)
         print(f"{corpus_exact.name(case):<34} {r.seconds:7.2f} s  {'clean' if r.clean else 'not clean':9} "
               f"error {r.error:.2e}  {r.status[:60]}", flush=True)
+    if pool is not None:
+        pool.shutdown()
     print(corpus_exact.report(results))
     path = _out(args) / "corpus_exact.csv"
     decades = " ".join(f"{x:g}" for x in args.contact_decades) if args.contact_decades else ""
@@ -159,6 +169,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "times stiffer than the other springs)")
     p.add_argument("--proximal", choices=("static", "residual"), default="static",
                    help="MMS-HBM's proximal parameter r (docs/exact.md)")
+    p.add_argument("--workers", type=common.positive_int, default=1, help="processes (chains in parallel)")
     p.add_argument("--out", default="out", help="folder of corpus_exact.csv")
 
     p = add("throughput", _throughput, "time a Monte-Carlo study of N backbones serially, on a process pool "
