@@ -234,13 +234,13 @@ def _with_frequency(solver, u: np.ndarray, frequency: float) -> np.ndarray:
 def _closed_frequency(solver) -> float:
     """The first mode's frequency (Hz) with every contact DOF held at its stop (NaN where
     the solver does not say which DOFs those are)."""
-    from ..methods.mms.held import _held_frequency
+    from .base import entry_point
 
     dofs, model = getattr(solver, "contact_dofs", None), getattr(solver, "model", None)
     if dofs is None or model is None:
         return math.nan
     try:
-        return float(_held_frequency(model, dofs, int(getattr(solver, "mode", 1))))
+        return float(entry_point("held_frequency")(model, dofs, int(getattr(solver, "mode", 1))))
     except (ValueError, ArithmeticError, np.linalg.LinAlgError, RuntimeError):
         return math.nan
 
