@@ -273,15 +273,15 @@ def listed_orbit(branch, orbits, f_exact: float, tol: float = 1e-3, *, estimates
     within ``tol`` of it, "within its truncation estimate" when one orbit's own truncation
     estimate (re-solved at 2H and 4H) is at least :data:`TRUNCATION_PART` of its
     difference and its largest H lies closer to the exact frequency; empty when neither
-    (the estimates are computed in increasing distance, at most three; not at all without
-    ``estimates``)."""
+    (the estimates are computed in increasing distance until one holds; not at all
+    without ``estimates``)."""
     if any(abs(o.frequency / f_exact - 1) <= tol for o in orbits):
         return f"within {tol:g}"
     if not estimates:
         return ""
     from mmshbm.results.truncation import state_truncation_error
 
-    for o in sorted(orbits, key=lambda o: abs(o.frequency / f_exact - 1))[:3]:
+    for o in sorted(orbits, key=lambda o: abs(o.frequency / f_exact - 1)):
         try:
             est = state_truncation_error(branch, o.amplitude, o.frequency, o.state)
         except (ValueError, RuntimeError, ArithmeticError):
