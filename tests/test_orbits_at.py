@@ -184,3 +184,21 @@ def test_bad_amplitudes_are_refused_or_answered_with_a_reason():
         plain = other.orbits_at(2.0)
         assert len(plain) == 1 and plain[0].source == "backbone"
         assert plain[0].frequency == pytest.approx(other.frequency_at(2.0), rel=1e-12)
+
+
+def test_the_exact_comparison_explains_a_miss_by_three_computed_facts():
+    """A miss (error > 1e-3) is explained by the exact orbit listed, its share below one
+    half, or a truncation estimate of at least a third of the difference; nothing else,
+    and a case within 1e-3 needs no explanation."""
+    case = ce.chains(1, seed=0)[0]
+
+    def comparison(**kw):
+        return ce.ExactComparison(case, True, 1.0, 0.97, "bound:amplitude", 1, 0.0, [], **kw)
+
+    assert ce.ExactComparison(case, True, 1.0, 1.0005, "", 1, 0.0, []).explanations() == []
+    assert comparison(exact_share=0.9, estimate=1e-3).explanations() == []
+    assert comparison(exact_share=0.9, estimate=1e-3, reported="coexisting").explanations() == []
+    assert comparison(exact_share=0.9, estimate=0.0101).explanations()[0].startswith("truncation")
+    assert comparison(exact_share=0.4).explanations()[0].startswith("exact orbit's fundamental share")
+    listed = comparison(exact_share=0.9, exact_listed="within 0.001")
+    assert listed.explanations()[0].startswith("exact orbit listed")
