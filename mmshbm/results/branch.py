@@ -314,7 +314,7 @@ class Branch(ResultBase):
         warn_outside_front(self, a)
         return frequency_at(self, a, interpolate=interpolate, tol=tol)
 
-    def orbits_at(self, amplitude: float, *, unit: str = "m", search: bool = False, tol: float = 1e-10):
+    def orbits_at(self, amplitude: float, unit: str = "m", *, search: bool = False, tol: float = 1e-10):
         """Every orbit of the starting mode's family found at ``amplitude`` (m, or gaps
         with ``unit="gap"``), the backbone's first: :func:`mmshbm.results.orbits.orbits_at`.
 
