@@ -18,7 +18,7 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
@@ -27,6 +27,9 @@ from .archive import read_archive, write_archive
 from .base import FORMAT_VERSION, ResultBase, SolverSlot, entry_point, result_from_payload, result_payload
 from .family_points import amplitude_in_m, family_front, frequency_at, solve_at, warn_outside_front
 from .models import rebuild_model
+
+if TYPE_CHECKING:
+    from .orbits import OrbitsAt
 
 __all__ = ["Branch", "rebuild_model", "read_archive", "write_archive", "FORMAT_VERSION"]
 
@@ -314,7 +317,8 @@ class Branch(ResultBase):
         warn_outside_front(self, a)
         return frequency_at(self, a, interpolate=interpolate, tol=tol)
 
-    def orbits_at(self, amplitude: float, unit: str = "m", *, search: bool = False, tol: float = 1e-10):
+    def orbits_at(self, amplitude: float, unit: str = "m", *, search: bool = False,
+                  tol: float = 1e-10) -> OrbitsAt:
         """Every orbit of the starting mode's family found at ``amplitude`` (m, or gaps
         with ``unit="gap"``), the backbone's first: :func:`mmshbm.results.orbits.orbits_at`.
 
