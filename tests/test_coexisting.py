@@ -4,6 +4,7 @@
 import warnings
 
 import numpy as np
+import pytest
 
 import mmshbm
 from mmshbm.results.coexisting import coexisting_intervals
@@ -80,3 +81,46 @@ def test_the_segment_from_the_front_into_a_tongue_holds_coexisting_orbits():
     # the tongue side's orbits between the front point and the first point off it: the
     # exact orbit's frequency lies between theirs
     assert f_lo * (1 - 1e-3) <= orbit.frequency <= f_hi * (1 + 1e-3)
+
+
+def test_the_coexisting_points_are_solved_orbits_at_their_amplitude():
+    """Each point of the coexisting interval off the family front is an orbit that
+    ``orbits_at`` finds at that amplitude: listed when its fundamental holds at least half
+    the kinetic energy, among the rejected frequencies otherwise (a tongue's)."""
+    case = corpus.generate(138, seed=0)[137]
+    model = case.model()
+    b, _ = _run(model, harmonics=case.harmonics, max_amplitude=10 * model.gap)
+    front = set(b.family_front().tolist())
+    off = [i for c in coexisting_intervals(b) for i in c.points if i not in front]
+    for i in off[:: max(1, len(off) // 3)][:3]:
+        r = b.orbits_at(float(b.amplitude[i]))
+        known = list(r.frequencies) + list(r.rejected)
+        f_backbone = b.frequency_at(float(b.amplitude[i]))
+        if np.isfinite(f_backbone):  # the backbone's orbit first
+            assert r[0].source == "backbone" and r[0].frequency == pytest.approx(f_backbone, rel=1e-12)
+        else:  # inside an interval the front skipped: no backbone orbit, and the reason says it
+            assert all(o.source != "backbone" for o in r)
+            assert not len(r) or not r.reason
+        assert any(abs(f / b.frequency[i] - 1) <= 1e-7 for f in known), (b.frequency[i], known)
+
+
+def test_the_backbone_plot_marks_the_coexisting_orbits():
+    """plot_backbone draws the coexisting points off the family front as their own
+    markers with one legend entry (at their frequencies and amplitudes), and not with
+    ``coexisting=False``."""
+    from mmshbm import plotting
+
+    case = corpus.generate(138, seed=0)[137]
+    model = case.model()
+    b, _ = _run(model, harmonics=case.harmonics, max_amplitude=10 * model.gap)
+    front = set(b.family_front().tolist())
+    points = sorted({i for c in coexisting_intervals(b) for i in c.points if i not in front})
+    assert points
+    ax = plotting.plot_backbone(b).axes[0]
+    marked = [line for line in ax.get_lines() if line.get_label() == "coexisting orbit (same amplitude)"]
+    assert len(marked) == 1
+    np.testing.assert_array_equal(marked[0].get_xdata(), b.frequency[points])
+    np.testing.assert_array_equal(marked[0].get_ydata(), b.amplitude[points] / model.gap)
+    assert "coexisting orbit (same amplitude)" in [t.get_text() for t in ax.get_legend().get_texts()]
+    ax = plotting.plot_backbone(b, coexisting=False).axes[0]
+    assert not [line for line in ax.get_lines() if line.get_label().startswith("coexisting")]

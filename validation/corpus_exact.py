@@ -18,6 +18,19 @@ branch says, at that amplitude, that it may differ from the single-contact orbit
   than once per period;
 * or what its findings and special points report there (:func:`_reported`: a skipped
   interval, coexisting orbits, a truncation finding, a fold or branch point near it).
+
+The stricter account (:meth:`ExactComparison.explanations`, the summary's "explained" and
+"unexplained") asks the result three things about a miss, each a number it computes:
+
+* the exact orbit is among the family's orbits the branch lists at the amplitude
+  (:meth:`mmshbm.Branch.orbits_at` with ``search=True``): one of them within ``tol`` of
+  its frequency, or one whose own truncation estimate
+  (:func:`mmshbm.results.truncation.state_truncation_error`) is at least a third of its
+  difference from it (the H-harmonic counterpart of the exact orbit);
+* the exact orbit is not the mode's: its fundamental holds less than half the kinetic
+  energy (:data:`EXACT_FAMILY_SHARE`);
+* the branch's truncation estimate at the amplitude is at least a third of the difference
+  (:data:`TRUNCATION_PART`).
 """
 
 from __future__ import annotations
@@ -31,7 +44,14 @@ import numpy as np
 
 from .corpus import CorpusCase, generate
 
-__all__ = ["ExactComparison", "branch_orbit", "chains", "compare", "name", "report"]
+__all__ = ["EXACT_FAMILY_SHARE", "TRUNCATION_PART", "ExactComparison", "branch_orbit", "chains", "compare",
+           "listed_orbit", "name", "report"]
+
+#: an exact orbit is the first mode's when its fundamental holds at least this share of
+#: the kinetic energy (the family rule of :mod:`mmshbm.results.orbits`)
+EXACT_FAMILY_SHARE = 0.5
+#: a truncation estimate accounts for a difference when it is at least this part of it
+TRUNCATION_PART = 1 / 3
 
 
 def name(case: CorpusCase) -> str:
@@ -87,6 +107,10 @@ class ExactComparison:
     continued_share: float = math.nan
     family_exact: float = math.nan
     family_share: float = math.nan
+    orbits_hz: tuple = ()
+    orbits_share: tuple = ()
+    orbits_seconds: float = math.nan
+    exact_listed: str = ""
 
     @property
     def error(self) -> float:
@@ -123,6 +147,23 @@ class ExactComparison:
             out.append(f"{self.branch_contacts} contacts per period")
         if self.reported:
             out.append(self.reported)
+        return out
+
+    def explanations(self, tol: float = 1e-3) -> list[str]:
+        """What the result computes that accounts for a miss (module docstring): the
+        exact orbit listed by ``orbits_at`` (:attr:`exact_listed` says how), its
+        fundamental share below :data:`EXACT_FAMILY_SHARE`, the branch's truncation
+        estimate at least :data:`TRUNCATION_PART` of the difference; empty for a case
+        within ``tol``."""
+        if self.error <= tol:
+            return []
+        out = []
+        if self.exact_listed:
+            out.append(f"exact orbit listed ({self.exact_listed})")
+        if self.exact_share < EXACT_FAMILY_SHARE:
+            out.append(f"exact orbit's fundamental share {self.exact_share:.2f}")
+        if self.estimate >= TRUNCATION_PART * self.error:
+            out.append(f"truncation estimate {self.estimate:.1e} of a difference {self.error:.1e}")
         return out
 
     @property
@@ -202,8 +243,53 @@ def compare(case: CorpusCase, amplitude_gaps: float = 1.3, harmonics: int = 31,
             out.exact_share = orbit.fundamental_share()
             if min(out.exact_share, out.continued_share) < 0.5 and math.isfinite(f):
                 out.family_exact, out.family_share = branch_orbit(model, b, A)
+            cheaper = out.exact_share < EXACT_FAMILY_SHARE or out.estimate >= TRUNCATION_PART * out.error
+            if math.isfinite(f) and not cheaper:
+                _listed(out, b, A, tol)
     out.seconds = time.perf_counter() - t0
     return out
+
+
+def _listed(out: ExactComparison, branch, amplitude: float, tol: float) -> None:
+    """The family's orbits of ``branch`` at ``amplitude`` (m) with the search
+    (:meth:`mmshbm.Branch.orbits_at`), timed, and whether the exact orbit is among them
+    (:func:`listed_orbit`), into ``out``. :func:`compare` asks it for the misses that
+    neither the exact orbit's share nor the branch's truncation estimate explains (the
+    search and the listed orbits' re-solves at 2H and 4H cost tens of pinned solves)."""
+    t0 = time.perf_counter()
+    try:
+        orbits = branch.orbits_at(amplitude, search=True)
+    except (ValueError, RuntimeError, ArithmeticError, np.linalg.LinAlgError):
+        return
+    out.orbits_seconds = time.perf_counter() - t0
+    out.orbits_hz = tuple(float(o.frequency) for o in orbits)
+    out.orbits_share = tuple(float(o.fundamental_share) for o in orbits)
+    out.exact_listed = listed_orbit(branch, orbits, out.exact, tol)
+
+
+def listed_orbit(branch, orbits, f_exact: float, tol: float = 1e-3, *, estimates: bool = True) -> str:
+    """How the exact orbit of frequency ``f_exact`` (Hz) is among ``orbits`` (an
+    :meth:`~mmshbm.Branch.orbits_at` answer): "within tol" when one orbit's frequency is
+    within ``tol`` of it, "within its truncation estimate" when one orbit's own truncation
+    estimate (re-solved at 2H and 4H) is at least :data:`TRUNCATION_PART` of its
+    difference and its largest H lies closer to the exact frequency; empty when neither
+    (the estimates are computed in increasing distance until one holds; not at all
+    without ``estimates``)."""
+    if any(abs(o.frequency / f_exact - 1) <= tol for o in orbits):
+        return f"within {tol:g}"
+    if not estimates:
+        return ""
+    from mmshbm.results.truncation import state_truncation_error
+
+    for o in sorted(orbits, key=lambda o: abs(o.frequency / f_exact - 1)):
+        try:
+            est = state_truncation_error(branch, o.amplitude, o.frequency, o.state)
+        except (ValueError, RuntimeError, ArithmeticError):
+            continue
+        closer = len(est.frequency) > 1 and abs(est.frequency[-1] - f_exact) < abs(o.frequency - f_exact)
+        if closer and est.error >= TRUNCATION_PART * abs(o.frequency / f_exact - 1):
+            return f"{o.frequency:.6g} Hz within its truncation estimate {est.error:.1e}"
+    return ""
 
 
 def branch_orbit(model, branch, amplitude: float, n_samples: int = 1024) -> tuple[float, float]:
@@ -301,6 +387,29 @@ def _shares(r: ExactComparison) -> str:
     return out
 
 
+def _account(clean: list[ExactComparison], tol: float) -> str:
+    """The summary's line of the stricter account of the ``clean`` cases (module
+    docstring): within ``tol``, explained (and by what), unexplained (named), and the
+    time per call of ``orbits_at(search=True)``."""
+    bad = [r for r in clean if not r.error <= tol]
+    good = len(clean) - len(bad)
+    listed = sum(1 for r in bad if r.exact_listed)
+    share = sum(1 for r in bad if r.exact_share < EXACT_FAMILY_SHARE)
+    trunc = sum(1 for r in bad if r.estimate >= TRUNCATION_PART * r.error)
+    explained = [r for r in bad if r.explanations(tol)]
+    unexplained = [r for r in bad if not r.explanations(tol)]
+    n = max(len(clean), 1)
+    named = ", ".join(name(r.case) for r in unexplained)
+    times = [r.orbits_seconds for r in clean if math.isfinite(r.orbits_seconds)]
+    timing = (f"; orbits_at(search=True) {np.median(times):.2f} s median, {max(times):.2f} s at most "
+              f"over {len(times)} calls" if times else "")
+    return (f"within {tol:g}: {good} ({100 * good / n:.1f} %); explained: {len(explained)} "
+            f"({100 * len(explained) / n:.1f} %: "
+            f"the exact orbit listed by orbits_at {listed}, its fundamental share < {EXACT_FAMILY_SHARE:g} "
+            f"{share}, the truncation estimate >= {TRUNCATION_PART:.2g} of the difference {trunc}); "
+            f"unexplained: {len(unexplained)}" + (f" ({named})" if unexplained else "") + timing)
+
+
 def report(results: list[ExactComparison], tol: float = 1e-3) -> str:
     """Agreement within ``tol`` among the clean cases, the median error, and each
     disagreeing case with the special points of its branch up to the amplitude."""
@@ -311,6 +420,7 @@ def report(results: list[ExactComparison], tol: float = 1e-3) -> str:
              f"({100 * good / max(len(clean), 1):.1f} %), median error "
              f"{np.nanmedian(errs) if np.any(np.isfinite(errs)) else math.nan:.2e}"]
     bad = [r for r in clean if not r.error <= tol]
+    lines.append(_account(clean, tol))
     coexist = [r for r in bad if r.coexisting]
     resonant = [r for r in bad if not r.coexisting and r.resonant]
     trunc = [r for r in bad if not r.coexisting and not r.resonant and r.truncation]
@@ -339,7 +449,11 @@ def report(results: list[ExactComparison], tol: float = 1e-3) -> str:
         kind = ("coexisting" if r.coexisting else "resonant" if r.resonant
                 else "truncation" if r.truncation else "OTHER")
         why = "; ".join(r.reasons(tol)) or "not reported"
-        lines.append(f"  {kind} [{why}] (estimate {r.estimate:.2e} {r.estimate_note}): {name(r.case)}: "
+        account = "; ".join(r.explanations(tol)) or "UNEXPLAINED"
+        orbits = ", ".join(f"{f:.6g} Hz ({share:.2f})"
+                           for f, share in zip(r.orbits_hz, r.orbits_share, strict=True))
+        lines.append(f"  {kind} [{why}] {{{account}; orbits_at: {orbits or 'none'}}} "
+                     f"(estimate {r.estimate:.2e} {r.estimate_note}): {name(r.case)}: "
                      f"exact {r.exact:.6g} Hz, continued exact {r.continued:.6g} Hz, {_shares(r)}"
                      f"branch {r.branch:.6g} Hz (error {r.error:.2e}, at 2H "
                      f"{r.error_2h:.2e}, {r.status}); {r.special[:6]}")

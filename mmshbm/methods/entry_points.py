@@ -37,7 +37,14 @@ def _make_forced_problem(*args, **kwargs):
     return make_forced_problem(*args, **kwargs)
 
 
+def _held_frequency(*args, **kwargs):
+    from .mms.held import _held_frequency
+
+    return _held_frequency(*args, **kwargs)
+
+
 register_entry_point("make_problem", _make_problem)
 register_entry_point("backbone", _backbone)
 register_entry_point("admissible_signals", _admissible_signals)
 register_entry_point("make_forced_problem", _make_forced_problem)
+register_entry_point("held_frequency", _held_frequency)

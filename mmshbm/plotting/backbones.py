@@ -36,7 +36,7 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
                   marks=None, reference_lines: bool = True, modes: Sequence[int] = (2, 3),
                   max_order: int = 10,
                   ax=None, path=None, title: str | None = None, styles: Sequence[dict] | None = None,
-                  legend_loc: str = "best", special: bool = True) -> Figure:
+                  legend_loc: str = "best", special: bool = True, coexisting: bool = True) -> Figure:
     """Backbone curves: amplitude (a beam's tip, a model's amplitude DOF) against frequency.
 
     Parameters
@@ -74,6 +74,12 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
         its bounds (✕, with the reason). The starting mode's backbone (the family front,
         :meth:`~mmshbm.Branch.family_front`) is the branch's line; points off the family
         (internal-resonance tongues) are drawn thin.
+    coexisting : bool
+        Mark the branch's computed points that are other orbits of the same amplitude as
+        the backbone (:func:`mmshbm.results.coexisting.coexisting_intervals`: points off
+        the family front on amplitudes the front covers) with hollow circles, legend entry
+        "coexisting orbit (same amplitude)". No solve; :meth:`~mmshbm.Branch.orbits_at`
+        lists the family's orbits at one amplitude, solved.
 
     Returns
     -------
@@ -104,13 +110,15 @@ def plot_backbone(branches, labels: Sequence[str] | None = None, *, measured=Non
         styles = line_styles(len(branches))
     colors = []
     notes: list = []  # labels of special points, placed once the axes' limits are known
-    excursion_labelled = False
+    excursion_labelled = coexisting_labelled = False
     for i, (b, label) in enumerate(zip(branches, labels, strict=True)):
         style = {"lw": 1.4} | dict(styles[i])
         y = np.asarray(b.amplitude) / scales[i]
         line, drawn = _draw_family(ax, b, y, label, style, not excursion_labelled)
         excursion_labelled |= drawn
         colors.append(line.get_color())
+        if coexisting:
+            coexisting_labelled |= _coexisting_points(ax, b, y, line.get_color(), not coexisting_labelled)
         if special:
             _special_points(ax, b, scales[i], line.get_color(), notes)
     if measured is not None:
@@ -272,6 +280,22 @@ def _draw_family(ax, branch, y, label, style, first_excursion: bool):
     ax.plot(fp, vp, color=line.get_color(), lw=0.6, alpha=0.35, zorder=1,
             label="off the family (internal resonance)" if first_excursion else None)
     return line, True
+
+
+def _coexisting_points(ax, branch, y, color, label_it: bool) -> bool:
+    """Hollow circles at the points of ``branch`` that coexist with its backbone at the
+    same amplitude (``y`` per point); returns whether any was drawn."""
+    if "on_family" not in (getattr(branch, "records", None) or {}):
+        return False
+    from ..results.coexisting import coexisting_intervals
+
+    front = set(_front(branch).tolist())
+    points = sorted({i for c in coexisting_intervals(branch) for i in c.points if i not in front})
+    if not points:
+        return False
+    ax.plot(np.asarray(branch.frequency)[points], np.asarray(y)[points], "o", ms=3.5, mfc="none", mec=color,
+            mew=0.9, ls="none", zorder=3, label="coexisting orbit (same amplitude)" if label_it else None)
+    return True
 
 
 #: two labels of special points closer than this (fractions of the axes' width, height)

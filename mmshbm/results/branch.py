@@ -18,7 +18,7 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
@@ -27,6 +27,9 @@ from .archive import read_archive, write_archive
 from .base import FORMAT_VERSION, ResultBase, SolverSlot, entry_point, result_from_payload, result_payload
 from .family_points import amplitude_in_m, family_front, frequency_at, solve_at, warn_outside_front
 from .models import rebuild_model
+
+if TYPE_CHECKING:
+    from .orbits import OrbitsAt
 
 __all__ = ["Branch", "rebuild_model", "read_archive", "write_archive", "FORMAT_VERSION"]
 
@@ -301,6 +304,11 @@ class Branch(ResultBase):
 
         Notes
         -----
+        Where several orbits of the starting mode's family coexist at the amplitude (past
+        an internal resonance: a tongue's or a loop's beside the backbone, or one the
+        continuation never visited), this is the backbone's, the one on the family front
+        the continuation followed; :meth:`orbits_at` lists them all, the backbone's first.
+
         The answer is the branch's, at its H: how far the truncated Fourier series leaves
         it from the limit in H is estimated on demand by :meth:`truncation_error` (two
         re-solves of that amplitude at larger H).
@@ -308,6 +316,43 @@ class Branch(ResultBase):
         a = amplitude_in_m(self, amplitude, unit)
         warn_outside_front(self, a)
         return frequency_at(self, a, interpolate=interpolate, tol=tol)
+
+    def orbits_at(self, amplitude: float, unit: str = "m", *, search: bool = False,
+                  tol: float = 1e-10) -> OrbitsAt:
+        """Every orbit of the starting mode's family found at ``amplitude`` (m, or gaps
+        with ``unit="gap"``), the backbone's first: :func:`mmshbm.results.orbits.orbits_at`.
+
+        The backbone's orbit (the one :meth:`frequency_at` returns), then the other
+        segments of this branch's path that cross the amplitude (tongues and loops,
+        :mod:`mmshbm.results.coexisting`), solved there exactly; with ``search`` also the
+        orbits a deflated Newton search at the pinned amplitude finds (starts: those
+        orbits moved in frequency, the linear and closed-contact first modes scaled to the
+        amplitude). An orbit other than the backbone's is listed when its fundamental
+        holds at least half the kinetic energy (``orbits.FAMILY_SHARE``).
+
+        Parameters
+        ----------
+        amplitude : float
+            In m (``unit="m"``) or in multiples of the model's gap (``unit="gap"``).
+        unit : {"m", "gap"}
+            Unit of ``amplitude``.
+        search : bool
+            Also search for orbits the branch did not visit (harmonic balance only; a few
+            dozen pinned Newton solves).
+        tol : float
+            Newton tolerance of the solves.
+
+        Returns
+        -------
+        OrbitsAt
+            A sequence of :class:`~mmshbm.results.orbits.Orbit` (``.frequency`` Hz,
+            ``.fundamental_share``, ``.state``, ``.amplitude`` m, ``.source``); empty with
+            a ``reason`` (and a BranchWarning) where the amplitude lies outside the
+            branch's points.
+        """
+        from .orbits import orbits_at
+
+        return orbits_at(self, amplitude_in_m(self, amplitude, unit), search=search, tol=tol)
 
     def solve_at(self, amplitudes, *, unit: str = "m", tol: float = 1e-10, stand_in: bool = False) -> Branch:
         """The backbone's points at ``amplitudes`` (m, or gaps with ``unit="gap"``), solved

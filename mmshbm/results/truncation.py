@@ -41,7 +41,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["TruncationEstimate", "truncation_error"]
+__all__ = ["TruncationEstimate", "state_truncation_error", "truncation_error"]
 
 
 @dataclass(frozen=True)
@@ -110,8 +110,22 @@ def truncation_error(branch, amplitude: float, *, factors=(2, 4), rate: float = 
         For a method without harmonics (shooting), or an amplitude where the branch has no
         point (``frequency_at`` is NaN there).
     """
-    from ..core.pinned import PinnedFailure, solve_at_amplitude
     from .family_points import family_point
+
+    a = float(amplitude)
+    f0, u = family_point(branch, a, tol=tol)
+    if u is None or not math.isfinite(f0):
+        raise ValueError(f"the branch has no point at {a:.6g} m (frequency_at is NaN there)")
+    return state_truncation_error(branch, a, f0, u, factors=factors, rate=rate, safety=safety, tol=tol)
+
+
+def state_truncation_error(branch, amplitude: float, frequency: float, state: np.ndarray, *, factors=(2, 4),
+                           rate: float = 1.0, safety: float = 2.0, tol: float = 1e-10) -> TruncationEstimate:
+    """The estimate of :func:`truncation_error` for the solved orbit ``state`` (the
+    branch's solver's unknowns) of frequency ``frequency`` (Hz) at ``amplitude`` (m): any
+    orbit of the branch's equations there, not only the backbone's (e.g. one of
+    :meth:`mmshbm.Branch.orbits_at`)."""
+    from ..core.pinned import PinnedFailure, solve_at_amplitude
 
     factors = tuple(int(k) for k in np.atleast_1d(factors))
     if not 1 <= len(factors) <= 2 or any(k < 2 for k in factors) or list(factors) != sorted(set(factors)):
@@ -119,10 +133,7 @@ def truncation_error(branch, amplitude: float, *, factors=(2, 4), rate: float = 
     H = int(branch.harmonics)
     if H < 1:
         raise ValueError(f"a {branch.method} branch has no harmonics to truncate")
-    a = float(amplitude)
-    f0, u = family_point(branch, a, tol=tol)
-    if u is None or not math.isfinite(f0):
-        raise ValueError(f"the branch has no point at {a:.6g} m (frequency_at is NaN there)")
+    a, f0, u = float(amplitude), float(frequency), np.asarray(state, dtype=float)
     solver = branch._require_solver()
     if not (hasattr(solver, "unpack") and hasattr(solver, "pack")):
         raise ValueError(f"the {branch.method} solver does not expose its harmonics (unpack/pack)")
