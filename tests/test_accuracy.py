@@ -86,7 +86,7 @@ def test_a_tolerance_out_of_reach_is_said_with_its_amplitude_and_estimate():
     found = [f for f in b.findings if f.kind == "tolerance_not_met"]
     assert len(found) == 1
     f = found[0]
-    assert b.records["harmonics"].max() <= 16
+    assert b.records["harmonics"].max() <= 32
     assert 1.0 <= b.amplitude[f.first] / model.gap <= 1.05
     assert np.all(b.frequency_error[: f.first] <= 1e-6)
     assert f.value == pytest.approx(np.nanmax(b.frequency_error[f.first:]))

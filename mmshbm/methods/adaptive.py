@@ -9,13 +9,16 @@
    (relative, on the frequency at the point's amplitude);
 3. a point of the family front (:meth:`~mmshbm.Branch.family_front`: the backbone,
    without the excursions into internal-resonance tongues, which keep the start H and
-   their estimate) whose estimate exceeds ``tol`` is *promoted* to the 2H solution (the solve of
-   step 2 is the refined point, seeded by the lower-H one) and estimated again at 4H, and
-   so on, while the next estimate's solve stays within ``max_harmonics`` and the estimate
-   keeps contracting (``patience`` doublings of H in a row without a contraction by
-   ``contraction`` stop it: the point does not converge in H in this range, e.g. orbits that rattle) and
-   ``tol`` stays within reach (not more than ``FASTEST`` = 64 times per doubling the cap
-   still allows below the estimate);
+   their estimate) whose estimate exceeds ``tol`` is *promoted* to the 2H solution (the
+   solve of step 2 is the refined point, seeded by the lower-H one) and estimated again
+   at 4H, and so on while the estimate keeps contracting (``patience`` doublings of H in a
+   row without a contraction by ``contraction`` stop it: the point does not converge in
+   H in this range, e.g. orbits that rattle) and ``tol`` stays within reach (not more
+   than ``FASTEST`` = 64 times per doubling the cap still allows below the estimate);
+   no solve exceeds ``max_harmonics``: a point promoted to an H whose 2H would pass it
+   gets the estimate below divided by the contraction of its last doubling (at least
+   ``ASSUMED_CONTRACTION`` = 4, rate 2; at most ``FASTEST``), Richardson's estimate of
+   the finer solution, flagged in ``records["error_extrapolated"]``;
 4. the branch keeps, at each point, the lowest H whose estimate met ``tol`` (the points
    that never needed more keep ``start_harmonics``: H is raised only where the branch
    needs it; a point left where it is keeps its last H), its frequency and that
@@ -53,7 +56,7 @@ __all__ = ["backbone_to_tolerance", "check_tolerance", "TOLERANCE_DEFAULTS"]
 log = logging.getLogger(__name__)
 
 #: the defaults of the tolerance options of :func:`backbone_to_tolerance`
-TOLERANCE_DEFAULTS = {"start_harmonics": 8, "max_harmonics": 128, "patience": 2, "contraction": 1.5}
+TOLERANCE_DEFAULTS = {"start_harmonics": 8, "max_harmonics": 64, "patience": 2, "contraction": 1.5}
 
 
 #: the fastest contraction of an estimate per doubling of H that a point is credited with
@@ -62,6 +65,9 @@ TOLERANCE_DEFAULTS = {"start_harmonics": 8, "max_harmonics": 128, "patience": 2,
 #: FASTEST ** (the doublings the cap still allows) cannot meet it below the cap and is left
 #: where it is
 FASTEST = 64.0
+#: the contraction per doubling credited to a point at the cap whose last doubling was not
+#: measured (rate 2, the estimator's own)
+ASSUMED_CONTRACTION = 4.0
 
 
 def check_tolerance(tol, harmonics, method: str, options: dict) -> dict:
@@ -110,8 +116,8 @@ def backbone_to_tolerance(model, tol: float, *, start_harmonics: int, max_harmon
     start_harmonics : int
         H of the continuation.
     max_harmonics : int
-        The largest H of any solve, the estimate's included: a point keeps at most
-        ``max_harmonics // 2`` harmonics.
+        The largest H of any solve, the estimates' included (step 3 of the module
+        docstring): the most harmonics a point can have.
     patience : int
         Doublings of H without the estimate contracting by ``contraction`` after which a
         point is left where it is (not converging in H here).
@@ -135,9 +141,9 @@ def backbone_to_tolerance(model, tol: float, *, start_harmonics: int, max_harmon
         warnings.simplefilter("ignore")
         base = run(model, harmonics=start_harmonics, **kwargs)
     with blas_limit():  # small dense solves: one BLAS thread unless the user chose (mmshbm._threads)
-        ladder, H, states, freq, err, levels = _refine(base, tol, start_harmonics, max_harmonics, patience,
-                                                       contraction)
-        return _assemble(base, ladder, H, states, freq, err, settings={
+        refined = _refine(base, tol, start_harmonics, max_harmonics, patience, contraction)
+        ladder, H, states, freq, err, extrapolated, levels = refined
+        return _assemble(base, ladder, H, states, freq, err, extrapolated, settings={
             "tol": float(tol), "start_harmonics": start_harmonics, "max_harmonics": max_harmonics,
             "patience": patience, "contraction": float(contraction), "rate": 2.0, "levels": levels,
             "elapsed_s": time.perf_counter() - t0})
@@ -156,6 +162,8 @@ def _refine(base, tol, start_harmonics, max_harmonics, patience, contraction):
     amp = np.asarray(base.amplitude, dtype=float)
     err = np.full(n, np.nan)
     last = np.full(n, np.inf)  # the previous estimate per point
+    ratio = np.full(n, math.nan)  # its last contraction per doubling
+    extrapolated = np.zeros(n, dtype=np.int8)
     stalls = np.zeros(n, dtype=int)
     on_front = np.zeros(n, dtype=bool)
     on_front[np.asarray(base.family_front(), dtype=int)] = True
@@ -170,20 +178,28 @@ def _refine(base, tol, start_harmonics, max_harmonics, patience, contraction):
             err[i] = e
             if not math.isfinite(e) or e <= tol:
                 continue
+            ratio[i] = last[i] / e if math.isfinite(last[i]) else math.nan
             stalls[i] = 0 if e * contraction <= last[i] else stalls[i] + 1
             last[i] = e
-            left = math.floor(math.log2(max_harmonics / (2 * H[i])) + 1e-9)  # doublings the cap allows
+            left = math.floor(math.log2(max_harmonics / H[i]) + 1e-9)  # the doublings the cap allows
             if not on_front[i] or stalls[i] >= patience or left < 1 or e > tol * FASTEST ** left:
-                continue  # not converging in H here, the next estimate would pass the cap, or out of reach
+                continue  # not converging in H here, the cap reached, or tol out of reach
             promote.append((i, pe.states_raised[j], pe.frequency_raised[j], pe.harmonics_raised[j]))
+        nxt = []
         for i, u2, f2, h2 in promote:
             states[i], freq[i], H[i] = u2, f2, int(h2)
-        active = np.array([p[0] for p in promote], dtype=int)
-        log.info("tolerance %.3g: level %d, %d points raised", tol, levels, len(active))
-    return ladder, H, states, freq, err, levels
+            if 2 * H[i] <= max_harmonics:
+                nxt.append(i)
+            else:  # the top: no solve above the cap, the estimate extrapolated (module docstring)
+                c = ratio[i] if math.isfinite(ratio[i]) else ASSUMED_CONTRACTION
+                err[i] = err[i] / min(max(c, ASSUMED_CONTRACTION), FASTEST)
+                extrapolated[i] = 1
+        active = np.array(nxt, dtype=int)
+        log.info("tolerance %.3g: level %d, %d points raised", tol, levels, len(promote))
+    return ladder, H, states, freq, err, extrapolated, levels
 
 
-def _assemble(base, ladder, H, states, freq, err, settings: dict):
+def _assemble(base, ladder, H, states, freq, err, extrapolated, settings: dict):
     """The result branch: every point at its own H, padded to the largest (module docstring)."""
     from ..results.branch import Branch
     from ..results.point_errors import pad
@@ -207,6 +223,7 @@ def _assemble(base, ladder, H, states, freq, err, settings: dict):
                     rec[k][i] = v
     rec["frequency_error"] = err
     rec["harmonics"] = H.astype(np.int64)
+    rec["error_extrapolated"] = extrapolated
     meta = dict(base.metadata)
     meta["method_options"] = {**dict(meta.get("method_options", {})), "harmonics": H_top}
     meta["method_options"].pop("n_samples", None)

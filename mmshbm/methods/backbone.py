@@ -44,7 +44,7 @@ def backbone(model: Model, harmonics: int | None = None, method: str = "mmshbm",
         Relative tolerance on the frequency of every point at its amplitude: H is chosen
         per point from an error estimate (:mod:`mmshbm.methods.adaptive`, docs/accuracy.md),
         between ``start_harmonics`` (option, default 8) and ``max_harmonics`` (option,
-        default 128: the largest H of any solve, the estimate's at 2H included). The
+        default 64: the largest H of any solve, the estimates' included). The
         branch carries ``frequency_error`` and ``records["harmonics"]``; where ``tol`` is
         not met it has a ``"tolerance_not_met"`` finding. Methods "mmshbm" and "penalty"
         on conservative models; without ``checkpoint``/``resume``/``callback``.

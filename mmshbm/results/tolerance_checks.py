@@ -72,7 +72,7 @@ def tolerance_findings(branch) -> list[Finding]:
                f"{n_front} family points, {reached}"
                + (f", {failed} re-solves at 2H failed" if failed else "")
                + f", with H up to {int(H.max())} (max_harmonics {settings.get('max_harmonics')}: H is not "
-               "raised where the next estimate's solve would pass it, nor where the estimate stopped "
+               "raised past it, nor where tol is out of reach below it, nor where the estimate stopped "
                "contracting as H doubled, an orbit that does not converge in H there)"
                + (f"; it holds again above {_amp(branch, float(branch.amplitude[bad[-1]]))}"
                   if again else ""))
