@@ -104,6 +104,25 @@ def test_tolerance_not_met_on_a_beam_that_does_not_converge_in_h():
     first = found[0].first
     assert b.amplitude[first] > model.gap
     assert np.all(b.frequency_error[[i for i in b.family_front() if b.amplitude[i] < model.gap]] <= 1e-3)
+    # the truncation findings say what they cost the frequency against the tolerance
+    pen = [f for f in b.findings if f.kind == "penetration"]
+    assert pen and "against the tolerance 0.001: the frequency's estimated error at these points is up to" \
+        in pen[0].message
+
+
+def test_the_command_line_asks_for_a_tolerance(tmp_path, capsys):
+    from mmshbm.cli import main
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        code = main(["backbone", "--elements", "8", "--tol", "1e-3", "--max-amplitude", "1.5",
+                     "--max-harmonics", "32", "--out", str(tmp_path)])
+    out, err = capsys.readouterr()
+    assert code == 0
+    assert "tolerance 0.001 met up to" in out and "tolerance 0.001 on the frequency is not met from" in err
+    assert "frequency_error" in (tmp_path / "backbone.csv").read_text().splitlines()[0]
+    assert main(["backbone", "--tol", "1e-3", "-H", "7", "--out", str(tmp_path)]) == 2
+    assert "pass either -H 7" in capsys.readouterr().err
 
 
 def test_the_new_fields_survive_csv_and_npz(tmp_path):

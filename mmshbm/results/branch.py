@@ -212,6 +212,11 @@ class Branch(ResultBase):
             if name in meta:
                 kwargs[name] = meta[name]
         kwargs["method"] = self.method
+        tolerance = meta.get("tolerance")
+        if isinstance(tolerance, dict) and "harmonics" not in overrides:  # a run with tol: H chosen again
+            kwargs.pop("harmonics", None)
+            kwargs.update({k: tolerance[k] for k in ("tol", "start_harmonics", "max_harmonics", "patience",
+                                                     "contraction") if k in tolerance})
         kwargs.update(overrides)
         return backbone(self.get_model(), **kwargs)
 

@@ -189,7 +189,8 @@ def _warnings(branch, found: list[Finding]) -> list[tuple[str, str]]:
              f"them): the contact DOF passes the stop by up to {pen.value:.3g} gaps (from "
              f"{_where(branch, pen.first)}) and the contact force pulls by up to {-neg.value:.3g} of the "
              f"peak (from point {neg.first}); branch.time_signals(i, admissible=True) gives admissible "
-             "signals, branch.truncation_error(A) estimates the frequency's error at amplitude A")
+             "signals, branch.truncation_error(A) estimates the frequency's error at amplitude A"
+             + _tolerance_tail(pen.message))
     out = []
     for f in found:
         if f.kind == "penetration":
@@ -197,6 +198,13 @@ def _warnings(branch, found: list[Finding]) -> list[tuple[str, str]]:
         elif f.kind != "negative_force":
             out.append((f.message, f.kind))
     return out
+
+
+def _tolerance_tail(message: str) -> str:
+    """The statement against the tolerance that ends a truncation finding's message (empty
+    without one: :func:`mmshbm.results.contact_checks.contact_findings`)."""
+    head, sep, tail = message.partition("; against the tolerance ")
+    return sep + tail
 
 
 # ---------------------------------------------------------------------- mode shares
