@@ -166,3 +166,18 @@ def test_bad_tolerance_input_is_refused_clearly(kwargs, words):
     with pytest.raises(ValueError, match=None) as err:
         mmshbm.backbone(model, max_amplitude=2 * model.gap, **kwargs)
     assert words in str(err.value)
+
+
+def test_the_error_band_is_drawn_where_estimated(tmp_path):
+    from mmshbm.plotting import plot_error_band
+
+    model = mmshbm.OneDofOscillator(*STIFF).model()
+    b = _quiet(mmshbm.backbone, model, tol=1e-6, max_amplitude=2.0 * model.gap, max_harmonics=16)
+    fig = plot_error_band(b, path=tmp_path / "band.png")
+    ax = fig.axes[0]
+    band = ax.collections[0].get_paths()[0].vertices[:, 0]  # the band's frequencies (Hz)
+    front = b.family_front()
+    widest = np.nanmax(b.frequency[front] * b.frequency_error[front])
+    assert band.max() - band.min() >= np.ptp(b.frequency[front]) and widest > 0
+    assert any(line.get_label().startswith("tolerance 1e-06 not met") for line in ax.lines)
+    assert (tmp_path / "band.png").stat().st_size > 0
