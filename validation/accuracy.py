@@ -53,9 +53,10 @@ class ToleranceComparison:
 
 
 def compare_tolerance(case, tol: float = 1e-4, amplitude_gaps: float = 1.3,
-                      harmonics: int = 31) -> ToleranceComparison:
+                      harmonics: int = 31, options: dict | None = None) -> ToleranceComparison:
     """The exact orbit, the fixed-H and the tolerance backbone of ``case`` at
-    ``amplitude_gaps`` gaps (module docstring)."""
+    ``amplitude_gaps`` gaps (module docstring); ``options``: further keyword arguments of
+    the tolerance run (e.g. ``max_harmonics``)."""
     from mmshbm import exact
     from mmshbm.methods.backbone import backbone
 
@@ -81,7 +82,7 @@ def compare_tolerance(case, tol: float = 1e-4, amplitude_gaps: float = 1.3,
         out.fixed_s = time.perf_counter() - t
         t = time.perf_counter()
         try:
-            b = backbone(model, tol=tol, max_amplitude=1.2 * A)
+            b = backbone(model, tol=tol, max_amplitude=1.2 * A, **(options or {}))
             out.adaptive = float(b.frequency_at(A))
             i = int(np.argmin(np.abs(b.amplitude - A)))
             out.estimate = float(b.frequency_error[i])
@@ -234,6 +235,8 @@ def arguments(p) -> None:
     p.add_argument("--contact-decades", type=common.finite_float, nargs=2, default=(0.0, 6.0),
                    metavar=("LO", "HI"), help="the contact spring as 10**U(LO, HI) N/m")
     p.add_argument("--tol", type=common.positive_float, default=1e-4, help="the tolerance asked for")
+    p.add_argument("--max-harmonics", type=common.positive_int, default=None,
+                   help="the tolerance run's cap on H (default the backbone's, 64)")
     p.add_argument("--estimator", action="store_true",
                    help="measure the per-point estimate against the true error instead")
     p.add_argument("--no-beam", action="store_true", help="with --estimator: leave the beam out")
@@ -269,7 +272,8 @@ def main(args) -> int:
         return 0
     results = []
     for case in chains(args.n, seed=args.seed, max_masses=3, contact_decades=(lo, hi)):
-        r = compare_tolerance(case, args.tol)
+        r = compare_tolerance(case, args.tol, options=({} if args.max_harmonics is None
+                                                      else {"max_harmonics": args.max_harmonics}))
         results.append(r)
         print(f"{r.label:<34} {'ref' if r.reference else '   '} fixed {r.fixed_error:.1e} "
               f"{r.fixed_s:6.2f} s  "
