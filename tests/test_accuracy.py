@@ -181,3 +181,15 @@ def test_the_error_band_is_drawn_where_estimated(tmp_path):
     assert band.max() - band.min() >= np.ptp(b.frequency[front]) and widest > 0
     assert any(line.get_label().startswith("tolerance 1e-06 not met") for line in ax.lines)
     assert (tmp_path / "band.png").stat().st_size > 0
+
+
+def test_rerun_of_a_tolerance_branch_chooses_h_again():
+    """Branch.rerun repeats a tol run (the same computation: the same numbers), not a
+    fixed-H run at the branch's largest H."""
+    model = mmshbm.OneDofOscillator(*STIFF).model()
+    b = _quiet(mmshbm.backbone, model, tol=1e-3, max_amplitude=2 * model.gap, max_harmonics=32)
+    again = _quiet(b.rerun)
+    assert again.metadata["tolerance"]["tol"] == 1e-3
+    assert np.array_equal(again.records["harmonics"], b.records["harmonics"])
+    assert np.array_equal(again.frequency, b.frequency)
+    assert np.array_equal(again.frequency_error, b.frequency_error, equal_nan=True)
