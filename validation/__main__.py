@@ -3,6 +3,7 @@ writes their tables.
 
     python -m validation corpus N [--seed S] [--compare-path] [--workers W] [--out DIR]
     python -m validation exact N [--seed S] [--contact-decades LO HI] [--proximal residual] [--workers W]
+    python -m validation accuracy N [--seed S] [--contact-decades LO HI] [--tol 1e-4] [--estimator]
     python -m validation throughput N [-H 3] [--elements 8] [--workers 2]
     python -m validation tables [RUNS] --update docs/validation.md docs/benchmarks.md
 
@@ -18,6 +19,8 @@ import sys
 from pathlib import Path
 
 from mmshbm.cli import common
+
+from .accuracy import arguments as accuracy_arguments
 
 
 def _out(args) -> Path:
@@ -106,6 +109,14 @@ def _exact(args) -> int:
     return 1 if unexplained else 0
 
 
+def _accuracy(args) -> int:
+    """``backbone(tol=...)`` against the exact orbit and fixed H = 31 (validation/accuracy.py),
+    or with ``--estimator`` the per-point estimate against the true error."""
+    from . import accuracy
+
+    return accuracy.main(args)
+
+
 def _chunksize(text: str):
     return "auto" if text == "auto" else common.positive_int(text)
 
@@ -171,6 +182,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="MMS-HBM's proximal parameter r (docs/exact.md)")
     p.add_argument("--workers", type=common.positive_int, default=1, help="processes (chains in parallel)")
     p.add_argument("--out", default="out", help="folder of corpus_exact.csv")
+
+    p = add("accuracy", _accuracy, "backbone(tol=...) against the exact orbit and fixed H = 31 on N chains")
+    accuracy_arguments(p)
 
     p = add("throughput", _throughput, "time a Monte-Carlo study of N backbones serially, on a process pool "
                                        "and on a Dask cluster")

@@ -16,7 +16,13 @@ def register(sub) -> None:
     """Add the subcommand to the subparsers ``sub``."""
     p = sub.add_parser("backbone", help="first nonlinear mode: backbone.csv/.npz/.png")
     common.beam_options(p)
-    p.add_argument("-H", "--harmonics", type=common.positive_int, default=5, help="harmonics H (default 5)")
+    p.add_argument("-H", "--harmonics", type=common.positive_int, default=None,
+                   help="harmonics H (default 5); not with --tol")
+    p.add_argument("--tol", type=common.positive_float, default=None,
+                   help="relative tolerance on the frequency of every point: H chosen per point from an "
+                        "error estimate (docs/accuracy.md) instead of a fixed -H")
+    p.add_argument("--max-harmonics", type=common.positive_int, default=None,
+                   help="with --tol: the largest H of any solve (default 64)")
     p.add_argument("--method", default="mmshbm", choices=backbone_methods(),
                    help="MMS-HBM, or a baseline: penalty harmonic balance (full or reduced) or time-domain "
                         "shooting (exit code 1 when a baseline's branch turns into another family)")
@@ -66,8 +72,19 @@ def _run(args, worker, caught: list) -> int:
         if not method_info(args.method).proximal_parameter:
             raise ValueError(f"--proximal {args.proximal} applies to --method mmshbm, not {args.method}")
         extra["r"] = args.proximal
-    branch = backbone(model, harmonics=args.harmonics, method=args.method, max_amplitude=max_amp,
-                      verbose=common.progress(args), **extra)
+    if args.tol is not None:
+        if args.harmonics is not None:
+            raise ValueError(f"pass either -H {args.harmonics} (a fixed H) or --tol {args.tol:g} (H chosen "
+                             "to meet it), not both")
+        extra["tol"] = args.tol
+        if args.max_harmonics is not None:
+            extra["max_harmonics"] = args.max_harmonics
+    elif args.max_harmonics is not None:
+        raise ValueError("--max-harmonics bounds H with --tol: pass --tol too, or a fixed -H")
+    else:
+        extra["harmonics"] = 5 if args.harmonics is None else args.harmonics
+    branch = backbone(model, method=args.method, max_amplitude=max_amp, verbose=common.progress(args),
+                      **extra)
     out = common.out_dir(args)
     files = [branch.to_csv(out / "backbone.csv"), branch.save(out / "backbone.npz")]
     if len(branch):
@@ -111,7 +128,8 @@ def _report(args, branch, gap: float, files: list, caught: list) -> int:
     verbose = args.verbose > 0
     for message in caught:
         kind = getattr(message, "kind", None)
-        if verbose or kind is None or kind == "incomplete" or (short and kind == "left_family"):
+        if (verbose or kind in (None, "incomplete", "tolerance_not_met")
+                or (short and kind == "left_family")):
             print(f"mmshbm backbone: warning: {message}", file=sys.stderr)
     if short:
         _another_family(branch, gap)
@@ -144,7 +162,11 @@ def _summary(branch, gap: float, findings: list, short: bool) -> str:
     reaches, its frequency range) and how far to trust its frequency (the truncation
     estimate at the top of the backbone, and whether the truncated series passes the stop)."""
     head = f"mmshbm backbone: {method_info(branch.method).display_name}"
-    head += f", H = {branch.harmonics}: " if branch.harmonics else ": "
+    import numpy as np
+
+    hs = np.asarray(branch.records.get("harmonics", [branch.harmonics]))
+    hs = f"{int(hs.min())}–{int(hs.max())}" if len(hs) and hs.min() != hs.max() else str(branch.harmonics)
+    head += f", H = {hs}: " if branch.harmonics else ": "
     state = "complete" if branch.completed else f"incomplete ({branch.status})"
     front = branch.family_front() if len(branch) else []
     if not len(front):
@@ -165,6 +187,11 @@ def _trust(branch, top: float, gap: float) -> str:
     """The frequency's truncation error estimate at the amplitude ``top`` (m), in words."""
     if not branch.harmonics:
         return "no truncation in H (time integration)"
+    from ..results.tolerance_checks import tolerance_summary
+
+    asked = tolerance_summary(branch)
+    if asked is not None:  # a run with --tol: every point carries its estimate
+        return asked
     if not method_info(branch.method).cheap_truncation_estimate:  # re-solves at 2H, 4H: minutes
         return "truncation estimate on request (branch.truncation_error(A))"
     try:

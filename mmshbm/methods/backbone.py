@@ -19,8 +19,9 @@ __all__ = ["backbone", "backbone_method", "amplitude_range"]
 
 log = logging.getLogger(__name__)
 
-def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_amplitude: float | None = None,
-             *, start_amplitude: float | None = None, bounds: dict | None = None, verbose: bool = False,
+def backbone(model: Model, harmonics: int | None = None, method: str = "mmshbm",
+             max_amplitude: float | None = None, *, tol: float | None = None,
+             start_amplitude: float | None = None, bounds: dict | None = None, verbose: bool = False,
              callback=None, checkpoint=None, resume=None, **options) -> Branch:
     """Compute a nonlinear mode (backbone curve) of ``model``.
 
@@ -28,8 +29,9 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     ----------
     model : Model
         The structure, e.g. ``mmshbm.default_beam().model(21)``.
-    harmonics : int
-        Highest harmonic H of the Fourier ansatz (harmonic-balance methods).
+    harmonics : int, optional
+        Highest harmonic H of the Fourier ansatz (harmonic-balance methods); default 5.
+        Not together with ``tol``.
     method : {"mmshbm", "penalty", "shooting", "epmc"}
         MMS-HBM, or one of the baselines. A model with damping (``model.damping``, or
         friction contacts) gets its damped nonlinear mode with "mmshbm": the method becomes
@@ -38,6 +40,14 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
         (INFO); the branch's ``damping_ratio`` is ξ/(2Ω).
     max_amplitude : float, optional
         Stop at this amplitude (m) of the contact DOF; default 10 gaps.
+    tol : float, optional
+        Relative tolerance on the frequency of every point at its amplitude: H is chosen
+        per point from an error estimate (:mod:`mmshbm.methods.adaptive`, docs/accuracy.md),
+        between ``start_harmonics`` (option, default 8) and ``max_harmonics`` (option,
+        default 64: the largest H of any solve, the estimates' included). The
+        branch carries ``frequency_error`` and ``records["harmonics"]``; where ``tol`` is
+        not met it has a ``"tolerance_not_met"`` finding. Methods "mmshbm" and "penalty"
+        on conservative models; without ``checkpoint``/``resume``/``callback``.
     start_amplitude : float, optional
         Amplitude (m) of the first point, on the linear mode, below ``max_amplitude``;
         default half the gap, or less where a contact of the linear mode would reach its
@@ -82,6 +92,12 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
     runner.check_model(model)
     runner.check_is_nonlinear(model, "backbone")
     runner.check_method(method, METHODS)
+    if tol is not None:
+        return _to_tolerance(model, tol, harmonics, method, max_amplitude, start_amplitude=start_amplitude,
+                             bounds=bounds, verbose=verbose, callback=callback, checkpoint=checkpoint,
+                             resume=resume, **options)
+    if harmonics is None:
+        harmonics = 5
     requested = method
     method = backbone_method(model, method)
     if method != requested:
@@ -145,6 +161,20 @@ def backbone(model: Model, harmonics: int = 5, method: str = "mmshbm", max_ampli
         records={k: v for k, v in rec.items() if k not in _BRANCH_COLUMNS})
     branch.check()  # records mode_share, warns (BranchWarning) when the branch is not what it seems
     return branch
+
+
+def _to_tolerance(model: Model, tol, harmonics, method: str, max_amplitude, *, callback, checkpoint, resume,
+                  **kwargs) -> Branch:
+    """The backbone with H chosen to meet ``tol`` (:mod:`mmshbm.methods.adaptive`)."""
+    from .adaptive import backbone_to_tolerance, check_tolerance
+
+    settings = check_tolerance(tol, harmonics, backbone_method(model, method), kwargs)
+    for name, value in (("callback", callback), ("checkpoint", checkpoint), ("resume", resume)):
+        if value is not None:
+            raise ValueError(f"{name} is not available with tol (the points are refined after the "
+                             "continuation): pass harmonics for a fixed H")
+    return backbone_to_tolerance(model, run=backbone, method=method, max_amplitude=max_amplitude, **settings,
+                                 **kwargs)
 
 
 def amplitude_range(model: Model, start_amplitude: float | None, max_amplitude: float | None,

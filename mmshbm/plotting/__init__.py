@@ -20,6 +20,7 @@ own axes. Every function returns the figure.
   units of its own gap, every varying coordinate in the labels).
 - :func:`plot_family_grid`, :func:`plot_convergence`: a study over H and elements, its
   first-mode family per element count and the convergence of its table.
+- :func:`plot_error_band`: a backbone with the band of its per-point error estimate.
 - :func:`plot_frequency_response`, :func:`plot_phase_resonance`, :func:`plot_damping_ratio`:
   forced responses (unstable parts dashed), phase resonance, damped modes."""
 
@@ -39,13 +40,14 @@ _LAZY = {
     "plot_contact_force": "signals", "plot_harmonic_content": "signals", "plot_time_signals": "signals",
     "plot_figure2": "studies", "plot_study": "studies", "study_labels": "studies", "study_styles": "studies",
     "varying_axes": "studies", "plot_family_grid": "grids", "plot_convergence": "grids",
+    "plot_error_band": "accuracy",
 }
 
 __all__ = ["plot_backbone", "plot_frequency_energy", "plot_time_signals", "plot_contact_force",
            "plot_harmonic_content", "plot_figure2", "plot_peak_contact_force", "study_styles", "points_at",
            "plot_study", "study_labels", "varying_axes", "branch_label", "dof_label", "_gap",
            "plot_frequency_response", "plot_phase_resonance", "plot_damping_ratio", "BranchData",
-           "reference_frequencies", "plot_family_grid", "plot_convergence"]
+           "reference_frequencies", "plot_family_grid", "plot_convergence", "plot_error_band"]
 
 
 def __getattr__(name: str):

@@ -116,6 +116,46 @@ class Branch(ResultBase):
         zeros for a conservative backbone."""
         return np.asarray(self.records.get("damping_ratio", np.zeros(len(self))), dtype=float)
 
+    @property
+    def frequency_error(self) -> np.ndarray:
+        """Estimated relative error of each point's frequency at its amplitude, shape
+        (n_points,): ``records["frequency_error"]``, which a run with ``tol`` and
+        :meth:`estimate_frequency_error` fill (:mod:`mmshbm.results.point_errors`); NaN
+        where not estimated. ``records["harmonics"]`` holds the H of each point."""
+        value = self.records.get("frequency_error")
+        if value is None or len(value) != len(self):
+            return np.full(len(self), np.nan)
+        return np.asarray(value, dtype=float)
+
+    def estimate_frequency_error(self) -> np.ndarray:
+        """Estimate the truncation error of every point (one pinned re-solve at 2H per
+        point, :mod:`mmshbm.results.point_errors`) and store it in
+        ``records["frequency_error"]`` (and H in ``records["harmonics"]``).
+
+        Returns
+        -------
+        ndarray, shape (n_points,)
+            :attr:`frequency_error`.
+
+        Raises
+        ------
+        ValueError
+            For a method without harmonics.
+        """
+        from .point_errors import SolverLadder, estimate_point_errors
+
+        if not is_harmonic_balance(self.method) or self.harmonics < 1:
+            raise ValueError(f"a {self.method} branch has no harmonics to truncate")
+        harmonics = np.asarray(self.records.get("harmonics", np.full(len(self), self.harmonics)), dtype=int)
+        if np.any(harmonics != self.harmonics):
+            raise ValueError("the points of this branch have their own H (a run with tol): its "
+                             "frequency_error is already the estimate of each point at its H")
+        self._require_solver()
+        pe = estimate_point_errors(SolverLadder(self), harmonics, self.states, self.amplitude, self.frequency)
+        self.records["frequency_error"] = pe.error
+        self.records["harmonics"] = harmonics.astype(np.int64)
+        return self.frequency_error
+
     def check(self, thresholds=None, *, warn: bool = True) -> list:
         """Check what this branch is (family of its starting mode, contact admissibility,
         completeness): :func:`mmshbm.results.diagnostics.check_branch`. ``backbone``
@@ -175,6 +215,11 @@ class Branch(ResultBase):
             if name in meta:
                 kwargs[name] = meta[name]
         kwargs["method"] = self.method
+        tolerance = meta.get("tolerance")
+        if isinstance(tolerance, dict) and "harmonics" not in overrides:  # a run with tol: H chosen again
+            kwargs.pop("harmonics", None)
+            kwargs.update({k: tolerance[k] for k in ("tol", "start_harmonics", "max_harmonics", "patience",
+                                                     "contraction") if k in tolerance})
         kwargs.update(overrides)
         return backbone(self.get_model(), **kwargs)
 

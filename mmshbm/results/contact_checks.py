@@ -85,8 +85,8 @@ def contact_findings(branch, solver, th: CheckThresholds) -> list[Finding]:
             f"{pen[worst]:.3g} gaps at point {worst} ({branch.frequency[worst]:.4g} Hz)"
             + ("; more harmonics reduce it, branch.time_signals(i, admissible=True) gives admissible "
                "signals, branch.truncation_error(A) estimates the frequency's error at amplitude A"
-               if branch.harmonics else ""),
-            int(bad[0]), int(bad[-1]), float(pen[worst])))
+               if branch.harmonics else "")
+            + _against_tolerance(branch, bad), int(bad[0]), int(bad[-1]), float(pen[worst])))
     bad = np.flatnonzero(neg > th.negative_force)
     if len(bad):
         worst = int(bad[np.argmax(neg[bad])])
@@ -96,9 +96,24 @@ def contact_findings(branch, solver, th: CheckThresholds) -> list[Finding]:
             f"{th.negative_force:g} of the peak force at {len(bad)} of {len(branch)} points, from "
             f"{_where(branch, int(bad[0]))}; worst {neg[worst]:.3g} of the peak at point {worst}"
             + (" (a truncation effect of the Fourier series; branch.truncation_error(A) estimates the "
-               "frequency's error at amplitude A)" if branch.harmonics else ""),
-            int(bad[0]), int(bad[-1]), float(-neg[worst])))
+               "frequency's error at amplitude A)" if branch.harmonics else "")
+            + _against_tolerance(branch, bad), int(bad[0]), int(bad[-1]), float(-neg[worst])))
     return out
+
+
+def _against_tolerance(branch, points: np.ndarray) -> str:
+    """For a branch computed to a tolerance (``tol``): what the truncation effect at
+    ``points`` costs the frequency there, against the tolerance (empty otherwise)."""
+    settings = branch.metadata.get("tolerance")
+    err = branch.records.get("frequency_error")
+    if not isinstance(settings, dict) or err is None or len(err) != len(branch) or not len(points):
+        return ""
+    tol = float(settings["tol"])
+    e = np.asarray(err, dtype=float)[points]
+    met = int(np.sum(e <= tol))
+    worst = float(np.max(e[np.isfinite(e)])) if np.isfinite(e).any() else math.nan
+    return (f"; against the tolerance {tol:g}: the frequency's estimated error at these points is up to "
+            f"{worst:.2g}, within the tolerance at {met} of {len(points)}")
 
 
 #: n -> τ = 2π·arange(n)/n (read only) of the checks' sample grids

@@ -35,6 +35,9 @@ study summaries):
     front: the backbone is not the only orbit there (:mod:`mmshbm.results.coexisting`;
     the message names the intervals in gaps, ``first``/``last`` the off-front points,
     ``value`` the summed width of the intervals in gaps, or m without a gap).
+``"tolerance_not_met"``
+    A branch computed with ``tol`` misses it on part of its family front
+    (:mod:`mmshbm.results.tolerance_checks`).
 ``"incomplete"``
     The branch ended short of its bounds (its status is not ``"bound:<name>"``: a step
     budget ``max_steps``, a step size below ``ds_min``, a failed start, ...).
@@ -66,6 +69,7 @@ from ..core.status import Status
 from .contact_checks import contact_findings as _contact
 from .findings import CheckThresholds, Finding
 from .findings import where as _where
+from .tolerance_checks import tolerance_findings
 
 __all__ = ["CheckThresholds", "Finding", "check_branch", "mode_shares", "findings", "incomplete_reason"]
 
@@ -131,6 +135,7 @@ def check_branch(branch, thresholds: CheckThresholds | None = None, *, warn: boo
             out += _back_below_grazing(branch)
         out += _coexisting(branch)
         out += _contact(branch, solver, th)
+    out += tolerance_findings(branch)
     if Status.parse(branch.status).kind != Status.BOUND:
         out.append(_incomplete(branch))
     branch.metadata["checks"] = [f.to_dict() for f in out]
@@ -184,7 +189,8 @@ def _warnings(branch, found: list[Finding]) -> list[tuple[str, str]]:
              f"them): the contact DOF passes the stop by up to {pen.value:.3g} gaps (from "
              f"{_where(branch, pen.first)}) and the contact force pulls by up to {-neg.value:.3g} of the "
              f"peak (from point {neg.first}); branch.time_signals(i, admissible=True) gives admissible "
-             "signals, branch.truncation_error(A) estimates the frequency's error at amplitude A")
+             "signals, branch.truncation_error(A) estimates the frequency's error at amplitude A"
+             + _tolerance_tail(pen.message))
     out = []
     for f in found:
         if f.kind == "penetration":
@@ -192,6 +198,13 @@ def _warnings(branch, found: list[Finding]) -> list[tuple[str, str]]:
         elif f.kind != "negative_force":
             out.append((f.message, f.kind))
     return out
+
+
+def _tolerance_tail(message: str) -> str:
+    """The statement against the tolerance that ends a truncation finding's message (empty
+    without one: :func:`mmshbm.results.contact_checks.contact_findings`)."""
+    head, sep, tail = message.partition("; against the tolerance ")
+    return sep + tail
 
 
 # ---------------------------------------------------------------------- mode shares

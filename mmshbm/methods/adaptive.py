@@ -1,0 +1,237 @@
+"""Backbones to a tolerance: H chosen per point from an error estimate on every point.
+
+``mmshbm.backbone(model, tol=1e-4)`` runs :func:`backbone_to_tolerance`:
+
+1. the continuation runs at a modest ``start_harmonics`` (default 8): every point of the
+   branch, its family guard, jumps and special points come from that run;
+2. every point is re-solved at 2H with its amplitude pinned, from its own coefficients
+   (:mod:`mmshbm.results.point_errors`): the difference is its error estimate at H
+   (relative, on the frequency at the point's amplitude);
+3. a point of the family front (:meth:`~mmshbm.Branch.family_front`: the backbone,
+   without the excursions into internal-resonance tongues, which keep the start H and
+   their estimate) whose estimate exceeds ``tol`` is *promoted* to the 2H solution (the
+   solve of step 2 is the refined point, seeded by the lower-H one) and estimated again
+   at 4H, and so on while the estimate keeps contracting (``patience`` doublings of H in a
+   row without a contraction by ``contraction`` stop it: the point does not converge in
+   H in this range, e.g. orbits that rattle) and ``tol`` stays within reach (not more
+   than ``FASTEST`` = 64 times per doubling the cap still allows below the estimate);
+   no solve exceeds ``max_harmonics``: a point promoted to an H whose 2H would pass it
+   gets the estimate below divided by the contraction of its last doubling (at least
+   ``ASSUMED_CONTRACTION`` = 4, rate 2; at most ``FASTEST``), Richardson's estimate of
+   the finer solution, flagged in ``records["error_extrapolated"]``;
+4. the branch keeps, at each point, the lowest H whose estimate met ``tol`` (the points
+   that never needed more keep ``start_harmonics``: H is raised only where the branch
+   needs it; a point left where it is keeps its last H), its frequency and that
+   estimate: ``branch.frequency_error``, ``branch.records["harmonics"]``.
+
+The amplitude of every point is pinned in the re-solves: a point is (A_i, f_i) with the
+estimated error on f_i at A_i, so its relative distance to the converged backbone, in
+frequency or in amplitude, is at most ``frequency_error`` (the amplitude is exact by
+construction; the frequency carries the error).
+
+The branch returned is one :class:`~mmshbm.Branch` at the largest H any point kept
+(``branch.harmonics``): each point's unknowns are its own solution's coefficients padded
+with zeros to that H, so that the contact DOF's series of every point is its own; the
+other DOFs' signals are recovered at ``branch.harmonics``. Points where ``tol`` is not met
+(estimate above it at the cap, estimate stalled, a failed re-solve) are a
+``"tolerance_not_met"`` finding (:mod:`mmshbm.results.tolerance_checks`).
+
+Cost: the continuation at ``start_harmonics``, one pinned solve per point at 2H, and one
+more per point for each doubling a point needs.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+import warnings
+
+import numpy as np
+
+from .. import _validate as check
+
+__all__ = ["backbone_to_tolerance", "check_tolerance", "TOLERANCE_DEFAULTS"]
+
+log = logging.getLogger(__name__)
+
+#: the defaults of the tolerance options of :func:`backbone_to_tolerance`
+TOLERANCE_DEFAULTS = {"start_harmonics": 8, "max_harmonics": 64, "patience": 2, "contraction": 1.5}
+
+
+#: the fastest contraction of an estimate per doubling of H that a point is credited with
+#: (rate 6; a stiff contact's points just past grazing were measured contracting 28-fold
+#: once H resolves the contact time): a point whose estimate exceeds ``tol`` by more than
+#: FASTEST ** (the doublings the cap still allows) cannot meet it below the cap and is left
+#: where it is
+FASTEST = 64.0
+#: the contraction per doubling credited to a point at the cap whose last doubling was not
+#: measured (rate 2, the estimator's own)
+ASSUMED_CONTRACTION = 4.0
+
+
+def check_tolerance(tol, harmonics, method: str, options: dict) -> dict:
+    """The checked tolerance options (popped from ``options``): tol, start_harmonics,
+    max_harmonics, patience, contraction.
+
+    Raises
+    ------
+    ValueError
+        tol not a number in (0, 1), given together with ``harmonics``, a method without
+        harmonics, a start H above the cap.
+    """
+    if isinstance(tol, bool) or not isinstance(tol, int | float) or not math.isfinite(tol) or not 0 < tol < 1:
+        raise ValueError(f"tol must be a relative tolerance in (0, 1), e.g. 1e-4, got {tol!r}")
+    if harmonics is not None:
+        raise ValueError(f"pass either harmonics (a fixed H, got {harmonics!r}) or tol (H chosen to meet it, "
+                         f"got {tol!r}), not both; with tol, start_harmonics and max_harmonics bound H")
+    if method not in ("mmshbm", "penalty"):
+        raise ValueError(f"tol is available for the conservative harmonic balance methods 'mmshbm' and "
+                         f"'penalty', not {method!r}: pass harmonics instead")
+    out = {k: options.pop(k, v) for k, v in TOLERANCE_DEFAULTS.items()}
+    out["start_harmonics"] = check.integer("start_harmonics", out["start_harmonics"], minimum=1)
+    out["max_harmonics"] = check.integer("max_harmonics", out["max_harmonics"], minimum=2)
+    out["patience"] = check.integer("patience", out["patience"], minimum=1)
+    if 2 * out["start_harmonics"] > out["max_harmonics"]:
+        raise ValueError(f"max_harmonics ({out['max_harmonics']}) caps every solve, the error estimate's at "
+                         f"2H included: it must be at least 2 * start_harmonics "
+                         f"({2 * out['start_harmonics']})")
+    c = out["contraction"]
+    if isinstance(c, bool) or not isinstance(c, int | float) or not c >= 1:
+        raise ValueError(f"contraction must be a number >= 1, got {c!r}")
+    out["tol"] = float(tol)
+    return out
+
+
+def backbone_to_tolerance(model, tol: float, *, start_harmonics: int, max_harmonics: int, patience: int,
+                          contraction: float, run, **kwargs):
+    """The backbone of ``model`` with every point's estimated relative frequency error
+    at most ``tol`` where it can be had (module docstring).
+
+    Parameters
+    ----------
+    model : Model
+    tol : float
+        Relative tolerance on each point's frequency at its amplitude.
+    start_harmonics : int
+        H of the continuation.
+    max_harmonics : int
+        The largest H of any solve, the estimates' included (step 3 of the module
+        docstring): the most harmonics a point can have.
+    patience : int
+        Doublings of H without the estimate contracting by ``contraction`` after which a
+        point is left where it is (not converging in H here).
+    contraction : float
+        The factor by which an estimate must fall per doubling of H to count as converging.
+    run : callable
+        ``run(model, harmonics=H, **kwargs)`` -> Branch: the fixed-H backbone.
+    **kwargs
+        The other arguments of the fixed-H backbone.
+
+    Returns
+    -------
+    Branch
+        With ``records["frequency_error"]``, ``records["harmonics"]`` and
+        ``metadata["tolerance"]``.
+    """
+    from .._threads import blas_limit
+
+    t0 = time.perf_counter()
+    with warnings.catch_warnings():  # the findings of the start H are not the result's: it is checked below
+        warnings.simplefilter("ignore")
+        base = run(model, harmonics=start_harmonics, **kwargs)
+    with blas_limit():  # small dense solves: one BLAS thread unless the user chose (mmshbm._threads)
+        refined = _refine(base, tol, start_harmonics, max_harmonics, patience, contraction)
+        ladder, H, states, freq, err, extrapolated, levels = refined
+        return _assemble(base, ladder, H, states, freq, err, extrapolated, settings={
+            "tol": float(tol), "start_harmonics": start_harmonics, "max_harmonics": max_harmonics,
+            "patience": patience, "contraction": float(contraction), "rate": 2.0, "levels": levels,
+            "elapsed_s": time.perf_counter() - t0})
+
+
+def _refine(base, tol, start_harmonics, max_harmonics, patience, contraction):
+    """Steps 2 and 3 of the module docstring: (solvers, H, states, frequency, estimate) per point and
+    the number of estimate passes."""
+    from ..results.point_errors import SolverLadder, estimate_point_errors
+
+    n = len(base)
+    ladder = SolverLadder(base)
+    H = np.full(n, start_harmonics, dtype=int)
+    states = [np.asarray(u, dtype=float) for u in base.states]
+    freq = np.asarray(base.frequency, dtype=float).copy()
+    amp = np.asarray(base.amplitude, dtype=float)
+    err = np.full(n, np.nan)
+    last = np.full(n, np.inf)  # the previous estimate per point
+    ratio = np.full(n, math.nan)  # its last contraction per doubling
+    extrapolated = np.zeros(n, dtype=np.int8)
+    stalls = np.zeros(n, dtype=int)
+    on_front = np.zeros(n, dtype=bool)
+    on_front[np.asarray(base.family_front(), dtype=int)] = True
+    active = np.arange(n)
+    levels = 0
+    while len(active):
+        levels += 1
+        pe = estimate_point_errors(ladder, H[active], [states[i] for i in active], amp[active], freq[active])
+        promote = []
+        for j, i in enumerate(active):
+            e = pe.error[j]
+            err[i] = e
+            if not math.isfinite(e) or e <= tol:
+                continue
+            ratio[i] = last[i] / e if math.isfinite(last[i]) else math.nan
+            stalls[i] = 0 if e * contraction <= last[i] else stalls[i] + 1
+            last[i] = e
+            left = math.floor(math.log2(max_harmonics / H[i]) + 1e-9)  # the doublings the cap allows
+            if not on_front[i] or stalls[i] >= patience or left < 1 or e > tol * FASTEST ** left:
+                continue  # not converging in H here, the cap reached, or tol out of reach
+            promote.append((i, pe.states_raised[j], pe.frequency_raised[j], pe.harmonics_raised[j]))
+        nxt = []
+        for i, u2, f2, h2 in promote:
+            states[i], freq[i], H[i] = u2, f2, int(h2)
+            if 2 * H[i] <= max_harmonics:
+                nxt.append(i)
+            else:  # the top: no solve above the cap, the estimate extrapolated (module docstring)
+                c = ratio[i] if math.isfinite(ratio[i]) else ASSUMED_CONTRACTION
+                err[i] = err[i] / min(max(c, ASSUMED_CONTRACTION), FASTEST)
+                extrapolated[i] = 1
+        active = np.array(nxt, dtype=int)
+        log.info("tolerance %.3g: level %d, %d points raised", tol, levels, len(promote))
+    return ladder, H, states, freq, err, extrapolated, levels
+
+
+def _assemble(base, ladder, H, states, freq, err, extrapolated, settings: dict):
+    """The result branch: every point at its own H, padded to the largest (module docstring)."""
+    from ..results.branch import Branch
+    from ..results.point_errors import pad
+
+    n = len(base)
+    H_top = int(H.max()) if n else int(settings["start_harmonics"])
+    top = ladder.at(H_top)
+    rec = {k: np.array(v, copy=True) for k, v in base.records.items()}
+    energy = np.array(base.energy, dtype=float, copy=True)
+    force = np.array(base.contact_force_max, dtype=float, copy=True)
+    out_states = np.empty((n, top.n_unknowns)) if n else np.empty((0, top.n_unknowns))
+    for i in range(n):
+        own = ladder.at(int(H[i]))
+        out_states[i] = pad(own, states[i], top) if int(H[i]) != H_top else states[i]
+        if int(H[i]) != int(settings["start_harmonics"]):
+            mon = own.monitor(states[i])
+            energy[i] = mon.get("energy", energy[i])
+            force[i] = mon.get("contact_force_max", force[i])
+            for k, v in mon.items():
+                if k in rec and rec[k].ndim == 1 and k not in ("frequency", "amplitude"):
+                    rec[k][i] = v
+    rec["frequency_error"] = err
+    rec["harmonics"] = H.astype(np.int64)
+    rec["error_extrapolated"] = extrapolated
+    meta = dict(base.metadata)
+    meta["method_options"] = {**dict(meta.get("method_options", {})), "harmonics": H_top}
+    meta["method_options"].pop("n_samples", None)
+    meta.update(harmonics=H_top, n_samples=int(top.N), tolerance=settings)
+    branch = Branch(frequency=freq, amplitude=np.array(base.amplitude, dtype=float, copy=True), energy=energy,
+                    contact_force_max=force, newton_iterations=base.newton_iterations,
+                    step_size=base.step_size, states=out_states, status=base.status, method=base.method,
+                    harmonics=H_top, special_points=list(base.special_points), metadata=meta, solver=top,
+                    residual_histories=base.residual_histories, records=rec)
+    branch.check()
+    return branch
