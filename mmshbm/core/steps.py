@@ -250,7 +250,11 @@ def _kink_crossed(problem, u, t, ds, opt, curvature, t_new, turn) -> bool:
     on the half step; across a kink within the first half it turns as far on both, and
     the two new tangents agree (the piece beyond the kink is straight on this scale).
     Halving to the kink instead costs a failed step per halving and a slow regrowth after
-    it. A kink in the second half is found by the driver's next halving."""
+    it. A kink in the second half is found by the driver's next halving. A turn that reverses
+    the parameter (t_new's last component against t's) is a corner, not a kink: refused here
+    (the corner step takes it once ds <= corner_ds)."""
+    if t_new[-1] * t[-1] <= 0:
+        return False
     try:
         _, _, _, J_half = _corrector(problem, u, t, 0.5 * ds, opt, curvature=curvature)
         t_half, _, turn_half = _tangent_sign_turn(J_half, t, problem)
