@@ -152,9 +152,10 @@ def run_case(case: str, src: Path, out: Path, repeats: int = 2) -> NLvibComparis
     prefix = out / case
     load0 = os.getloadavg()[0]
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
-    subprocess.run(["octave", "--no-gui", "--quiet", "--eval",
+    # run in the output folder: Octave may leave its octave-workspace file where it runs
+    subprocess.run(["octave", "--no-gui", "--quiet", "--path", str(HERE), "--eval",
                     call.format(src=src, out=prefix, repeats=max(2, repeats))],
-                   cwd=HERE, check=True, capture_output=True, timeout=3600, env=env)
+                   cwd=out, check=True, capture_output=True, timeout=3600, env=env)
     summary = np.atleast_2d(np.loadtxt(f"{prefix}_summary.csv", delimiter=","))
     points = np.atleast_2d(np.loadtxt(f"{prefix}_points.csv", delimiter=","))
     om_ref, rms_ref = points[:, 0], points[:, 1]
