@@ -25,6 +25,9 @@
   1.5 ω_stuck at H = 13, with its Newton iterations per point.
 * ``ImpactFriction``: impact with friction on 4 DOFs (two masses driving a node's normal and
   tangential DOFs; gap 0.05 m, μ = 0.3, preload 0.05 N), the FRF 0.1–0.3 Hz at H = 7.
+* ``NLvibSideBySide``: the ex08 beam (k_t = 1e7, 1e9) and the Jenkins oscillator against
+  NLvib's figures measured by ``python -m validation nlvib`` (``NLVIB``): the processor-time
+  ratio and the rms difference at NLvib's largest point.
 """
 
 from __future__ import annotations
@@ -299,3 +302,86 @@ class ImpactFriction:
 
     def time_frf(self):
         self.run()
+
+
+#: NLvib 1.3 (github.com/maltekrack/NLvib) under GNU Octave 7.3 with OpenBLAS on one thread,
+#: fsolve TolFun = TolX = 1e-10, measured by ``python -m validation nlvib`` (the Octave drivers
+#: validation/nlvib/*.m, NLvib's own HB_residual and solve_and_continue) on the 2-core
+#: development machine ("vm", x86_64), in one sitting with the MMS-HBM runs of that command
+#: (docs/friction.md): the warm whole FRF by its example's sequential continuation, H = 13,
+#: N samples per period. ``cpu_s``: NLvib's processor time (the steady measure on the shared
+#: machine: its own time, not the time others hold the cores), ``wall_s`` its wall time under
+#: the load average ``load``; ``points`` its FRF's points; ``peak``: its largest point (Ω in
+#: rad/s, rms of the tip or the oscillator's mass in m). The ex08 beam at k_t = 1e9 N/m stops
+#: at 177.46 rad/s (fsolve fails there, the step at its minimum).
+NLVIB = {
+    "1e7": {"N": 128, "cpu_s": 8.66, "wall_s": 69.9, "load": "12.7-16.8", "points": 54,
+            "peak": (133.4598, 9.461876e-07), "date": "2026-12-02"},
+    "1e9": {"N": 128, "cpu_s": 40.97, "wall_s": 305.4, "load": "16.8-17.8", "points": 44,
+            "peak": (183.4598, 8.860128e-08), "date": "2026-12-02"},
+    "oscillator-N128": {"N": 128, "cpu_s": 3.55, "wall_s": 11.2, "load": "17.8-16.4", "points": 101,
+                        "peak": (1.2200, 1.160890e-01), "date": "2026-12-02"},
+    "oscillator-N1024": {"N": 1024, "cpu_s": 18.13, "wall_s": 43.8, "load": "16.4-14.6", "points": 101,
+                         "peak": (1.2200, 1.160355e-01), "date": "2026-12-02"},
+}
+
+
+def nlvib_case(kind: str):
+    """(model, force, band (Hz), compared DOF) of the MMS-HBM side of :data:`NLVIB`'s ``kind``
+    ("1e7", "1e9": the ex08 beam's tip; "oscillator": the Jenkins oscillator's mass on
+    0.5–2.5 rad/s, NLvib's band)."""
+    if kind == "oscillator":
+        return jenkins_oscillator(), np.array([0.1, 0.0]), (0.5 / (2 * np.pi), 2.5 / (2 * np.pi)), 0
+    model, force, band = nlvib_friction_beam(kind)
+    return model, force, band, model.amplitude_dof
+
+
+class NLvibSideBySide:
+    """MMS-HBM against NLvib's recorded figures (:data:`NLVIB`): the whole FRF at H = 13.
+    ``track_cpu_ratio``: NLvib's processor time over MMS-HBM's (one run here; NLvib at
+    N = 128, its example's sampling); ``track_rms_difference_at_nlvib_peak``: MMS-HBM's rms at
+    the frequency of NLvib's largest point (a fixed-frequency solve) against NLvib's rms
+    there, relative (the oscillator against NLvib at N = 1024, whose AFT sampling error is
+    smaller)."""
+
+    params = [("1e7", "1e9", "oscillator")]
+    param_names = ["case"]
+    number = 1
+    repeat = (3, 10, 60.0)
+    warmup_time = 0.0
+    timeout = 300
+
+    def setup(self, kind):
+        self.response = self.run(kind)
+
+    def run(self, kind):
+        import mmshbm
+
+        model, force, band, _ = nlvib_case(kind)
+        return mmshbm.frequency_response(model, force, band, harmonics=13)
+
+    def time_frf(self, kind):
+        self.run(kind)
+
+    def track_cpu_ratio(self, kind):
+        import time
+
+        ref = NLVIB["oscillator-N128" if kind == "oscillator" else kind]["cpu_s"]
+        c0 = time.process_time()
+        self.run(kind)
+        return ref / (time.process_time() - c0)
+
+    track_cpu_ratio.unit = "ratio"
+
+    def track_rms_difference_at_nlvib_peak(self, kind):
+        omega, rms_ref = NLVIB["oscillator-N1024" if kind == "oscillator" else kind]["peak"]
+        r = self.response
+        solver, dof = r.solver, nlvib_case(kind)[3]
+        guess = r.states[int(np.argmin(np.abs(r.angular_frequency - omega)))]
+        u, ok = solver.solve_at(omega / (2 * np.pi), guess)
+        if not ok:
+            return float("nan")
+        c = solver.coefficients(u)[dof]
+        return abs(float(np.sqrt(c[0] ** 2 + 0.5 * np.sum(c[1:] ** 2))) / rms_ref - 1)
+
+    track_rms_difference_at_nlvib_peak.unit = "relative difference"

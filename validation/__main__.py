@@ -6,6 +6,7 @@ writes their tables.
     python -m validation accuracy N [--seed S] [--contact-decades LO HI] [--tol 1e-4] [--estimator]
     python -m validation throughput N [-H 3] [--elements 8] [--workers 2]
     python -m validation tables [RUNS] --update docs/validation.md docs/benchmarks.md
+    python -m validation nlvib --nlvib DIR [--case C ...] [--repeats 2] [--out DIR]
 
 Exit codes: 0, 1 when a run failed as the subcommand says, 2 for bad input.
 """
@@ -140,6 +141,24 @@ def _throughput(args) -> int:
     return 0 if all(r.identical for r in result.runs) else 1
 
 
+def _nlvib(args) -> int:
+    """NLvib under Octave and MMS-HBM side by side (validation/nlvib_compare.py); writes
+    nlvib.txt and NLvib's points under --out. Exit 2 without Octave."""
+    from . import nlvib_compare
+
+    if nlvib_compare.octave_available() is None:
+        print("python -m validation nlvib: octave is not on PATH (apt-get install octave)", file=sys.stderr)
+        return 2
+    out = _out(args)
+    results = nlvib_compare.run(Path(args.nlvib), args.case, args.repeats, out)
+    text = nlvib_compare.report(results)
+    print(text)
+    path = out / "nlvib.txt"
+    path.write_text(text + "\n")
+    common.wrote(path)
+    return 0
+
+
 def _tables(args) -> int:
     from . import tables
 
@@ -197,6 +216,14 @@ def build_parser() -> argparse.ArgumentParser:
                    help="one executor besides the serial reference (default both pool and dask)")
     p.add_argument("--chunksize", type=_chunksize, default="auto", help="runs per task, or auto")
     p.add_argument("--out", default="out", help="folder of throughput.txt and throughput.json")
+
+    p = add("nlvib", _nlvib, "NLvib (under Octave) and MMS-HBM on NLvib's example 08 with a Jenkins element "
+                             "and on the Jenkins oscillator: times, points, peaks")
+    p.add_argument("--nlvib", required=True, help="an NLvib checkout (github.com/maltekrack/NLvib)")
+    p.add_argument("--case", action="append", default=None, choices=("ex08-kt1e7", "ex08-kt1e9",
+                   "oscillator-N128", "oscillator-N1024"), help="a case (repeatable; default all)")
+    p.add_argument("--repeats", type=common.positive_int, default=2, help="warm runs of each side")
+    p.add_argument("--out", default="out/nlvib", help="folder of nlvib.txt and NLvib's points")
 
     p = add("tables", _tables, "write the tables of docs/validation.md from the runs")
     p.add_argument("runs", nargs="?", default="runs",

@@ -223,7 +223,8 @@ def _advance_turn(problem, u, t, ds, opt, curvature):
         # _step, with the monitor after the turn test (a refused step is not monitored)
         u_new, nit, hist, J = _corrector(problem, u, t, ds, opt, curvature=curvature)
         t_new, sign, turn = _tangent_sign_turn(J, t, problem)
-        if turn < math.cos(opt.max_angle) and ds > opt.corner_ds:
+        if turn < math.cos(opt.max_angle) and ds > opt.corner_ds and not (
+                problem.corner_parameter and _kink_crossed(problem, u, t, ds, opt, curvature, t_new, turn)):
             raise _Failure("tangent turned too far")
         try:  # _monitor(problem, u_new), without its call
             rec = problem.monitor(u_new)
@@ -238,6 +239,29 @@ def _advance_turn(problem, u, t, ds, opt, curvature):
         out = _corner_step(problem, u, t, ds, opt)
         return (*out, float(out[4] @ t))
     return u_new, nit, hist, J, t_new, sign, rec, turn
+
+
+def _kink_crossed(problem, u, t, ds, opt, curvature, t_new, turn) -> bool:
+    """True when a step of length ``ds`` from (u, t) that turned the tangent by more than
+    ``opt.max_angle`` (t_new·t = ``turn``) crossed a kink of the branch (a point where its
+    tangent jumps: the onset of slip of a friction node, whose slider harmonics start to
+    grow linearly from a constant) rather than a bend that a shorter step resolves. The
+    half step tells: across a bend of curvature κ the tangent turns by κ·ds, half as far
+    on the half step; across a kink within the first half it turns as far on both, and
+    the two new tangents agree (the piece beyond the kink is straight on this scale).
+    Halving to the kink instead costs a failed step per halving and a slow regrowth after
+    it. A kink in the second half is found by the driver's next halving. A turn that reverses
+    the parameter (t_new's last component against t's) is a corner, not a kink: refused here
+    (the corner step takes it once ds <= corner_ds)."""
+    if t_new[-1] * t[-1] <= 0:
+        return False
+    try:
+        _, _, _, J_half = _corrector(problem, u, t, 0.5 * ds, opt, curvature=curvature)
+        t_half, _, turn_half = _tangent_sign_turn(J_half, t, problem)
+    except _Failure:
+        return False
+    angle, angle_half = math.acos(min(turn, 1.0)), math.acos(min(turn_half, 1.0))
+    return angle_half >= 0.75 * angle and float(t_half.dot(t_new)) >= math.cos(0.5 * opt.max_angle)
 
 
 def _corner_step(problem, u, t, ds, opt):

@@ -62,6 +62,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...contact.coulomb import _sample_basis, derivative_matrix, project_coulomb, project_coulomb_play
+from ...core.measures import mean_energy
 from ...model.model import Model
 from .condensation.damped_condense import DENSE_LIMIT
 from .corrector import at_roundoff, backtrack, corrector_to_roundoff
@@ -139,6 +140,7 @@ class FrictionRows:
         for j, i in enumerate(self.friction_rows):
             self.rowscale[self._coef_index[i]] = self.rho[j] * length
         self.colscale = np.concatenate([self.xscale, np.full(extra_cols, self.omega_ref)])
+        self._jscale = None  # the Jacobian's column scaling, formed again at first use
 
     def friction_law(self, x: np.ndarray, F: np.ndarray, j: int, jacobian: bool = True):
         """(R (2H+1,), ∂R/∂F_t, ∂R/∂x_t (2H+1, 2H+1), slip fraction) of friction contact j
@@ -314,6 +316,8 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         hit = np.flatnonzero(model.l == self.amplitude_dof)
         self._track = int(hit[0]) if len(hit) else None
         self._tracker = None
+        self._tracked_dx = None  # (z, ∂(cos, sin)/∂x) of the last Ω the tracker was asked
+        self._dense_km = None
         if self._track is not None and self.cond.n_l <= DENSE_LIMIT:
             self._tracker = TrackedHarmonic(model.blocks, self._track, self.force_l)
         if self._track is not None:
@@ -355,9 +359,16 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         Uc, Us = x[n_c:2 * n_c], x[2 * n_c:3 * n_c]
         U = Uc - 1j * Us
         q = -z @ U + s * y
-        dx = np.zeros((2, self.n_x))
-        dx[0, n_c:2 * n_c], dx[0, 2 * n_c:3 * n_c] = -z.real, -z.imag
-        dx[1, n_c:2 * n_c], dx[1, 2 * n_c:3 * n_c] = z.imag, -z.real
+        memo = self._tracked_dx
+        if memo is not None and memo[0] is z:  # z is the tracker's array for this Ω
+            dx = memo[1]
+        else:
+            dx = np.zeros((2, self.n_x))
+            dx[0, n_c:2 * n_c], dx[0, 2 * n_c:3 * n_c] = -z.real, -z.imag
+            dx[1, n_c:2 * n_c], dx[1, 2 * n_c:3 * n_c] = z.imag, -z.real
+            dx.flags.writeable = False
+            if self._tracker is not None:
+                self._tracked_dx = (z, dx)
         dw = None
         if derivative and dz is not None:
             dq = -dz @ U + ds * y + s * dy
@@ -375,18 +386,36 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
             return super()._evaluate(u, jacobian)
         x, omega = self.unpack(u)
         ab = np.asarray(u[self.n_x:self.n_x + 2], dtype=float) * self.length
-        R_x, Jx, Jw, _ = self.residual_parts(x, omega, 1.0, jacobian)
+        R_x, Jx, Jw = self._parts(x, omega, jacobian)
         rec, drec, dw = self._tracked(x, omega, jacobian)
-        R = np.concatenate([R_x / self.rowscale, (ab - rec) / self.length])
+        n_x = self.n_x
+        R = np.empty(n_x + 2)
+        np.divide(R_x, self.rowscale, out=R[:n_x])
+        R[n_x:] = (ab - rec) / self.length
         if not jacobian:
             return R
-        J = np.zeros((self.n_x + 2, self.n_unknowns))
-        J[:self.n_x, :self.n_x] = Jx * self.xscale[None, :] / self.rowscale[:, None]
-        J[:self.n_x, -1] = Jw * self.omega_ref / self.rowscale
-        J[self.n_x:, :self.n_x] = -drec * self.xscale[None, :] / self.length
-        J[self.n_x:, self.n_x:self.n_x + 2] = np.eye(2)
-        J[self.n_x:, -1] = -dw * self.omega_ref / self.length
+        if self._jscale is None:  # the scaling of the x columns: xscale_j / rowscale_i
+            self._jscale = self.xscale[None, :] / self.rowscale[:, None]
+        J = np.empty((n_x + 2, self.n_unknowns))
+        np.multiply(Jx, self._jscale, out=J[:n_x, :n_x])
+        J[:n_x, n_x:n_x + 2] = 0.0
+        J[:n_x, -1] = Jw * self.omega_ref / self.rowscale
+        J[n_x:, :n_x] = -drec * self.xscale[None, :] / self.length
+        J[n_x:, n_x:n_x + 2] = np.eye(2)
+        J[n_x:, -1] = -dw * self.omega_ref / self.length
         return R, J
+
+    def _parts(self, x: np.ndarray, omega: float, jacobian: bool):
+        """:meth:`ForcedResponseProblem.residual_parts` at σ = 1 without the σ column:
+        R (n_x,) and, if asked, ∂R/∂x (n_x, n_x) and ∂R/∂Ω (n_x,) (else None)."""
+        ch = self._condensed(omega, 0.0, jacobian)
+        s, ds = self.excitation.scale(omega)
+        Pv = self.first_harmonic_vector(s * ch.P[:, 0])
+        if not jacobian:
+            return self.fused_residual(ch.D, x, Pv)[0], None, None
+        dload = self.first_harmonic_vector(s * ch.dP_domega[:, 0] + ds * ch.P[:, 0])[:, None]
+        R, Jx, Jp = self.fused_residual(ch.D, x, Pv, ch.dD_domega[None], dload)
+        return R, Jx, Jp[:, 0]
 
     def _static_length(self) -> float:
         """The static response (m) to the force, friction nodes free (1 if it is zero)."""
@@ -505,6 +534,62 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         return self._floquet.multipliers(merge_phases(normal, pieces), omega)
 
     def _record(self, x: np.ndarray, omega: float, sigma: float) -> dict:
-        rec = super()._record(x, omega, sigma)
-        rec.update(self.friction_records(x, omega, sigma))
-        return rec
+        if self.stability:
+            rec = super()._record(x, omega, sigma)
+            rec.update(self.friction_records(x, omega, sigma))
+            return rec
+        # the records of ForcedResponseProblem._record and friction_records, the force the
+        # structure needs computed once
+        Q = self._coefficients(x, omega, sigma)
+        q = Q[self.amplitude_dof]
+        F = self._needed(x, omega, sigma)
+        slip, work = self.slip_and_work(x, F)
+        return {"frequency": omega / (2 * np.pi), "amplitude": self.amplitude(q), "phase": self.phase(q),
+                "energy": self._energy(Q, omega), "contact_force_max": self.contact_force_max(x, F),
+                "slip_fraction": slip, "friction_dissipation": work}
+
+    def _energy(self, Q: np.ndarray, omega: float) -> float:
+        """:func:`~mmshbm.core.measures.mean_energy` of Q (n_dof, 2H+1) at Ω, with dense K and
+        M where the dense blocks are held (small models: the sparse products cost more)."""
+        if self._tracker is None:
+            return mean_energy(self.model, Q, omega)
+        if self._dense_km is None:
+            self._dense_km = (np.ascontiguousarray(self.model.K.toarray()),
+                              np.ascontiguousarray(self.model.M.toarray()))
+        K, M = self._dense_km
+        KQ = np.einsum("ij,ij->j", Q, K @ Q)
+        MQ = np.einsum("ij,ij->j", Q[:, 1:], M @ Q[:, 1:])
+        k2 = np.repeat(np.arange(1, self.H + 1), 2) ** 2
+        return float(0.5 * KQ[0] + 0.25 * KQ[1:].sum() + 0.25 * omega**2 * (k2 @ MQ))
+
+    def _coefficients(self, x: np.ndarray, omega: float, sigma: float) -> np.ndarray:
+        """NLvib-ordered coefficients of all DOFs (n_dof, 2H+1): the DOFs with mass recovered
+        by one batched solve with S_k = K_ll + ikΩ C_ll − (kΩ)² M_ll, k = 0..H (the massless
+        DOFs carry no mass or damping, so Q̂_l,k = S_k⁻¹ (σ F̂_l δ_k1 − K_lc Q̂_c,k)), where the
+        dense blocks are held (:class:`~mmshbm.methods.mms.friction_tracked.TrackedHarmonic`);
+        otherwise the condensation's recovery."""
+        tr = self._tracker
+        if tr is None:
+            return super()._coefficients(x, omega, sigma)
+        n_c, n_coef = self.n_c, self.n_coef
+        Xc = x.reshape(n_coef, n_c).T  # (n_c, 2H+1)
+        w = omega * np.arange(self.H + 1)
+        S = (tr.K_ll[None] + (1j * w)[:, None, None] * tr.C_ll[None]
+             - (w**2)[:, None, None] * tr.M_ll[None])
+        rhs = np.empty((self.H + 1, len(tr.K_ll), 1), dtype=complex)
+        rhs[0, :, 0] = -(tr.K_lc @ Xc[:, 0])
+        rhs[1:, :, 0] = -(tr.K_lc @ (Xc[:, 1::2] - 1j * Xc[:, 2::2])).T
+        s, _ = self.excitation.scale(omega)
+        rhs[1, :, 0] += sigma * s * tr.force_l
+        try:
+            Ql_hat = np.linalg.solve(S, rhs)[:, :, 0].T  # (n_l, H+1)
+        except np.linalg.LinAlgError:
+            return super()._coefficients(x, omega, sigma)
+        Q = np.empty((self.model.n_dof, n_coef))
+        Q[self.model.c] = Xc
+        Ql = Q[self.model.l]
+        Ql[:, 0] = Ql_hat[:, 0].real
+        Ql[:, 1::2] = Ql_hat[:, 1:].real
+        Ql[:, 2::2] = -Ql_hat[:, 1:].imag
+        Q[self.model.l] = Ql
+        return Q
