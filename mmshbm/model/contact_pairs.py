@@ -42,7 +42,8 @@ from dataclasses import replace
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["with_contact_pairs", "pair_frames", "pair_dofs", "fe_pair_dofs"]
+__all__ = ["with_contact_pairs", "pair_frames", "pair_dofs", "fe_pair_dofs", "interface_matrices",
+           "pair_laws", "pair_step"]
 
 
 def pair_frames(normals, tangents=None) -> np.ndarray:
@@ -185,40 +186,18 @@ def with_contact_pairs(model, dofs_b, normals, *, dofs_a=None, gap=0.0, mu=0.3, 
     k_t = _per_pair("tangential_stiffness", tangential_stiffness, n_pairs, positive=True)
 
     bonded = normal == "bonded"
-    per = 2 if bonded else 3
-    n_new = per * n_pairs
-    # B (3 n_pairs × n_dof): row 3p + i is R_p[i] · (u_b − u_a)
-    rows = np.repeat(np.arange(3 * n_pairs), 3)
-    vals_b = R.reshape(3 * n_pairs, 3).ravel()
-    cols_b = np.repeat(b, 3, axis=0).ravel()
-    parts_r, parts_c, parts_v = [rows], [cols_b], [vals_b]
-    if a is not None:
-        parts_r.append(rows)
-        parts_c.append(np.repeat(a, 3, axis=0).ravel())
-        parts_v.append(-vals_b)
-    B = sp.csr_matrix((np.concatenate(parts_v), (np.concatenate(parts_r), np.concatenate(parts_c))),
-                      shape=(3 * n_pairs, n_dof))
-    k_all = np.stack([k_n, k_t, k_t], axis=1).ravel()
-    slid = np.ones(3 * n_pairs, dtype=bool)
-    if bonded:
-        slid[0::3] = False  # the normal spring joins the nodes directly
-    Kd = sp.diags(k_all, format="csr")
-    # ½ (Bq − E s)ᵀ Kd (Bq − E s), E (3 n_pairs × n_new) picking the slid rows
-    E = sp.csr_matrix((np.ones(n_new), (np.flatnonzero(slid), np.arange(n_new))), shape=(3 * n_pairs, n_new))
-    K = sp.bmat([[model.K + B.T @ Kd @ B, -(B.T @ Kd @ E)], [-(E.T @ Kd @ B), E.T @ Kd @ E]], format="csr")
+    K_add, K_lc, K_cc = interface_matrices(n_dof, b, R, a, k_n, k_t, bonded)
+    n_new = K_cc.shape[0]
+    K = sp.bmat([[model.K + K_add, K_lc], [K_lc.T, K_cc]], format="csr")
     K = (0.5 * (K + K.T)).tocsr()
     M = sp.block_diag([model.M, sp.csr_matrix((n_new, n_new))], format="csr")
     C = None if model.damping is None else sp.block_diag([model.damping, sp.csr_matrix((n_new, n_new))],
                                                          format="csr")
     first = n_dof
-    new = np.arange(first, first + n_new).reshape(n_pairs, per)
-    dofs = [c.dof for c in model.contacts]
-    gaps = [c.gap for c in model.contacts]
-    sides = [c.side for c in model.contacts]
-    if not bonded:
-        dofs += new[:, 0].tolist()
-        gaps += gap.tolist()
-        sides += [-1] * n_pairs
+    dofs, gaps, sides, entries = pair_laws(first, n_pairs, bonded, gap, mu, preload, len(model.contacts))
+    dofs = [c.dof for c in model.contacts] + dofs
+    gaps = [c.gap for c in model.contacts] + gaps
+    sides = [c.side for c in model.contacts] + sides
     amplitude_dof = model._amplitude_dof
     if amplitude_dof is None and len(model.contacts) == 1:
         amplitude_dof = model.contacts[0].dof
@@ -226,26 +205,89 @@ def with_contact_pairs(model, dofs_b, normals, *, dofs_a=None, gap=0.0, mu=0.3, 
         amplitude_dof = int(b[0, int(np.argmax(np.abs(R[0, 0])))])
     description = dict(model.description)
     out = Model.from_matrices(M, K, dofs, gaps, sides, description, damping=C, amplitude_dof=amplitude_dof)
-    entries = [friction_args(fc) for fc in model.friction]
-    j0 = len(model.contacts)
-    tangential = new[:, -2:]
-    for p in range(n_pairs):
-        for d in tangential[p]:
-            if bonded:
-                entries.append({"dof": int(d), "mu": float(mu[p]), "normal_load": float(preload[p])})
-            else:
-                entries.append({"dof": int(d), "mu": float(mu[p]), "normal_contact": j0 + p,
-                                "preload": float(preload[p])})
+    entries = [friction_args(fc) for fc in model.friction] + entries
     out = add_friction(out, entries)
-    step = {"name": "with_contact_pairs",
-            "args": {"n_pairs": int(n_pairs), "first_dof": int(first), "normal": normal,
-                     "dofs_b": b.tolist(), "dofs_a": None if a is None else a.tolist(),
-                     "frames": R.tolist(), "gap": gap.tolist(), "mu": mu.tolist(),
-                     "preload": preload.tolist(),
-                     "normal_stiffness": k_n.tolist(), "tangential_stiffness": k_t.tolist()}}
+    step = pair_step(first, normal, b, a, R, gap, mu, preload, k_n, k_t)
     steps = [step] + [{"name": "with_friction", "args": e} for e in entries[len(model.friction):]]
     description["transforms"] = list(description.get("transforms", [])) + steps
     return replace(out, description=description, elements=model.elements)
+
+
+def interface_matrices(n_dof: int, dofs_b: np.ndarray, frames: np.ndarray, dofs_a: np.ndarray | None,
+                       k_n: np.ndarray, k_t: np.ndarray, bonded: bool):
+    """The stiffness the pairs add, as blocks of [[K_ss, K_sp], [K_spᵀ, K_pp]] over the
+    structure's DOFs s and the pairs' slip DOFs p (module docstring): the energy
+    ½ (B q − E p)ᵀ diag(k) (B q − E p), B (3 n_pairs × n_dof) the relative displacements in
+    the pair frames, E picking the directions that slide (the normal too unless ``bonded``).
+
+    Parameters
+    ----------
+    n_dof : int
+        DOFs of the structure.
+    dofs_b, dofs_a : ndarray of int (n_pairs, 3)
+        The nodes' DOFs (``dofs_a`` None: the ground).
+    frames : ndarray (n_pairs, 3, 3)
+        :func:`pair_frames`.
+    k_n, k_t : ndarray (n_pairs,)
+        Interface stiffness (N/m).
+    bonded : bool
+        Normal spring between the nodes, no normal slip DOF.
+
+    Returns
+    -------
+    K_ss (n_dof, n_dof), K_sp (n_dof, n_p), K_pp (n_p, n_p) : scipy.sparse.csr_matrix
+        n_p = 2 or 3 per pair, in pair order ((s_n,) s_t1, s_t2).
+    """
+    n_pairs = dofs_b.shape[0]
+    rows = np.repeat(np.arange(3 * n_pairs), 3)
+    vals = frames.reshape(3 * n_pairs, 3).ravel()
+    parts_r, parts_c, parts_v = [rows], [np.repeat(dofs_b, 3, axis=0).ravel()], [vals]
+    if dofs_a is not None:
+        parts_r.append(rows)
+        parts_c.append(np.repeat(dofs_a, 3, axis=0).ravel())
+        parts_v.append(-vals)
+    B = sp.csr_matrix((np.concatenate(parts_v), (np.concatenate(parts_r), np.concatenate(parts_c))),
+                      shape=(3 * n_pairs, n_dof))
+    Kd = sp.diags(np.stack([k_n, k_t, k_t], axis=1).ravel(), format="csr")
+    slid = np.ones(3 * n_pairs, dtype=bool)
+    if bonded:
+        slid[0::3] = False  # the normal spring joins the nodes directly
+    n_new = int(slid.sum())
+    E = sp.csr_matrix((np.ones(n_new), (np.flatnonzero(slid), np.arange(n_new))), shape=(3 * n_pairs, n_new))
+    return ((B.T @ Kd @ B).tocsr(), (-(B.T @ Kd @ E)).tocsr(), (E.T @ Kd @ E).tocsr())
+
+
+def pair_laws(first: int, n_pairs: int, bonded: bool, gap, mu, preload, first_contact: int = 0):
+    """The laws on the pairs' slip DOFs ``first, first + 1, ...`` (module docstring):
+    (contact DOFs, gaps, sides, friction entries) — the unilateral contacts (none when
+    ``bonded``) as lists for :meth:`Model.from_matrices`, the friction contacts as
+    :func:`~mmshbm.model.friction.friction_contact` arguments, pressed by contact
+    ``first_contact + p`` (the index the pair's stop gets in the model)."""
+    per = 2 if bonded else 3
+    new = np.arange(first, first + per * n_pairs).reshape(n_pairs, per)
+    dofs, gaps, sides, entries = [], [], [], []
+    if not bonded:
+        dofs, gaps, sides = new[:, 0].tolist(), [float(g) for g in gap], [-1] * n_pairs
+    for p in range(n_pairs):
+        for d in new[p, -2:]:
+            if bonded:
+                entries.append({"dof": int(d), "mu": float(mu[p]), "normal_load": float(preload[p])})
+            else:
+                entries.append({"dof": int(d), "mu": float(mu[p]), "normal_contact": first_contact + p,
+                                "preload": float(preload[p])})
+    return dofs, gaps, sides, entries
+
+
+def pair_step(first, normal, dofs_b, dofs_a, frames, gap, mu, preload, k_n, k_t) -> dict:
+    """The ``description["transforms"]`` record of a set of pairs (read by :func:`pair_dofs`)."""
+    return {"name": "with_contact_pairs",
+            "args": {"n_pairs": int(len(dofs_b)), "first_dof": int(first), "normal": normal,
+                     "dofs_b": np.asarray(dofs_b).tolist(),
+                     "dofs_a": None if dofs_a is None else np.asarray(dofs_a).tolist(),
+                     "frames": np.asarray(frames).tolist(), "gap": list(map(float, gap)),
+                     "mu": list(map(float, mu)), "preload": list(map(float, preload)),
+                     "normal_stiffness": list(map(float, k_n)),
+                     "tangential_stiffness": list(map(float, k_t))}}
 
 
 def pair_dofs(model) -> np.ndarray:
