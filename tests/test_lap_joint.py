@@ -106,3 +106,39 @@ def test_grid_shape():
 def test_bad_input_is_named(kwargs, match):
     with pytest.raises(ValueError, match=match):
         lap_joint(**kwargs)
+
+
+def test_interface_reduction_keeps_the_static_interface_and_the_tip_exact():
+    """On a chain of 60 masses with 6 massless interface DOFs: the reduced model's static
+    condensation onto the interface and its static tip response to a tip load are the full
+    model's (round-off of the solves: a few ε times the condition, ~1e-10 here)."""
+    from mmshbm.model.interface_reduction import reduce_to_interface
+
+    rng = np.random.default_rng(3)
+    n_l, n_c = 60, 6
+    k = 1e4 * (1 + rng.random(n_l + 1))
+    K_ll = sp.diags([k[:-1] + k[1:], -k[1:-1], -k[1:-1]], [0, 1, -1], format="csr").tolil()
+    M_ll = sp.diags(1 + rng.random(n_l), format="csr")
+    attach = rng.choice(n_l, n_c, replace=False)
+    k_i = 5e3 * (1 + rng.random(n_c))
+    K_lc = sp.csr_matrix((-k_i, (attach, np.arange(n_c))), shape=(n_l, n_c))
+    for a, kk in zip(attach, k_i, strict=True):
+        K_ll[a, a] += kk
+    K_ll = K_ll.tocsr()
+    K_cc = sp.diags(k_i, format="csr")
+    tip = 37
+    red = reduce_to_interface(M_ll, K_ll, K_lc, K_cc, tip, n_modes=4, n_interface=3)
+    n_r = red.n_reduced
+    D0_full = K_cc.toarray() - K_lc.T.toarray() @ np.linalg.solve(K_ll.toarray(), K_lc.toarray())
+    Kr = red.K
+    D0_red = Kr[n_r:, n_r:] - Kr[n_r:, :n_r] @ np.linalg.solve(Kr[:n_r, :n_r], Kr[:n_r, n_r:])
+    assert np.abs(D0_red - D0_full).max() <= 1e-9 * np.abs(D0_full).max()
+    # a unit tip load, the interface free: the tip's static displacement
+    K_full = sp.bmat([[K_ll, K_lc], [K_lc.T, K_cc]]).toarray()
+    f = np.zeros(n_l + n_c)
+    f[tip] = 1.0
+    q_full = np.linalg.solve(K_full, f)
+    q_red = np.linalg.solve(Kr, red.load(f[:n_l]))
+    assert abs(q_red[0] - q_full[tip]) <= 1e-9 * abs(q_full[tip])
+    assert np.abs(q_red[n_r:] - q_full[n_l:]).max() <= 1e-9 * np.abs(q_full[n_l:]).max()
+    assert np.allclose(red.basis[tip], np.eye(n_r)[0], atol=1e-12)
