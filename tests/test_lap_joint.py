@@ -142,3 +142,19 @@ def test_interface_reduction_keeps_the_static_interface_and_the_tip_exact():
     assert abs(q_red[0] - q_full[tip]) <= 1e-9 * abs(q_full[tip])
     assert np.abs(q_red[n_r:] - q_full[n_l:]).max() <= 1e-9 * np.abs(q_full[n_l:]).max()
     assert np.allclose(red.basis[tip], np.eye(n_r)[0], atol=1e-12)
+
+
+def test_unilateral_pairs_open_and_close():
+    """normal="unilateral": a stop per pair at gap 0, the tangents pressed by its contact force;
+    at the bending frequency the forced orbit converges with the pairs closing (contact
+    force) and slipping part of the period."""
+    joint = lap_joint(8, normal="unilateral")
+    model = joint.model
+    assert len(model.contacts) == 8 and all(c.side == -1 and c.gap == 0.0 for c in model.contacts)
+    assert [fc.normal_contact for fc in model.friction] == [p for p in range(8) for _ in range(2)]
+    P = FrictionForcedProblem(model, joint.force, harmonics=3)
+    u = P.start_point(joint.bending_frequency)
+    x, omega = P.unpack(u)
+    assert np.abs(P.residual_parts(x, omega, 1.0, False)[0] / P.rowscale).max() < 1e-10
+    rec = P._record(x, omega, 1.0)
+    assert rec["contact_force_max"] > 0 and 0 < rec["slip_fraction"] < 1
