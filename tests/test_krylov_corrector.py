@@ -214,3 +214,21 @@ def test_forced_krylov_response_points_are_dense_solutions(joint):
         R_d, _ = _scaled_square(dense, u_d)
         bound = 2 * np.abs(np.linalg.inv(J)).sum(axis=1).max() * (np.abs(R_d).max() + np.abs(R_k).max())
         assert np.abs(u - u_d)[:dense.n_x].max() <= max(bound, 1e-12)
+
+
+def test_forced_linear_solver_switch():
+    from mmshbm.methods.mms.forced_krylov import (
+        FORCED_KRYLOV_MIN_UNKNOWNS,
+        forced_harmonic_columns,
+        resolve_forced_solver,
+    )
+
+    assert resolve_forced_solver("auto", FORCED_KRYLOV_MIN_UNKNOWNS - 1) == "dense"
+    assert resolve_forced_solver("auto", FORCED_KRYLOV_MIN_UNKNOWNS) == "krylov"
+    assert resolve_forced_solver("dense", 10**6) == "dense"
+    with pytest.raises(ValueError, match="linear_solver"):
+        resolve_forced_solver("lu", 10)
+    # the harmonics' unknowns partition the rows, the tracked pair with harmonic 1
+    cols = forced_harmonic_columns(3, 2, 3 * 5 + 2)
+    assert np.array_equal(np.sort(np.concatenate(cols)), np.arange(17))
+    assert cols[1].tolist() == [3, 4, 5, 6, 7, 8, 15, 16]
