@@ -12,9 +12,18 @@ asv suites:
 * ``InterfaceBackbone``: the backbone to 1.5 gaps (H = 5): its time, its points and the
   cost per point (``track_ms_per_point``, timed in one process).
 
+* ``LapJointIteration``: one Newton iteration of the forced response with friction on the
+  lap joint (:func:`mmshbm.lap_joint`, 2 slip DOFs per pair) at its bending frequency:
+  residual and Jacobian, then the linear solve (dense LU or the harmonics' blocks and
+  GMRES, :mod:`mmshbm.methods.mms.forced_krylov`), per solver, pairs and H; its memory.
+* ``LapJointResponse``: the lap joint's forced response over its frequency range at H = 5
+  (the points and the cost per point), for the pair counts that fit asv's timeout.
+
 The table of docs/scale.md comes from the script entry point:
 
     OPENBLAS_NUM_THREADS=1 python -m benchmarks.bench_interfaces 8 16 32 64
+
+and that of docs/interfaces.md from ``python -m benchmarks.bench_interfaces --lap 8 32 100``.
 """
 
 from __future__ import annotations
@@ -142,6 +151,101 @@ class InterfaceBackbone:
     track_ms_per_point.unit = "ms"
 
 
+#: pair counts of the lap-joint suites (an nx × ny grid each)
+PAIRS = (8, 32, 100, 400)
+
+
+def _joint(pairs: int):
+    from mmshbm.fe.lap_joint import lap_joint
+
+    return lap_joint(pairs)
+
+
+def _forced_setup(pairs: int, harmonics: int, solver: str):
+    """(problem, x, Ω) at 0.98 of the joint's bending frequency, from its linear response."""
+    from mmshbm.methods.mms.friction_forced import FrictionForcedProblem
+
+    joint = _joint(pairs)
+    problem = FrictionForcedProblem(joint.model, joint.force, harmonics=harmonics, linear_solver=solver)
+    f = 0.98 * joint.bending_frequency
+    x, omega = problem.unpack(problem.linear_response_point(f))
+    return problem, x, omega
+
+
+class LapJointIteration:
+    """One Newton iteration of the lap joint's forced response at fixed frequency."""
+
+    params = [SOLVERS, PAIRS, (3, 5)]
+    param_names = ["solver", "pairs", "harmonics"]
+    timeout = 900
+
+    def setup(self, solver, pairs, harmonics):
+        problem, x, omega = _forced_setup(pairs, harmonics, solver)
+
+        def iterate():
+            R, Jx, _, _ = problem.residual_parts(x, omega, 1.0, True)
+            if problem._krylov is not None:
+                return problem._krylov.square_solve(Jx, -R)
+            return np.linalg.solve(Jx, -R)
+
+        iterate()
+        self.iterate = iterate
+        self.problem = problem
+
+    def time_iteration(self, solver, pairs, harmonics):
+        self.iterate()
+
+    def peakmem_iteration(self, solver, pairs, harmonics):
+        self.iterate()
+
+    def track_unknowns(self, solver, pairs, harmonics):
+        return self.problem.n_x
+
+
+class LapJointResponse:
+    """The lap joint's forced response over its frequency range at H = 5."""
+
+    params = [SOLVERS, (8, 32)]
+    param_names = ["solver", "pairs"]
+    timeout = 1800
+
+    def setup(self, solver, pairs):
+        self.joint = _joint(pairs)
+
+    def _run(self, solver):
+        import mmshbm
+
+        return mmshbm.frequency_response(self.joint.model, self.joint.force, self.joint.frequency_range,
+                                         harmonics=5, linear_solver=solver)
+
+    def track_ms_per_point(self, solver, pairs):
+        start = time.perf_counter()
+        res = self._run(solver)
+        return 1e3 * (time.perf_counter() - start) / len(res.frequency)
+
+    track_ms_per_point.unit = "ms"
+
+    def track_points(self, solver, pairs):
+        return len(self._run(solver).frequency)
+
+
+def lap_main(pairs: list[int]) -> None:
+    """Print, per pair count: unknowns, one fixed-frequency Newton iteration (dense and
+    Krylov, H = 5) and the joint's build time."""
+    print("| pairs | unknowns (H = 5) | build (s) | dense iteration (s) | Krylov iteration (s) |")
+    print("|---:|---:|---:|---:|---:|")
+    for n in pairs:
+        start = time.perf_counter()
+        _joint(n)
+        build = time.perf_counter() - start
+        row = []
+        for solver in SOLVERS:
+            it = LapJointIteration()
+            it.setup(solver, n, 5)
+            row.append(_seconds(it.iterate, number=1, repeat=3))
+        print(f"| {n} | {it.problem.n_x} | {build:.1f} | {row[0]:.2f} | {row[1]:.2f} |", flush=True)
+
+
 def main(argv: list[str]) -> None:
     """Print, per n_c: the bordered system's size, the corrector call and iterations, the
     iteration, and the backbone's points and cost per point, dense beside Krylov."""
@@ -171,4 +275,7 @@ def main(argv: list[str]) -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:])
+    if sys.argv[1:2] == ["--lap"]:
+        lap_main([int(a) for a in sys.argv[2:]] or [8, 32, 100])
+    else:
+        main(sys.argv[1:])

@@ -46,6 +46,8 @@ _LAZY = {
     "tip_damper_model": "mmshbm.fe.damper",
     "tip_damper_force": "mmshbm.fe.damper",
     "solid_tip_friction_model": "mmshbm.fe.damper",
+    "lap_joint": "mmshbm.fe.lap_joint",
+    "LapJoint": "mmshbm.fe.lap_joint",
     "normal_load_study": "mmshbm.analysis.friction_study",
     "branch_stability": "mmshbm.methods.mms.stability",
     "phase_resonance_backbone": "mmshbm.analysis.phase_resonance",

@@ -88,6 +88,45 @@ def _dof_locations(mesh, dofs) -> tuple[np.ndarray, np.ndarray]:
     return loc, comp
 
 
+def _box_assembly(m, dofs, Kh: np.ndarray, Mh: np.ndarray) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+    """(M, K) of a mesh of axis-aligned boxes from the reference-cube matrices of
+    :func:`_reference_matrices` (module docstring: each element scaled by its sides)."""
+    corners = m.p[:, m.t]  # (3, 8, n_e)
+    sides = corners.max(axis=1) - corners.min(axis=1)  # (3, n_e)
+    volume = sides.prod(axis=0)
+    ed = dofs.element_dofs.astype(np.int64)  # (nb, n_e)
+    nb = ed.shape[0]
+    rows = np.broadcast_to(ed[:, None, :], (nb, nb, ed.shape[1])).ravel()
+    cols = np.broadcast_to(ed[None, :, :], (nb, nb, ed.shape[1])).ravel()
+    Ke = np.zeros((nb, nb, ed.shape[1]))
+    for p in range(3):
+        for q in range(3):
+            Ke += Kh[p, q][:, :, None] * (volume / (sides[p] * sides[q]))[None, None, :]
+    # element matrices exactly symmetric: the scattered sums are then symmetric too
+    Ke = 0.5 * (Ke + Ke.transpose(1, 0, 2))
+    K = sp.coo_matrix((Ke.ravel(), (rows, cols)), shape=(dofs.N, dofs.N)).tocsr()
+    del Ke
+    Me = 0.5 * (Mh + Mh.T)[:, :, None] * volume[None, None, :]
+    M = sp.coo_matrix((Me.ravel(), (rows, cols)), shape=(dofs.N, dofs.N)).tocsr()
+    return M, K
+
+
+def box_matrices(x, y, z, E: float, nu: float, rho: float, order: int = 2):
+    """Mass and stiffness (free, scikit-fem's DOF numbering) of the hexahedral tensor mesh
+    on the node coordinates ``x``, ``y``, ``z`` (m, increasing), isotropic material (E in Pa,
+    ν, ρ in kg/m³), and where each DOF is: (M, K, locations (3, N), component (N,))."""
+    from skfem import MeshHex
+    from skfem.assembly import Dofs
+
+    m = MeshHex.init_tensor(np.asarray(x, float), np.asarray(y, float), np.asarray(z, float))
+    lam = E * nu / ((1 + nu) * (1 - 2 * nu))
+    mu = E / (2 * (1 + nu))
+    dofs = Dofs(m, _element(order))
+    M, K = _box_assembly(m, dofs, *_reference_matrices(order, lam, mu, rho))
+    loc, comp = _dof_locations(m, dofs)
+    return M, K, loc, comp
+
+
 def solid_beam_matrices(beam, n_length: int = 40, n_width: int = 2, n_height: int = 2, grading: float = 10.0,
                         order: int = 2, fast: bool = True):
     """Free-free mass and stiffness of the solid beam and where its DOFs are.
@@ -133,24 +172,7 @@ def solid_beam_matrices(beam, n_length: int = 40, n_width: int = 2, n_height: in
     mu = beam.E / (2 * (1 + beam.nu))
     dofs = Dofs(m, element)
     if fast:
-        Kh, Mh = _reference_matrices(order, lam, mu, beam.rho)
-        corners = m.p[:, m.t]  # (3, 8, n_e)
-        sides = corners.max(axis=1) - corners.min(axis=1)  # (3, n_e)
-        volume = sides.prod(axis=0)
-        ed = dofs.element_dofs.astype(np.int64)  # (nb, n_e)
-        nb = ed.shape[0]
-        rows = np.broadcast_to(ed[:, None, :], (nb, nb, ed.shape[1])).ravel()
-        cols = np.broadcast_to(ed[None, :, :], (nb, nb, ed.shape[1])).ravel()
-        Ke = np.zeros((nb, nb, ed.shape[1]))
-        for p in range(3):
-            for q in range(3):
-                Ke += Kh[p, q][:, :, None] * (volume / (sides[p] * sides[q]))[None, None, :]
-        # element matrices exactly symmetric: the scattered sums are then symmetric too
-        Ke = 0.5 * (Ke + Ke.transpose(1, 0, 2))
-        K = sp.coo_matrix((Ke.ravel(), (rows, cols)), shape=(dofs.N, dofs.N)).tocsr()
-        del Ke
-        Me = 0.5 * (Mh + Mh.T)[:, :, None] * volume[None, None, :]
-        M = sp.coo_matrix((Me.ravel(), (rows, cols)), shape=(dofs.N, dofs.N)).tocsr()
+        M, K = _box_assembly(m, dofs, *_reference_matrices(order, lam, mu, beam.rho))
     else:
         from skfem import Basis, BilinearForm, asm
         from skfem.models.elasticity import linear_elasticity

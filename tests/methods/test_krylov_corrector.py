@@ -156,3 +156,79 @@ def test_preconditioner_is_exact_with_every_contact_open():
     before = problem.krylov.krylov_iterations
     problem.krylov.solve(J, t, rhs, pre)
     assert problem.krylov.krylov_iterations - before <= 1
+
+
+# ---------------------------------------------------------------------- forced response
+@pytest.fixture(scope="module")
+def joint():
+    from mmshbm.fe.lap_joint import lap_joint
+
+    return lap_joint(8, tip_load=1.0)
+
+
+def _scaled_square(problem, u):
+    x, omega = problem.unpack(u)
+    R, Jx, _, _ = problem.residual_parts(x, omega, 1.0, True)
+    return R / problem.rowscale, Jx * problem.xscale[None, :] / problem.rowscale[:, None]
+
+
+def test_forced_krylov_solve_matches_dense_on_the_lap_joint(joint):
+    """At fixed frequency (slip over part of the period), Newton with the harmonics' block
+    preconditioner and GMRES converges to the dense solve's point within the bound its
+    residuals allow (‖J⁻¹‖∞ (r_d + r_k), scaled unknowns, times 2)."""
+    from mmshbm.methods.mms.friction_forced import FrictionForcedProblem
+
+    dense = FrictionForcedProblem(joint.model, joint.force, harmonics=3, linear_solver="dense")
+    krylov = FrictionForcedProblem(joint.model, joint.force, harmonics=3, linear_solver="krylov")
+    assert dense._krylov is None and krylov._krylov is not None
+    for f in (0.97 * joint.bending_frequency, joint.bending_frequency):
+        guess = dense.linear_response_point(f)
+        u_d, ok_d = dense.solve_at(f, guess)
+        u_k, ok_k = krylov.solve_at(f, guess)
+        assert ok_d and ok_k
+        x, omega = dense.unpack(u_d)
+        assert 0.05 < dense._record(x, omega, 1.0)["slip_fraction"] < 0.999
+        R_d, J = _scaled_square(dense, u_d)
+        R_k, _ = _scaled_square(krylov, u_k)
+        bound = 2 * np.abs(np.linalg.inv(J)).sum(axis=1).max() * (np.abs(R_d).max() + np.abs(R_k).max())
+        assert np.abs(u_k - u_d)[:dense.n_x].max() <= max(bound, 1e-13)
+    assert krylov._krylov.krylov_iterations > 0 and krylov._krylov.fallbacks == 0
+
+
+def test_forced_krylov_response_points_are_dense_solutions(joint):
+    """A frequency response with the Krylov corrector (through ``frequency_response``'s
+    ``linear_solver`` option): every point checked is a dense fixed-frequency solution from
+    itself, within the bound of the two residuals."""
+    from mmshbm.methods.mms.friction_forced import FrictionForcedProblem
+
+    f0 = 0.97 * joint.bending_frequency
+    res = mmshbm.frequency_response(joint.model, joint.force, (f0, 1.01 * f0), harmonics=3,
+                                    linear_solver="krylov")
+    assert res.status == "bound:frequency" and len(res.frequency) >= 3
+    dense = FrictionForcedProblem(joint.model, joint.force, harmonics=3, linear_solver="dense")
+    for i in (0, len(res.frequency) // 2, len(res.frequency) - 1):
+        u = np.asarray(res.states[i])
+        u_d, ok = dense.solve_at(res.frequency[i], u)
+        assert ok
+        R_k, J = _scaled_square(dense, u)
+        R_d, _ = _scaled_square(dense, u_d)
+        bound = 2 * np.abs(np.linalg.inv(J)).sum(axis=1).max() * (np.abs(R_d).max() + np.abs(R_k).max())
+        assert np.abs(u - u_d)[:dense.n_x].max() <= max(bound, 1e-12)
+
+
+def test_forced_linear_solver_switch():
+    from mmshbm.methods.mms.forced_krylov import (
+        FORCED_KRYLOV_MIN_UNKNOWNS,
+        forced_harmonic_columns,
+        resolve_forced_solver,
+    )
+
+    assert resolve_forced_solver("auto", FORCED_KRYLOV_MIN_UNKNOWNS - 1) == "dense"
+    assert resolve_forced_solver("auto", FORCED_KRYLOV_MIN_UNKNOWNS) == "krylov"
+    assert resolve_forced_solver("dense", 10**6) == "dense"
+    with pytest.raises(ValueError, match="linear_solver"):
+        resolve_forced_solver("lu", 10)
+    # the harmonics' unknowns partition the rows, the tracked pair with harmonic 1
+    cols = forced_harmonic_columns(3, 2, 3 * 5 + 2)
+    assert np.array_equal(np.sort(np.concatenate(cols)), np.arange(17))
+    assert cols[1].tolist() == [3, 4, 5, 6, 7, 8, 15, 16]

@@ -85,10 +85,13 @@ def backtrack(merit, x: np.ndarray, dx: np.ndarray, r: float, min_step: float = 
 
 
 def corrector_to_roundoff(problem, u: np.ndarray, u_pred: np.ndarray, tangent: np.ndarray, tol: float,
-                          max_iter: int, step_tol: float):
+                          max_iter: int, step_tol: float, solve=None):
     """Newton on [R(u); t·(u − u_pred)] = 0 for ``problem`` (``residual``,
     ``residual_and_jacobian`` on scaled unknowns), each step halved until the merit
     max(|R|, |t·(u − u_pred)|) decreases, stopped at round-off (module docstring).
+
+    ``solve(J, t, rhs)``: the bordered linear solve (default
+    :func:`~mmshbm.core.bordered.bordered_solve`, the dense LU).
 
     Returns (u, iterations, merit history, Jacobian at u or at the iterate one round-off
     step before it). Raises RuntimeError when it does not converge in ``max_iter`` or stalls
@@ -114,7 +117,7 @@ def corrector_to_roundoff(problem, u: np.ndarray, u_pred: np.ndarray, tangent: n
             raise RuntimeError("non-finite residual")
         if J is None:
             R, J = problem.residual_and_jacobian(u)
-        du = -bordered_solve(J, tangent, np.append(R, tangent @ (u - u_pred)))
+        du = -(solve or bordered_solve)(J, tangent, np.append(R, tangent @ (u - u_pred)))
         if not np.all(np.isfinite(du)):
             raise RuntimeError("singular Jacobian")
         if r <= tol:

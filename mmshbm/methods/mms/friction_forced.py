@@ -274,6 +274,12 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         play form, NotImplementedError otherwise). "auto" and False skip them.
     law : {"play", "velocity"}
         The form of the friction rows (module docstring); "play" needs the exact projection.
+    linear_solver : {"auto", "dense", "krylov"}
+        The corrector's linear solves: "dense" LU, or "krylov", GMRES preconditioned by one
+        factorisation per harmonic (:mod:`~mmshbm.methods.mms.forced_krylov`; the same
+        points to the Newton tolerance, det [J; t]'s sign not tracked). "auto" (default):
+        "krylov" from :data:`~mmshbm.methods.mms.forced_krylov.FORCED_KRYLOV_MIN_UNKNOWNS`
+        unknowns on.
 
     Notes
     -----
@@ -296,7 +302,7 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
 
     def __init__(self, model: Model, force, harmonics: int = 5, n_samples: int | None = None,
                  r: float | None = None, backend: str = "auto", stability: bool | str = "auto",
-                 projection: str = "exact", law: str = "play"):
+                 projection: str = "exact", law: str = "play", linear_solver: str = "auto"):
         check_friction_model(model, coupled_ok=True)
         check_law(law, projection)
         if not (stability is True or stability is False or stability == "auto"):
@@ -323,6 +329,17 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         if self._track is not None:
             self.colscale = np.concatenate([self.xscale, [self.length, self.length, self.omega_ref]])
             self.n_unknowns = self.n_x + 3
+        self._init_linear_solver(linear_solver)
+
+    def _init_linear_solver(self, linear_solver: str) -> None:
+        """The corrector's linear solves: the dense LU, or GMRES with the harmonics' blocks
+        (:mod:`~mmshbm.methods.mms.forced_krylov`, which then also solves the tangent)."""
+        from .forced_krylov import ForcedKrylovSolver, resolve_forced_solver
+
+        self.linear_solver = resolve_forced_solver(linear_solver, self.n_unknowns)
+        self._krylov = ForcedKrylovSolver(self.n_c, self.H) if self.linear_solver == "krylov" else None
+        if self._krylov is not None:
+            self.solved_tangent = self._krylov.tangent
 
     # ------------------------------------------------------------------ unknowns
     def unpack(self, u: np.ndarray) -> tuple[np.ndarray, float]:
@@ -462,10 +479,13 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
             if not np.isfinite(r):
                 return guess, False
             _, Jx, _, _ = self.residual_parts(x, omega, 1.0, True)
-            try:
-                dx = np.linalg.solve(Jx, -R)
-            except np.linalg.LinAlgError:
-                dx = np.linalg.lstsq(Jx, -R, rcond=None)[0]
+            if self._krylov is not None:
+                dx = self._krylov.square_solve(Jx, -R)
+            else:
+                try:
+                    dx = np.linalg.solve(Jx, -R)
+                except np.linalg.LinAlgError:
+                    dx = np.linalg.lstsq(Jx, -R, rcond=None)[0]
             if r <= tol:
                 done, x, r, R = at_roundoff(merit, x, dx, r, R, xs)
                 if done:
@@ -485,7 +505,8 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         not bound the error where the friction rows are weak, condition numbers of 1e7 and
         more). Returns (u, iterations, residual history, Jacobian); raises RuntimeError when
         it does not converge."""
-        return corrector_to_roundoff(self, u, u_pred, tangent, tol, max_iter, step_tol)
+        solve = self._krylov.bordered_solve if self._krylov is not None else None
+        return corrector_to_roundoff(self, u, u_pred, tangent, tol, max_iter, step_tol, solve)
 
     def start_point(self, frequency: float, max_iter: int = 50, tol: float = 1e-11) -> np.ndarray:
         """Converged unknowns at ``frequency`` (Hz) by Newton from the free-slip, then the

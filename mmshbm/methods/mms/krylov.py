@@ -273,10 +273,17 @@ def _right_gmres(J, t, rhs, pre, rtol: float, max_iter: int):
         out[-1] = t @ v
         return out
 
+    scale = max(float(np.abs(J).sum(axis=1).max()), float(np.abs(t).sum()))
+    return gmres_operator(apply, rhs, pre, rtol, max_iter, scale)
+
+
+def gmres_operator(apply, rhs: np.ndarray, pre, rtol: float, max_iter: int, scale: float):
+    """:func:`_right_gmres` on any operator: ``apply`` a callable (n,) -> (n,), ``scale``
+    its ∞-norm (the round-off floor's scale). Returns (x, iterations, converged)."""
+    n = rhs.shape[0]
     x0 = pre(rhs)
     if not np.all(np.isfinite(x0)):
         return x0, 0, False
-    scale = max(float(np.abs(J).sum(axis=1).max()), float(np.abs(t).sum()))
     bound = max(rtol * float(np.linalg.norm(rhs)), _FLOOR * scale * float(np.abs(x0).max()) * math.sqrt(n))
     r0 = rhs - apply(x0)
     beta = float(np.linalg.norm(r0))

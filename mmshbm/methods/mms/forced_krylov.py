@@ -1,0 +1,167 @@
+"""Krylov solves for the forced response with friction and many contact DOFs.
+
+The forced problem's unknowns are the massless DOFs' coefficients x (n_c per cosine or
+sine coefficient, ordered coefficient-major: x[j n_c + i] is coefficient j of DOF i), with
+a friction forced problem's two tracked harmonic-1 unknowns and Ω after them. Its Jacobian
+is A 𝔻 + B: 𝔻 = diag_k(D_k) the condensed dynamic stiffness (dense n_c × n_c per harmonic,
+as real 2 n_c × 2 n_c blocks), A and B block-diagonal per contact DOF ((2H+1) × (2H+1): the
+friction law's or the contact law's derivatives, which couple the harmonics of one DOF).
+The dense LU of the whole Jacobian costs (n_c (2H+1))³ · 2/3 flops.
+
+The preconditioner keeps, per harmonic k, the square block of the Jacobian on the unknowns
+of harmonic k (the cosine and sine coefficients of every DOF, and on harmonic 1 the two
+tracked unknowns): J_kk = A_kk 𝔻_k + B_kk, the law's time-averaged derivatives on that
+harmonic times the exact coupling of the DOFs, one LU of 2 n_c (n_c for harmonic 0) each,
+(H+1) blocks: (2H+1)³/(1 + 8H) times fewer flops than the whole LU (~20× at H = 5). The
+bordered system of the continuation ([J; tᵀ], the Ω column and the arclength row) is
+preconditioned by the block elimination of
+:meth:`mmshbm.methods.mms.krylov.KrylovCorrector._preconditioner`; the square system of a
+fixed-frequency solve by the blocks alone. Right-preconditioned GMRES
+(:func:`mmshbm.methods.mms.krylov._right_gmres`) solves to a relative residual ``rtol``
+(1e-10) or its round-off floor, with the Jacobian applied as a dense product; a solve it
+does not finish in ``max_krylov`` iterations falls back to the dense LU (counted in
+``fallbacks``). The Newton iterates therefore differ from the dense path's by at most ~rtol
+times the step, and the converged points agree with it to the Newton tolerance.
+
+Switch: ``linear_solver`` of the friction forced problem, "dense", "krylov" or "auto"
+(Krylov from :data:`FORCED_KRYLOV_MIN_UNKNOWNS` unknowns on).
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+import scipy.linalg as la
+
+from .krylov import KrylovCorrector, _right_gmres, check_linear_solver, gmres_operator
+
+__all__ = ["ForcedKrylovSolver", "forced_harmonic_columns", "FORCED_KRYLOV_MIN_UNKNOWNS",
+           "resolve_forced_solver"]
+
+log = logging.getLogger(__name__)
+
+#: unknowns of the forced problem from which ``linear_solver="auto"`` takes Krylov: on the
+#: lap joint with 100 pairs at H = 5 (2203 unknowns) one dense LU and one preconditioned
+#: GMRES solve cost about the same (1.4 and 2.0 s on the loaded 2-core machine,
+#: docs/interfaces.md); the LU grows as n³, GMRES with the dense product as n²
+FORCED_KRYLOV_MIN_UNKNOWNS = 4000
+#: GMRES iterations a reused preconditioner gets before a new one is built
+_REUSE_ITERATIONS = 40
+
+
+def resolve_forced_solver(linear_solver: str, n_unknowns: int) -> str:
+    """"dense" or "krylov" for the option and a problem of ``n_unknowns`` unknowns
+    (ValueError naming a bad value)."""
+    if check_linear_solver(linear_solver) == "auto":
+        return "krylov" if n_unknowns >= FORCED_KRYLOV_MIN_UNKNOWNS else "dense"
+    return linear_solver
+
+
+def forced_harmonic_columns(n_c: int, H: int, n_rows: int) -> list[np.ndarray]:
+    """The unknowns of each harmonic k = 0..H among the first ``n_rows`` (the rows of the
+    residual: n_c (2H+1), plus 2 tracked harmonic-1 unknowns when n_rows exceeds that)."""
+    n_x = n_c * (2 * H + 1)
+    cols = [np.arange(n_c)]
+    for k in range(1, H + 1):
+        cols.append(np.arange((2 * k - 1) * n_c, (2 * k + 1) * n_c))
+    if n_rows > n_x:
+        cols[1] = np.concatenate([cols[1], np.arange(n_x, n_rows)])
+    return cols
+
+
+class ForcedKrylovSolver(KrylovCorrector):
+    """Preconditioned GMRES for the forced problem's bordered and square systems (module
+    docstring).
+
+    Parameters
+    ----------
+    n_c, H : int
+        Massless DOFs and harmonics of the problem.
+    rtol : float
+        GMRES's relative residual tolerance.
+    max_krylov : int
+        Most GMRES iterations of one solve before the dense fallback.
+    """
+
+    def __init__(self, n_c: int, H: int, rtol: float = 1e-10, max_krylov: int = 200):
+        self.n_c, self.H = int(n_c), int(H)
+        self.rtol = float(rtol)
+        self.max_krylov = int(max_krylov)
+        self._blocks = None
+        self._rows = None
+        self.krylov_iterations = 0
+        self.solves = 0
+        self.fallbacks = 0
+        self.rebuilds = 0
+        self._pre = None
+        self._pre_size = None
+
+    def _set_rows(self, n_rows: int) -> None:
+        if self._rows != n_rows:
+            cols = forced_harmonic_columns(self.n_c, self.H, n_rows)
+            self._blocks = [np.asarray(c, dtype=np.intp) for c in cols]
+            self._rows = n_rows
+
+    def bordered_solve(self, J: np.ndarray, t: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+        """x with [J; tᵀ] x = rhs (J (n−1, n), its last column ∂R/∂Ω): the corrector's solve.
+
+        The last preconditioner is tried first (the active set changes little from one
+        iterate or point to the next) for at most :data:`_REUSE_ITERATIONS` GMRES
+        iterations; then a new one is built at this J."""
+        J = np.asarray(J, dtype=float)
+        t = np.asarray(t, dtype=float)
+        rhs = np.asarray(rhs, dtype=float)
+        self._set_rows(J.shape[0])
+        if self._pre is not None and self._pre_size == J.shape[1]:
+            x, its, ok = _right_gmres(J, t, rhs, self._pre, self.rtol, _REUSE_ITERATIONS)
+            self.krylov_iterations += its
+            if ok:
+                self.solves += 1
+                return x
+        self._pre = self._preconditioner(J, t)
+        self._pre_size = J.shape[1]
+        self.rebuilds += 1
+        return self.solve(J, t, rhs, self._pre)
+
+    def tangent(self, J: np.ndarray, t_prev: np.ndarray):
+        """(x, 0) with [J; t_prevᵀ] x = e_n (the continuation's ``solved_tangent``; the sign
+        of the determinant is not computed: 0)."""
+        e = np.zeros(J.shape[1])
+        e[-1] = 1.0
+        x = self.bordered_solve(J, t_prev, e)
+        return (x, 0.0) if np.all(np.isfinite(x)) else None
+
+    def square_solve(self, J: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+        """x with J x = rhs (J square, Ω fixed): GMRES preconditioned by the harmonics'
+        blocks, the dense LU when it does not converge."""
+        J = np.asarray(J, dtype=float)
+        n = J.shape[0]
+        self._set_rows(n)
+        self.solves += 1
+        factors = []
+        for idx in self._blocks:
+            lu = la.lu_factor(J[np.ix_(idx, idx)], check_finite=False)
+            if not np.all(np.isfinite(lu[0])) or np.any(np.diag(lu[0]) == 0.0):
+                factors = None
+                break
+            factors.append((idx, lu))
+        if factors is not None:
+            def pre(v):
+                out = np.empty(n)
+                for idx, lu in factors:
+                    out[idx] = la.lu_solve(lu, v[idx], check_finite=False)
+                return out
+
+            scale = float(np.abs(J).sum(axis=1).max())
+            x, its, ok = gmres_operator(lambda v: J @ v, np.asarray(rhs, dtype=float), pre, self.rtol,
+                                        self.max_krylov, scale)
+            self.krylov_iterations += its
+            if ok:
+                return x
+        self.fallbacks += 1
+        log.debug("GMRES did not converge on a %d-unknown forced system; dense LU instead", n)
+        try:
+            return la.solve(J, rhs, check_finite=False)
+        except la.LinAlgError:
+            return np.full(n, np.nan)
