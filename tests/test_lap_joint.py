@@ -102,6 +102,8 @@ def test_grid_shape():
     ({"contact_nodes": 8, "overlap": 0.3}, "overlap"),
     ({"contact_nodes": 8, "mu": -0.1}, "mu"),
     ({"contact_nodes": 8, "normal": "glued"}, "normal"),
+    ({"contact_nodes": 8, "n_interface": -1}, "n_interface"),
+    ({"contact_nodes": 8, "n_modes": 0}, "n_modes"),
 ])
 def test_bad_input_is_named(kwargs, match):
     with pytest.raises(ValueError, match=match):

@@ -124,6 +124,8 @@ def reduce_to_interface(M_ll, K_ll, K_lc, K_cc, output: int, n_modes: int = 10, 
         raise ValueError(f"output must index a DOF with mass in [0, {n_l - 1}], got {output}")
     if not 1 <= n_modes < n_l - 1:
         raise ValueError(f"n_modes must be in [1, {n_l - 2}], got {n_modes}")
+    if isinstance(n_interface, bool) or not isinstance(n_interface, int | np.integer) or n_interface < 0:
+        raise ValueError(f"n_interface must be an integer >= 0, got {n_interface!r}")
     n_interface = min(int(n_interface), n_c)
     lu = spla.splu(K_ll, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                    options={"SymmetricMode": True})
