@@ -297,11 +297,12 @@ class ContinuationProblemBase:
 
     def solver_settings(self) -> dict:
         """The scalar numbers among the attributes the class names in ``setting_names``
-        (a checkpoint's ``solver`` entry: a resumed run must match); an attribute that holds
-        no single number (None, an array) is left out."""
+        (a checkpoint's ``solver`` entry: a resumed run must match); a named attribute that
+        this instance does not set, or that holds no single number (None, an array), is
+        left out."""
         out = {}
         for name in self.setting_names:
-            value = getattr(self, name)
+            value = getattr(self, name, None)
             if isinstance(value, int | float | np.number) and not isinstance(value, bool):
                 out[name] = value.item() if isinstance(value, np.generic) else value
         return out

@@ -104,10 +104,8 @@ class DampedHBMBase(ContinuationProblemBase):
         The method's name in error messages.
     """
 
+    #: ``mode``: the linear mode a damped backbone starts from (the EPMC problems set it)
     setting_names = ("H", "N", "r", "mode")
-    #: the linear mode a damped backbone starts from (set by the EPMC problems); None for a
-    #: forced response
-    mode: int | None = None
 
     def __init__(self, model: Model, harmonics: int, n_samples: int | None, r: float | None, backend: str,
                  who: str, rhs: np.ndarray | None = None, projection: str = "exact"):

@@ -108,9 +108,8 @@ class ElementBackboneProblem(OneEvaluation, BackboneProblemBase):
     """
 
     method = "mmshbm"
+    #: ``r``: the proximal parameter of the first stop (set only when there are stops)
     setting_names = ("H", "N", "r", "mode")
-    #: the proximal parameter of the first stop (None: no stops)
-    r: float | None = None
 
     def __init__(self, model: Model, harmonics: int = 5, n_samples: int | None = None, r=None, mode: int = 1,
                  projection: str = "exact"):
