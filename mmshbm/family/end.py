@@ -30,13 +30,15 @@ class Attempt:
         The search that made it (``"deflated"``; for the staged search the stage:
         ``"near"``, ``"far"``, ``"filtered"``, ...).
     start : str
-        Where Newton started (``"extrapolated"``, ``"scaled"``, ``"linear mode"``, ...).
+        Where Newton started (``"extrapolated from the frontier"``, ``"linear mode"``,
+        ...; the staged search names its stage again).
     amplitude : float
         The pinned amplitude (m).
     outcome : str
         ``"landed"`` (an orbit of the family), ``"off the family"`` (converged to an orbit
         that fails the predicate), ``"rejected"`` (converged, refused by the search's
-        frequency window), ``"known"`` (converged to an orbit already found) or
+        frequency window), ``"known"`` (converged to an orbit already found),
+        ``"outside"`` (the start lies outside the trust region: nothing solved) or
         ``"failed"`` (Newton did not converge).
     frequency : float
         Hz of the converged orbit (nan when none).

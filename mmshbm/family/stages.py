@@ -240,9 +240,7 @@ def jump(problem, guard: FamilyGuard, us: list, recs: list, *, step: float, ampl
     def accept(u0, target, f_pred):
         try:
             u, nit, hist, rec, t = solved(u0, target, f_pred)
-        except _Outside:
-            raise
-        except _Exhausted:
+        except (_Outside, _Exhausted):  # nothing solved
             raise
         except _OffFamily as err:
             tried.append(Attempt(stage[0], stage[0], float(target), "off the family", *err.orbit))
