@@ -1,6 +1,6 @@
 """The friction rows of MMS-HBM in one compiled pass (the play form, constant slip force).
 
-The residual of :class:`~mmshbm.methods.mms.friction_forced.FrictionRows` replaces the rows
+The residual of :class:`~mmshbm.methods.mms.friction_rows.FrictionRows` replaces the rows
 F_t = 0 of each friction DOF t by R_t = F_t − proj[ρ (Play(y) − y)], y = x_t − F_t/ρ, with
 ∂R_t/∂x = (I + J_g/ρ) ∂F_t/∂x − J_g on x_t's own columns and ∂R_t/∂params = (I + J_g/ρ)
 ∂F_t/∂params, J_g = ∂g/∂y (:func:`~mmshbm.contact.coulomb_play_kernels._play_projection`).

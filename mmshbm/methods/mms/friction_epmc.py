@@ -4,7 +4,7 @@ Krack's extended periodic motion concept (:mod:`mmshbm.methods.mms.epmc`): the p
 solutions of M q'' + (C − ξM) q' + K q = −Σ e_t f_t, with ξ (1/s) an unknown that
 compensates viscous and friction dissipation, ξ ∮ q̇ᵀMq̇ dt = ∮ q̇ᵀCq̇ dt + ∮ f_t u̇_t dt;
 the modal damping ratio is D = ξ/(2Ω). The friction rows are those of
-:class:`~mmshbm.methods.mms.friction_forced.FrictionRows` (default the displacement-level
+:class:`~mmshbm.methods.mms.friction_rows.FrictionRows` (default the displacement-level
 play form).
 
 Why the first harmonic of the DOFs with mass is kept as an unknown. At small amplitude
@@ -30,7 +30,7 @@ from ...core.measures import mean_energy
 from ...core.problem import BackboneProblemBase, OneEvaluation
 from ...model.model import Model
 from .damped import DampedHBMBase
-from .friction_forced import FrictionRows, check_friction_model, check_law
+from .friction_rows import FrictionRows, check_friction_model, check_law
 
 __all__ = ["FrictionEPMCProblem", "stuck_mode"]
 

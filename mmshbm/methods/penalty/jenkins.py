@@ -39,7 +39,7 @@ from ...harmonic.harmonics import check_harmonics
 from ...model.model import Model
 from ..mms.damped import fine_samples
 from ..mms.forced import Excitation, harmonic_force
-from ..mms.friction_forced import check_friction_model
+from ..mms.friction_rows import check_friction_model
 from .forced import PenaltyForcedProblem
 
 __all__ = ["JenkinsForcedProblem", "DEFAULT_TANGENTIAL_FACTOR"]
