@@ -11,7 +11,8 @@ The peak is taken
   by a parabola through it and its neighbours (baselines with sampled signals);
 * from a series, exactly: the largest sample of the series on a grid refined by Newton on
   its derivative (:func:`_series_peak`, value only, inside the MMS-HBM monitor kernel;
-  :func:`_cosine_peak`, value, maximiser and sign, for the amplitude's gradient).
+  :func:`_cosine_peak`, value, maximiser and sign, for the amplitude's gradient, its
+  samples by one FFT of the coefficients).
 
 Harmonic content: |Q_k| = √(c_k² + s_k²) for k = 0..H (|Q_0| the mean's magnitude) of
 NLvib-ordered coefficients (:func:`harmonic_content`); methods with sampled signals take
@@ -120,31 +121,104 @@ def _series_peak(c, s, cos_table, sin_table, y):
     return best
 
 
+def _cosine_samples(row: np.ndarray, n: int) -> np.ndarray:
+    """q(τ_i) = Σ_k row_k cos kτ_i on the grid τ_i = 2πi/n, i = 0..n−1 (shape (n,)), by one
+    real FFT of the coefficients (H + 1 = len(row) <= n/2): O(n log n) instead of the
+    O(nH) of a table."""
+    spectrum = np.zeros(n // 2 + 1)
+    spectrum[0] = row[0]
+    spectrum[1:row.shape[0]] = 0.5 * row[1:]
+    return np.fft.hfft(spectrum, n)
+
+
+def _cosine_peak(row: np.ndarray, sign: float, n_fine: int, cos_k: np.ndarray) -> tuple[float, float]:
+    """Largest value of sign·q (|q| when sign is 0) for q(τ) = Σ_k row_k cos kτ (row shape
+    (H+1,), units of q) over the period: ``n_fine`` equispaced samples by one FFT
+    (:func:`_cosine_samples`), then Newton on q′(τ) = 0 from each sampled local maximum
+    within the sampling error of the largest sample (:func:`_cosine_refine_best`; compiled).
+    Returns (the value, the sign s with value = s·q(τ*)); ``cos_k`` (H+1,) <- cos kτ* (the
+    gradient of q(τ*) in row, envelope theorem)."""
+    row = np.ascontiguousarray(row, dtype=float)
+    if not 2 * row.shape[0] <= n_fine:
+        raise ValueError(f"n_fine must be at least 2(H + 1) = {2 * row.shape[0]}, got {n_fine}")
+    y = _cosine_samples(row, n_fine)
+    return _cosine_refine_best(row, float(sign), y, cos_k)
+
+
+#: the most sampled local maxima :func:`_cosine_refine_best` refines (the largest ones)
+_PEAK_CANDIDATES = 8
+
+
 @njit(**JIT_OPTIONS)
-def _cosine_peak(row, sign, cos_fine, tau_fine, cos_k):
-    """Largest value of sign·q (|q| when sign is 0) for q(τ) = Σ_k row_k cos kτ: the largest
-    sample on the fine grid (cos_fine (H+1, n), tau_fine (n,)), refined by Newton on
-    q′(τ) = 0 (at most 8 steps, to 1e-14 in τ). Returns (the value, the sign s with
-    value = s·q(τ*)); ``cos_k`` <- cos kτ* (the gradient of q(τ*) in row, envelope theorem)."""
+def _cosine_refine_best(row, sign, q_samples, cos_k):
+    """The peak of :func:`_cosine_peak` from the samples q(2πi/n) (shape (n,)): every sampled
+    local maximum of y = sign·q (|q| for sign 0) within the sampling error of the largest,
+    (h²/8) Σ k²|row_k| (h = 2π/n, the drop of y from its maximum to the nearest sample)
+    plus the samples' round-off, is refined by :func:`_cosine_refine` (the
+    ``_PEAK_CANDIDATES`` largest of them); the largest refined value wins. Returns
+    (value, s); ``cos_k`` <- cos kτ* of the winner."""
+    n = q_samples.shape[0]
     H1 = row.shape[0]
-    n = tau_fine.shape[0]
-    best = -np.inf
+    y = np.empty(n)
     j = 0
     for i in range(n):
-        q = 0.0
-        for k in range(H1):
-            q += row[k] * cos_fine[k, i]
-        y = sign * q if sign != 0.0 else abs(q)
-        if y > best:
-            best = y
+        y[i] = sign * q_samples[i] if sign != 0.0 else abs(q_samples[i])
+        if y[i] > y[j]:
             j = i
-    tau = tau_fine[j]
+    h = _TWO_PI / n
+    curvature = 0.0
+    size = 0.0
+    for k in range(H1):
+        curvature += k * k * abs(row[k])
+        size += abs(row[k])
+    margin = 0.125 * h * h * curvature + 8.0 * (math.log2(n) + 2.0) * 2.220446049250313e-16 * size
+    cand = np.empty(_PEAK_CANDIDATES, dtype=np.int64)
+    n_cand = 0
+    for i in range(n):
+        if y[i] < y[j] - margin or y[i] < y[i - 1] or y[i] < y[(i + 1) % n]:
+            continue
+        if n_cand < _PEAK_CANDIDATES:
+            cand[n_cand] = i
+            n_cand += 1
+        else:  # replace the smallest candidate kept
+            low = 0
+            for c in range(1, n_cand):
+                if y[cand[c]] < y[cand[low]]:
+                    low = c
+            if y[i] > y[cand[low]]:
+                cand[low] = i
+    if n_cand == 0:
+        cand[0] = j
+        n_cand = 1
+    best = -np.inf
+    best_s = 1.0
+    trial = np.empty(H1)
+    for c in range(n_cand):
+        value, s = _cosine_refine(row, sign, cand[c] * h, trial)
+        if value > best:
+            best = value
+            best_s = s
+            cos_k[:] = trial
+    return best, best_s
+
+
+@njit(**JIT_OPTIONS)
+def _cosine_refine(row, sign, tau, cos_k):
+    """Newton on q′(τ) = 0 from τ for q(τ) = Σ_k row_k cos kτ (at most 8 steps, to 1e-14 in
+    τ; q′, q″ by the angle-addition recurrence). Returns (s·q(τ*), s), s = sign (that of
+    q(τ*) when sign is 0); ``cos_k`` <- cos kτ* (each by ``math.cos``)."""
+    H1 = row.shape[0]
     for _ in range(8):
+        c1 = math.cos(tau)
+        s1 = math.sin(tau)
+        ck = 1.0
+        sk = 0.0
         d1 = 0.0
         d2 = 0.0
-        for k in range(H1):
-            d1 -= k * row[k] * math.sin(k * tau)
-            d2 -= k * k * row[k] * math.cos(k * tau)
+        for k in range(1, H1):
+            ck, sk = ck * c1 - sk * s1, sk * c1 + ck * s1
+            d1 -= k * row[k] * sk
+            d2 -= k * k * row[k] * ck
         if d2 == 0.0:
             break
         step = d1 / d2

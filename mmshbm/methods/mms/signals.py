@@ -212,11 +212,11 @@ class SignalsMixin:
     def _amplitude_peak(self, u: np.ndarray):
         """(row, cos kτ* (H+1,), amplitude (m), s): the amplitude DOF's cosine coefficients,
         cos kτ at the time τ* of its largest excursion (fine grid, refined by Newton on
-        q′(τ) = 0, compiled), the amplitude s·q(τ*) and the excursion's sign s."""
+        q′(τ) = 0), the amplitude s·q(τ*) and the excursion's sign s."""
         a, omega = self.unpack(u)
         row = np.ascontiguousarray(self._amplitude_row(a, omega, self.unpack_eta(u)), dtype=float)
         cos_k = np.empty(self.H + 1)
-        amplitude, s = _cosine_peak(row, self._amp_sign, self._cos_fine, self._tau_fine, cos_k)
+        amplitude, s = _cosine_peak(row, self._amp_sign, self._tau_fine.shape[0], cos_k)
         return row, cos_k, amplitude, s
 
     def amplitude_value(self, u: np.ndarray) -> float:

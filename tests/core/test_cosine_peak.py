@@ -1,0 +1,119 @@
+"""The amplitude peak of a cosine series (mmshbm.core.measures._cosine_peak): its value
+against a dense brute-force search, its maximiser's cosines against the envelope theorem's
+gradient (finite differences), and the cases that trap a sampled search: two maxima of
+nearly equal height and a constant series."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.optimize import minimize_scalar
+
+from mmshbm.core.measures import _cosine_peak
+from tests.finite_differences import assert_derivative
+from tests.roundoff import EPS, assert_roundoff_close
+
+#: the dense grid of the brute-force search (2^16 samples)
+DENSE = 1 << 16
+
+
+def _series(row, tau):
+    """q(τ) = Σ_k row_k cos kτ by direct evaluation (shape of ``tau``)."""
+    k = np.arange(len(row))
+    return np.cos(np.multiply.outer(np.atleast_1d(tau), k)) @ row
+
+
+def _brute_force_peak(row, sign):
+    """Largest sign·q (|q| for sign 0) on DENSE samples, each local maximum within the dense
+    sampling error of the largest refined by a bounded Brent search to 1e-13 in τ."""
+    tau = 2 * np.pi * np.arange(DENSE) / DENSE
+    y = _series(row, tau)
+    y = np.abs(y) if sign == 0 else sign * y
+    h = 2 * np.pi / DENSE
+    drop = h * h / 8 * np.sum(np.arange(len(row)) ** 2 * np.abs(row))
+    local = (y >= np.roll(y, 1)) & (y >= np.roll(y, -1)) & (y >= y.max() - drop - 1e-14 * np.abs(row).sum())
+    best = y.max()
+    for i in np.flatnonzero(local)[:16]:
+        def minus(t):
+            q = _series(row, t)[0]
+            return -(abs(q) if sign == 0 else sign * q)
+        r = minimize_scalar(minus, bounds=(tau[i] - h, tau[i] + h), method="bounded",
+                            options={"xatol": 1e-13})
+        best = max(best, -r.fun)
+    return best
+
+
+def _tolerance_scale(row):
+    """Σ_k |row_k| (1 + 2πk): the terms' size, with the rounding of the argument kτ (τ up
+    to 2π) that moves cos kτ by up to ε·kτ."""
+    k = np.arange(len(row))
+    return float(np.sum(np.abs(row) * (1 + 2 * np.pi * k)))
+
+
+def _peak(row, sign, n_fine=None):
+    H = len(row) - 1
+    n_fine = max(512, 32 * (H + 1)) if n_fine is None else n_fine
+    cos_k = np.empty(H + 1)
+    value, s = _cosine_peak(row, float(sign), n_fine, cos_k)
+    return value, s, cos_k
+
+
+@pytest.mark.parametrize("H", [1, 2, 3, 5, 8, 16, 31, 64, 128])
+@pytest.mark.parametrize("sign", [0, 1, -1])
+def test_the_peak_is_the_dense_search_maximum_to_round_off(H, sign):
+    """Random series with coefficients decaying as 1/k (a contact orbit's content), H = 1…128:
+    the peak equals the brute-force maximum within the round-off of H + 1 terms, and
+    value = s·Σ row_k cos_k (the cosines of one τ*)."""
+    rng = np.random.default_rng(1000 * H + sign + 1)
+    row = rng.standard_normal(H + 1) / (1.0 + np.arange(H + 1))
+    value, s, cos_k = _peak(row, sign)
+    want = _brute_force_peak(row, sign)
+    assert_roundoff_close(value, want, _tolerance_scale(row), terms=H + 3, err_msg=f"H={H} sign={sign}")
+    assert s in (1.0, -1.0) and (sign == 0 or s == sign)
+    chebyshev = np.polynomial.chebyshev.chebvander(cos_k[1], H)  # cos kτ = T_k(cos τ)
+    k = np.arange(H + 1)
+    assert np.all(np.abs(cos_k - chebyshev) <= 100 * (k**2 + 1) * EPS), (cos_k, chebyshev)  # |T_k'| <= k²
+    assert_roundoff_close(value, s * row @ cos_k, np.abs(row).sum(), terms=H + 3)
+
+
+@pytest.mark.parametrize("delta", [1e-7, 1e-10])
+def test_the_higher_of_two_nearly_equal_maxima_wins(delta):
+    """q = −cos 3τ + δ cos τ on 512 samples: maxima 1 − δ at τ = π (a sample, exactly) and
+    ≈ 1 + δ/2 at τ ≈ π/3 (between samples, its nearest one 7e-5 lower): the peak is the
+    higher, off-grid one (the brute-force maximum to round-off, above 1 + 0.4δ); the
+    best sample alone would give 1 − δ."""
+    row = np.array([0.0, delta, 0.0, -1.0])
+    value, s, cos_k = _peak(row, 1, 512)
+    assert value > 1 + 0.4 * delta
+    assert_roundoff_close(value, _brute_force_peak(row, 1), _tolerance_scale(row), terms=6)
+    assert abs(cos_k[1] - 0.5) < 1e-6  # τ* ≈ ±π/3
+
+
+@pytest.mark.parametrize("constant", [2.5, -0.75, 0.0])
+def test_a_constant_series_peaks_at_its_value(constant):
+    """row = (c, 0, …, 0): every τ is a maximiser; the peak is |c| (sign 0), ±c (sign ±1)
+    exactly, and cos_k is the cosines of one τ (cos 0 = 1 first)."""
+    row = np.zeros(9)
+    row[0] = constant
+    for sign, want in ((0, abs(constant)), (1, constant), (-1, -constant)):
+        value, s, cos_k = _peak(row, sign)
+        assert value == want and cos_k[0] == 1.0
+        assert np.all(np.abs(cos_k) <= 1.0)
+
+
+@pytest.mark.parametrize("H", [3, 20, 64])
+def test_the_cosines_at_the_maximiser_are_the_peak_gradient(H):
+    """Envelope theorem: ∂(peak)/∂row = s·cos kτ*, checked by finite differences of the
+    peak along a random direction of the coefficients."""
+    rng = np.random.default_rng(H)
+    row = rng.standard_normal(H + 1) / (1.0 + np.arange(H + 1))
+    direction = rng.standard_normal(H + 1) / (1.0 + np.arange(H + 1))
+    value, s, cos_k = _peak(row, 0)
+    assert_derivative(lambda t: np.array([_peak(row + t * direction, 0)[0]]),
+                      np.array([s * direction @ cos_k]), 1e-3, name=f"peak gradient H={H}")
+
+
+def test_a_grid_too_coarse_for_the_series_is_refused():
+    """n_fine < 2(H + 1) cannot sample the series; the error names n_fine."""
+    with pytest.raises(ValueError, match="n_fine"):
+        _cosine_peak(np.ones(9), 0.0, 10, np.empty(9))
