@@ -11,8 +11,9 @@ The peak is taken
   by a parabola through it and its neighbours (baselines with sampled signals);
 * from a series, exactly: the largest sample of the series on a grid refined by Newton on
   its derivative (:func:`_series_peak`, value only, inside the MMS-HBM monitor kernel;
-  :func:`_cosine_peak`, value, maximiser and sign, for the amplitude's gradient, its
-  samples by one FFT of the coefficients).
+  :func:`_cosine_peak`, value, maximiser and sign, for the amplitude's gradient: samples by
+  one FFT of the coefficients, Newton from every sampled maximum within the sampling error
+  of the largest).
 
 Harmonic content: |Q_k| = √(c_k² + s_k²) for k = 0..H (|Q_0| the mean's magnitude) of
 NLvib-ordered coefficients (:func:`harmonic_content`); methods with sampled signals take
