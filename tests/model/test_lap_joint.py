@@ -160,3 +160,85 @@ def test_unilateral_pairs_open_and_close():
     assert np.abs(P.residual_parts(x, omega, 1.0, False)[0] / P.rowscale).max() < 1e-10
     rec = P._record(x, omega, 1.0)
     assert rec["contact_force_max"] > 0 and 0 < rec["slip_fraction"] < 1
+
+
+# ---------------------------------------------------------------------- condensation back end
+@pytest.fixture(scope="module")
+def joint16():
+    return lap_joint(16)
+
+
+def test_auto_backend_follows_the_operation_counts(joint16):
+    """``backend="auto"`` of the damped condensation: modal while n_c stays below ~1.37 n_l
+    (damped; ``modal_is_cheaper``), direct above: the beam (40 DOFs with mass, 2 massless)
+    keeps the modal back end, the 8-pair joint (21 + 16) too, the 16-pair joint (21 + 32)
+    takes the direct one."""
+    from mmshbm.methods.mms.condensation.damped_condense import DampedCondensation, modal_is_cheaper
+
+    beam = mmshbm.default_beam().model(21).with_damping(modal_ratio=0.01)
+    assert (len(beam.l), len(beam.c)) == (40, 2)
+    assert DampedCondensation(beam).backend == "modal"
+    small = lap_joint(8).model
+    assert (len(small.l), len(small.c)) == (21, 16) and DampedCondensation(small).backend == "modal"
+    big = joint16.model
+    assert (len(big.l), len(big.c)) == (21, 32) and DampedCondensation(big).backend == "direct"
+    # the crossover of 3 r³ − r² − 4 r − 1/3 (damped) lies between r = 1.35 and 1.40
+    assert modal_is_cheaper(100, 135, True) and not modal_is_cheaper(100, 140, True)
+    assert modal_is_cheaper(100, 105, False) and not modal_is_cheaper(100, 107, False)
+    assert DampedCondensation(big, backend="modal").backend == "modal"  # an explicit choice is kept
+
+
+def test_modal_and_direct_condensations_agree_on_the_joint(joint16):
+    """D_k of both back ends over the frequency range within their round-off: the direct
+    one's Z_k = S_k⁻¹ K_lc to n_l ε κ(S_k) and the cancellation in K_cc − K_lcᵀ Z_k, the modal
+    one's inverse of A_k ≈ D_k⁻¹ to n_c ε κ(D_k) ‖D_k‖ (tests/roundoff.py, 4 ulps)."""
+    from roundoff import EPS
+
+    from mmshbm.methods.mms.condensation.damped_condense import DampedCondensation
+
+    model = joint16.model
+    b = model.blocks
+    B = joint16.force[model.l][:, None]
+    modal, direct = DampedCondensation(model, B, "modal"), DampedCondensation(model, B, "direct")
+    K, M, C = (b[n].toarray() for n in ("K_ll", "M_ll", "C_ll"))
+    K_lc, K_cc = np.asarray(b["K_lc"]), np.asarray(b["K_cc"])
+    n_l, n_c = K.shape[0], K_cc.shape[0]
+    for f in np.linspace(*joint16.frequency_range, 3):
+        omega = 2 * np.pi * f
+        a = modal.evaluate(omega, 3, recover=False)
+        d = direct.evaluate(omega, 3, recover=True)
+        for k in range(1, 4):
+            S = K + 1j * k * omega * C - (k * omega) ** 2 * M
+            scale = np.abs(K_cc) + np.abs(K_lc).T @ np.abs(d.Z[k])
+            tol = 4 * EPS * (n_l * np.linalg.cond(S) * scale
+                             + n_c * np.linalg.cond(d.D[k]) * np.abs(d.D[k]).max())
+            assert np.all(np.abs(a.D[k] - d.D[k]) <= tol), (f, k)
+        assert np.abs(a.P - d.P).max() <= 4 * EPS * (n_l + n_c) * np.linalg.cond(d.D[1]) * np.abs(d.P).max()
+
+
+def test_modal_and_direct_forced_points_agree_on_the_joint(joint16):
+    """The forced response with friction at fixed frequency (slip over part of the period):
+    the modal back end's point is the direct one's within the bound the direct residuals of
+    both points allow (‖J⁻¹‖∞ (r_d + r_m), scaled unknowns, times 2): the modal
+    condensation's round-off enters through r_m."""
+    model = joint16.model
+    direct = FrictionForcedProblem(model, joint16.force, harmonics=3, backend="direct")
+    modal = FrictionForcedProblem(model, joint16.force, harmonics=3, backend="modal")
+    assert direct.cond.backend == "direct" and modal.cond.backend == "modal"
+
+    def scaled(u):
+        x, omega = direct.unpack(u)
+        R, Jx, _, _ = direct.residual_parts(x, omega, 1.0, True)
+        return R / direct.rowscale, Jx * direct.xscale[None, :] / direct.rowscale[:, None]
+
+    f = joint16.bending_frequency
+    guess = direct.linear_response_point(f)
+    u_d, ok_d = direct.solve_at(f, guess)
+    u_m, ok_m = modal.solve_at(f, guess)
+    assert ok_d and ok_m
+    x, omega = direct.unpack(u_d)
+    assert 0.05 < direct._record(x, omega, 1.0)["slip_fraction"] < 0.999
+    R_d, J = scaled(u_d)
+    R_m, _ = scaled(u_m)
+    bound = 2 * np.abs(np.linalg.inv(J)).sum(axis=1).max() * (np.abs(R_d).max() + np.abs(R_m).max())
+    assert np.abs(u_m - u_d)[:direct.n_x].max() <= max(bound, 1e-13)

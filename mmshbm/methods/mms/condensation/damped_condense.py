@@ -26,8 +26,9 @@ Without damping and with ξ = 0 this is :class:`mmshbm.harmonic.condense.Condens
 Two back ends, identical in exact arithmetic (tests compare them):
 
 ``"modal"`` (default when C is diagonal in the open-contact modes, as the damping of
-    ``Model.with_damping`` is, and the model has at most :data:`DENSE_LIMIT` DOFs with
-    mass). With all n_l mass-normalised open modes φ_j (massless entries following
+    ``Model.with_damping`` is, the model has at most :data:`DENSE_LIMIT` DOFs with mass
+    and the modal evaluation costs fewer operations than the direct one, see
+    :func:`modal_is_cheaper`). With all n_l mass-normalised open modes φ_j (massless entries following
     statically), γ_j = φ_jᵀ C φ_j − ξ and d_j(ω) = 1/(ω_j² − ω² + iωγ_j), the receptance
     of the whole model is exactly
 
@@ -59,12 +60,38 @@ from ....harmonic.condense import SingularDynamicStiffness
 from ....model.model import Model
 from ._damped_modal_kernels import _damped_modal
 
-__all__ = ["DampedCondensation", "CondensedHarmonics", "DENSE_LIMIT"]
+__all__ = ["DampedCondensation", "CondensedHarmonics", "DENSE_LIMIT", "modal_is_cheaper"]
 
 #: largest number of DOFs with mass solved densely (modal back end, dense direct solves)
 DENSE_LIMIT = 400
 #: C counts as modal when its off-diagonal modal entries are below this share of the diagonal
 _MODAL_RTOL = 1e-7
+
+
+def modal_is_cheaper(n_l: int, n_c: int, damped: bool) -> bool:
+    """Whether one evaluation (D_k and ∂D_k/∂Ω, one harmonic) costs fewer complex
+    multiply-adds with the modal back end than with the dense direct one.
+
+    Counted from the two evaluations (leading terms, n_m = n_l open modes):
+
+    * modal: A = K_cc⁻¹ + Σ_m φ_m d_m φ_mᵀ (n_l n_c²), its inverse by Gauss–Jordan (n_c³),
+      ∂A the same sum (n_l n_c²) and ∂B = −B ∂A B (2 n_c³): 2 n_l n_c² + 3 n_c³;
+    * direct: the LU of S_k (n_l³/3), the solves for the n_c columns of K_lc (2 n_l² n_c),
+      D_k = K_cc − K_lcᵀ Z_k (n_l n_c²), M Z_k and Z_kᵀ M Z_k (n_l² n_c + n_l n_c²), and
+      with damping C Z_k and Z_kᵀ C Z_k once more:
+      n_l³/3 + (3 + δ) n_l² n_c + (2 + δ) n_l n_c², δ = 1 damped, else 0.
+
+    The modal back end's n_c³ terms grow with the massless DOFs it solves per frequency,
+    the direct one's with the DOFs with mass: in r = n_c / n_l the modal one is cheaper
+    for 3 r³ − δ r² − (3 + δ) r − 1/3 < 0, i.e. up to n_c ≈ 1.37 n_l damped (1.06 n_l
+    undamped). A structure with a few contacts (the beam: n_c = 2, n_l = 40) keeps the
+    modal back end, an interface model (a lap joint's 21 DOFs with mass and hundreds of
+    slip DOFs) takes the direct one.
+    """
+    n_l, n_c, delta = float(n_l), float(n_c), 1.0 if damped else 0.0
+    modal = 2.0 * n_l * n_c**2 + 3.0 * n_c**3
+    direct = n_l**3 / 3.0 + (3.0 + delta) * n_l**2 * n_c + (2.0 + delta) * n_l * n_c**2
+    return modal <= direct
 
 
 @dataclass(frozen=True, eq=False)
@@ -111,7 +138,8 @@ class DampedCondensation:
         Loads on the DOFs with mass (``model.l`` order) at the first harmonic, complex
         allowed; their condensed loads P̂ are computed at every evaluation.
     backend : {"auto", "modal", "direct"}
-        ``"auto"``: modal when C is diagonal in the open modes and n_l <= DENSE_LIMIT.
+        ``"auto"``: modal when C is diagonal in the open modes, n_l <= DENSE_LIMIT and
+        :func:`modal_is_cheaper`; else direct.
     """
 
     def __init__(self, model: Model, rhs: np.ndarray | None = None, backend: str = "auto"):
@@ -137,7 +165,8 @@ class DampedCondensation:
         self.D0 = self.K_cc - self.K_lc.T @ self.Z0
         self.P0 = -self.Z0.T @ self.B  # static condensed load (not used by the harmonics >= 1)
         modal = None
-        if backend in ("auto", "modal") and small:
+        if backend == "modal" and small or backend == "auto" and small and \
+                modal_is_cheaper(n_l, self.n_c, self.damped):
             modal = self._modal_setup(model, C)
         if backend == "modal" and modal is None:
             raise ValueError("backend 'modal' needs a damping matrix that is diagonal in the open-contact "
