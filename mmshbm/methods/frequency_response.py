@@ -62,9 +62,9 @@ def make_forced_problem(model: Model, force, method: str = "mmshbm", harmonics: 
     return problem_class(model, force, **options)
 
 
-def frequency_response(model: Model, force, frequency_range, harmonics: int = 5, method: str = "mmshbm", *,
-                       verbose: bool = False, callback=None, checkpoint=None, resume=None,
-                       **options) -> FrequencyResponse:
+def frequency_response(model: Model, force, frequency_range, harmonics: int | None = None,
+                       method: str = "mmshbm", *, tol: float | None = None, verbose: bool = False,
+                       callback=None, checkpoint=None, resume=None, **options) -> FrequencyResponse:
     """Forced response of ``model`` over ``frequency_range``.
 
     Parameters
@@ -78,10 +78,20 @@ def frequency_response(model: Model, force, frequency_range, harmonics: int = 5,
     frequency_range : (float, float)
         (f_start, f_end) in Hz, 0 < f_start < f_end; the response starts on the linear
         response at f_start and ends where the frequency leaves the range.
-    harmonics : int
-        H of the harmonic-balance methods.
+    harmonics : int, optional
+        H of the harmonic-balance methods; default 5. Not together with ``tol``.
     method : {"mmshbm", "penalty", "shooting"}
         MMS-HBM, or a baseline on the same forced problem.
+    tol : float, optional
+        Relative tolerance on every point: on its amplitude at its frequency, or, where
+        the response is steeper than |d ln A / d ln f| = 10 (near its folds), on its
+        frequency at its amplitude. H is chosen per point from an error
+        estimate (:mod:`mmshbm.methods.adaptive_forced`, docs/accuracy.md) between
+        ``start_harmonics`` (option, default 8) and ``max_harmonics`` (option, default
+        64). The response carries ``amplitude_error``, ``frequency_error`` and
+        ``records["harmonics"]``; where ``tol`` is not met, a ``"tolerance_not_met"``
+        finding (``response.findings``, and a BranchWarning). Method "mmshbm", impact
+        and friction contacts; without ``checkpoint``/``resume``/``callback``.
     verbose : bool
         Show the progress on stderr: the points, with the frequency and amplitude of the
         last; a tqdm bar on a terminal, plain lines every few seconds in a pipe or a log
@@ -118,6 +128,11 @@ def frequency_response(model: Model, force, frequency_range, harmonics: int = 5,
     runner.check_model(model)
     runner.check_is_nonlinear(model, "forced response")
     f0, f1 = _frequency_range(frequency_range)
+    if tol is not None:
+        return _to_tolerance(model, force, (f0, f1), tol, harmonics, method, verbose=verbose,
+                             callback=callback, checkpoint=checkpoint, resume=resume, **options)
+    if harmonics is None:
+        harmonics = 5
     if not model_has_damping(model):
         raise ValueError("the model has no damping: its forced response grows along the backbone without "
                          "bound (no resonance peak to continue around); give it damping with "
@@ -149,6 +164,28 @@ def frequency_response(model: Model, force, frequency_range, harmonics: int = 5,
     response = _assemble(model, excitation, problem, res, method, (f0, f1), options, copts, done)
     warn_failed_start(response, model, excitation, f0)
     return response
+
+
+def _to_tolerance(model: Model, force, frange, tol, harmonics, method: str, *, callback, checkpoint, resume,
+                  **options) -> FrequencyResponse:
+    """The response with H chosen to meet ``tol`` (:mod:`mmshbm.methods.adaptive_forced`)."""
+    from .adaptive import check_tolerance
+    from .adaptive_forced import FORCED_TOLERANCE_METHODS, response_to_tolerance
+
+    runner.check_method(method, FORCED_METHODS)
+    if method not in FORCED_TOLERANCE_METHODS:
+        raise ValueError(f"tol is available for the forced method(s) {', '.join(FORCED_TOLERANCE_METHODS)}, "
+                         f"not {method!r}: pass harmonics instead")
+    settings = check_tolerance(tol, harmonics, "mmshbm", options)
+    for name, value in (("callback", callback), ("checkpoint", checkpoint), ("resume", resume)):
+        if value is not None:
+            raise ValueError(f"{name} is not available with tol (the points are refined after the "
+                             "continuation): pass harmonics for a fixed H")
+    if not model_has_damping(model):  # the same refusal as the fixed-H run, before it starts
+        return frequency_response(model, force, frange, settings["start_harmonics"], method, **options)
+    excitation = force if isinstance(force, Excitation) else harmonic_force(model, force)
+    return response_to_tolerance(model, excitation, frange, method=method, run=frequency_response, **settings,
+                                 **options)
 
 
 def _response_progress(method: str, gap: float, callback):

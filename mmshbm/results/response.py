@@ -100,6 +100,36 @@ class FrequencyResponse(ResultBase):
     ARRAY_FIELDS: ClassVar[tuple] = ARRAY_FIELDS
     _NOUN: ClassVar[str] = "response"
 
+    @property
+    def amplitude_error(self) -> np.ndarray:
+        """Estimated relative error of each point's amplitude at its frequency, shape
+        (n_points,): ``records["amplitude_error"]``, filled by a run with ``tol``
+        (:mod:`mmshbm.methods.adaptive_forced`); NaN where not estimated.
+        ``records["harmonics"]`` holds the H of each point."""
+        return self._record_or_nan("amplitude_error")
+
+    @property
+    def frequency_error(self) -> np.ndarray:
+        """Estimated relative error of each point's frequency at its amplitude, shape
+        (n_points,): ``records["frequency_error"]`` (a run with ``tol``); NaN where not
+        estimated. One of the two errors is measured at a point (``records["error_pinned"]``:
+        0 the amplitude, 1 this one, near folds); the other follows from the slope."""
+        return self._record_or_nan("frequency_error")
+
+    def _record_or_nan(self, name: str) -> np.ndarray:
+        value = self.records.get(name)
+        if value is None or len(value) != len(self):
+            return np.full(len(self), np.nan)
+        return np.asarray(value, dtype=float)
+
+    @property
+    def findings(self) -> list:
+        """The findings stored with the response (``metadata["checks"]``: the
+        ``"tolerance_not_met"`` finding of a run with ``tol``); empty otherwise."""
+        from .findings import Finding
+
+        return [Finding.from_dict(d) for d in self.metadata.get("checks", [])]
+
     def peak(self) -> tuple[float, float]:
         """(frequency (Hz), amplitude (m)) of the largest amplitude on the response."""
         i = int(np.argmax(self.amplitude))
@@ -179,13 +209,18 @@ class FrequencyResponse(ResultBase):
     def to_csv(self, path) -> Path:
         """Per-point table: frequency_hz, amplitude_m, phase_rad, energy_j,
         contact_force_max_n, stable, floquet_max, newton_iterations, step_size (12
-        significant digits)."""
+        significant digits); a run with ``tol`` adds amplitude_error, frequency_error and
+        harmonics."""
         path = Path(path)
         names = ["frequency_hz", "amplitude_m", "phase_rad", "energy_j", "contact_force_max_n", "stable",
                  "floquet_max", "newton_iterations", "step_size"]
         cols = [self.frequency, self.amplitude, self.phase, self.energy, self.contact_force_max,
                 self.stable.astype(int), self.floquet_max, self.newton_iterations, self.step_size]
         fmt = ["%.12g"] * 5 + ["%d", "%.12g", "%d", "%.6g"]
+        if "harmonics" in self.records and "amplitude_error" in self.records:
+            names += ["amplitude_error", "frequency_error", "harmonics"]
+            cols += [self.amplitude_error, self.frequency_error, np.asarray(self.records["harmonics"])]
+            fmt += ["%.6g", "%.6g", "%d"]
         table = np.column_stack(cols) if len(self) else np.empty((0, len(names)))
         path.parent.mkdir(parents=True, exist_ok=True)
         np.savetxt(path, table, delimiter=",", fmt=fmt, comments="", header=",".join(names))
