@@ -47,7 +47,9 @@ def backbone(model: Model, harmonics: int | None = None, method: str = "mmshbm",
         default 64: the largest H of any solve, the estimates' included). The
         branch carries ``frequency_error`` and ``records["harmonics"]``; where ``tol`` is
         not met it has a ``"tolerance_not_met"`` finding. Methods "mmshbm" and "penalty"
-        on conservative models; without ``checkpoint``/``resume``/``callback``.
+        on conservative models, and the damped nonlinear mode ("epmc", on the damping
+        ratio too: ``records["damping_error"]``, :mod:`mmshbm.methods.adaptive_damped`);
+        without ``checkpoint``/``resume``/``callback``.
     start_amplitude : float, optional
         Amplitude (m) of the first point, on the linear mode, below ``max_amplitude``;
         default half the gap, or less where a contact of the linear mode would reach its
@@ -168,11 +170,17 @@ def _to_tolerance(model: Model, tol, harmonics, method: str, max_amplitude, *, c
     """The backbone with H chosen to meet ``tol`` (:mod:`mmshbm.methods.adaptive`)."""
     from .adaptive import backbone_to_tolerance, check_tolerance
 
-    settings = check_tolerance(tol, harmonics, backbone_method(model, method), kwargs)
+    damped = backbone_method(model, method) == "epmc"  # the damped nonlinear mode: its own measures
+    settings = check_tolerance(tol, harmonics, "mmshbm" if damped else backbone_method(model, method), kwargs)
     for name, value in (("callback", callback), ("checkpoint", checkpoint), ("resume", resume)):
         if value is not None:
             raise ValueError(f"{name} is not available with tol (the points are refined after the "
                              "continuation): pass harmonics for a fixed H")
+    if damped:
+        from .adaptive_damped import damped_mode_to_tolerance
+
+        return damped_mode_to_tolerance(model, run=backbone, method=method, max_amplitude=max_amplitude,
+                                        **settings, **kwargs)
     return backbone_to_tolerance(model, run=backbone, method=method, max_amplitude=max_amplitude, **settings,
                                  **kwargs)
 

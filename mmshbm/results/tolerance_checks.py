@@ -23,7 +23,7 @@ import numpy as np
 from .findings import Finding
 from .findings import where as _where
 
-__all__ = ["tolerance_findings", "tolerance_summary", "tolerance_of", "unmet_points"]
+__all__ = ["tolerance_findings", "tolerance_summary", "tolerance_of", "unmet_points", "point_estimate"]
 
 
 def tolerance_of(branch) -> float | None:
@@ -41,8 +41,18 @@ def unmet_points(branch) -> np.ndarray:
     if tol is None or not len(branch):
         return np.zeros(0, dtype=int)
     front = np.asarray(branch.family_front(), dtype=int)
-    err = branch.frequency_error[front]
+    err = point_estimate(branch)[front]
     return front[~(err <= tol)]
+
+
+def point_estimate(branch) -> np.ndarray:
+    """The estimate ``tol`` bounds at each point, shape (n_points,): ``frequency_error``,
+    and for a damped nonlinear mode the larger of it and ``records["damping_error"]``."""
+    err = branch.frequency_error
+    damping = branch.records.get("damping_error")
+    if damping is not None and len(damping) == len(branch):
+        err = np.maximum(err, np.asarray(damping, dtype=float))
+    return err
 
 
 def _amp(branch, a: float) -> str:
@@ -58,7 +68,7 @@ def tolerance_findings(branch) -> list[Finding]:
         return []
     tol = tolerance_of(branch)
     settings = branch.metadata["tolerance"]
-    err = branch.frequency_error[bad]
+    err = point_estimate(branch)[bad]
     finite = err[np.isfinite(err)]
     H = np.asarray(branch.records.get("harmonics", np.full(len(branch), branch.harmonics)))[bad]
     first = int(bad[0])
@@ -67,7 +77,8 @@ def tolerance_findings(branch) -> list[Finding]:
                f"{np.median(finite):.2g})" if len(finite) else "no estimate could be made there")
     failed = int(np.sum(~np.isfinite(err)))
     again = [int(i) for i in branch.family_front() if branch.amplitude[i] > branch.amplitude[bad[-1]]]
-    message = (f"{branch.method} branch: the tolerance {tol:g} on the frequency is not met from "
+    on = "on the frequency and damping ratio" if "damping_error" in branch.records else "on the frequency"
+    message = (f"{branch.method} branch: the tolerance {tol:g} {on} is not met from "
                f"{_amp(branch, float(branch.amplitude[first]))} ({_where(branch, first)}) on: {len(bad)} of "
                f"{n_front} family points, {reached}"
                + (f", {failed} re-solves at 2H failed" if failed else "")
@@ -88,7 +99,7 @@ def tolerance_summary(branch) -> str | None:
         return None
     H = np.asarray(branch.records.get("harmonics", [branch.harmonics]))
     bad = unmet_points(branch)
-    err = branch.frequency_error
+    err = point_estimate(branch)
     hs = f"H {int(H.min())}" + (f"-{int(H.max())}" if H.max() != H.min() else "")
     if not len(bad):
         worst = float(np.nanmax(err[branch.family_front()])) if len(branch) else math.nan
