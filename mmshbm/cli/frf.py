@@ -14,7 +14,14 @@ def register(sub) -> None:
                                    "dashed. Default: the default beam with 0.5 % modal damping, a force at "
                                    "the last node with mass.")
     common.beam_options(p)
-    p.add_argument("-H", "--harmonics", type=common.positive_int, default=5, help="harmonics (default 5)")
+    p.add_argument("-H", "--harmonics", type=common.positive_int, default=None,
+                   help="harmonics (default 5); not with --tol")
+    p.add_argument("--tol", type=common.positive_float, default=None,
+                   help="relative tolerance on every point's amplitude at its frequency (on its frequency near "
+                        "folds): H chosen per point from an error estimate (docs/accuracy.md) instead of a "
+                        "fixed -H")
+    p.add_argument("--max-harmonics", type=common.positive_int, default=None,
+                   help="with --tol: the largest H of any solve (default 64)")
     p.add_argument("--method", default="mmshbm", choices=forced_methods(),
                    help="MMS-HBM, or a baseline on the same forced problem: penalty harmonic balance or "
                         "time-domain shooting (default mmshbm)")
@@ -72,7 +79,7 @@ def run(args) -> int:
         force = np.zeros(model.n_dof)
         force[dof] = args.force
     extra = {} if args.max_steps is None else {"max_steps": args.max_steps}
-    options = {"harmonics": args.harmonics} if is_harmonic_balance(args.method) else {}
+    options = _accuracy(args)
     resp = frequency_response(model, force, tuple(args.range), method=args.method,
                               verbose=common.progress(args), **options, **extra)
     out = common.out_dir(args)
@@ -81,11 +88,17 @@ def run(args) -> int:
         files.append(out / "frf.png")
         plot_frequency_response(resp, measured=measured, path=files[-1])
     print(repr(resp))
+    if args.tol is not None:
+        from ..results.response_tolerance import response_tolerance_summary
+
+        print(response_tolerance_summary(resp))
+        for f in resp.findings:
+            print(f"mmshbm frf: {f.kind}: {f.message}")
     if args.phase_resonance:
         from ..analysis.phase_resonance import compare_backbones
         from .backbone import gaps_in_m
 
-        both = compare_backbones(model, force, harmonics=args.harmonics,
+        both = compare_backbones(model, force, harmonics=5 if args.harmonics is None else args.harmonics,
                                  max_amplitude=gaps_in_m(args.max_amplitude, model))
         pr = both["phase_resonance"]
         files += [pr.to_csv(out / "phase_resonance.csv"), out / "phase_resonance.png"]
@@ -93,3 +106,17 @@ def run(args) -> int:
         print(repr(pr))
     common.wrote(*files)
     return 0 if resp.completed else 1
+
+
+def _accuracy(args) -> dict:
+    """The H options of the run: a fixed -H, or --tol (with --max-harmonics)."""
+    if args.tol is not None:
+        if args.harmonics is not None:
+            raise ValueError(f"pass either -H {args.harmonics} (a fixed H) or --tol {args.tol:g} (H chosen "
+                             "to meet it), not both")
+        return {"tol": args.tol, **({} if args.max_harmonics is None else {"max_harmonics": args.max_harmonics})}
+    if args.max_harmonics is not None:
+        raise ValueError("--max-harmonics bounds H with --tol: pass --tol too, or a fixed -H")
+    if not is_harmonic_balance(args.method):
+        return {}
+    return {"harmonics": 5 if args.harmonics is None else args.harmonics}
