@@ -103,8 +103,13 @@ def _execute(spec: RunSpec) -> Branch:
         # process has no terminal of its own, and the study summarises both on the parent side
         warnings.simplefilter("always", MmshbmWarning)
         warnings.simplefilter("ignore", BranchWarning)
-        branch = backbone(model, harmonics=spec.harmonics, method=spec.method, max_amplitude=max_amplitude,
-                          **spec.options)
+        options = dict(spec.options)
+        harmonics = spec.harmonics
+        if options.get("tol") is not None:  # H chosen per point: the grid's H is where it starts
+            options.setdefault("start_harmonics", harmonics)
+            harmonics = None
+        branch = backbone(model, harmonics=harmonics, method=spec.method, max_amplitude=max_amplitude,
+                          **options)
     notes = []
     package = str(Path(__file__).resolve().parents[1]) + os.sep
     for w in caught:

@@ -358,6 +358,10 @@ def run_study(beam=None, *, model=None, harmonics: Sequence[int] = (1, 3, 5),
         matplotlib there).
     **options
         Passed to every :func:`mmshbm.backbone` call (continuation and method options).
+        With ``tol`` (and ``max_harmonics``), every run chooses its H per point to meet
+        it, and ``harmonics`` is the H each run starts from
+        (:mod:`mmshbm.analysis.study_tolerance`: the H of each table cell, the mesh
+        error at the table's amplitudes).
 
     Returns
     -------

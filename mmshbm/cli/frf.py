@@ -17,9 +17,9 @@ def register(sub) -> None:
     p.add_argument("-H", "--harmonics", type=common.positive_int, default=None,
                    help="harmonics (default 5); not with --tol")
     p.add_argument("--tol", type=common.positive_float, default=None,
-                   help="relative tolerance on every point's amplitude at its frequency (on its frequency near "
-                        "folds): H chosen per point from an error estimate (docs/accuracy.md) instead of a "
-                        "fixed -H")
+                   help="relative tolerance on every point's amplitude at its frequency (on its frequency "
+                        "near folds): H chosen per point from an error estimate (docs/accuracy.md) instead "
+                        "of a fixed -H")
     p.add_argument("--max-harmonics", type=common.positive_int, default=None,
                    help="with --tol: the largest H of any solve (default 64)")
     p.add_argument("--method", default="mmshbm", choices=forced_methods(),
@@ -114,7 +114,8 @@ def _accuracy(args) -> dict:
         if args.harmonics is not None:
             raise ValueError(f"pass either -H {args.harmonics} (a fixed H) or --tol {args.tol:g} (H chosen "
                              "to meet it), not both")
-        return {"tol": args.tol, **({} if args.max_harmonics is None else {"max_harmonics": args.max_harmonics})}
+        cap = {} if args.max_harmonics is None else {"max_harmonics": args.max_harmonics}
+        return {"tol": args.tol, **cap}
     if args.max_harmonics is not None:
         raise ValueError("--max-harmonics bounds H with --tol: pass --tol too, or a fixed -H")
     if not is_harmonic_balance(args.method):

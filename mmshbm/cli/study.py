@@ -28,6 +28,12 @@ def register(sub) -> None:
                    help="values of H (default 1 3 5)")
     p.add_argument("--elements", type=common.positive_int, nargs="+", default=None,
                    help="element counts (default 8 21)")
+    p.add_argument("--tol", type=common.positive_float, default=None,
+                   help="relative tolerance on the frequency of every point of every run: H chosen per point "
+                        "(-H is then the H each run starts from, default 8); the report gives each cell's H "
+                        "and the mesh error at the amplitudes (3 element counts or more)")
+    p.add_argument("--max-harmonics", type=common.positive_int, default=None,
+                   help="with --tol: the largest H of any solve (default 64)")
     p.add_argument("--methods", nargs="+", default=None, choices=backbone_methods(),
                    help="methods (default mmshbm)")
     p.add_argument("--param", action="append", default=None, metavar="NAME=V1,V2",
@@ -64,6 +70,9 @@ def run(args) -> int:
         out = common.out_dir(args)
         table = study.table(marks, unit="gap")
         report = study.report(marks, unit="gap")
+        accuracy = _accuracy_lines(study, table, marks) if args.tol is not None else []
+        if accuracy:
+            report += "\n\n" + "\n".join(accuracy)
         files = []
 
         def write_files():
@@ -84,6 +93,9 @@ def run(args) -> int:
         for line in notes:
             print(f"mmshbm study: warning: {line}", file=sys.stderr)
     print(study.findings())
+    mesh = next((i for i, s in enumerate(accuracy) if s.startswith("mesh error")), len(accuracy))
+    for line in accuracy[:1] + accuracy[mesh:]:  # the counts and the mesh errors; every line in the report
+        print(line)
     if args.figure2:
         from .plot import _print_points
 
@@ -121,6 +133,12 @@ def _run_study(args):
         shared.update(max_amplitude=args.max_amplitude, unit="gap")
     if args.max_steps is not None:
         shared["max_steps"] = args.max_steps
+    if args.tol is not None:
+        shared["tol"] = args.tol
+        if args.max_harmonics is not None:
+            shared["max_harmonics"] = args.max_harmonics
+    elif args.max_harmonics is not None:
+        raise ValueError("--max-harmonics bounds H with --tol: pass --tol too")
     beam = common.beam(args)
     if args.figure2:
         if args.harmonics or args.elements or args.methods or params or args.model_file:
@@ -129,7 +147,8 @@ def _run_study(args):
         study = studies.figure2_study(beam, grading=args.grading, **shared)
         name = "figure2"
     else:
-        grid = {"harmonics": args.harmonics or (1, 3, 5), "methods": args.methods or ("mmshbm",),
+        grid = {"harmonics": args.harmonics or ((8,) if args.tol is not None else (1, 3, 5)),
+                "methods": args.methods or ("mmshbm",),
                 "params": params}
         if args.model_file:
             if args.elements:
@@ -172,3 +191,20 @@ def _plots(args, study, name, marks, measured, table, out, write_files) -> list:
 def _import_plots() -> None:
     """Import matplotlib and the study plots (~0.3 s)."""
     from ..plotting import grids, studies  # noqa: F401
+
+
+def _accuracy_lines(study, table, marks) -> list[str]:
+    """The tolerance lines of a study run with --tol: each run's summary, the H of each
+    cell, and the mesh error at the amplitudes."""
+    from ..analysis.study_tolerance import cell_harmonics, mesh_error_lines, tolerance_lines
+
+    lines = tolerance_lines(study)
+    H = cell_harmonics(study, marks, "gap")
+    lines.append("H chosen by the tolerance at " + ", ".join(f"{a:g}" for a in marks)
+                 + " gaps (-1: not reached)")
+    lines += [f"  {', '.join(f'{k}={v}' for k, v in c.items())}: {' '.join(str(h) for h in row)}"
+              for c, row in zip(study.runs, H, strict=True)]
+    mesh = mesh_error_lines(table, study=study)
+    lines.append("mesh error at the amplitudes:"
+                 + ("" if mesh else " needs 3 element counts or more (--elements)"))
+    return lines + mesh
