@@ -103,7 +103,8 @@ def tolerance_summary(branch) -> str | None:
     hs = f"H {int(H.min())}" + (f"-{int(H.max())}" if H.max() != H.min() else "")
     if not len(bad):
         worst = float(np.nanmax(err[branch.family_front()])) if len(branch) else math.nan
-        return (f"tolerance {tol:g} met at every point of the backbone (largest estimated frequency error "
+        what = "frequency and damping-ratio error" if "damping_error" in branch.records else "frequency error"
+        return (f"tolerance {tol:g} met at every point of the backbone (largest estimated {what} "
                 f"{worst:.2g}, {hs})")
     return (f"tolerance {tol:g} met up to {_amp(branch, float(branch.amplitude[bad[0]]))} only "
             f"({len(bad)} points beyond it miss it; {hs}): see the tolerance_not_met finding")
