@@ -51,7 +51,11 @@ including ∂s/∂(the normal contact's coefficients). Play form only.
 Evaluation. The play form with constant slip forces runs compiled: the fused unilateral
 residual, then the friction rows in place (:mod:`mmshbm.methods.mms._friction_kernels`);
 the coupled and velocity forms assemble their rows in NumPy
-(:meth:`~mmshbm.methods.mms.friction_rows.FrictionRows.contact_residual`).
+(:meth:`~mmshbm.methods.mms.friction_rows.FrictionRows.contact_residual`). Where moreover
+the amplitude DOF's harmonic 1 is tracked with the dense blocks and the condensation is
+modal, the whole scaled residual and Jacobian, and each point's records, are one compiled
+call each (:mod:`mmshbm.methods.mms.friction_fused`; ``_fused = False`` takes the steps
+above, its reference).
 
 Floquet multipliers (``stability=True``, :mod:`mmshbm.methods.mms.friction_stability`), play
 form. Not yet: the velocity form with ``normal_contact=`` or with stability
