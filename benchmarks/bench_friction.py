@@ -18,7 +18,8 @@
   (``with_friction(..., tangential_stiffness=)``): MMS-HBM against the Jenkins baseline on
   the same physical spring; ``track_ms_per_point`` the time per FRF point (MMS-HBM, the
   friction rows compiled: 1.5 ms on the 2-core development machine, idle; 4.0–5.1 ms with
-  the NumPy rows, docs/friction.md).
+  the NumPy rows, docs/friction.md), ``track_cpu_ms_per_point`` its processor time (the
+  whole evaluation fused: 1.41–1.58 ms, best of twenty, at load 7–14; 3.4–4.1 ms before).
 * ``NLvibFrictionBeam``: NLvib's example-08 beam (2 m, 0.1 × 0.3 m, 185 GPa, 7830 kg/m³, 8
   elements; 0.2 N at the tip, C = βK with 1 % at the first stuck mode), μN = 1.5 N at node 4
   behind k_t = 1e7 or 1e9 N/m, or rigid at node 4 made massless; the whole FRF 0.9 ω_free …
