@@ -18,11 +18,14 @@
   (``with_friction(..., tangential_stiffness=)``): MMS-HBM against the Jenkins baseline on
   the same physical spring; ``track_ms_per_point`` the time per FRF point (MMS-HBM, the
   friction rows compiled: 1.5 ms on the 2-core development machine, idle; 4.0–5.1 ms with
-  the NumPy rows, docs/friction.md).
+  the NumPy rows, docs/friction.md), ``track_cpu_ms_per_point`` its processor time (the
+  whole evaluation fused: 1.41–1.58 ms, best of twenty, at load 7–14; 3.4–4.1 ms before).
 * ``NLvibFrictionBeam``: NLvib's example-08 beam (2 m, 0.1 × 0.3 m, 185 GPa, 7830 kg/m³, 8
   elements; 0.2 N at the tip, C = βK with 1 % at the first stuck mode), μN = 1.5 N at node 4
   behind k_t = 1e7 or 1e9 N/m, or rigid at node 4 made massless; the whole FRF 0.9 ω_free …
-  1.5 ω_stuck at H = 13, with its Newton iterations per point.
+  1.5 ω_stuck at H = 13, with its Newton iterations per point and its processor time.
+* ``FrictionEvaluation``: one evaluation and one point's records on that beam (k_t = 1e7),
+  the fused kernel against the stepwise path.
 * ``ImpactFriction``: impact with friction on 4 DOFs (two masses driving a node's normal and
   tangential DOFs; gap 0.05 m, μ = 0.3, preload 0.05 N), the FRF 0.1–0.3 Hz at H = 7.
 * ``NLvibSideBySide``: the ex08 beam (k_t = 1e7, 1e9) and the Jenkins oscillator against
@@ -221,6 +224,24 @@ class TwoMassDamper:
 
     track_ms_per_point.unit = "ms"
 
+    def track_cpu_ms_per_point(self, method):
+        """Processor time per point (ms), the best of five whole FRFs (the steady measure on
+        a shared machine)."""
+        return min(_cpu_ms(lambda: self.run(method), per_point=True) for _ in range(5))
+
+    track_cpu_ms_per_point.unit = "ms"
+
+
+def _cpu_ms(run, per_point: bool = False) -> float:
+    """Processor time (ms) of ``run()``, per point of the response it returns with
+    ``per_point``."""
+    import time
+
+    c0 = time.process_time()
+    r = run()
+    ms = 1e3 * (time.process_time() - c0)
+    return ms / len(r.frequency) if per_point else ms
+
 
 @functools.cache
 def nlvib_friction_beam(kind: str):
@@ -277,6 +298,47 @@ class NLvibFrictionBeam:
 
     def track_newton_per_point(self, kind):
         return float(self.run(kind).newton_iterations.mean())
+
+    def track_cpu_ms(self, kind):
+        """Processor time of the whole FRF (ms), best of three."""
+        return min(_cpu_ms(lambda: self.run(kind)) for _ in range(3))
+
+    track_cpu_ms.unit = "ms"
+
+
+class FrictionEvaluation:
+    """One residual-and-Jacobian evaluation of the ex08-like beam (k_t = 1e7 N/m, H = 13) at
+    its stick–slip resonance: the fused kernel (:mod:`mmshbm.methods.mms.friction_fused`)
+    against the stepwise path (condensation, fused residual, friction rows, tracked harmonic
+    and scaling called from Python), and one point's records."""
+
+    params = [("fused", "stepwise")]
+    param_names = ["path"]
+    number = 200
+    repeat = (3, 10, 30.0)
+    warmup_time = 0.0
+    timeout = 300
+
+    def setup(self, path):
+        from mmshbm.methods.mms.friction_forced import FrictionForcedProblem
+
+        model, force, _ = nlvib_friction_beam("1e7")
+        self.problem = p = FrictionForcedProblem(model, force, 13)
+        self.u = p.start_point(1.1 * p.linear_frequency)
+        self.x, self.omega = p.unpack(self.u)
+        p._evaluate(self.u, True)
+        if path == "stepwise":
+            p._fused = False
+        p.monitor(self.u)
+
+    def time_evaluate(self, path):
+        self.problem._evaluate(self.u, True)
+
+    def time_residual(self, path):
+        self.problem._evaluate(self.u, False)
+
+    def time_record(self, path):
+        self.problem.monitor(self.u)
 
 
 class ImpactFriction:

@@ -51,7 +51,11 @@ including ∂s/∂(the normal contact's coefficients). Play form only.
 Evaluation. The play form with constant slip forces runs compiled: the fused unilateral
 residual, then the friction rows in place (:mod:`mmshbm.methods.mms._friction_kernels`);
 the coupled and velocity forms assemble their rows in NumPy
-(:meth:`~mmshbm.methods.mms.friction_rows.FrictionRows.contact_residual`).
+(:meth:`~mmshbm.methods.mms.friction_rows.FrictionRows.contact_residual`). Where moreover
+the amplitude DOF's harmonic 1 is tracked with the dense blocks and the condensation is
+modal, the whole scaled residual and Jacobian, and each point's records, are one compiled
+call each (:mod:`mmshbm.methods.mms.friction_fused`; ``_fused = False`` takes the steps
+above, its reference).
 
 Floquet multipliers (``stability=True``, :mod:`mmshbm.methods.mms.friction_stability`), play
 form. Not yet: the velocity form with ``normal_contact=`` or with stability
@@ -67,6 +71,7 @@ from ...model.model import Model
 from .condensation.damped_condense import DENSE_LIMIT
 from .corrector import at_roundoff, backtrack, corrector_to_roundoff
 from .forced import ForcedResponseProblem
+from .friction_fused import fused_evaluation
 from .friction_rows import FrictionRows, check_friction_model, check_law
 from .friction_tracked import TrackedHarmonic
 
@@ -117,6 +122,9 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
     corner_parameter = True
     #: the Floquet solver of the normal contacts' phases; None until built
     _normal_floquet = None
+    #: the compiled evaluation (:class:`~mmshbm.methods.mms.friction_fused.FusedFrictionEvaluation`):
+    #: None until first asked, False where the problem is not of the kind it evaluates
+    _fused = None
 
     def __init__(self, model: Model, force, harmonics: int = 5, n_samples: int | None = None,
                  r: float | None = None, backend: str = "auto", stability: bool | str = "auto",
@@ -219,6 +227,10 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         more rows (its harmonic-1 unknowns equal their recovery from x, :meth:`_tracked`)."""
         if self._track is None:
             return super()._evaluate(u, jacobian)
+        if self._fused is None:
+            self._fused = fused_evaluation(self)
+        if self._fused is not False and self._compiled_rows:
+            return self._fused.evaluate(u, jacobian)
         x, omega = self.unpack(u)
         ab = np.asarray(u[self.n_x:self.n_x + 2], dtype=float) * self.length
         R_x, Jx, Jw = self._parts(x, omega, jacobian)
@@ -378,7 +390,14 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
             rec.update(self.friction_records(x, omega, sigma))
             return rec
         # the records of ForcedResponseProblem._record and friction_records, the force the
-        # structure needs computed once
+        # structure needs computed once (in one compiled call where the evaluation is fused)
+        parts = self._fused_record(x, omega, sigma)
+        if parts is not None:
+            F, Q, energy, slip, work = parts
+            q = Q[self.amplitude_dof]
+            return {"frequency": omega / (2 * np.pi), "amplitude": self.amplitude(q), "phase": self.phase(q),
+                    "energy": energy, "contact_force_max": self.contact_force_max(x, F),
+                    "slip_fraction": slip, "friction_dissipation": work}
         Q = self._coefficients(x, omega, sigma)
         q = Q[self.amplitude_dof]
         F = self._needed(x, omega, sigma)
@@ -386,6 +405,16 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         return {"frequency": omega / (2 * np.pi), "amplitude": self.amplitude(q), "phase": self.phase(q),
                 "energy": self._energy(Q, omega), "contact_force_max": self.contact_force_max(x, F),
                 "slip_fraction": slip, "friction_dissipation": work}
+
+    def _fused_record(self, x: np.ndarray, omega: float, sigma: float):
+        """:meth:`FusedFrictionEvaluation.record_parts
+        <mmshbm.methods.mms.friction_fused.FusedFrictionEvaluation.record_parts>` where the
+        evaluation is fused (and the friction rows compiled), else None."""
+        if self._track is None or not self._compiled_rows:
+            return None
+        if self._fused is None:
+            self._fused = fused_evaluation(self)
+        return None if self._fused is False else self._fused.record_parts(x, omega, sigma)
 
     def _energy(self, Q: np.ndarray, omega: float) -> float:
         """:func:`~mmshbm.core.measures.mean_energy` of Q (n_dof, 2H+1) at Ω, with dense K and
