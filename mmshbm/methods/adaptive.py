@@ -14,7 +14,11 @@
    at 4H, and so on while the estimate keeps contracting (``patience`` doublings of H in a
    row without a contraction by ``contraction`` stop it: the point does not converge in
    H in this range, e.g. orbits that rattle) and ``tol`` stays within reach (not more
-   than ``FASTEST`` = 64 times per doubling the cap still allows below the estimate);
+   than ``FASTEST`` = 64 times per doubling the cap still allows below the estimate: a
+   point out of reach keeps the 2H solution its estimate solved, the better one, with
+   the estimate divided by the contraction of its last doubling where one was measured
+   (between 1 and ``FASTEST``: above ``tol``), else by ``ASSUMED_CONTRACTION``, flagged
+   in ``records["error_extrapolated"]``);
    no solve exceeds ``max_harmonics``: a point promoted to an H whose 2H would pass it
    gets the estimate below divided by the contraction of its last doubling (at least
    ``ASSUMED_CONTRACTION`` = 4, rate 2; at most ``FASTEST``), Richardson's estimate of
@@ -30,7 +34,7 @@
    cap, a failed re-solve, ``confirm=False``, off the family front);
 5. the branch keeps, at each point, the lowest H whose estimate met ``tol`` (the points
    that never needed more keep ``start_harmonics``: H is raised only where the branch
-   needs it; a point left where it is keeps its last H), its frequency and that
+   needs it; a point whose estimate stalled keeps its last H), its frequency and that
    estimate: ``branch.frequency_error``, ``branch.records["harmonics"]``.
 
 The amplitude of every point is pinned in the re-solves: a point is (A_i, f_i) with the
@@ -218,8 +222,13 @@ def _refine(base, tol, start_harmonics, max_harmonics, patience, contraction, co
             stalls[i] = 0 if e * contraction <= last[i] else stalls[i] + 1
             last[i] = e
             left = math.floor(math.log2(max_harmonics / H[i]) + 1e-9)  # the doublings the cap allows
-            if not on_front[i] or stalls[i] >= patience or left < 1 or e > tol * FASTEST ** left:
-                continue  # not converging in H here, the cap reached, or tol out of reach
+            if not on_front[i] or stalls[i] >= patience or left < 1:
+                continue  # not converging in H here, or the cap reached
+            if e > tol * FASTEST ** left:  # out of reach: the finer solve is the better point
+                c = min(max(ratio[i], 1.0), FASTEST) if math.isfinite(ratio[i]) else ASSUMED_CONTRACTION
+                states[i], freq[i] = pe.states_raised[j], pe.frequency_raised[j]
+                H[i], err[i], extrapolated[i] = int(pe.harmonics_raised[j]), e / c, 1
+                continue
             promote.append((i, pe.states_raised[j], pe.frequency_raised[j], pe.harmonics_raised[j]))
         nxt = []
         for i, u2, f2, h2 in promote:

@@ -241,3 +241,25 @@ def test_a_stepped_re_solve_lands_where_the_direct_one_does():
     assert (8, 16) not in direct.stepped
     assert abs(f[1] / f[0] - 1) <= 1e-8
     assert abs(f[0] / b.frequency[i] - 1) > 1e-4  # H = 16 moved the point: not a trivial agreement
+
+
+def test_a_point_out_of_reach_keeps_its_finer_solve():
+    """tol = 1e-6 under a cap of 32 on the stiff oscillator is out of reach past grazing
+    from H = 8 on: each such point keeps the H = 16 solution its estimate solved (the
+    series converges at ~H^-2 here: four times closer to the exact orbit than the H = 8
+    point) with the estimate divided by the assumed contraction 4, flagged as
+    extrapolated, above tol (the finding still names it), within [1/3, 3] of the true
+    error."""
+    model = mmshbm.OneDofOscillator(*STIFF).model()
+    b = _quiet(mmshbm.backbone, model, tol=1e-6, max_amplitude=2.0 * model.gap, max_harmonics=32)
+    b8 = _quiet(mmshbm.backbone, model, harmonics=8, max_amplitude=2.0 * model.gap)
+    front = [i for i in b.family_front() if b.amplitude[i] > 1.05 * model.gap]
+    assert len(front) >= 5
+    for i in front:
+        f_exact = exact.periodic_orbit(model, float(b.amplitude[i])).frequency
+        true = abs(b.frequency[i] / f_exact - 1)
+        true8 = abs(b8.frequency_at(float(b.amplitude[i])) / f_exact - 1)
+        assert b.records["harmonics"][i] == 16 and b.records["error_extrapolated"][i] == 1
+        assert true <= true8 / 2
+        assert 1e-6 < b.frequency_error[i] and 1 / 3 <= b.frequency_error[i] / true <= 3, (i, true)
+    assert "tolerance_not_met" in {f.kind for f in b.findings}
