@@ -31,8 +31,8 @@ The stricter account (:meth:`ExactComparison.explanations`, the summary's "expla
   energy (:data:`EXACT_FAMILY_SHARE`);
 * the exact orbit is not the mode's: its frequency lies outside the first mode's band of
   the definition (:func:`mmshbm.family.definition.frequency_band`: from the linear mode's
-  to the first mode's with the contact held, widened by the default ``band_slack``; an
-  orbit of the second mode can hold the fundamental's majority too);
+  to the first mode's with the contact held; without ``band_slack``, the margin for a
+  truncated series; an orbit of the second mode can hold the fundamental's majority too);
 * the branch's truncation estimate at the amplitude is at least a third of the difference
   (:data:`TRUNCATION_PART`).
 
@@ -292,18 +292,17 @@ def compare(case: CorpusCase, amplitude_gaps: float = 1.3, harmonics: int = 31,
 
 def _band(branch) -> tuple[float, float]:
     """The first mode's frequency band (Hz) of ``branch``'s problem by the definition
-    (:func:`mmshbm.family.definition.frequency_band`, the default ``band_slack``); (0, inf)
-    where its solver offers none."""
+    (:func:`mmshbm.family.definition.frequency_band`) for an exact orbit: without the
+    ``band_slack`` margin, which covers the truncated series of a harmonic balance orbit,
+    not an exact one; (0, inf) where the solver offers none."""
     from mmshbm.core.problem import as_problem
-    from mmshbm.family import FamilyOptions
     from mmshbm.family.definition import frequency_band
 
     solver = branch.attached_solver
     if solver is None or not len(branch):
         return 0.0, math.inf
     try:
-        return frequency_band(as_problem(solver), [{"frequency": float(branch.frequency[0])}],
-                              FamilyOptions().band_slack)
+        return frequency_band(as_problem(solver), [{"frequency": float(branch.frequency[0])}], 0.0)
     except (ValueError, RuntimeError, ArithmeticError, np.linalg.LinAlgError, AttributeError, TypeError):
         return 0.0, math.inf
 
