@@ -151,7 +151,8 @@ def backbone_to_tolerance(model, tol: float, *, start_harmonics: int, max_harmon
     Returns
     -------
     Branch
-        With ``records["frequency_error"]``, ``records["harmonics"]`` and
+        With ``records["frequency_error"]``, ``records["harmonics"]``,
+        ``records["error_extrapolated"]``, ``records["error_confirmed"]`` and
         ``metadata["tolerance"]``.
     """
     from .._threads import blas_limit
