@@ -73,7 +73,7 @@ def _exact(args) -> int:
     cases = corpus_exact.chains(args.n, seed=args.seed,
                                 contact_decades=tuple(args.contact_decades) if args.contact_decades else None)
     results = []
-    compare = functools.partial(corpus_exact.compare, options=_proximal(args))
+    compare = functools.partial(corpus_exact.compare, options=_proximal(args), accuracy=args.tol)
     if args.workers > 1:  # each chain in its own task; the lines still in chain order
         from concurrent.futures import ProcessPoolExecutor
 
@@ -96,7 +96,7 @@ def _exact(args) -> int:
                     "first_mode", "estimate", "reasons", "status", "seconds", "exact_share",
                     "continued_share", "branch_orbit_hz", "branch_orbit_share", "proximal",
                     "contact_decades", "orbits_hz", "orbits_share", "orbits_seconds", "exact_listed",
-                    "explained"])
+                    "explained", "band_lo_hz", "band_hi_hz", "tol", "tolerance_not_met"])
         for r in results:
             w.writerow([r.case.index, r.case.seed, int(r.clean), repr(r.exact), repr(r.branch),
                         f"{r.error:.3e}", f"{r.error_2h:.3e}", repr(r.continued), int(r.first_mode),
@@ -104,7 +104,8 @@ def _exact(args) -> int:
                         f"{r.exact_share:.4f}", f"{r.continued_share:.4f}", repr(r.family_exact),
                         f"{r.family_share:.4f}", args.proximal, decades,
                         " ".join(repr(f) for f in r.orbits_hz), " ".join(f"{x:.4f}" for x in r.orbits_share),
-                        f"{r.orbits_seconds:.3f}", r.exact_listed, "; ".join(r.explanations())])
+                        f"{r.orbits_seconds:.3f}", r.exact_listed, "; ".join(r.explanations()),
+                        repr(r.band[0]), repr(r.band[1]), repr(r.tolerance), int(r.tolerance_not_met)])
     common.wrote(path)
     unexplained = [r for r in results if r.clean and not r.error <= 1e-3 and not r.explanations()]
     return 1 if unexplained else 0
@@ -200,6 +201,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--proximal", choices=("static", "residual"), default="static",
                    help="MMS-HBM's proximal parameter r (docs/exact.md)")
     p.add_argument("--workers", type=common.positive_int, default=1, help="processes (chains in parallel)")
+    p.add_argument("--tol", type=common.positive_float, default=None,
+                   help="run backbone(tol=TOL) instead of H = 31 (its own error estimate explains misses)")
     p.add_argument("--out", default="out", help="folder of corpus_exact.csv")
 
     p = add("accuracy", _accuracy, "backbone(tol=...) against the exact orbit and fixed H = 31 on N chains")

@@ -14,14 +14,27 @@
    at 4H, and so on while the estimate keeps contracting (``patience`` doublings of H in a
    row without a contraction by ``contraction`` stop it: the point does not converge in
    H in this range, e.g. orbits that rattle) and ``tol`` stays within reach (not more
-   than ``FASTEST`` = 64 times per doubling the cap still allows below the estimate);
+   than ``FASTEST`` = 64 times per doubling the cap still allows below the estimate: a
+   point out of reach keeps the 2H solution its estimate solved, the better one, with
+   the estimate divided by the contraction of its last doubling where one was measured
+   (between 1 and ``FASTEST``: above ``tol``), else by ``ASSUMED_CONTRACTION``, flagged
+   in ``records["error_extrapolated"]``);
    no solve exceeds ``max_harmonics``: a point promoted to an H whose 2H would pass it
    gets the estimate below divided by the contraction of its last doubling (at least
    ``ASSUMED_CONTRACTION`` = 4, rate 2; at most ``FASTEST``), Richardson's estimate of
    the finer solution, flagged in ``records["error_extrapolated"]``;
-4. the branch keeps, at each point, the lowest H whose estimate met ``tol`` (the points
+4. an estimate that meets ``tol`` at H is *confirmed* on the next pair (``confirm``, on by
+   default): the point's 2H solution is re-solved at 4H, and the estimate at H stands
+   when |f(4H) − f(2H)| < |f(2H) − f(H)| (the pair contracts: H is in the asymptotic
+   regime); where it does not, the pair (H, 2H) was pre-asymptotic (a stiff contact whose
+   contact time neither series resolves: f(H) ≈ f(2H) on a plateau, then a drop once the
+   series resolves it), and the point goes on from 2H with the estimate at 2H, as in step
+   3. ``records["error_confirmed"]`` is 1 where the next pair contracted or the point
+   carries no contact force (exact at every H), 0 where it was not checked (4H above the
+   cap, a failed re-solve, ``confirm=False``, off the family front);
+5. the branch keeps, at each point, the lowest H whose estimate met ``tol`` (the points
    that never needed more keep ``start_harmonics``: H is raised only where the branch
-   needs it; a point left where it is keeps its last H), its frequency and that
+   needs it; a point whose estimate stalled keeps its last H), its frequency and that
    estimate: ``branch.frequency_error``, ``branch.records["harmonics"]``.
 
 The amplitude of every point is pinned in the re-solves: a point is (A_i, f_i) with the
@@ -36,8 +49,9 @@ other DOFs' signals are recovered at ``branch.harmonics``. Points where ``tol`` 
 (estimate above it at the cap, estimate stalled, a failed re-solve) are a
 ``"tolerance_not_met"`` finding (:mod:`mmshbm.results.tolerance_checks`).
 
-Cost: the continuation at ``start_harmonics``, one pinned solve per point at 2H, and one
-more per point for each doubling a point needs.
+Cost: the continuation at ``start_harmonics``, one pinned solve per point at 2H, one more
+per point for each doubling a point needs, and one at 4H per point in contact that met
+``tol`` (its confirmation).
 """
 
 from __future__ import annotations
@@ -56,7 +70,8 @@ __all__ = ["backbone_to_tolerance", "check_tolerance", "TOLERANCE_DEFAULTS"]
 log = logging.getLogger(__name__)
 
 #: the defaults of the tolerance options of :func:`backbone_to_tolerance`
-TOLERANCE_DEFAULTS = {"start_harmonics": 8, "max_harmonics": 64, "patience": 2, "contraction": 1.5}
+TOLERANCE_DEFAULTS = {"start_harmonics": 8, "max_harmonics": 64, "patience": 2, "contraction": 1.5,
+                      "confirm": True}
 
 
 #: the fastest contraction of an estimate per doubling of H that a point is credited with
@@ -72,7 +87,7 @@ ASSUMED_CONTRACTION = 4.0
 
 def check_tolerance(tol, harmonics, method: str, options: dict) -> dict:
     """The checked tolerance options (popped from ``options``): tol, start_harmonics,
-    max_harmonics, patience, contraction.
+    max_harmonics, patience, contraction, confirm.
 
     Raises
     ------
@@ -96,6 +111,8 @@ def check_tolerance(tol, harmonics, method: str, options: dict) -> dict:
         raise ValueError(f"max_harmonics ({out['max_harmonics']}) caps every solve, the error estimate's at "
                          f"2H included: it must be at least 2 * start_harmonics "
                          f"({2 * out['start_harmonics']})")
+    if not isinstance(out["confirm"], bool):
+        raise ValueError(f"confirm must be True or False, got {out['confirm']!r}")
     c = out["contraction"]
     if isinstance(c, bool) or not isinstance(c, int | float) or not c >= 1:
         raise ValueError(f"contraction must be a number >= 1, got {c!r}")
@@ -104,7 +121,7 @@ def check_tolerance(tol, harmonics, method: str, options: dict) -> dict:
 
 
 def backbone_to_tolerance(model, tol: float, *, start_harmonics: int, max_harmonics: int, patience: int,
-                          contraction: float, run, **kwargs):
+                          contraction: float, confirm: bool = True, run, **kwargs):
     """The backbone of ``model`` with every point's estimated relative frequency error
     at most ``tol`` where it can be had (module docstring).
 
@@ -123,6 +140,9 @@ def backbone_to_tolerance(model, tol: float, *, start_harmonics: int, max_harmon
         point is left where it is (not converging in H here).
     contraction : float
         The factor by which an estimate must fall per doubling of H to count as converging.
+    confirm : bool
+        Check an estimate that meets ``tol`` on the next pair (step 4 of the module
+        docstring; one more pinned solve, at 4H, per such point in contact).
     run : callable
         ``run(model, harmonics=H, **kwargs)`` -> Branch: the fixed-H backbone.
     **kwargs
@@ -131,7 +151,8 @@ def backbone_to_tolerance(model, tol: float, *, start_harmonics: int, max_harmon
     Returns
     -------
     Branch
-        With ``records["frequency_error"]``, ``records["harmonics"]`` and
+        With ``records["frequency_error"]``, ``records["harmonics"]``,
+        ``records["error_extrapolated"]``, ``records["error_confirmed"]`` and
         ``metadata["tolerance"]``.
     """
     from .._threads import blas_limit
@@ -141,17 +162,18 @@ def backbone_to_tolerance(model, tol: float, *, start_harmonics: int, max_harmon
         warnings.simplefilter("ignore")
         base = run(model, harmonics=start_harmonics, **kwargs)
     with blas_limit():  # small dense solves: one BLAS thread unless the user chose (mmshbm._threads)
-        refined = _refine(base, tol, start_harmonics, max_harmonics, patience, contraction)
-        ladder, H, states, freq, err, extrapolated, levels = refined
-        return _assemble(base, ladder, H, states, freq, err, extrapolated, settings={
+        refined = _refine(base, tol, start_harmonics, max_harmonics, patience, contraction, confirm)
+        ladder, H, states, freq, err, flags, levels = refined
+        return _assemble(base, ladder, H, states, freq, err, flags, settings={
             "tol": float(tol), "start_harmonics": start_harmonics, "max_harmonics": max_harmonics,
-            "patience": patience, "contraction": float(contraction), "rate": 2.0, "levels": levels,
+            "patience": patience, "contraction": float(contraction), "confirm": bool(confirm), "rate": 2.0,
+            "levels": levels,
             "elapsed_s": time.perf_counter() - t0})
 
 
-def _refine(base, tol, start_harmonics, max_harmonics, patience, contraction):
-    """Steps 2 and 3 of the module docstring: (solvers, H, states, frequency, estimate) per point and
-    the number of estimate passes."""
+def _refine(base, tol, start_harmonics, max_harmonics, patience, contraction, confirm):
+    """Steps 2 and 3 of the module docstring: (solvers, H, states, frequency, estimate, flags) per
+    point and the number of estimate passes."""
     from ..results.point_errors import SolverLadder, estimate_point_errors
 
     n = len(base)
@@ -164,6 +186,11 @@ def _refine(base, tol, start_harmonics, max_harmonics, patience, contraction):
     last = np.full(n, np.inf)  # the previous estimate per point
     ratio = np.full(n, math.nan)  # its last contraction per doubling
     extrapolated = np.zeros(n, dtype=np.int8)
+    # 1: the next pair contracted (or no contact force: exact at every H); 0: not checked
+    confirmed = np.zeros(n, dtype=np.int8)
+    touching = np.asarray(base.contact_force_max, dtype=float) > 0
+    confirmed[~touching] = 1
+    held = {}  # point -> (H, state, frequency, estimate) it returns to when its next pair contracts
     stalls = np.zeros(n, dtype=int)
     on_front = np.zeros(n, dtype=bool)
     on_front[np.asarray(base.family_front(), dtype=int)] = True
@@ -175,15 +202,34 @@ def _refine(base, tol, start_harmonics, max_harmonics, patience, contraction):
         promote = []
         for j, i in enumerate(active):
             e = pe.error[j]
+            if i in held:  # a confirmation: the pair above the one that met tol
+                h0, u0, f0, e0 = held.pop(i)
+                if math.isfinite(e) and e < e0:  # it contracts: the lower pair was asymptotic
+                    H[i], states[i], freq[i], err[i], confirmed[i] = h0, u0, f0, e0, 1
+                    continue
+                if not math.isfinite(e):  # no estimate above: the lower one stands, unconfirmed
+                    H[i], states[i], freq[i], err[i] = h0, u0, f0, e0
+                    continue
+                last[i] = math.inf  # pre-asymptotic pair: the point goes on from 2H, afresh
             err[i] = e
-            if not math.isfinite(e) or e <= tol:
+            if not math.isfinite(e):
+                continue
+            if e <= tol:
+                if (confirm and touching[i] and on_front[i] and 4 * H[i] <= max_harmonics):
+                    held[i] = (int(H[i]), states[i], float(freq[i]), float(e))
+                    promote.append((i, pe.states_raised[j], pe.frequency_raised[j], pe.harmonics_raised[j]))
                 continue
             ratio[i] = last[i] / e if math.isfinite(last[i]) else math.nan
             stalls[i] = 0 if e * contraction <= last[i] else stalls[i] + 1
             last[i] = e
             left = math.floor(math.log2(max_harmonics / H[i]) + 1e-9)  # the doublings the cap allows
-            if not on_front[i] or stalls[i] >= patience or left < 1 or e > tol * FASTEST ** left:
-                continue  # not converging in H here, the cap reached, or tol out of reach
+            if not on_front[i] or stalls[i] >= patience or left < 1:
+                continue  # not converging in H here, or the cap reached
+            if e > tol * FASTEST ** left:  # out of reach: the finer solve is the better point
+                c = min(max(ratio[i], 1.0), FASTEST) if math.isfinite(ratio[i]) else ASSUMED_CONTRACTION
+                states[i], freq[i] = pe.states_raised[j], pe.frequency_raised[j]
+                H[i], err[i], extrapolated[i] = int(pe.harmonics_raised[j]), e / c, 1
+                continue
             promote.append((i, pe.states_raised[j], pe.frequency_raised[j], pe.harmonics_raised[j]))
         nxt = []
         for i, u2, f2, h2 in promote:
@@ -196,10 +242,10 @@ def _refine(base, tol, start_harmonics, max_harmonics, patience, contraction):
                 extrapolated[i] = 1
         active = np.array(nxt, dtype=int)
         log.info("tolerance %.3g: level %d, %d points raised", tol, levels, len(promote))
-    return ladder, H, states, freq, err, extrapolated, levels
+    return ladder, H, states, freq, err, (extrapolated, confirmed), levels
 
 
-def _assemble(base, ladder, H, states, freq, err, extrapolated, settings: dict):
+def _assemble(base, ladder, H, states, freq, err, flags, settings: dict):
     """The result branch: every point at its own H, padded to the largest (module docstring)."""
     from ..results.branch import Branch
     from ..results.point_errors import pad
@@ -223,7 +269,7 @@ def _assemble(base, ladder, H, states, freq, err, extrapolated, settings: dict):
                     rec[k][i] = v
     rec["frequency_error"] = err
     rec["harmonics"] = H.astype(np.int64)
-    rec["error_extrapolated"] = extrapolated
+    rec["error_extrapolated"], rec["error_confirmed"] = flags
     meta = dict(base.metadata)
     meta["method_options"] = {**dict(meta.get("method_options", {})), "harmonics": H_top}
     meta["method_options"].pop("n_samples", None)

@@ -68,6 +68,8 @@ class SolverLadder:
         self.options = {k: v for k, v in dict(branch.metadata.get("method_options", {})).items()
                         if k not in ("n_samples", "harmonics")}
         self._solvers = {}
+        #: the (H, H2) pairs whose direct re-solve failed on this branch (:func:`raise_point`)
+        self.stepped: set[tuple[int, int]] = set()
         solver = branch.attached_solver
         if solver is not None and getattr(solver, "H", None) is not None:
             self._solvers[int(solver.H)] = solver
@@ -99,6 +101,12 @@ def raise_point(ladder: SolverLadder, H: int, u: np.ndarray, amplitude: float, H
     is raised by ``STEP`` (~√2) per pinned solve instead (the direct solve gets
     ``DIRECT_ITERATIONS``, each step 40). Returns the unknowns at ``H2``.
 
+    A pair (H, H2) whose direct solve failed once on the ladder's branch goes by the
+    steps from then on (``ladder.stepped``): the points of a branch are solved in its
+    order, and where the zero-padded start is too poor for one point (a stiff contact
+    whose harmonics above H are not small) it is for the next, deeper one too; a failed
+    direct solve costs its ``DIRECT_ITERATIONS`` at H2 for nothing.
+
     Raises
     ------
     PinnedFailure
@@ -110,14 +118,17 @@ def raise_point(ladder: SolverLadder, H: int, u: np.ndarray, amplitude: float, H
         s_from, s_to = ladder.at(h_from), ladder.at(h_to)
         return solve_at_amplitude(s_to, pad(s_from, v, s_to), amplitude, tol=tol, max_iter=max_iter)[0]
 
-    try:  # from a good start Newton converges in a few iterations: a long struggle is a bad start
-        return solve(H, u, H2, DIRECT_ITERATIONS)
-    except (PinnedFailure, ArithmeticError, ValueError):
-        h, v = H, u
-        while h < H2:
-            nxt = min(H2, max(h + 1, math.ceil(STEP * h)))
-            v, h = solve(h, v, nxt, 40), nxt
-        return v
+    pair = (int(H), int(H2))
+    if pair not in ladder.stepped or STEP * H >= H2:
+        try:  # from a good start Newton converges in a few iterations: a long struggle is a bad start
+            return solve(H, u, H2, DIRECT_ITERATIONS)
+        except (PinnedFailure, ArithmeticError, ValueError):
+            ladder.stepped.add(pair)
+    h, v = H, u
+    while h < H2:
+        nxt = min(H2, max(h + 1, math.ceil(STEP * h)))
+        v, h = solve(h, v, nxt, 40), nxt
+    return v
 
 
 #: Newton iterations of the direct re-solve at H2 before the steps take over
@@ -169,7 +180,7 @@ def estimate_point_errors(ladder: SolverLadder, harmonics, states, amplitudes, f
             u2 = raise_point(ladder, int(harmonics[i]), states[i], a, int(H2[i]), tol)
         except (PinnedFailure, ArithmeticError, ValueError, np.linalg.LinAlgError):
             continue
-        f = float(ladder.at(int(H2[i])).monitor(u2)["frequency"])
+        f = float(ladder.at(int(H2[i])).unpack(u2)[1]) / (2 * math.pi)  # Ω (rad/s): the monitor's frequency
         raised[i], f2[i] = u2, f
         err[i] = factor * abs(f - float(frequencies[i])) / abs(f)
     return PointErrors(err, f2, H2, raised)

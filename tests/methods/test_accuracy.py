@@ -193,3 +193,73 @@ def test_rerun_of_a_tolerance_branch_chooses_h_again():
     assert np.array_equal(again.records["harmonics"], b.records["harmonics"])
     assert np.array_equal(again.frequency, b.frequency)
     assert np.array_equal(again.frequency_error, b.frequency_error, equal_nan=True)
+
+
+def test_a_pre_asymptotic_pair_is_not_taken_for_convergence():
+    """Chain 4 of seed 3 with contact springs 10**U(0, 6): at 1.34 gaps f(8) and f(16) agree
+    within 2e-5 while both are 1.0e-3 above the exact orbit (a plateau: neither series
+    resolves the contact; at 32 the error drops to 8e-5). The estimate at H = 8 met tol =
+    1e-4; its confirmation on the next pair (16, 32) does not contract, so the point goes on
+    from 16. With the confirmation every family point with a clean exact orbit is within
+    3 × tol of it; without it, one point is off by 10 × tol under an estimate below tol."""
+    case = ce.chains(5, seed=3, max_masses=3, contact_decades=(0, 6))[4]
+    model = case.model()
+
+    def worst(**options):
+        b = _quiet(mmshbm.backbone, model, tol=1e-4, max_amplitude=1.56 * model.gap, **options)
+        out = 0.0
+        for i in b.family_front():
+            if b.amplitude[i] < 1.01 * model.gap:
+                continue
+            o = exact.periodic_orbit(model, float(b.amplitude[i]))
+            if o.converged and o.n_contacts == 1 and abs(o.max_excursion / b.amplitude[i] - 1) < 1e-6:
+                out = max(out, abs(b.frequency[i] / o.frequency - 1))
+        return b, out
+
+    b, err = worst()
+    assert err <= 3e-4
+    touching = b.contact_force_max > 0
+    assert np.all(b.records["error_confirmed"][~touching] == 1)  # exact at every H
+    _, err_unchecked = worst(confirm=False)
+    assert err_unchecked > 5e-4
+
+
+def test_a_stepped_re_solve_lands_where_the_direct_one_does():
+    """raise_point goes by steps of ~√2 in H once a direct solve of the same pair failed on
+    the branch; both paths solve the same pinned problem at H2 (Newton to a residual of
+    1e-10): the frequencies agree to 1e-8."""
+    from mmshbm.results.point_errors import SolverLadder, raise_point
+
+    model = mmshbm.OneDofOscillator(*STIFF).model()
+    b = _quiet(mmshbm.backbone, model, harmonics=8, max_amplitude=2 * model.gap)
+    i = int(np.argmin(np.abs(b.amplitude - 1.5 * model.gap)))
+    direct, stepped = SolverLadder(b), SolverLadder(b)
+    stepped.stepped.add((8, 16))
+    a = float(b.amplitude[i])
+    f = [lad.at(16).monitor(raise_point(lad, 8, b.states[i], a, 16))["frequency"]
+         for lad in (direct, stepped)]
+    assert (8, 16) not in direct.stepped
+    assert abs(f[1] / f[0] - 1) <= 1e-8
+    assert abs(f[0] / b.frequency[i] - 1) > 1e-4  # H = 16 moved the point: not a trivial agreement
+
+
+def test_a_point_out_of_reach_keeps_its_finer_solve():
+    """tol = 1e-6 under a cap of 32 on the stiff oscillator is out of reach past grazing
+    from H = 8 on: each such point keeps the H = 16 solution its estimate solved (the
+    series converges at ~H^-2 here: four times closer to the exact orbit than the H = 8
+    point) with the estimate divided by the assumed contraction 4, flagged as
+    extrapolated, above tol (the finding still names it), within [1/3, 3] of the true
+    error."""
+    model = mmshbm.OneDofOscillator(*STIFF).model()
+    b = _quiet(mmshbm.backbone, model, tol=1e-6, max_amplitude=2.0 * model.gap, max_harmonics=32)
+    b8 = _quiet(mmshbm.backbone, model, harmonics=8, max_amplitude=2.0 * model.gap)
+    front = [i for i in b.family_front() if b.amplitude[i] > 1.05 * model.gap]
+    assert len(front) >= 5
+    for i in front:
+        f_exact = exact.periodic_orbit(model, float(b.amplitude[i])).frequency
+        true = abs(b.frequency[i] / f_exact - 1)
+        true8 = abs(b8.frequency_at(float(b.amplitude[i])) / f_exact - 1)
+        assert b.records["harmonics"][i] == 16 and b.records["error_extrapolated"][i] == 1
+        assert true <= true8 / 2
+        assert 1e-6 < b.frequency_error[i] and 1 / 3 <= b.frequency_error[i] / true <= 3, (i, true)
+    assert "tolerance_not_met" in {f.kind for f in b.findings}
