@@ -44,7 +44,9 @@ def backbone(model: Model, harmonics: int | None = None, method: str = "mmshbm",
         Relative tolerance on the frequency of every point at its amplitude: H is chosen
         per point from an error estimate (:mod:`mmshbm.methods.adaptive`, docs/accuracy.md),
         between ``start_harmonics`` (option, default 8) and ``max_harmonics`` (option,
-        default 64: the largest H of any solve, the estimates' included). The
+        default 64: the largest H of any solve, the estimates' included); ``confirm``
+        (option, default True, conservative backbones only) checks an estimate that meets
+        ``tol`` on the next pair of H (``records["error_confirmed"]``). The
         branch carries ``frequency_error`` and ``records["harmonics"]``; where ``tol`` is
         not met it has a ``"tolerance_not_met"`` finding. Methods "mmshbm" and "penalty"
         on conservative models, and the damped nonlinear mode ("epmc", on the damping
@@ -171,6 +173,7 @@ def _to_tolerance(model: Model, tol, harmonics, method: str, max_amplitude, *, c
     from .adaptive import backbone_to_tolerance, check_tolerance
 
     damped = backbone_method(model, method) == "epmc"  # the damped nonlinear mode: its own measures
+    kwargs_given = set(kwargs)
     settings = check_tolerance(tol, harmonics, "mmshbm" if damped else backbone_method(model, method), kwargs)
     for name, value in (("callback", callback), ("checkpoint", checkpoint), ("resume", resume)):
         if value is not None:
@@ -178,6 +181,11 @@ def _to_tolerance(model: Model, tol, harmonics, method: str, max_amplitude, *, c
                              "continuation): pass harmonics for a fixed H")
     if damped:
         from .adaptive_damped import damped_mode_to_tolerance
+
+        if "confirm" in kwargs_given:
+            raise ValueError("confirm (the next-pair check of an estimate that meets tol) is an option of "
+                             "the conservative backbone only; a damped mode's estimates are not confirmed")
+        del settings["confirm"]
 
         return damped_mode_to_tolerance(model, run=backbone, method=method, max_amplitude=max_amplitude,
                                         **settings, **kwargs)

@@ -176,7 +176,11 @@ def _to_tolerance(model: Model, force, frange, tol, harmonics, method: str, *, c
     if method not in FORCED_TOLERANCE_METHODS:
         raise ValueError(f"tol is available for the forced method(s) {', '.join(FORCED_TOLERANCE_METHODS)}, "
                          f"not {method!r}: pass harmonics instead")
+    if "confirm" in options:
+        raise ValueError("confirm (the next-pair check of an estimate that meets tol) is an option of "
+                         "the conservative backbone only; a forced response's estimates are not confirmed")
     settings = check_tolerance(tol, harmonics, "mmshbm", options)
+    del settings["confirm"]
     for name, value in (("callback", callback), ("checkpoint", checkpoint), ("resume", resume)):
         if value is not None:
             raise ValueError(f"{name} is not available with tol (the points are refined after the "
