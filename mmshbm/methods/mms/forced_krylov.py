@@ -34,7 +34,7 @@ import logging
 import numpy as np
 import scipy.linalg as la
 
-from .krylov import KrylovCorrector, _right_gmres, check_linear_solver, gmres_operator
+from .krylov import DENSE_FALLBACK_MAX, KrylovCorrector, _right_gmres, check_linear_solver, gmres_operator
 
 __all__ = ["ForcedKrylovSolver", "forced_harmonic_columns", "FORCED_KRYLOV_MIN_UNKNOWNS",
            "resolve_forced_solver"]
@@ -109,7 +109,8 @@ class ForcedKrylovSolver(KrylovCorrector):
         The last preconditioner is tried first (the active set changes little from one
         iterate or point to the next) for at most :data:`_REUSE_ITERATIONS` GMRES
         iterations; then a new one is built at this J."""
-        J = np.asarray(J, dtype=float)
+        if not hasattr(J, "harmonic_block"):
+            J = np.asarray(J, dtype=float)
         t = np.asarray(t, dtype=float)
         rhs = np.asarray(rhs, dtype=float)
         self._set_rows(J.shape[0])
@@ -132,16 +133,19 @@ class ForcedKrylovSolver(KrylovCorrector):
         x = self.bordered_solve(J, t_prev, e)
         return (x, 0.0) if np.all(np.isfinite(x)) else None
 
-    def square_solve(self, J: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-        """x with J x = rhs (J square, Ω fixed): GMRES preconditioned by the harmonics'
-        blocks, the dense LU when it does not converge."""
-        J = np.asarray(J, dtype=float)
-        n = J.shape[0]
+    def square_solve(self, J, rhs: np.ndarray) -> np.ndarray:
+        """x with J x = rhs (J square, Ω fixed: an array, or a
+        :class:`~mmshbm.methods.mms.forced_operator.CondensedLawOperator`): GMRES
+        preconditioned by the harmonics' blocks, the dense LU when it does not converge."""
+        operator = hasattr(J, "block")
+        if not operator:
+            J = np.asarray(J, dtype=float)
+        n = J.n_x if operator else J.shape[0]
         self._set_rows(n)
         self.solves += 1
         factors = []
-        for idx in self._blocks:
-            lu = la.lu_factor(J[np.ix_(idx, idx)], check_finite=False)
+        for k, idx in enumerate(self._blocks):
+            lu = la.lu_factor(J.block(k) if operator else J[np.ix_(idx, idx)], check_finite=False)
             if not np.all(np.isfinite(lu[0])) or np.any(np.diag(lu[0]) == 0.0):
                 factors = None
                 break
@@ -153,14 +157,21 @@ class ForcedKrylovSolver(KrylovCorrector):
                     out[idx] = la.lu_solve(lu, v[idx], check_finite=False)
                 return out
 
-            scale = float(np.abs(J).sum(axis=1).max())
-            x, its, ok = gmres_operator(lambda v: J @ v, np.asarray(rhs, dtype=float), pre, self.rtol,
+            if operator:
+                scale, apply = float(J.abs_row_bound(np.ones(n)).max()), J.matvec
+            else:
+                scale, apply = float(np.abs(J).sum(axis=1).max()), J.__matmul__
+            x, its, ok = gmres_operator(apply, np.asarray(rhs, dtype=float), pre, self.rtol,
                                         self.max_krylov, scale)
             self.krylov_iterations += its
             if ok:
                 return x
         self.fallbacks += 1
         log.debug("GMRES did not converge on a %d-unknown forced system; dense LU instead", n)
+        if operator:
+            if n > DENSE_FALLBACK_MAX:
+                return np.full(n, np.nan)
+            J = J.toarray()
         try:
             return la.solve(J, rhs, check_finite=False)
         except la.LinAlgError:

@@ -95,7 +95,9 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
     linear_solver : {"auto", "dense", "krylov"}
         The corrector's linear solves: "dense" LU, or "krylov", GMRES preconditioned by one
         factorisation per harmonic (:mod:`~mmshbm.methods.mms.forced_krylov`; the same
-        points to the Newton tolerance, det [J; t]'s sign not tracked). "auto" (default):
+        points to the Newton tolerance, det [J; t]'s sign not tracked; with constant slip
+        forces and no unilateral contacts the Jacobian is then never assembled,
+        :mod:`~mmshbm.methods.mms.forced_operator`). "auto" (default):
         "krylov" from :data:`~mmshbm.methods.mms.forced_krylov.FORCED_KRYLOV_MIN_UNKNOWNS`
         unknowns on.
 
@@ -156,6 +158,10 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
 
         self.linear_solver = resolve_forced_solver(linear_solver, self.n_unknowns)
         self._krylov = ForcedKrylovSolver(self.n_c, self.H) if self.linear_solver == "krylov" else None
+        # the Jacobian as an operator where its structure allows (mmshbm.methods.mms.forced_operator)
+        from .forced_operator import supports_matrix_free
+
+        self._matrix_free = self._krylov is not None and supports_matrix_free(self)
         if self._krylov is not None:
             self.solved_tangent = self._krylov.tangent
 
@@ -216,7 +222,13 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
 
     def _evaluate(self, u: np.ndarray, jacobian: bool):
         """Scaled residual and, if asked, its Jacobian; with the amplitude DOF tracked, two
-        more rows (its harmonic-1 unknowns equal their recovery from x, :meth:`_tracked`)."""
+        more rows (its harmonic-1 unknowns equal their recovery from x, :meth:`_tracked`).
+        With the Krylov solves and constant slip forces the Jacobian is an operator
+        (:func:`~mmshbm.methods.mms.forced_operator.evaluate_matrix_free`)."""
+        if self._matrix_free:
+            from .forced_operator import evaluate_matrix_free
+
+            return evaluate_matrix_free(self, u, jacobian)
         if self._track is None:
             return super()._evaluate(u, jacobian)
         x, omega = self.unpack(u)
@@ -296,7 +308,12 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         for _ in range(max_iter):
             if not np.isfinite(r):
                 return guess, False
-            _, Jx, _, _ = self.residual_parts(x, omega, 1.0, True)
+            if self._matrix_free:
+                from .forced_operator import square_operator
+
+                Jx = square_operator(self, x, omega)[1]
+            else:
+                _, Jx, _, _ = self.residual_parts(x, omega, 1.0, True)
             if self._krylov is not None:
                 dx = self._krylov.square_solve(Jx, -R)
             else:
