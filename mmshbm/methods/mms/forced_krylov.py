@@ -48,6 +48,11 @@ log = logging.getLogger(__name__)
 FORCED_KRYLOV_MIN_UNKNOWNS = 4000
 #: GMRES iterations a reused preconditioner gets before a new one is built
 _REUSE_ITERATIONS = 40
+#: extra GMRES iterations of a reused preconditioner, over its first solve's, from which it
+#: is rebuilt: about what a rebuild costs (the (H+1) blocks and their LUs) in iterations (one
+#: operator product and (H+1) triangular solves each), measured ~9 on the 100-pair lap joint
+#: at H = 5 (docs/interfaces.md)
+_REBUILD_MARGIN = 8
 
 
 def resolve_forced_solver(linear_solver: str, n_unknowns: int) -> str:
@@ -82,9 +87,13 @@ class ForcedKrylovSolver(KrylovCorrector):
         GMRES's relative residual tolerance.
     max_krylov : int
         Most GMRES iterations of one solve before the dense fallback.
+    rebuild_margin : int
+        A reused preconditioner whose solve takes more GMRES iterations than the fresh
+        one's first solve plus this many is rebuilt at the next solve.
     """
 
-    def __init__(self, n_c: int, H: int, rtol: float = 1e-10, max_krylov: int = 200):
+    def __init__(self, n_c: int, H: int, rtol: float = 1e-10, max_krylov: int = 200,
+                 rebuild_margin: int = _REBUILD_MARGIN):
         self.n_c, self.H = int(n_c), int(H)
         self.rtol = float(rtol)
         self.max_krylov = int(max_krylov)
@@ -96,6 +105,8 @@ class ForcedKrylovSolver(KrylovCorrector):
         self.rebuilds = 0
         self._pre = None
         self._pre_size = None
+        self.rebuild_margin = int(rebuild_margin)
+        self._fresh_iterations = 0
 
     def _set_rows(self, n_rows: int) -> None:
         if self._rows != n_rows:
@@ -119,11 +130,16 @@ class ForcedKrylovSolver(KrylovCorrector):
             self.krylov_iterations += its
             if ok:
                 self.solves += 1
+                if its > self._fresh_iterations + self.rebuild_margin:
+                    self._pre = None  # stale: the next solve builds a new one
                 return x
         self._pre = self._preconditioner(J, t)
         self._pre_size = J.shape[1]
         self.rebuilds += 1
-        return self.solve(J, t, rhs, self._pre)
+        before = self.krylov_iterations
+        x = self.solve(J, t, rhs, self._pre)
+        self._fresh_iterations = self.krylov_iterations - before
+        return x
 
     def tangent(self, J: np.ndarray, t_prev: np.ndarray):
         """(x, 0) with [J; t_prevᵀ] x = e_n (the continuation's ``solved_tangent``; the sign

@@ -61,7 +61,7 @@ def condensed_product(D: np.ndarray, x: np.ndarray) -> np.ndarray:
     n_c = D.shape[1]
     X = x.reshape(-1, n_c)
     out = np.empty_like(X)
-    out[0] = D[0].real @ X[0]
+    out[0] = D[0].real @ X[0]  # D_0 is real (no damping at k = 0)
     if D.shape[0] > 1:
         Z = X[1::2] - 1j * X[2::2]  # (H, n_c)
         W = np.matmul(D[1:], Z[:, :, None])[:, :, 0]
@@ -104,7 +104,7 @@ class CondensedLawOperator:
     """
 
     def __init__(self, D: np.ndarray, rows: np.ndarray, rho: np.ndarray, Jg: np.ndarray):
-        self.D = D
+        self.D = np.ascontiguousarray(D)
         self.H = D.shape[0] - 1
         self.n_c = D.shape[1]
         self.n_coef = 2 * self.H + 1
@@ -268,7 +268,8 @@ class ForcedJacobian:
         rows = self.law.abs_row_bound(self.xscale) / self.rowscale + np.abs(self.column[:n_x])
         best = float(rows.max())
         if self.tracked is not None:
-            best = max(best, float(np.abs(self.tracked).sum(axis=1).max()))
+            tracked = np.abs(self.tracked).sum(axis=1) + np.abs(self.column[n_x:])
+            best = max(best, float(tracked.max()))
         return best
 
     def bordered_solve(self, t: np.ndarray, rhs: np.ndarray) -> np.ndarray:
