@@ -37,7 +37,7 @@ import scipy.linalg as la
 from .krylov import DENSE_FALLBACK_MAX, KrylovCorrector, _right_gmres, check_linear_solver, gmres_operator
 
 __all__ = ["ForcedKrylovSolver", "forced_harmonic_columns", "FORCED_KRYLOV_MIN_UNKNOWNS",
-           "resolve_forced_solver"]
+           "FORCED_MATRIX_FREE_MIN_UNKNOWNS", "resolve_forced_solver"]
 
 log = logging.getLogger(__name__)
 
@@ -46,6 +46,11 @@ log = logging.getLogger(__name__)
 #: GMRES solve cost about the same (1.4 and 2.0 s on the loaded 2-core machine,
 #: docs/interfaces.md); the LU grows as n³, GMRES with the dense product as n²
 FORCED_KRYLOV_MIN_UNKNOWNS = 4000
+#: the same where the Krylov path applies the Jacobian as an operator (constant slip forces,
+#: no unilateral contacts): measured on the lap joint at H = 5, processor time of the whole
+#: forced response, dense against Krylov: 29.8 against 33.8 s at 32 pairs (707 unknowns),
+#: 208 against 75 s at 100 pairs (2203 unknowns) (docs/interfaces.md)
+FORCED_MATRIX_FREE_MIN_UNKNOWNS = 1000
 #: GMRES iterations a reused preconditioner gets before a new one is built
 _REUSE_ITERATIONS = 40
 #: extra GMRES iterations of a reused preconditioner, over its first solve's, from which it
@@ -55,11 +60,14 @@ _REUSE_ITERATIONS = 40
 _REBUILD_MARGIN = 8
 
 
-def resolve_forced_solver(linear_solver: str, n_unknowns: int) -> str:
+def resolve_forced_solver(linear_solver: str, n_unknowns: int, matrix_free: bool = False) -> str:
     """"dense" or "krylov" for the option and a problem of ``n_unknowns`` unknowns
-    (ValueError naming a bad value)."""
+    (ValueError naming a bad value); ``matrix_free``: the Krylov path would apply the
+    Jacobian as an operator (:mod:`~mmshbm.methods.mms.forced_operator`), which moves the
+    crossover down to :data:`FORCED_MATRIX_FREE_MIN_UNKNOWNS`."""
     if check_linear_solver(linear_solver) == "auto":
-        return "krylov" if n_unknowns >= FORCED_KRYLOV_MIN_UNKNOWNS else "dense"
+        least = FORCED_MATRIX_FREE_MIN_UNKNOWNS if matrix_free else FORCED_KRYLOV_MIN_UNKNOWNS
+        return "krylov" if n_unknowns >= least else "dense"
     return linear_solver
 
 

@@ -42,8 +42,8 @@ import numpy as np
 
 from .forced_krylov import forced_harmonic_columns
 
-__all__ = ["CondensedLawOperator", "ForcedJacobian", "condensed_product", "real_blocks", "supports_matrix_free",
-           "evaluate_matrix_free", "square_operator"]
+__all__ = ["CondensedLawOperator", "ForcedJacobian", "condensed_product", "real_blocks",
+           "supports_matrix_free", "evaluate_matrix_free", "square_operator"]
 
 
 def supports_matrix_free(problem) -> bool:
@@ -121,7 +121,8 @@ class CondensedLawOperator:
             W = w.reshape(self.n_coef, self.n_c)
             V = v.reshape(self.n_coef, self.n_c)
             Wt, Vt = W[:, self.rows].T, V[:, self.rows].T  # (n_f, 2H+1)
-            W[:, self.rows] += np.einsum("tab,tb->at", self._Jg_rho, Wt) - np.einsum("tab,tb->at", self.Jg, Vt)
+            W[:, self.rows] += (np.einsum("tab,tb->at", self._Jg_rho, Wt)
+                                - np.einsum("tab,tb->at", self.Jg, Vt))
         return w
 
     def law_product(self, w: np.ndarray) -> np.ndarray:
@@ -291,8 +292,8 @@ def _law(problem, x: np.ndarray, omega: float, jacobian: bool):
     n_f = len(problem.friction_rows)
     Jg = np.zeros((n_f, problem.n_coef, problem.n_coef))
     tau, cos_t, sin_t = problem._play_tables
-    _law_blocks(np.ascontiguousarray(x, dtype=float), problem._friction_rows64, problem.n_c, problem.slip_force,
-                problem.rho, tau, cos_t, sin_t, jacobian, R, Jg, np.empty(n_f))
+    _law_blocks(np.ascontiguousarray(x, dtype=float), problem._friction_rows64, problem.n_c,
+                problem.slip_force, problem.rho, tau, cos_t, sin_t, jacobian, R, Jg, np.empty(n_f))
     if not jacobian:
         return R, None, None
     op = CondensedLawOperator(ch.D, problem.friction_rows, problem.rho, Jg)

@@ -99,7 +99,8 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         forces and no unilateral contacts the Jacobian is then never assembled,
         :mod:`~mmshbm.methods.mms.forced_operator`). "auto" (default):
         "krylov" from :data:`~mmshbm.methods.mms.forced_krylov.FORCED_KRYLOV_MIN_UNKNOWNS`
-        unknowns on.
+        unknowns on (:data:`~mmshbm.methods.mms.forced_krylov.FORCED_MATRIX_FREE_MIN_UNKNOWNS`
+        where the Jacobian is an operator).
 
     Notes
     -----
@@ -155,13 +156,13 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         """The corrector's linear solves: the dense LU, or GMRES with the harmonics' blocks
         (:mod:`~mmshbm.methods.mms.forced_krylov`, which then also solves the tangent)."""
         from .forced_krylov import ForcedKrylovSolver, resolve_forced_solver
-
-        self.linear_solver = resolve_forced_solver(linear_solver, self.n_unknowns)
-        self._krylov = ForcedKrylovSolver(self.n_c, self.H) if self.linear_solver == "krylov" else None
-        # the Jacobian as an operator where its structure allows (mmshbm.methods.mms.forced_operator)
         from .forced_operator import supports_matrix_free
 
-        self._matrix_free = self._krylov is not None and supports_matrix_free(self)
+        # the Jacobian as an operator where its structure allows (mmshbm.methods.mms.forced_operator)
+        operator = supports_matrix_free(self)
+        self.linear_solver = resolve_forced_solver(linear_solver, self.n_unknowns, operator)
+        self._krylov = ForcedKrylovSolver(self.n_c, self.H) if self.linear_solver == "krylov" else None
+        self._matrix_free = self._krylov is not None and operator
         if self._krylov is not None:
             self.solved_tangent = self._krylov.tangent
 
