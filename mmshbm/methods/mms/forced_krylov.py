@@ -18,13 +18,17 @@ preconditioned by the block elimination of
 :meth:`mmshbm.methods.mms.krylov.KrylovCorrector._preconditioner`; the square system of a
 fixed-frequency solve by the blocks alone. Right-preconditioned GMRES
 (:func:`mmshbm.methods.mms.krylov._right_gmres`) solves to a relative residual ``rtol``
-(1e-10) or its round-off floor, with the Jacobian applied as a dense product; a solve it
-does not finish in ``max_krylov`` iterations falls back to the dense LU (counted in
-``fallbacks``). The Newton iterates therefore differ from the dense path's by at most ~rtol
-times the step, and the converged points agree with it to the Newton tolerance.
+(1e-10) or its round-off floor, with the Jacobian applied as a dense product, or, where
+the problem hands an operator (:class:`~mmshbm.methods.mms.forced_operator.ForcedJacobian`,
+never assembled), by its product and its harmonics' blocks; a solve it does not finish in
+``max_krylov`` iterations falls back to the dense LU (counted in ``fallbacks``; an operator
+is assembled for it up to :data:`~mmshbm.methods.mms.krylov.DENSE_FALLBACK_MAX` unknowns).
+The Newton iterates therefore differ from the dense path's by at most ~rtol times the step,
+and the converged points agree with it to the Newton tolerance.
 
 Switch: ``linear_solver`` of the friction forced problem, "dense", "krylov" or "auto"
-(Krylov from :data:`FORCED_KRYLOV_MIN_UNKNOWNS` unknowns on).
+(Krylov from :data:`FORCED_KRYLOV_MIN_UNKNOWNS` unknowns on, from
+:data:`FORCED_MATRIX_FREE_MIN_UNKNOWNS` where the Jacobian is an operator).
 """
 
 from __future__ import annotations
