@@ -50,7 +50,7 @@ def supports_matrix_free(problem) -> bool:
     """True when ``problem`` (a friction forced problem) has the structure this module
     applies: the play form with constant slip forces (compiled rows) and no unilateral
     contacts."""
-    return bool(getattr(problem, "_compiled_rows", False)) and not problem.model.contacts
+    return bool(problem._compiled_rows) and not problem.model.contacts
 
 
 def condensed_product(D: np.ndarray, x: np.ndarray) -> np.ndarray:
