@@ -14,8 +14,10 @@ asv suites:
 
 * ``LapJointIteration``: one Newton iteration of the forced response with friction on the
   lap joint (:func:`mmshbm.lap_joint`, 2 slip DOFs per pair) at its bending frequency:
-  residual and Jacobian, then the linear solve (dense LU or the harmonics' blocks and
-  GMRES, :mod:`mmshbm.methods.mms.forced_krylov`), per solver, pairs and H; its memory.
+  residual and Jacobian, then the linear solve (dense LU; or the harmonics' blocks and
+  GMRES, :mod:`mmshbm.methods.mms.forced_krylov`, multiplying by the assembled Jacobian or
+  by the operator of :mod:`mmshbm.methods.mms.forced_operator`), per solver, pairs and H;
+  its memory.
 * ``LapJointResponse``: the lap joint's forced response over its frequency range at H = 5
   (the points and the cost per point), for the pair counts that fit asv's timeout.
 
@@ -23,7 +25,8 @@ The table of docs/scale.md comes from the script entry point:
 
     OPENBLAS_NUM_THREADS=1 python -m benchmarks.bench_interfaces 8 16 32 64
 
-and that of docs/interfaces.md from ``python -m benchmarks.bench_interfaces --lap 8 32 100``.
+and that of docs/interfaces.md from ``python -m benchmarks.bench_interfaces --lap 8 32 100 400``
+(processor times, one BLAS thread).
 """
 
 from __future__ import annotations
@@ -161,28 +164,48 @@ def _joint(pairs: int):
     return lap_joint(pairs)
 
 
+#: the lap joint's linear solves: the dense LU of the assembled Jacobian, GMRES multiplying
+#: by the assembled Jacobian, GMRES with the Jacobian as an operator (never assembled,
+#: :mod:`mmshbm.methods.mms.forced_operator`)
+LAP_SOLVERS = ("dense", "krylov-assembled", "krylov")
+#: the largest dense Jacobian the dense and assembled suites form (n_x² numbers: 1.6 GB at 400
+#: pairs, H = 5): above, those parameters are skipped
+ASSEMBLED_MAX_PAIRS = 100
+
+
 def _forced_setup(pairs: int, harmonics: int, solver: str):
     """(problem, x, Ω) at 0.98 of the joint's bending frequency, from its linear response."""
     from mmshbm.methods.mms.friction_forced import FrictionForcedProblem
 
     joint = _joint(pairs)
-    problem = FrictionForcedProblem(joint.model, joint.force, harmonics=harmonics, linear_solver=solver)
+    problem = FrictionForcedProblem(joint.model, joint.force, harmonics=harmonics,
+                                    linear_solver="dense" if solver == "dense" else "krylov")
+    if solver == "krylov-assembled":
+        problem._matrix_free = False
     f = 0.98 * joint.bending_frequency
     x, omega = problem.unpack(problem.linear_response_point(f))
     return problem, x, omega
 
 
 class LapJointIteration:
-    """One Newton iteration of the lap joint's forced response at fixed frequency."""
+    """One Newton iteration of the lap joint's forced response at fixed frequency: residual
+    and Jacobian (assembled, or the operator's law blocks), then the linear solve."""
 
-    params = [SOLVERS, PAIRS, (3, 5)]
+    params = [LAP_SOLVERS, PAIRS, (3, 5)]
     param_names = ["solver", "pairs", "harmonics"]
     timeout = 900
 
     def setup(self, solver, pairs, harmonics):
+        if solver != "krylov" and pairs > ASSEMBLED_MAX_PAIRS:
+            raise NotImplementedError("the assembled Jacobian is not formed at this size")
+        from mmshbm.methods.mms.forced_operator import square_operator
+
         problem, x, omega = _forced_setup(pairs, harmonics, solver)
 
         def iterate():
+            if problem._matrix_free:
+                R, op = square_operator(problem, x, omega)
+                return problem._krylov.square_solve(op, -R)
             R, Jx, _, _ = problem.residual_parts(x, omega, 1.0, True)
             if problem._krylov is not None:
                 return problem._krylov.square_solve(Jx, -R)
@@ -203,13 +226,16 @@ class LapJointIteration:
 
 
 class LapJointResponse:
-    """The lap joint's forced response over its frequency range at H = 5."""
+    """The lap joint's forced response over its frequency range at H = 5 (the dense solves
+    up to 32 pairs: 208 s processor at 100 pairs, docs/interfaces.md)."""
 
-    params = [SOLVERS, (8, 32)]
+    params = [SOLVERS, (8, 32, 100)]
     param_names = ["solver", "pairs"]
     timeout = 1800
 
     def setup(self, solver, pairs):
+        if solver == "dense" and pairs > 32:
+            raise NotImplementedError("the dense response at this size exceeds the suite's budget")
         self.joint = _joint(pairs)
 
     def _run(self, solver):
@@ -232,18 +258,27 @@ class LapJointResponse:
 def lap_main(pairs: list[int]) -> None:
     """Print, per pair count: unknowns, one fixed-frequency Newton iteration (dense and
     Krylov, H = 5) and the joint's build time."""
-    print("| pairs | unknowns (H = 5) | build (s) | dense iteration (s) | Krylov iteration (s) |")
-    print("|---:|---:|---:|---:|---:|")
+    print("| pairs | unknowns (H = 5) | build (s) | dense iteration (s) | Krylov, assembled (s) "
+          "| Krylov, operator (s) |")
+    print("|---:|---:|---:|---:|---:|---:|")
     for n in pairs:
-        start = time.perf_counter()
+        start = time.process_time()
         _joint(n)
-        build = time.perf_counter() - start
+        build = time.process_time() - start
         row = []
-        for solver in SOLVERS:
+        for solver in LAP_SOLVERS:
             it = LapJointIteration()
-            it.setup(solver, n, 5)
-            row.append(_seconds(it.iterate, number=1, repeat=3))
-        print(f"| {n} | {it.problem.n_x} | {build:.1f} | {row[0]:.2f} | {row[1]:.2f} |", flush=True)
+            try:
+                it.setup(solver, n, 5)
+            except NotImplementedError:
+                row.append(float("nan"))
+                continue
+            start = time.process_time()
+            for _ in range(3):
+                it.iterate()
+            row.append((time.process_time() - start) / 3)
+        print(f"| {n} | {it.problem.n_x} | {build:.1f} | {row[0]:.3f} | {row[1]:.3f} | {row[2]:.3f} |",
+              flush=True)
 
 
 def main(argv: list[str]) -> None:

@@ -106,7 +106,8 @@ def solve_bordered_sparse(J: sp.spmatrix, t: np.ndarray, rhs: np.ndarray) -> np.
 
 
 def bordered_solve(J, t: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-    """Solve [J; tᵀ] x = rhs for dense or sparse J (all NaN when singular)."""
+    """Solve [J; tᵀ] x = rhs for dense or sparse J, or an operator J with its own
+    ``bordered_solve(t, rhs)`` (all NaN when singular)."""
     return _solve(J, t, rhs, False)[0]
 
 
@@ -119,6 +120,8 @@ def bordered_solve_sign(J, t: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, 
 def _solve(J, t: np.ndarray, rhs: np.ndarray, with_sign: bool) -> tuple[np.ndarray, float]:
     """(x, sign) of :func:`bordered_solve_sign`; the LAPACK path leaves the sign (0)
     uncomputed unless ``with_sign``."""
+    if hasattr(J, "bordered_solve"):  # an operator that solves its own bordered systems
+        return J.bordered_solve(t, rhs), 0.0
     if not isinstance(J, np.ndarray) and sp.issparse(J):
         return solve_bordered_sparse(J, t, rhs), 0.0  # block elimination, full LU fallback
     n = len(rhs)

@@ -130,7 +130,11 @@ def reduce_to_interface(M_ll, K_ll, K_lc, K_cc, output: int, n_modes: int = 10, 
     lu = spla.splu(K_ll, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                    options={"SymmetricMode": True})
     op = spla.LinearOperator((n_l, n_l), matvec=lu.solve, dtype=float)
-    w2, phi = spla.eigsh(K_ll, k=n_modes, M=M_ll, sigma=0.0, OPinv=op, which="LM")
+    # a fixed start vector: ARPACK's default is drawn from a generator that advances with
+    # every call in the process, so two builds would differ in round-off (and the Ritz
+    # basis below in its rotation), and so would the steps of a continuation on them
+    v0 = np.linspace(1.0, 2.0, n_l)
+    w2, phi = spla.eigsh(K_ll, k=n_modes, M=M_ll, sigma=0.0, OPinv=op, which="LM", v0=v0)
     order = np.argsort(w2)
     w2, phi = w2[order], phi[:, order]
     e_t = np.zeros(n_l)

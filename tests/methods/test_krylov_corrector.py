@@ -219,6 +219,7 @@ def test_forced_krylov_response_points_are_dense_solutions(joint):
 def test_forced_linear_solver_switch():
     from mmshbm.methods.mms.forced_krylov import (
         FORCED_KRYLOV_MIN_UNKNOWNS,
+        FORCED_MATRIX_FREE_MIN_UNKNOWNS,
         forced_harmonic_columns,
         resolve_forced_solver,
     )
@@ -226,6 +227,9 @@ def test_forced_linear_solver_switch():
     assert resolve_forced_solver("auto", FORCED_KRYLOV_MIN_UNKNOWNS - 1) == "dense"
     assert resolve_forced_solver("auto", FORCED_KRYLOV_MIN_UNKNOWNS) == "krylov"
     assert resolve_forced_solver("dense", 10**6) == "dense"
+    assert resolve_forced_solver("auto", FORCED_MATRIX_FREE_MIN_UNKNOWNS, matrix_free=True) == "krylov"
+    assert resolve_forced_solver("auto", FORCED_MATRIX_FREE_MIN_UNKNOWNS - 1, matrix_free=True) == "dense"
+    assert resolve_forced_solver("auto", FORCED_MATRIX_FREE_MIN_UNKNOWNS, matrix_free=False) == "dense"
     with pytest.raises(ValueError, match="linear_solver"):
         resolve_forced_solver("lu", 10)
     # the harmonics' unknowns partition the rows, the tracked pair with harmonic 1

@@ -310,8 +310,11 @@ class DampedHBMBase(ContinuationProblemBase):
         return tau, np.atleast_2d(Q) @ synthesis_matrix(self.H, tau).T
 
     def needed_force(self, x: np.ndarray, D: np.ndarray, P_hat: np.ndarray | None) -> np.ndarray:
-        """F (n_x,) = 𝔇 x − P for complex D (H+1, n_c, n_c) and first-harmonic P̂ (n_c,)."""
-        F = self.real_blocks(D) @ x
+        """F (n_x,) = 𝔇 x − P for complex D (H+1, n_c, n_c) and first-harmonic P̂ (n_c,) (𝔇 x
+        harmonic by harmonic, 𝔇 not formed)."""
+        from .forced_operator import condensed_product
+
+        F = condensed_product(D, np.asarray(x, dtype=float))
         if P_hat is not None:
             F -= self.first_harmonic_vector(P_hat)
         return F

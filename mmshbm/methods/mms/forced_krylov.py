@@ -18,13 +18,17 @@ preconditioned by the block elimination of
 :meth:`mmshbm.methods.mms.krylov.KrylovCorrector._preconditioner`; the square system of a
 fixed-frequency solve by the blocks alone. Right-preconditioned GMRES
 (:func:`mmshbm.methods.mms.krylov._right_gmres`) solves to a relative residual ``rtol``
-(1e-10) or its round-off floor, with the Jacobian applied as a dense product; a solve it
-does not finish in ``max_krylov`` iterations falls back to the dense LU (counted in
-``fallbacks``). The Newton iterates therefore differ from the dense path's by at most ~rtol
-times the step, and the converged points agree with it to the Newton tolerance.
+(1e-10) or its round-off floor, with the Jacobian applied as a dense product, or, where
+the problem hands an operator (:class:`~mmshbm.methods.mms.forced_operator.ForcedJacobian`,
+never assembled), by its product and its harmonics' blocks; a solve it does not finish in
+``max_krylov`` iterations falls back to the dense LU (counted in ``fallbacks``; an operator
+is assembled for it up to :data:`~mmshbm.methods.mms.krylov.DENSE_FALLBACK_MAX` unknowns).
+The Newton iterates therefore differ from the dense path's by at most ~rtol times the step,
+and the converged points agree with it to the Newton tolerance.
 
 Switch: ``linear_solver`` of the friction forced problem, "dense", "krylov" or "auto"
-(Krylov from :data:`FORCED_KRYLOV_MIN_UNKNOWNS` unknowns on).
+(Krylov from :data:`FORCED_KRYLOV_MIN_UNKNOWNS` unknowns on, from
+:data:`FORCED_MATRIX_FREE_MIN_UNKNOWNS` where the Jacobian is an operator).
 """
 
 from __future__ import annotations
@@ -34,10 +38,10 @@ import logging
 import numpy as np
 import scipy.linalg as la
 
-from .krylov import KrylovCorrector, _right_gmres, check_linear_solver, gmres_operator
+from .krylov import DENSE_FALLBACK_MAX, KrylovCorrector, _right_gmres, check_linear_solver, gmres_operator
 
 __all__ = ["ForcedKrylovSolver", "forced_harmonic_columns", "FORCED_KRYLOV_MIN_UNKNOWNS",
-           "resolve_forced_solver"]
+           "FORCED_MATRIX_FREE_MIN_UNKNOWNS", "resolve_forced_solver"]
 
 log = logging.getLogger(__name__)
 
@@ -46,15 +50,28 @@ log = logging.getLogger(__name__)
 #: GMRES solve cost about the same (1.4 and 2.0 s on the loaded 2-core machine,
 #: docs/interfaces.md); the LU grows as n³, GMRES with the dense product as n²
 FORCED_KRYLOV_MIN_UNKNOWNS = 4000
+#: the same where the Krylov path applies the Jacobian as an operator (constant slip forces,
+#: no unilateral contacts): measured on the lap joint at H = 5, processor time of the whole
+#: forced response, dense against Krylov: 29.8 against 33.8 s at 32 pairs (707 unknowns),
+#: 208 against 75 s at 100 pairs (2203 unknowns) (docs/interfaces.md)
+FORCED_MATRIX_FREE_MIN_UNKNOWNS = 1000
 #: GMRES iterations a reused preconditioner gets before a new one is built
 _REUSE_ITERATIONS = 40
+#: extra GMRES iterations of a reused preconditioner, over its first solve's, from which it
+#: is rebuilt: about what a rebuild costs (the (H+1) blocks and their LUs) in iterations (one
+#: operator product and (H+1) triangular solves each), measured ~9 on the 100-pair lap joint
+#: at H = 5 (docs/interfaces.md)
+_REBUILD_MARGIN = 8
 
 
-def resolve_forced_solver(linear_solver: str, n_unknowns: int) -> str:
+def resolve_forced_solver(linear_solver: str, n_unknowns: int, matrix_free: bool = False) -> str:
     """"dense" or "krylov" for the option and a problem of ``n_unknowns`` unknowns
-    (ValueError naming a bad value)."""
+    (ValueError naming a bad value); ``matrix_free``: the Krylov path would apply the
+    Jacobian as an operator (:mod:`~mmshbm.methods.mms.forced_operator`), which moves the
+    crossover down to :data:`FORCED_MATRIX_FREE_MIN_UNKNOWNS`."""
     if check_linear_solver(linear_solver) == "auto":
-        return "krylov" if n_unknowns >= FORCED_KRYLOV_MIN_UNKNOWNS else "dense"
+        least = FORCED_MATRIX_FREE_MIN_UNKNOWNS if matrix_free else FORCED_KRYLOV_MIN_UNKNOWNS
+        return "krylov" if n_unknowns >= least else "dense"
     return linear_solver
 
 
@@ -82,9 +99,13 @@ class ForcedKrylovSolver(KrylovCorrector):
         GMRES's relative residual tolerance.
     max_krylov : int
         Most GMRES iterations of one solve before the dense fallback.
+    rebuild_margin : int
+        A reused preconditioner whose solve takes more GMRES iterations than the fresh
+        one's first solve plus this many is rebuilt at the next solve.
     """
 
-    def __init__(self, n_c: int, H: int, rtol: float = 1e-10, max_krylov: int = 200):
+    def __init__(self, n_c: int, H: int, rtol: float = 1e-10, max_krylov: int = 200,
+                 rebuild_margin: int = _REBUILD_MARGIN):
         self.n_c, self.H = int(n_c), int(H)
         self.rtol = float(rtol)
         self.max_krylov = int(max_krylov)
@@ -96,6 +117,8 @@ class ForcedKrylovSolver(KrylovCorrector):
         self.rebuilds = 0
         self._pre = None
         self._pre_size = None
+        self.rebuild_margin = int(rebuild_margin)
+        self._fresh_iterations = 0
 
     def _set_rows(self, n_rows: int) -> None:
         if self._rows != n_rows:
@@ -109,7 +132,8 @@ class ForcedKrylovSolver(KrylovCorrector):
         The last preconditioner is tried first (the active set changes little from one
         iterate or point to the next) for at most :data:`_REUSE_ITERATIONS` GMRES
         iterations; then a new one is built at this J."""
-        J = np.asarray(J, dtype=float)
+        if not hasattr(J, "harmonic_block"):
+            J = np.asarray(J, dtype=float)
         t = np.asarray(t, dtype=float)
         rhs = np.asarray(rhs, dtype=float)
         self._set_rows(J.shape[0])
@@ -118,11 +142,16 @@ class ForcedKrylovSolver(KrylovCorrector):
             self.krylov_iterations += its
             if ok:
                 self.solves += 1
+                if its > self._fresh_iterations + self.rebuild_margin:
+                    self._pre = None  # stale: the next solve builds a new one
                 return x
         self._pre = self._preconditioner(J, t)
         self._pre_size = J.shape[1]
         self.rebuilds += 1
-        return self.solve(J, t, rhs, self._pre)
+        before = self.krylov_iterations
+        x = self.solve(J, t, rhs, self._pre)
+        self._fresh_iterations = self.krylov_iterations - before
+        return x
 
     def tangent(self, J: np.ndarray, t_prev: np.ndarray):
         """(x, 0) with [J; t_prevᵀ] x = e_n (the continuation's ``solved_tangent``; the sign
@@ -132,16 +161,19 @@ class ForcedKrylovSolver(KrylovCorrector):
         x = self.bordered_solve(J, t_prev, e)
         return (x, 0.0) if np.all(np.isfinite(x)) else None
 
-    def square_solve(self, J: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-        """x with J x = rhs (J square, Ω fixed): GMRES preconditioned by the harmonics'
-        blocks, the dense LU when it does not converge."""
-        J = np.asarray(J, dtype=float)
-        n = J.shape[0]
+    def square_solve(self, J, rhs: np.ndarray) -> np.ndarray:
+        """x with J x = rhs (J square, Ω fixed: an array, or a
+        :class:`~mmshbm.methods.mms.forced_operator.CondensedLawOperator`): GMRES
+        preconditioned by the harmonics' blocks, the dense LU when it does not converge."""
+        operator = hasattr(J, "block")
+        if not operator:
+            J = np.asarray(J, dtype=float)
+        n = J.n_x if operator else J.shape[0]
         self._set_rows(n)
         self.solves += 1
         factors = []
-        for idx in self._blocks:
-            lu = la.lu_factor(J[np.ix_(idx, idx)], check_finite=False)
+        for k, idx in enumerate(self._blocks):
+            lu = la.lu_factor(J.block(k) if operator else J[np.ix_(idx, idx)], check_finite=False)
             if not np.all(np.isfinite(lu[0])) or np.any(np.diag(lu[0]) == 0.0):
                 factors = None
                 break
@@ -153,14 +185,21 @@ class ForcedKrylovSolver(KrylovCorrector):
                     out[idx] = la.lu_solve(lu, v[idx], check_finite=False)
                 return out
 
-            scale = float(np.abs(J).sum(axis=1).max())
-            x, its, ok = gmres_operator(lambda v: J @ v, np.asarray(rhs, dtype=float), pre, self.rtol,
+            if operator:
+                scale, apply = float(J.abs_row_bound(np.ones(n)).max()), J.matvec
+            else:
+                scale, apply = float(np.abs(J).sum(axis=1).max()), J.__matmul__
+            x, its, ok = gmres_operator(apply, np.asarray(rhs, dtype=float), pre, self.rtol,
                                         self.max_krylov, scale)
             self.krylov_iterations += its
             if ok:
                 return x
         self.fallbacks += 1
         log.debug("GMRES did not converge on a %d-unknown forced system; dense LU instead", n)
+        if operator:
+            if n > DENSE_FALLBACK_MAX:
+                return np.full(n, np.nan)
+            J = J.toarray()
         try:
             return la.solve(J, rhs, check_finite=False)
         except la.LinAlgError:

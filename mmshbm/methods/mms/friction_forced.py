@@ -100,9 +100,12 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
     linear_solver : {"auto", "dense", "krylov"}
         The corrector's linear solves: "dense" LU, or "krylov", GMRES preconditioned by one
         factorisation per harmonic (:mod:`~mmshbm.methods.mms.forced_krylov`; the same
-        points to the Newton tolerance, det [J; t]'s sign not tracked). "auto" (default):
+        points to the Newton tolerance, det [J; t]'s sign not tracked; with constant slip
+        forces and no unilateral contacts the Jacobian is then never assembled,
+        :mod:`~mmshbm.methods.mms.forced_operator`). "auto" (default):
         "krylov" from :data:`~mmshbm.methods.mms.forced_krylov.FORCED_KRYLOV_MIN_UNKNOWNS`
-        unknowns on.
+        unknowns on (:data:`~mmshbm.methods.mms.forced_krylov.FORCED_MATRIX_FREE_MIN_UNKNOWNS`
+        where the Jacobian is an operator).
 
     Notes
     -----
@@ -161,9 +164,13 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         """The corrector's linear solves: the dense LU, or GMRES with the harmonics' blocks
         (:mod:`~mmshbm.methods.mms.forced_krylov`, which then also solves the tangent)."""
         from .forced_krylov import ForcedKrylovSolver, resolve_forced_solver
+        from .forced_operator import supports_matrix_free
 
-        self.linear_solver = resolve_forced_solver(linear_solver, self.n_unknowns)
+        # the Jacobian as an operator where its structure allows (mmshbm.methods.mms.forced_operator)
+        operator = supports_matrix_free(self)
+        self.linear_solver = resolve_forced_solver(linear_solver, self.n_unknowns, operator)
         self._krylov = ForcedKrylovSolver(self.n_c, self.H) if self.linear_solver == "krylov" else None
+        self._matrix_free = self._krylov is not None and operator
         if self._krylov is not None:
             self.solved_tangent = self._krylov.tangent
 
@@ -224,7 +231,13 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
 
     def _evaluate(self, u: np.ndarray, jacobian: bool):
         """Scaled residual and, if asked, its Jacobian; with the amplitude DOF tracked, two
-        more rows (its harmonic-1 unknowns equal their recovery from x, :meth:`_tracked`)."""
+        more rows (its harmonic-1 unknowns equal their recovery from x, :meth:`_tracked`).
+        With the Krylov solves and constant slip forces the Jacobian is an operator
+        (:func:`~mmshbm.methods.mms.forced_operator.evaluate_matrix_free`)."""
+        if self._matrix_free:
+            from .forced_operator import evaluate_matrix_free
+
+            return evaluate_matrix_free(self, u, jacobian)
         if self._track is None:
             return super()._evaluate(u, jacobian)
         if self._fused is None:
@@ -308,7 +321,12 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         for _ in range(max_iter):
             if not np.isfinite(r):
                 return guess, False
-            _, Jx, _, _ = self.residual_parts(x, omega, 1.0, True)
+            if self._matrix_free:
+                from .forced_operator import square_operator
+
+                Jx = square_operator(self, x, omega)[1]
+            else:
+                _, Jx, _, _ = self.residual_parts(x, omega, 1.0, True)
             if self._krylov is not None:
                 dx = self._krylov.square_solve(Jx, -R)
             else:

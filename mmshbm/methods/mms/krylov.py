@@ -60,6 +60,9 @@ LINEAR_SOLVERS = ("auto", "dense", "krylov")
 #: massless DOFs (164). Measured on the string at H = 5 (docs/scale.md): dense 1.9 against
 #: Krylov 4.1 ms a corrector call at 245 unknowns, 11 against 6 at 326.
 KRYLOV_MIN_UNKNOWNS = 300
+#: the largest system a solve that GMRES does not finish assembles for the dense LU when its
+#: Jacobian is an operator (8000² numbers: 512 MB); a larger one returns NaN (the step fails)
+DENSE_FALLBACK_MAX = 8000
 #: GMRES's absolute tolerance relative to ‖[J; tᵀ]‖∞ ‖x‖∞ (a backward error of ~450 ε,
 #: below which the residual of the bordered system is round-off)
 _FLOOR = 1e-13
@@ -133,13 +136,20 @@ class KrylovCorrector:
         every contact open) B_1 has the mode as its null vector, and only the bordering
         makes the branch's system regular."""
         n = J.shape[1]
-        b, c, d = J[:, -1], t[:-1], float(t[-1])
+        if isinstance(J, np.ndarray):
+            b = J[:, -1]
+
+            def block(k):
+                return J[np.ix_(self._blocks[k], self._blocks[k])]
+        else:  # an operator that forms its harmonics' blocks (forced_operator.ForcedJacobian)
+            b, block = J.column, J.harmonic_block
+        c, d = t[:-1], float(t[-1])
         factors = []
         coupling = 0.0
         for k, idx in enumerate(self._blocks):
             if k == 1:
                 continue
-            lu = la.lu_factor(J[np.ix_(idx, idx)], check_finite=False)
+            lu = la.lu_factor(block(k), check_finite=False)
             if not np.all(np.isfinite(lu[0])) or np.any(np.diag(lu[0]) == 0.0):
                 return None
             z = la.lu_solve(lu, b[idx], check_finite=False)
@@ -148,7 +158,7 @@ class KrylovCorrector:
         idx1 = self._blocks[1]
         m = len(idx1)
         E = np.empty((m + 1, m + 1))
-        E[:m, :m] = J[np.ix_(idx1, idx1)]
+        E[:m, :m] = block(1)
         E[:m, m] = b[idx1]
         E[m, :m] = c[idx1]
         E[m, m] = d - coupling
@@ -191,6 +201,10 @@ class KrylovCorrector:
                 return x
         self.fallbacks += 1
         log.debug("GMRES did not converge on a %d-unknown bordered system; dense LU instead", n)
+        if not isinstance(J, np.ndarray):
+            if n > DENSE_FALLBACK_MAX:
+                return np.full(n, np.nan)
+            J = J.toarray()
         A = np.empty((n, n))
         A[:-1] = J
         A[-1] = t
@@ -258,7 +272,8 @@ class KrylovCorrector:
 
 
 def _right_gmres(J, t, rhs, pre, rtol: float, max_iter: int):
-    """GMRES on [J; tᵀ] x = rhs, right-preconditioned by ``pre`` (x = x0 + M⁻¹ V y), from
+    """GMRES on [J; tᵀ] x = rhs (J an array or an operator with ``@`` and
+    ``inf_norm_bound()``), right-preconditioned by ``pre`` (x = x0 + M⁻¹ V y), from
     x0 = pre(rhs), without restarts (Arnoldi by modified Gram–Schmidt, the least-squares
     residual updated by Givens rotations, so the residual it tracks is the true one's in
     exact arithmetic, not a preconditioned one).
@@ -273,7 +288,8 @@ def _right_gmres(J, t, rhs, pre, rtol: float, max_iter: int):
         out[-1] = t @ v
         return out
 
-    scale = max(float(np.abs(J).sum(axis=1).max()), float(np.abs(t).sum()))
+    norm = float(np.abs(J).sum(axis=1).max()) if isinstance(J, np.ndarray) else J.inf_norm_bound()
+    scale = max(norm, float(np.abs(t).sum()))
     return gmres_operator(apply, rhs, pre, rtol, max_iter, scale)
 
 
