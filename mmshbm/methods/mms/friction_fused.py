@@ -35,6 +35,10 @@ class FusedFrictionEvaluation:
     scalings (``colscale``, ``rowscale``, ``length``) are read from the problem at every call;
     everything else is fixed at construction."""
 
+    #: the record kernel's fixed arrays and work buffers, built at the first record
+    _record_fixed = None
+    _record_work = None
+
     def __init__(self, problem):
         cond, tr = problem.cond, problem._tracker
         H, n_c, n_x = problem.H, problem.n_c, problem.n_x
@@ -106,7 +110,7 @@ class FusedFrictionEvaluation:
         stepwise records then apply)."""
         from ._friction_fused import _forced_friction_record
 
-        if not hasattr(self, "_record_fixed"):
+        if self._record_fixed is None:
             self._record_setup()
         p = self.problem
         F = np.empty(p.n_x)
