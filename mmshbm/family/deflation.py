@@ -1,11 +1,11 @@
 """The one search for the family beyond a frontier: deflated Newton at pinned amplitudes.
 
 Where the branch has left the family (docs/resonances.md), the family's continuation is
-sought at amplitudes A_i = frontier·(1 + jump_step·2^i), i < ``max_targets`` (capped at the
-amplitude bound), by Newton on the pinned system G(u) = [R(u); A(u)/A_i − 1] = 0
-(:mod:`mmshbm.core.pinned`) from a fixed set of starts (:class:`BranchStarts`; a method's
-own through the problem's ``family_starts()``). Every orbit u_k found at A_i is
-*deflated*: Newton then solves F(u) = M(u) G(u) = 0 with
+sought at amplitudes A_i = frontier·(1 + jump_step·2^i), consecutive ones at most
+``target_ratio`` apart, up to the amplitude bound, by Newton on the pinned system
+G(u) = [R(u); A(u)/A_i − 1] = 0 (:mod:`mmshbm.core.pinned`) from a fixed set of starts
+(:class:`BranchStarts`; a method's own through the problem's ``family_starts()``).
+Every orbit u_k found at A_i is *deflated*: Newton then solves F(u) = M(u) G(u) = 0 with
 
     M(u) = Π_k (‖u − u_k‖⁻ᵖ + σ),      p = :data:`POWER`, σ = :data:`SHIFT`,
 
@@ -237,6 +237,10 @@ class BranchStarts:
             clean = [j for j in guard.clean if j <= origin]
             if clean:
                 out.append((f"extrapolated from {at}", extrapolated(us, recs, clean, amplitude)))
+        last = len(us) - 1
+        if last > i:  # where the branch is now: the excursion's end, which may come back beyond
+            own = self.origin_starts(us, recs, guard, last, amplitude, amplitude_max)
+            out += [(f"{name} from the branch's end", u0) for name, u0 in own]
         linear = getattr(self.problem, "linear_mode_point", None)
         if linear is not None:
             try:
@@ -267,11 +271,16 @@ def extrapolated(us: list, recs: list, clean: list, amplitude: float) -> np.ndar
 
 
 def _targets(frontier: float, amplitude_max: float, options: FamilyOptions) -> list[float]:
+    """The amplitude targets beyond ``frontier``: frontier·(1 + jump_step·2^i), consecutive
+    ones at most ``target_ratio`` apart, up to ``amplitude_max`` (at most
+    frontier/jump_step)."""
+    top = min(amplitude_max, frontier / options.jump_step)
     out = []
-    for i in range(options.max_targets):
-        target = min(frontier * (1.0 + options.jump_step * 2.0**i), amplitude_max)
-        if not out or target > out[-1]:
-            out.append(target)
+    target, i = frontier, 0
+    while target < top:
+        target = min(frontier * (1.0 + options.jump_step * 2.0**i), target * options.target_ratio, top)
+        out.append(target)
+        i += 1
     return out
 
 

@@ -119,7 +119,7 @@ def test_a_search_that_finds_only_orbits_off_the_family_ends_it_with_what_it_tri
     guard = FamilyGuard(0.5, 60)
     for i, rec in enumerate(recs):
         guard.observe(i, rec)
-    options = FamilyOptions(search="deflated", max_targets=4)
+    options = FamilyOptions(search="deflated")
     with pytest.raises(FamilyEnded) as info:
         search_beyond(problem, guard, us, recs, options=options, amplitude_max=1.6, newton_tol=1e-12,
                       max_newton=10, monitor=lambda p, v: p.monitor(v), starts=_Start(0.2))
