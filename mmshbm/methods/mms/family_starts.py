@@ -45,6 +45,7 @@ class MMSHBMStarts(BranchStarts):
             if frontier < target <= amplitude_max:
                 out.append(("filtered landing", u0, float(target)))
                 self._landed.append((u0, float(target)))
+                break  # from the best origin where the filtered branch passes the resonance
         return out
 
     def before(self, us: list, recs: list, guard: FamilyGuard,
