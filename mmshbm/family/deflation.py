@@ -222,6 +222,9 @@ class BranchStarts:
 
     def __init__(self, problem):
         self.problem = problem
+        self.amplitude_max = math.inf
+        #: (tol, max_iter, admissible) of the search's pinned solves, for starts that solve
+        self.solver = (1e-10, 30, None)
 
     def landings(self, us: list, recs: list, guard: FamilyGuard,
                  amplitude_max: float) -> list[tuple[str, np.ndarray, float]]:
@@ -326,6 +329,8 @@ def search_beyond(problem, guard: FamilyGuard, us: list, recs: list, *, options:
             return lo <= frequency_of(u) <= hi
 
     tried = []
+    starts.amplitude_max = amplitude_max
+    starts.solver = (newton_tol, _NEWTON_FACTOR * max_newton, admissible)
     # the method's landings (a start that picks its own amplitude, MMS-HBM's filtered
     # passage, costly) join the targets once the first target has found no family orbit
     landings = None
