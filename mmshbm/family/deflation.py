@@ -282,12 +282,6 @@ def extrapolated(us: list, recs: list, clean: list, amplitude: float) -> np.ndar
     return sum(c * xt ** (deg - p) for p, c in enumerate(coef))
 
 
-def _done(found: list, max_roots: int) -> bool:
-    """Whether a target's search is over: ``max_roots`` orbits found, one of the family
-    (orbits off the family do not end it: the starts not yet tried may reach the family)."""
-    return len(found) >= max_roots and any(x[5] for x in found)
-
-
 def _targets(frontier: float, amplitude_max: float, options: FamilyOptions) -> list[float]:
     """The amplitude targets beyond ``frontier``: frontier·(1 + jump_step·2^i), consecutive
     ones at most ``target_ratio`` apart, up to ``amplitude_max`` (at most
@@ -350,9 +344,7 @@ def search_beyond(problem, guard: FamilyGuard, us: list, recs: list, *, options:
         for name, u0 in own + starts.starts(us, recs, guard, target, amplitude_max):
             if any(n == len(found) and _same(u0, v) for v, n in settled):
                 continue  # the same start with the same orbits deflated fails the same way
-            from_start = 0
-            while from_start < options.max_roots and not _done(found, options.max_roots):
-                from_start += 1
+            while len(found) < options.max_roots:
                 try:
                     u, nit, hist, t = deflated_solve(
                         problem, u0, target, [f[0] for f in found],
@@ -379,7 +371,7 @@ def search_beyond(problem, guard: FamilyGuard, us: list, recs: list, *, options:
                 found.append((u, nit, hist, rec, t, member))
                 log.debug("deflated search at %.4g from the %s start: %.4g Hz, share %.3f (%s)", target, name,
                           f, share, "family" if member else "not the family")
-            if _done(found, options.max_roots):
+            if len(found) >= options.max_roots:
                 break
         family = [x for x in found if x[5]]
         if family:

@@ -52,9 +52,9 @@ class FamilyOptions:
         matter of the target, and a family that comes back below the bound within a
         doubling step would otherwise get one or two tries.
     max_roots : int
-        Orbits the deflated search finds at one target, one of them of the family, before
-        it stops there, and at most from one start (each found orbit is deflated, so
-        Newton from the same start must go elsewhere). Default 3.
+        Orbits the deflated search finds at one target before it goes on to the next
+        (each found orbit is deflated, so Newton from the same start must go elsewhere).
+        Default 3.
     band_slack : float
         Relative margin of the first mode's frequency band (the definition's second
         condition, :func:`mmshbm.family.definition.frequency_band`): an orbit of the
