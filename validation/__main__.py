@@ -32,7 +32,11 @@ def _out(args) -> Path:
 
 def _proximal(args) -> dict:
     """The backbone options the corpus runs take from the command line."""
-    return {} if args.proximal == "static" else {"r": args.proximal}
+    out = {} if args.proximal == "static" else {"r": args.proximal}
+    search = getattr(args, "family_search", None)
+    if search is not None:
+        out["family_search"] = search
+    return out
 
 
 def _corpus(args) -> int:
@@ -41,6 +45,8 @@ def _corpus(args) -> int:
     from . import corpus
 
     cases = corpus.generate(args.n, args.seed)
+    if args.only:
+        cases = [c for c in cases if c.index in set(args.only)]
 
     def progress(r):
         print(f"{r.case.label:<34} {r.seconds:7.2f} s  {'ok ' if r.completed else 'NOT'} {r.status[:90]}",
@@ -190,6 +196,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--workers", type=common.positive_int, default=1, help="processes")
     p.add_argument("--proximal", choices=("static", "residual"), default="static",
                    help="MMS-HBM's proximal parameter r (docs/exact.md)")
+    p.add_argument("--family-search", choices=("stages", "deflated"), default=None,
+                   help="the search for the family beyond a frontier (docs/resonances.md; default: the "
+                        "backbone's)")
+    p.add_argument("--only", type=common.non_negative_int, nargs="+", default=None, metavar="I",
+                   help="run only the models of these indices (of the N drawn)")
     p.add_argument("--out", default="out", help="folder of corpus.csv")
 
     p = add("exact", _exact, "the default backbone against the exact single-contact orbit on N random chains")

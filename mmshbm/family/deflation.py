@@ -1,11 +1,11 @@
 """The one search for the family beyond a frontier: deflated Newton at pinned amplitudes.
 
 Where the branch has left the family (docs/resonances.md), the family's continuation is
-sought at amplitudes A_i = frontier·(1 + jump_step·2^i), i < ``max_targets`` (capped at the
-amplitude bound), by Newton on the pinned system G(u) = [R(u); A(u)/A_i − 1] = 0
-(:mod:`mmshbm.core.pinned`) from a fixed set of starts (:class:`BranchStarts`; a method's
-own through the problem's ``family_starts()``). Every orbit u_k found at A_i is
-*deflated*: Newton then solves F(u) = M(u) G(u) = 0 with
+sought at amplitudes A_i = frontier·(1 + jump_step·2^i), consecutive ones at most
+``target_ratio`` apart, up to the amplitude bound, by Newton on the pinned system
+G(u) = [R(u); A(u)/A_i − 1] = 0 (:mod:`mmshbm.core.pinned`) from a fixed set of starts
+(:class:`BranchStarts`; a method's own through the problem's ``family_starts()``).
+Every orbit u_k found at A_i is *deflated*: Newton then solves F(u) = M(u) G(u) = 0 with
 
     M(u) = Π_k (‖u − u_k‖⁻ᵖ + σ),      p = :data:`POWER`, σ = :data:`SHIFT`,
 
@@ -163,7 +163,7 @@ def deflated_solve(problem, u0: np.ndarray, amplitude: float, known: list, *, sh
             if admissible is not None and not admissible(trial):
                 if last:
                     raise PinnedFailure(f"Newton left the trust region (iteration {it + 1})")
-            elif last or _deflated_norm(problem, trial, amplitude, known, shift) < M * norm:
+            elif last or _deflated_norm(problem, trial, amplitude, known, shift, M * norm) < M * norm:
                 break
             lam *= 0.5
         u = u - lam * du
@@ -171,21 +171,30 @@ def deflated_solve(problem, u0: np.ndarray, amplitude: float, known: list, *, sh
 
 
 def _check_new(u: np.ndarray, known: list) -> None:
+    if any(_same(u, uk) for uk in known):
+        raise KnownOrbit("converged onto an orbit already found")
+
+
+def _same(u: np.ndarray, v: np.ndarray) -> bool:
+    """Whether two states agree within round-off (relative to their size)."""
     scale = max(float(np.abs(u).max()), 1.0)
-    for uk in known:
-        if float(np.abs(u - uk).max()) <= _SAME_ORBIT_ROUNDOFF * scale:
-            raise KnownOrbit("converged onto an orbit already found")
+    return u.shape == v.shape and float(np.abs(u - v).max()) <= _SAME_ORBIT_ROUNDOFF * scale
 
 
-def _deflated_norm(problem, u: np.ndarray, amplitude: float, known: list, shift: float) -> float:
-    """M(u)·‖G(u)‖∞ (inf where the evaluation fails)."""
+def _deflated_norm(problem, u: np.ndarray, amplitude: float, known: list, shift: float,
+                   above: float = math.inf) -> float:
+    """M(u)·‖G(u)‖∞ (inf where the evaluation fails). Where the residual alone puts it at
+    ``above`` or more, that bound is returned without evaluating the amplitude."""
     try:
         r = float(np.abs(problem.residual(u)).max())
+        M = deflation(u, known, shift)[0]
+        if M * r >= above:
+            return above
         A = (problem.amplitude_value(u) if problem.amplitude_value is not None
              else amplitude_and_gradient(problem, u)[0])
     except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError):
         return math.inf
-    return deflation(u, known, shift)[0] * max(r, abs(A / amplitude - 1.0))
+    return M * max(r, abs(A / amplitude - 1.0))
 
 
 class FamilyStarts(Protocol):
@@ -213,6 +222,9 @@ class BranchStarts:
 
     def __init__(self, problem):
         self.problem = problem
+        self.amplitude_max = math.inf
+        #: (tol, max_iter, admissible) of the search's pinned solves, for starts that solve
+        self.solver = (1e-10, 30, None)
 
     def landings(self, us: list, recs: list, guard: FamilyGuard,
                  amplitude_max: float) -> list[tuple[str, np.ndarray, float]]:
@@ -237,6 +249,10 @@ class BranchStarts:
             clean = [j for j in guard.clean if j <= origin]
             if clean:
                 out.append((f"extrapolated from {at}", extrapolated(us, recs, clean, amplitude)))
+        last = len(us) - 1
+        if last > i:  # where the branch is now: the excursion's end, which may come back beyond
+            own = self.origin_starts(us, recs, guard, last, amplitude, amplitude_max)
+            out += [(f"{name} from the branch's end", u0) for name, u0 in own]
         linear = getattr(self.problem, "linear_mode_point", None)
         if linear is not None:
             try:
@@ -267,11 +283,16 @@ def extrapolated(us: list, recs: list, clean: list, amplitude: float) -> np.ndar
 
 
 def _targets(frontier: float, amplitude_max: float, options: FamilyOptions) -> list[float]:
+    """The amplitude targets beyond ``frontier``: frontier·(1 + jump_step·2^i), consecutive
+    ones at most ``target_ratio`` apart, up to ``amplitude_max`` (at most
+    frontier/jump_step)."""
+    top = min(amplitude_max, frontier / options.jump_step)
     out = []
-    for i in range(options.max_targets):
-        target = min(frontier * (1.0 + options.jump_step * 2.0**i), amplitude_max)
-        if not out or target > out[-1]:
-            out.append(target)
+    target, i = frontier, 0
+    while target < top:
+        target = min(frontier * (1.0 + options.jump_step * 2.0**i), target * options.target_ratio, top)
+        out.append(target)
+        i += 1
     return out
 
 
@@ -308,12 +329,21 @@ def search_beyond(problem, guard: FamilyGuard, us: list, recs: list, *, options:
             return lo <= frequency_of(u) <= hi
 
     tried = []
-    landings = starts.landings(us, recs, guard, amplitude_max)
-    targets = sorted(set(_targets(frontier, amplitude_max, options)) | {a for _, _, a in landings})
-    for target in targets:
+    starts.amplitude_max = amplitude_max
+    starts.solver = (newton_tol, _NEWTON_FACTOR * max_newton, admissible)
+    # the method's landings (a start that picks its own amplitude, MMS-HBM's filtered
+    # passage, costly) join the targets once the first target has found no family orbit
+    landings = None
+    queue = _targets(frontier, amplitude_max, options)
+    searched = queue[-1]
+    while queue:
+        target = queue.pop(0)
         found = []  # (u, iterations, history, record, tangent) of every orbit found at target
-        own = [(name, u0) for name, u0, a in landings if a == target]
+        own = [(name, u0) for name, u0, a in landings or () if a == target]
+        settled = []  # (start, orbits found when it failed) at this target
         for name, u0 in own + starts.starts(us, recs, guard, target, amplitude_max):
+            if any(n == len(found) and _same(u0, v) for v, n in settled):
+                continue  # the same start with the same orbits deflated fails the same way
             while len(found) < options.max_roots:
                 try:
                     u, nit, hist, t = deflated_solve(
@@ -321,12 +351,15 @@ def search_beyond(problem, guard: FamilyGuard, us: list, recs: list, *, options:
                         tol=newton_tol, max_iter=_NEWTON_FACTOR * max_newton, admissible=admissible)
                 except StartOutside:
                     tried.append(Attempt("deflated", name, target, "outside"))
+                    settled.append((u0, len(found)))
                     break
                 except KnownOrbit:
                     tried.append(Attempt("deflated", name, target, "known"))
+                    settled.append((u0, len(found)))
                     break
                 except PinnedFailure:
                     tried.append(Attempt("deflated", name, target, "failed"))
+                    settled.append((u0, len(found)))
                     break
                 rec = monitor(problem, u)
                 f = float(rec.get("frequency", math.nan))
@@ -345,9 +378,13 @@ def search_beyond(problem, guard: FamilyGuard, us: list, recs: list, *, options:
             # the tangent solves [J; ∇A/A*] t = e_n: oriented to growing amplitude
             u, nit, hist, rec, t, _ = max(family, key=lambda x: family_value(x[3]) or 0.0)
             return u, nit, hist, rec, t, target, i
+        if landings is None:
+            landings = starts.landings(us, recs, guard, amplitude_max)
+            queue = sorted(set(queue) | {a for _, _, a in landings})
+            searched = max([searched] + queue)
     cross = crossing(recs, guard, problem)
     end = FamilyEnd(ended=cross is not None, frontier=frontier, frontier_frequency=f_frontier,
-                    searched_to=float(targets[-1]), crossing=cross, attempts=tuple(tried))
+                    searched_to=float(searched), crossing=cross, attempts=tuple(tried))
     if cross is None:
         end = dataclasses.replace(end, notes=turned_back(recs, guard) + end.tried())
     raise FamilyEnded(end)

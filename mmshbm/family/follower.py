@@ -27,7 +27,7 @@ from ..core.pinned import PinnedFailure
 from ..core.special_points import SpecialPoint
 from ..core.status import Status
 from ..core.steps import _pinned_monitor
-from .definition import FAMILY_RECORD, family_value
+from .definition import FAMILY_RECORD, family_value, frequency_band, on_family
 from .deflation import FamilyStarts, search_beyond
 from .end import FamilyEnded
 from .guard import FamilyGuard
@@ -122,12 +122,17 @@ class FamilyFollower:
                                                                 self.family, self.amplitude_max),
                     descend=lambda u, t, a, a_to: _descend(self.follow, problem, u, t, a, a_to, opt,
                                                            self.family))
-        except FamilyEnded as err:
-            end = err.end
-            raise RelocationFailed(end.detail(), kind=Status.FAMILY_ENDED if end.ended else None,
-                                   cause=end) from None
-        except PinnedFailure as err:
-            raise RelocationFailed(str(err)) from None
+        except (FamilyEnded, PinnedFailure) as err:
+            along = (_along_path(self.follow, problem, points, records, guard, opt, self.family)
+                     if reason in _MOVING and self.family.search == "deflated" else None)
+            if along is None:
+                if isinstance(err, FamilyEnded):
+                    end = err.end
+                    raise RelocationFailed(end.detail(), kind=Status.FAMILY_ENDED if end.ended else None,
+                                           cause=end) from None
+                raise RelocationFailed(str(err)) from None
+            u_j, nit_j, hist_j, rec_j, t_j = along
+            target, i_from = float(rec_j["amplitude"]), guard.frontier_index
         A_from = float(records[i_from]["amplitude"])
         frontier = float(records[guard.frontier_index]["amplitude"])
         filled = (_backfill(self.follow, problem, u_j, t_j, frontier, target, opt, self.family)
@@ -146,6 +151,45 @@ class FamilyFollower:
         log.info("jump (%s) from amplitude %.4g to %.4g (landed at %.4g, %d points filled back)", reason,
                  A_from, special.data["amplitude_to"], target, len(filled))
         return Relocation(found, special, terminal)
+
+
+#: the reasons of a search where the branch itself still goes on (not a step size failure
+#: or a tongue at the bound): where the search finds nothing, the path is followed on
+_MOVING = ("excursion", "loop")
+
+
+def _along_path(follow: Callable, problem, us: list, recs: list, guard: FamilyGuard, opt: ContinuationOptions,
+                family: FamilyOptions):
+    """The first orbit of the family beyond the frontier on the branch itself: the path
+    followed on from its last point (plain path following, at most ``max_excursion``
+    steps, the tangent from the last secant) to the first point that satisfies the
+    definition (:func:`~mmshbm.family.definition.on_family`, the first mode's frequency
+    band) above the frontier's amplitude. The last start of a search that found nothing
+    from the frontier: a branch that folds back and forth (S-bends) can come back beyond
+    the frontier only along itself. Returns (u, iterations, history, record, tangent
+    oriented to growing amplitude), or None."""
+    if len(us) < 2:
+        return None
+    frontier = float(recs[guard.frontier_index]["amplitude"])
+    band = frequency_band(problem, recs, family.band_slack)
+    secant = np.asarray(us[-1]) - np.asarray(us[-2])
+    norm = float(np.linalg.norm(secant))
+    if not norm > 0:
+        return None
+    on = dataclasses.replace(opt, max_steps=family.max_excursion, follow="path")
+    try:
+        res = follow(problem, us[-1], secant / norm, on, catch_interrupt=False)
+    except (PinnedFailure, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
+        return None
+    for i in range(1, len(res.u)):
+        rec = {k: v[i] for k, v in res.records.items()}
+        if float(rec["amplitude"]) > frontier and on_family(rec, family.family_share, band) is not False:
+            tangent = res.u[i] - res.u[i - 1]
+            if float(rec["amplitude"]) < float(res.records["amplitude"][i - 1]):
+                tangent = -tangent
+            tangent /= max(np.linalg.norm(tangent), 1e-300)
+            return res.u[i], int(res.newton_iterations[i]), res.residual_histories[i], rec, tangent
+    return None
 
 
 def default_events(options: ContinuationOptions, follow: Callable):

@@ -43,10 +43,14 @@ class FamilyOptions:
         the staged jump (:func:`mmshbm.family.stages.jump`); ``"deflated"``, Newton at
         pinned amplitudes from a fixed set of starts with the orbits already found
         deflated (:func:`mmshbm.family.deflation.search_beyond`).
-    max_targets : int
-        Amplitude targets of the deflated search (``i = 0 .. max_targets − 1``, capped at
-        the amplitude bound). Default 12: the last target is 1 + 0.02·2¹¹ ≈ 42 times the
-        frontier, beyond any amplitude bound a backbone is run to.
+    target_ratio : float
+        Largest ratio (> 1) of consecutive amplitude targets of the deflated search: the
+        targets frontier·(1 + jump_step·2^i) double their step until consecutive ones are
+        this far apart, then grow by this ratio, up to the amplitude bound (at most
+        frontier/jump_step, 50 times the frontier by default, where the bound is higher).
+        Default 1.1: whether Newton converges from a start that far from the branch is a
+        matter of the target, and a family that comes back below the bound within a
+        doubling step would otherwise get one or two tries.
     max_roots : int
         Orbits the deflated search finds at one target before it goes on to the next
         (each found orbit is deflated, so Newton from the same start must go elsewhere).
@@ -64,7 +68,7 @@ class FamilyOptions:
     jump_step: float = 0.02
     max_jumps: int = 50
     search: str = "stages"
-    max_targets: int = 12
+    target_ratio: float = 1.1
     max_roots: int = 3
     band_slack: float = 0.01
 
@@ -77,6 +81,8 @@ class FamilyOptions:
         check.integer("max_jumps", self.max_jumps, minimum=0)
         if self.search not in SEARCHES:
             raise ValueError(f"search must be one of {SEARCHES}, got {self.search!r}")
-        check.integer("max_targets", self.max_targets, minimum=1)
+        ratio = check.real_number("target_ratio", self.target_ratio)
+        if not ratio > 1.0:
+            raise ValueError(f"target_ratio must be > 1, got {self.target_ratio!r}")
         check.integer("max_roots", self.max_roots, minimum=1)
         check.non_negative("band_slack", self.band_slack)

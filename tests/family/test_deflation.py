@@ -119,7 +119,7 @@ def test_a_search_that_finds_only_orbits_off_the_family_ends_it_with_what_it_tri
     guard = FamilyGuard(0.5, 60)
     for i, rec in enumerate(recs):
         guard.observe(i, rec)
-    options = FamilyOptions(search="deflated", max_targets=4)
+    options = FamilyOptions(search="deflated")
     with pytest.raises(FamilyEnded) as info:
         search_beyond(problem, guard, us, recs, options=options, amplitude_max=1.6, newton_tol=1e-12,
                       max_newton=10, monitor=lambda p, v: p.monitor(v), starts=_Start(0.2))
@@ -129,3 +129,20 @@ def test_a_search_that_finds_only_orbits_off_the_family_ends_it_with_what_it_tri
     assert "landed" not in end.outcomes()
     with pytest.raises(KnownOrbit):
         deflated_solve(problem, us[-1], 1.5, [us[-1]], max_iter=0)
+
+
+@pytest.mark.parametrize("frontier, bound", [(1.0, 10.0), (0.3, 10.0), (1.0, 1.05), (1.0, 1e3)])
+def test_the_targets_double_their_step_then_grow_by_at_most_the_target_ratio_to_the_bound(frontier, bound):
+    """frontier·(1 + jump_step·2^i) while consecutive targets are less than target_ratio
+    apart, then that ratio, up to the bound or frontier/jump_step, whichever is lower."""
+    from mmshbm.family.deflation import _targets
+
+    options = FamilyOptions(search="deflated")
+    t = np.array(_targets(frontier, bound, options))
+    assert t[0] == pytest.approx(frontier * (1 + options.jump_step))
+    assert t[-1] == pytest.approx(min(bound, frontier / options.jump_step))
+    ratios = t[1:] / t[:-1]
+    assert np.all(ratios > 1.0) and np.all(ratios <= options.target_ratio * (1 + 1e-12))
+    doubling = frontier * (1 + options.jump_step * 2.0 ** np.arange(4))
+    n = min(len(t), 4)
+    assert np.allclose(t[:n], np.minimum(doubling[:n], min(bound, frontier / options.jump_step)))

@@ -37,3 +37,28 @@ def test_the_deflated_search_reaches_the_bound_on_the_corpus_slice(case):
     end "interrupted")."""
     r = corpus.run_case(case, time_limit=30.0, options={"family_search": "deflated"})
     assert r.completed, (case, r.status)
+
+
+def test_a_family_that_comes_back_beyond_the_frontier_only_along_the_branch_is_followed_there():
+    """A tree of five masses whose one-sided stop is stiffer than its ground springs: the
+    backbone's frequency barely moves (0.819–0.823 Hz) while the amplitude folds back and
+    forth between 3.4 and 5.25 gaps on the family; past the first fold (5.19 gaps) no
+    pinned solve from the frontier converges beyond it, and the family is reached again
+    by following the branch on. The orbit at the bound is then the plain path's (one
+    solution of the pinned equations: the frequencies agree to the Newton tolerance
+    times the condition, 1e-8 relative)."""
+    params = {"masses": [0.011765912204887216, 0.29549928060619957, 0.10673599878865297, 1.0840906028984894,
+                         1.5397472761873718],
+              "springs": [29.51644003555689, 1136.3943781075513, 2266.9443388030386, 29.95178034537588,
+                          213.0568810435389],
+              "parents": [-1, 0, 1, 1, 1], "ground": [False, True, False, False, False],
+              "ground_k": [12.576622058724876, 725.8603506649492, 124.76717049242505, 116.8646231421379,
+                           80005.05213016008],
+              "hosts": [4], "node_k": [54752.525748633394], "gaps": [0.0078734020723788], "sides": [-1]}
+    model = corpus._spring_mass_model(params)
+    path = mmshbm.backbone(model, harmonics=15, follow="path")
+    deflated = mmshbm.backbone(model, harmonics=15, family_search="deflated")
+    assert path.status == deflated.status == "bound:amplitude", deflated.status
+    assert path.records["fundamental_share"][-1] > 0.5
+    assert deflated.records["on_family"][-1] == 1.0
+    assert abs(deflated.frequency[-1] / path.frequency[-1] - 1) < 1e-8

@@ -35,6 +35,7 @@ class MMSHBMStarts(BranchStarts):
         frontier = float(recs[i]["amplitude"])
         excursion = us[i + 1:]
         self._landed = []
+        self.amplitude_max = amplitude_max
         out = []
         for origin in guard.origins(lambda j: float(recs[j]["amplitude"])):
             try:
@@ -45,17 +46,34 @@ class MMSHBMStarts(BranchStarts):
             if frontier < target <= amplitude_max:
                 out.append(("filtered landing", u0, float(target)))
                 self._landed.append((u0, float(target)))
+                break  # from the best origin where the filtered branch passes the resonance
         return out
 
     def before(self, us: list, recs: list, guard: FamilyGuard,
                amplitude: float) -> list[tuple[str, np.ndarray]]:
         i = guard.frontier_index
         A_f = float(recs[i]["amplitude"])
-        out = []
+        out = self._ladders(guard, amplitude)
         for u_l, A_l in self._landed:
             if A_f < amplitude < A_l:
                 s = (amplitude - A_f) / (A_l - A_f)
                 out.append(("toward the filtered landing", (1.0 - s) * us[i] + s * u_l))
+        return out
+
+    def _ladders(self, guard: FamilyGuard, amplitude: float) -> list[tuple[str, np.ndarray]]:
+        """The starting mode's orbit at ``amplitude`` continued in the harmonics from the
+        low-harmonic families (``harmonic_landing``, from the auxiliary H = 3 family and
+        from the fundamental's), where that family's orbit is on the family."""
+        p, out = self.problem, []
+        tol, max_iter, admissible = self.solver
+        for fundamental in (False, True):
+            try:
+                start = p.harmonic_landing(amplitude, self.amplitude_max, tol=tol, max_iter=max_iter,
+                                           admissible=admissible, fundamental=fundamental)
+            except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
+                continue
+            if start is not None and start[1] >= guard.family_share:
+                out.append(("harmonic ladder" + (" from the fundamental" if fundamental else ""), start[0]))
         return out
 
     def origin_starts(self, us: list, recs: list, guard: FamilyGuard, origin: int, amplitude: float,

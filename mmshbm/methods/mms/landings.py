@@ -146,23 +146,21 @@ class LandingsMixin:
     def reference_branch(self, amplitude_max: float):
         """(problem, amplitudes ascending, scaled unknowns) of the family at H_ref = 3 (1
         for H <= 3): the monotone front of an auxiliary backbone, continued once by plain
-        path following up to ``amplitude_max`` (cached; recomputed for a larger one).
-        With so few harmonics the branch meets no internal resonance with the higher
-        modes that the H-harmonic branch meets. None when H_ref would not be below H."""
-        cached = self._reference
-        if cached is not None and cached[1][-1] >= amplitude_max * (1 - 1e-9):
-            return cached
+        path following up to ``amplitude_max`` (cached, also where the branch ends below
+        it; recomputed for a larger one). With so few harmonics the branch meets no
+        internal resonance with the higher modes that the H-harmonic branch meets. None
+        when H_ref would not be below H or the branch has fewer than two points."""
+        cached = self._reference  # (amplitude_max asked, front or None)
+        if cached is not None and cached[0] >= amplitude_max * (1 - 1e-9):
+            return cached[1]
         H_ref = 3 if self.H > 3 else 1
         if H_ref >= self.H:
             return None
         aux = type(self)(self.model, H_ref, r=self.r_each, mode=self.mode, backend=self.cond.backend,
                             projection=self.projection)
         aux._modal = self._modal
-        front = _rising_front(aux, self.gap, amplitude_max)
-        if front is None:
-            return None
-        self._reference = front
-        return self._reference
+        self._reference = (amplitude_max, _rising_front(aux, self.gap, amplitude_max))
+        return self._reference[1]
 
     # ------------------------------------------------------------------ modal energy
 
