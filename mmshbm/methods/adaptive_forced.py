@@ -91,7 +91,7 @@ def path_slope(frequency: np.ndarray, amplitude: np.ndarray) -> np.ndarray:
 
 def response_to_tolerance(model, excitation, frequency_range, tol: float, *, start_harmonics: int,
                           max_harmonics: int, patience: int, contraction: float, method: str, run,
-                          **kwargs):
+                          make_problem, **kwargs):
     """The forced response of ``model`` with every point's estimated relative error at
     most ``tol`` where it can be had (module docstring).
 
@@ -111,6 +111,10 @@ def response_to_tolerance(model, excitation, frequency_range, tol: float, *, sta
     run : callable
         ``run(model, excitation, frequency_range, harmonics=H, method=method, **kwargs)``
         -> FrequencyResponse: the fixed-H response.
+    make_problem : callable
+        ``make_problem(model, excitation, method, H, options)`` -> the forced problem at H
+        (:func:`mmshbm.methods.frequency_response.make_forced_problem`), passed in so that
+        this module does not import its caller.
 
     Returns
     -------
@@ -121,7 +125,6 @@ def response_to_tolerance(model, excitation, frequency_range, tol: float, *, sta
     """
     from .._threads import blas_limit
     from ..core.pinned import solve_at_amplitude
-    from .frequency_response import make_forced_problem
     from .tolerance_ladder import solve_at_frequency
 
     t0 = time.perf_counter()
@@ -132,12 +135,12 @@ def response_to_tolerance(model, excitation, frequency_range, tol: float, *, sta
 
     def build(H, stability=False):
         try:
-            return make_forced_problem(model, excitation, method, H, {**options, "stability": stability})
+            return make_problem(model, excitation, method, H, {**options, "stability": stability})
         except TypeError:  # a problem without Floquet multipliers
-            return make_forced_problem(model, excitation, method, H, options)
+            return make_problem(model, excitation, method, H, options)
 
     quick = DampedLadder(build)
-    full = DampedLadder(lambda H: make_forced_problem(model, excitation, method, H, options), base.solver)
+    full = DampedLadder(lambda H: make_problem(model, excitation, method, H, options), base.solver)
     n = len(base)
     slope = path_slope(base.frequency, base.amplitude)
     pin_amplitude = ~(np.abs(slope) <= PIN_SLOPE)  # NaN (a single point): the amplitude

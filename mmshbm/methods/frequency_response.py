@@ -188,7 +188,8 @@ def _to_tolerance(model: Model, force, frange, tol, harmonics, method: str, *, c
     if not model_has_damping(model):  # the same refusal as the fixed-H run, before it starts
         return frequency_response(model, force, frange, settings["start_harmonics"], method, **options)
     excitation = force if isinstance(force, Excitation) else harmonic_force(model, force)
-    return response_to_tolerance(model, excitation, frange, method=method, run=frequency_response, **settings,
+    return response_to_tolerance(model, excitation, frange, method=method, run=frequency_response,
+                                 make_problem=make_forced_problem, **settings,
                                  **options)
 
 

@@ -46,10 +46,10 @@ def _lowered(high, low_problem, amplitude):
 def test_the_homotopy_reaches_the_orbit_from_the_raised_start(chain_runs):
     """At 7 gaps, H = 5, from the fundamental family's orbit raised to H: the homotopy
     reaches the orbit that Newton reaches from the H = 10 branch's orbit cut to H = 5 (an
-    independent route) to round-off. Plain Newton from the raised start reaches it too
-    since the amplitude is the series' global maximum (every sampled maximum within the
-    sampling error refined); with the refined maximum of the largest sample alone it
-    did not converge in 90 iterations."""
+    independent route) to round-off. Where plain Newton from that start goes after 90
+    iterations is not asserted: from a start this far from the orbit its path depends on
+    round-off (it has been seen to reach the orbit on one machine and a phase-shifted
+    orbit of another family on another)."""
     model, low, high = chain_runs
     P = low.solver
     target = 7.0 * model.gap
@@ -57,13 +57,11 @@ def test_the_homotopy_reaches_the_orbit_from_the_raised_start(chain_runs):
     u1 = np.array([np.interp(target, A, U[:, i]) for i in range(U.shape[1])])
     u1 = solve_at_amplitude(aux, u1, target, max_iter=60)[0]
     start = _raised(aux, u1, P)
-    plain = solve_at_amplitude(P, start, target, max_iter=90)[0]
     u = pinned_homotopy(P, start, target)[0]
     ref = solve_at_amplitude(P, _lowered(high, P, target), target, max_iter=60)[0]
     assert abs(P.frequency_of(u) / P.frequency_of(ref) - 1) < 1e-9
     assert np.abs(u - ref).max() < 1e-7 * np.abs(ref).max()
     assert P.fundamental_share(u) > 0.9
-    assert np.abs(plain - ref).max() < 1e-7 * np.abs(ref).max()
 
 
 def test_the_default_backbone_lands_beyond_the_fold_on_the_lowered_family(chain_runs):
