@@ -128,6 +128,10 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
     #: the compiled evaluation (:class:`~mmshbm.methods.mms.friction_fused.FusedFrictionEvaluation`):
     #: None until first asked, False where the problem is not of the kind it evaluates
     _fused = None
+    #: the corrector's Newton loop compiled where the evaluation is fused
+    #: (:meth:`~mmshbm.methods.mms.friction_fused.FusedFrictionEvaluation.correct`); False:
+    #: the Python loop (:func:`~mmshbm.methods.mms.corrector.corrector_to_roundoff`), its reference
+    compiled_corrector = True
 
     def __init__(self, model: Model, force, harmonics: int = 5, n_samples: int | None = None,
                  r: float | None = None, backend: str = "auto", stability: bool | str = "auto",
@@ -352,7 +356,16 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         (:func:`~mmshbm.methods.mms.corrector.corrector_to_roundoff`: the residual alone does
         not bound the error where the friction rows are weak, condition numbers of 1e7 and
         more). Returns (u, iterations, residual history, Jacobian); raises RuntimeError when
-        it does not converge."""
+        it does not converge. Where the evaluation is fused and the bordered system small,
+        the whole loop is one compiled call
+        (:meth:`~mmshbm.methods.mms.friction_fused.FusedFrictionEvaluation.correct`; the
+        same steps and tests, ``compiled_corrector = False`` keeps the Python loop)."""
+        compiled = self.compiled_corrector and self._krylov is None and self._track is not None
+        if compiled and self._compiled_rows:
+            if self._fused is None:
+                self._fused = fused_evaluation(self)
+            if self._fused is not False and self._fused.corrects(self.n_unknowns):
+                return self._fused.correct(u, u_pred, tangent, tol, max_iter, step_tol)
         solve = self._krylov.bordered_solve if self._krylov is not None else None
         return corrector_to_roundoff(self, u, u_pred, tangent, tol, max_iter, step_tol, solve)
 

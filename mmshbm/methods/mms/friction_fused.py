@@ -8,6 +8,12 @@ round-off: the same formulas, the steps in one loop instead of NumPy calls in be
 serves the problems of that kind (:func:`fused_evaluation`): the amplitude DOF's harmonic 1
 tracked with the dense blocks, the modal condensation's compiled back end, the play form
 with constant slip forces (unilateral contacts allowed). The others keep the stepwise path.
+
+:meth:`FusedFrictionEvaluation.correct` is the continuation's corrector of those problems in
+one compiled call per point (:mod:`mmshbm.methods.mms._friction_newton`: the Newton loop of
+:func:`~mmshbm.methods.mms.corrector.corrector_to_roundoff`, its reference, with the small
+dense bordered solve of :func:`~mmshbm.core.bordered.bordered_solve`), for bordered systems
+of at most :data:`COMPILED_CORRECTOR_MAX_UNKNOWNS` unknowns (:meth:`~FusedFrictionEvaluation.corrects`).
 """
 
 from __future__ import annotations
@@ -15,8 +21,16 @@ from __future__ import annotations
 import numpy as np
 
 from ...harmonic.condense import SingularDynamicStiffness
+from .corrector import _FLOOR, _STALL
 
-__all__ = ["FusedFrictionEvaluation", "fused_evaluation"]
+__all__ = ["COMPILED_CORRECTOR_MAX_UNKNOWNS", "FusedFrictionEvaluation", "fused_evaluation"]
+
+#: the compiled corrector's largest bordered system: up to this size
+#: :func:`~mmshbm.core.bordered.bordered_solve` solves by the small dense LU the compiled
+#: loop runs too (larger ones go to LAPACK, and the Python corrector keeps them)
+COMPILED_CORRECTOR_MAX_UNKNOWNS = 40
+#: the smallest step of the corrector's backtracking (:func:`~mmshbm.methods.mms.corrector.backtrack`)
+_MIN_STEP = 1.0 / 4096
 
 
 def fused_evaluation(problem) -> FusedFrictionEvaluation | bool:
@@ -86,6 +100,50 @@ class FusedFrictionEvaluation:
             omega = float(u[-1]) * float(p.colscale[-1])
             raise SingularDynamicStiffness(f"condensation singular at Ω = {omega:.6g} rad/s")
         return (R, J) if jacobian else R
+
+    def corrects(self, n_unknowns: int) -> bool:
+        """Whether :meth:`correct` serves a bordered system of ``n_unknowns`` unknowns."""
+        return n_unknowns <= COMPILED_CORRECTOR_MAX_UNKNOWNS
+
+    def correct(self, u0: np.ndarray, u_pred: np.ndarray, tangent: np.ndarray, tol: float, max_iter: int,
+                step_tol: float):
+        """:func:`~mmshbm.methods.mms.corrector.corrector_to_roundoff` of the problem (dense
+        bordered solves) in one compiled call: (u (n,), iterations, merit history, Jacobian
+        (n − 1, n) at u or at the iterate one round-off step before it), all scaled. Raises
+        what that corrector raises: RuntimeError (no convergence in ``max_iter``, a stall
+        above round-off, a non-finite residual, a singular bordered system),
+        SingularDynamicStiffness where the condensation is singular, numpy.linalg.LinAlgError
+        where S_1 is."""
+        from . import _friction_newton as kn
+
+        p = self.problem
+        n = p.n_x + 3
+        if np.shape(u0) != (n,) or np.shape(u_pred) != (n,) or np.shape(tangent) != (n,):
+            raise ValueError(f"u0, u_pred and tangent must have shape ({n},), got {np.shape(u0)}, "
+                             f"{np.shape(u_pred)}, {np.shape(tangent)}")
+        u = np.empty(n)
+        J = np.empty((n - 1, n))
+        history = np.empty(2 * max(int(max_iter), 0) + 3)
+        info = np.empty(3)
+        c = np.ascontiguousarray
+        try:
+            status = kn._forced_friction_correct(
+                c(u0, dtype=float), c(u_pred, dtype=float), c(tangent, dtype=float), float(tol),
+                int(max_iter), float(step_tol), _FLOOR, _STALL, _MIN_STEP, p.colscale, p.rowscale,
+                float(p.length), self._fixed, self._work, u, J, history, info)
+        except np.linalg.LinAlgError as err:
+            raise np.linalg.LinAlgError(f"S_1 singular in the corrector: {err}") from None
+        if status == kn.NOT_FINITE:
+            raise RuntimeError("non-finite residual")
+        if status == kn.SINGULAR_JACOBIAN:
+            raise RuntimeError("singular Jacobian")
+        if status == kn.STALLED:
+            raise RuntimeError(f"Newton stalled at residual {info[2]:.2e}")
+        if status == kn.NO_CONVERGENCE:
+            raise RuntimeError(f"no convergence in {max_iter} iterations (residual {info[2]:.2e})")
+        if status == kn.SINGULAR_CONDENSATION:
+            raise SingularDynamicStiffness(f"condensation singular at Ω = {info[2]:.6g} rad/s")
+        return u, int(info[0]), history[:int(info[1])].copy(), J
 
     def _record_setup(self):
         p = self.problem
