@@ -19,7 +19,8 @@
   the same physical spring; ``track_ms_per_point`` the time per FRF point (MMS-HBM, the
   friction rows compiled: 1.5 ms on the 2-core development machine, idle; 4.0–5.1 ms with
   the NumPy rows, docs/friction.md), ``track_cpu_ms_per_point`` its processor time (the
-  whole evaluation fused: 1.41–1.58 ms, best of twenty, at load 7–14; 3.4–4.1 ms before).
+  whole evaluation fused: 1.41–1.58 ms, best of twenty, at load 7–14; 3.4–4.1 ms before;
+  the corrector compiled too: 0.37–0.51 ms at load 2.8, 0.62–0.66 ms before).
 * ``NLvibFrictionBeam``: NLvib's example-08 beam (2 m, 0.1 × 0.3 m, 185 GPa, 7830 kg/m³, 8
   elements; 0.2 N at the tip, C = βK with 1 % at the first stuck mode), μN = 1.5 N at node 4
   behind k_t = 1e7 or 1e9 N/m, or rigid at node 4 made massless; the whole FRF 0.9 ω_free …
@@ -28,6 +29,8 @@
   the fused kernel against the stepwise path.
 * ``ImpactFriction``: impact with friction on 4 DOFs (two masses driving a node's normal and
   tangential DOFs; gap 0.05 m, μ = 0.3, preload 0.05 N), the FRF 0.1–0.3 Hz at H = 7.
+* ``FrictionCorrector``: the ex08-like FRF (k_t = 1e7, 1e9) with the corrector compiled and
+  with its Python loop.
 * ``NLvibSideBySide``: the ex08 beam (k_t = 1e7, 1e9) and the Jenkins oscillator against
   NLvib's figures measured by ``python -m validation nlvib`` (``NLVIB``): the processor-time
   ratio and the rms difference at NLvib's largest point.
@@ -447,3 +450,39 @@ class NLvibSideBySide:
         return abs(float(np.sqrt(c[0] ** 2 + 0.5 * np.sum(c[1:] ** 2))) / rms_ref - 1)
 
     track_rms_difference_at_nlvib_peak.unit = "relative difference"
+
+
+class FrictionCorrector:
+    """The ex08-like FRF at H = 13 with the corrector compiled (one kernel call per point,
+    :meth:`~mmshbm.methods.mms.friction_fused.FusedFrictionEvaluation.correct`) and with the
+    Python loop it compiles (``compiled_corrector = False``), processor time, best of three."""
+
+    params = [("1e7", "1e9"), ("compiled", "python")]
+    param_names = ["tangential_stiffness", "corrector"]
+    number = 1
+    repeat = (3, 10, 60.0)
+    warmup_time = 0.0
+    timeout = 300
+
+    def setup(self, kind, corrector):
+        from mmshbm.methods.mms.friction_forced import FrictionForcedProblem
+
+        self._saved = FrictionForcedProblem.compiled_corrector
+        FrictionForcedProblem.compiled_corrector = corrector == "compiled"
+        self.run(kind)
+
+    def teardown(self, kind, corrector):
+        from mmshbm.methods.mms.friction_forced import FrictionForcedProblem
+
+        FrictionForcedProblem.compiled_corrector = self._saved
+
+    def run(self, kind):
+        import mmshbm
+
+        model, force, band = nlvib_friction_beam(kind)
+        return mmshbm.frequency_response(model, force, band, harmonics=13)
+
+    def track_cpu_ms(self, kind, corrector):
+        return min(_cpu_ms(lambda: self.run(kind)) for _ in range(3))
+
+    track_cpu_ms.unit = "ms"
