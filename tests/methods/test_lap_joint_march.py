@@ -68,7 +68,14 @@ def test_march_rejects_coupled_friction():
         FrictionPairMarch(joint.model, joint.force, 30.0)
 
 
-@pytest.mark.parametrize("preload", [500.0, 2000.0, 8000.0])
+@pytest.mark.parametrize("preload", [
+    500.0, 2000.0, 8000.0,
+    # here the harmonic balance stays 0.7-1.2 % above the march's amplitude from H = 5 to 17
+    # (3.587, 3.578, 3.567, 3.569 mm against 3.544 mm, the march converged in its steps and
+    # ρ∞), far more than its change from H = 5 to 9; from the march's orbit as the guess the
+    # harmonic balance returns to its own solution
+    pytest.param(1000.0, marks=pytest.mark.xfail(strict=True, reason="harmonic balance 1 % off the march")),
+])
 def test_lap_joint_damping_against_the_march(preload):
     """At 0.98 f_1, 8 pairs: the tip amplitude and the friction work per period (the
     interface's damping) of the H = 9 harmonic balance equal the march's within the
