@@ -119,6 +119,7 @@ class ForcedKrylovSolver(KrylovCorrector):
         self._pre_size = None
         self.rebuild_margin = int(rebuild_margin)
         self._fresh_iterations = 0
+        self._square = None  # (n, preconditioner, its first solve's iterations) of square_solve
 
     def _set_rows(self, n_rows: int) -> None:
         if self._rows != n_rows:
@@ -164,13 +165,32 @@ class ForcedKrylovSolver(KrylovCorrector):
     def square_solve(self, J, rhs: np.ndarray) -> np.ndarray:
         """x with J x = rhs (J square, Ω fixed: an array, or a
         :class:`~mmshbm.methods.mms.forced_operator.CondensedLawOperator`): GMRES
-        preconditioned by the harmonics' blocks, the dense LU when it does not converge."""
+        preconditioned by the harmonics' blocks, the dense LU when it does not converge.
+
+        As :meth:`bordered_solve`, the last square system's blocks are tried first (Newton's
+        iterates at one frequency change the law's derivatives little) for at most
+        :data:`_REUSE_ITERATIONS` iterations, and rebuilt at this J when they fail or take
+        ``rebuild_margin`` more iterations than their first solve."""
         operator = hasattr(J, "block")
         if not operator:
             J = np.asarray(J, dtype=float)
         n = J.n_x if operator else J.shape[0]
         self._set_rows(n)
         self.solves += 1
+        rhs = np.asarray(rhs, dtype=float)
+        if operator:
+            scale, apply = float(J.abs_row_bound(np.ones(n)).max()), J.matvec
+        else:
+            scale, apply = float(np.abs(J).sum(axis=1).max()), J.__matmul__
+        reused = self._square
+        if reused is not None and reused[0] == n:
+            x, its, ok = gmres_operator(apply, rhs, reused[1], self.rtol, _REUSE_ITERATIONS, scale)
+            self.krylov_iterations += its
+            if ok:
+                if its > reused[2] + self.rebuild_margin:
+                    self._square = None
+                return x
+        self._square = None
         factors = []
         for k, idx in enumerate(self._blocks):
             lu = la.lu_factor(J.block(k) if operator else J[np.ix_(idx, idx)], check_finite=False)
@@ -185,14 +205,11 @@ class ForcedKrylovSolver(KrylovCorrector):
                     out[idx] = la.lu_solve(lu, v[idx], check_finite=False)
                 return out
 
-            if operator:
-                scale, apply = float(J.abs_row_bound(np.ones(n)).max()), J.matvec
-            else:
-                scale, apply = float(np.abs(J).sum(axis=1).max()), J.__matmul__
-            x, its, ok = gmres_operator(apply, np.asarray(rhs, dtype=float), pre, self.rtol,
-                                        self.max_krylov, scale)
+            self.rebuilds += 1
+            x, its, ok = gmres_operator(apply, rhs, pre, self.rtol, self.max_krylov, scale)
             self.krylov_iterations += its
             if ok:
+                self._square = (n, pre, its)
                 return x
         self.fallbacks += 1
         log.debug("GMRES did not converge on a %d-unknown forced system; dense LU instead", n)
