@@ -335,6 +335,13 @@ def _check_bound_names(bounds, rec: dict) -> None:
                          f"{', '.join(map(repr, unknown))}; the problem monitors {sorted(rec)}")
 
 
+#: the secant's least arclength onto a bound, as a part of the step: above 0 (s = 0 is the
+#: previous point again), far below the root's s when the previous point lies within the
+#: bound's tolerance of it (a branch relocated onto the bound goes on from there), where a
+#: larger floor overshoots the bound by floor·ds·|d record/ds|
+_BOUND_S_FLOOR = 1e-12
+
+
 def _refine_onto_bound(problem, u, t, ds, crossed, rec_prev, rec_new, opt, fallback):
     """Secant iteration in the arclength s ∈ (0, ds) for monitor[name](s) = bound.
 
@@ -352,7 +359,7 @@ def _refine_onto_bound(problem, u, t, ds, crossed, rec_prev, rec_new, opt, fallb
         if f1 == f0:
             break
         s = s1 - f1 * (s1 - s0) / (f1 - f0)
-        s = min(max(s, 1e-3 * ds), ds)
+        s = min(max(s, _BOUND_S_FLOOR * ds), ds)
         try:
             try:
                 u_s, nit, hist, J = _corrector(problem, u, t, s, opt, start=near_u + (s - near_s) * t)

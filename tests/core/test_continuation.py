@@ -159,3 +159,15 @@ def test_a_branch_point_is_kept_on_a_step_of_at_most_branch_point_ds(limit):
     before, after = res.u[points[0] - 1, 1], res.u[points[0], 1]
     assert before < 0.0 < after
     assert after - before <= (0.3 if limit is None else limit) * (1 + 1e-12)  # 0.3: ds_max
+
+
+def test_a_branch_starting_just_below_a_bound_lands_on_it():
+    # the previous point 1e-12 below the bound x = 0.5: the secant's root lies at s ≈ 1e-12 of the
+    # step; the point returned is on the bound to the secant's criterion (1e-10 of the bound) and the
+    # corrector's tolerance (1e-10 on x² + y² − 1, so ~1e-10 in x): 1e-9 holds both with room (a floor
+    # on s of 1e-3 of the step overshot by 1e-4·dx/ds ≈ 9e-5)
+    x0 = 0.5 - 1e-12
+    res = continue_branch(Circle(), np.array([x0, -math.sqrt(1 - x0**2)]), np.array([1.0, 0.0]),
+                          ContinuationOptions(ds=0.1, ds_max=0.3, bounds={"x": (-2.0, 0.5)}))
+    assert res.status == "bound:x" and len(res.u) == 2
+    assert res.records["x"][-1] == pytest.approx(0.5, abs=1e-9)
