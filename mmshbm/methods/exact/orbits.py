@@ -240,7 +240,7 @@ def periodic_orbit(model_or_system, amplitude: float, guess=None, *, tol: float 
         try:
             dz = -np.linalg.solve(_scaled_jacobian(dv_dx, dv_dtau, r, w1, A), F)
         except np.linalg.LinAlgError:
-            logger.warning("singular shooting Jacobian at amplitude %g", A)
+            logger.info("singular shooting Jacobian at amplitude %g", A)
             break
         step = 1.0
         for _ in range(12):  # backtracking on the residual
@@ -356,7 +356,8 @@ def backbone(model_or_system, amplitudes, *, guess=None, max_halvings: int = 6,
     another family and treated as a failure (observed: from 1.5 to 3 gaps in one step the
     chain of the tests lands on the second nonlinear mode traversed four times). Orbits
     with several contacts per period are logged at INFO level and flagged by
-    ``n_contacts``.
+    ``n_contacts``; a point that failed is logged at INFO level too (nothing reaches stderr:
+    the result's ``converged`` says it).
 
     Parameters
     ----------
@@ -436,7 +437,7 @@ def backbone(model_or_system, amplitudes, *, guess=None, max_halvings: int = 6,
                 logger.info("amplitude %.6g m: %d contacts per period (f = %.6g Hz)",
                             target, orbit.n_contacts, orbit.frequency)
         else:
-            logger.warning("no converged orbit at amplitude %.6g m (residual %.3e)", target, orbit.residual)
+            logger.info("no converged orbit at amplitude %.6g m (residual %.3e)", target, orbit.residual)
         orbits.append(orbit)
 
     def arr(name, dtype=float):
