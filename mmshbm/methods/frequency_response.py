@@ -162,7 +162,8 @@ def frequency_response(model: Model, force, frequency_range, harmonics: int | No
     log.info("%s frequency response: %d points, status %s, %.3f s", method, len(res.u), res.status,
              done.elapsed_s)
     response = _assemble(model, excitation, problem, res, method, (f0, f1), options, copts, done)
-    warn_failed_start(response, model, excitation, f0)
+    if not warn_failed_start(response, model, excitation, f0):
+        report_incomplete(response, (f0, f1))
     return response
 
 
@@ -229,6 +230,31 @@ def warn_failed_start(response: FrequencyResponse, model: Model, excitation: Exc
     warnings.warn(f"{response.method} frequency response is empty: its first point at {frequency:g} Hz "
                   f"did not converge ({status.detail}){reach}; start the range lower, where the response "
                   "stays off the stops (below grazing), or lower the force", BranchWarning, stacklevel=3)
+    return True
+
+
+def report_incomplete(response: FrequencyResponse, frequency_range) -> bool:
+    """Record an ``"incomplete"`` finding (``response.findings``) and warn
+    (:class:`~mmshbm.BranchWarning` of that kind) when ``response`` did not reach the end
+    of ``frequency_range`` (:attr:`FrequencyResponse.completed` false); returns whether it did."""
+    from ..results.diagnostics import incomplete_reason
+    from ..results.findings import Finding
+
+    if response.completed:
+        return False
+    n = len(response)
+    f0, f1 = frequency_range
+    status = Status.parse(response.status)
+    if status.kind == Status.BOUND:
+        why = f"it turned back and left the range at {f0:g} Hz"
+    else:
+        why = incomplete_reason(status, response.metadata)
+    at = f" at {float(response.frequency[-1]):.6g} Hz" if n else ""
+    message = (f"{response.method} frequency response ended short of {f1:g} Hz{at}: {why} "
+               f"(status {str(status)!r}, {n} points)")
+    finding = Finding("incomplete", message, n - 1, n - 1)
+    response.metadata["checks"] = [*response.metadata.get("checks", []), finding.to_dict()]
+    warnings.warn(BranchWarning(message, "incomplete"), stacklevel=3)
     return True
 
 

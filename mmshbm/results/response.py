@@ -101,6 +101,20 @@ class FrequencyResponse(ResultBase):
     _NOUN: ClassVar[str] = "response"
 
     @property
+    def completed(self) -> bool:
+        """True when the response reached the end of its frequency range: status kind
+        "bound" with the last point nearer f_end than f_start (``metadata["frequency_range"]``;
+        without it, the status alone). False when it ran out of steps (``"max_steps"``) or of
+        step size (``"ds_min"``), failed, or turned back at a fold and left at f_start."""
+        if not super().completed:
+            return False
+        frange = self.metadata.get("frequency_range")
+        if frange is None or not len(self):
+            return True
+        f, (f0, f1) = float(self.frequency[-1]), frange
+        return abs(f - f1) <= abs(f - f0)
+
+    @property
     def amplitude_error(self) -> np.ndarray:
         """Estimated relative error of each point's amplitude at its frequency, shape
         (n_points,): ``records["amplitude_error"]``, filled by a run with ``tol``
