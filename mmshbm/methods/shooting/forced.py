@@ -106,11 +106,16 @@ class ShootingForcedProblem(OneEvaluation, ForcedProblemBase):
         return np.concatenate([np.asarray(z, dtype=float), [omega]]) / self.colscale
 
     def linear_response_point(self, frequency: float) -> np.ndarray:
-        """The linear steady state (stop ignored) of the discrete map at ``frequency`` (Hz)."""
+        """The linear steady state (stop ignored) of the discrete map at ``frequency`` (Hz),
+        shape (n_unknowns,).
+
+        The map without the contact force is affine in z₀, so one Newton step from z₀ = 0
+        solves it exactly (to round-off). It is the continuous linear response at the
+        warped frequency Ω̃ = (2/h) tan(Ωh/2), h = 2π/(NΩ), of the trapezoidal rule."""
         omega = 2 * np.pi * check.positive("frequency", frequency)
         z = np.zeros(2 * self.n_l)
-        R, J = self._residual(z, omega, True)
-        z = z - np.linalg.solve(J[:, :-1], R)  # linear: one Newton step (Newton refines it)
+        R, J = self._residual(z, omega, True, contact=False)
+        z = z - np.linalg.solve(J[:, :-1], R)
         return self.pack(z, omega)
 
     def initial_tangent(self):
@@ -136,7 +141,10 @@ class ShootingForcedProblem(OneEvaluation, ForcedProblemBase):
         self._cache = (h, out)
         return out
 
-    def _integrate(self, z0, omega, tangents: bool, store: bool = False):
+    def _integrate(self, z0, omega, tangents: bool, store: bool = False, contact: bool = True):
+        """One period of the map from z₀ at Ω (rad/s): the end state (q, v) and tangents
+        (dq, dv) in modal coordinates, and the stored steps (Q, V, λ) when ``store``;
+        ``contact=False``: the open structure (no contact force)."""
         if not (np.isfinite(omega) and omega > 0):
             raise ValueError(f"the frequency unknown must be positive, got Ω = {omega!r} rad/s")
         n, N = self.n_l, self.N
@@ -162,13 +170,14 @@ class ShootingForcedProblem(OneEvaluation, ForcedProblemBase):
         Q = np.empty((N + 1, n)) if store else np.empty((0, n))
         V = np.empty((N + 1, n)) if store else np.empty((0, n))
         LAM = np.empty(N + 1) if store else np.empty(0)
-        _forced_integrate(Sinv, P, self.Gam, self.diag, self.a, z, alpha, self.contact_stiffness, self.gap, h,
+        kc = self.contact_stiffness if contact else 0.0
+        _forced_integrate(Sinv, P, self.Gam, self.diag, self.a, z, alpha, kc, self.gap, h,
                           dh, G, dG, q, v, dq, dv, Q, V, LAM)
         return q, v, dq, dv, (Q, V, LAM)
 
-    def _residual(self, z0, omega, jacobian):
+    def _residual(self, z0, omega, jacobian, contact: bool = True):
         n = self.n_l
-        q, v, dq, dv, _ = self._integrate(z0, omega, jacobian)
+        q, v, dq, dv, _ = self._integrate(z0, omega, jacobian, contact=contact)
         zT = np.concatenate([self.Phi @ q, self.Phi @ v])
         R = zT - z0
         if not jacobian:
