@@ -8,6 +8,7 @@ import numpy as np
 
 from ... import _validate as check
 from ...core.measures import _cosine_peak, check_dof, harmonic_content
+from ...harmonic.modal_reduction import KRYLOV_BLOCKS
 
 __all__ = ["SignalsMixin"]
 
@@ -202,12 +203,58 @@ class SignalsMixin:
         return harmonic_content(self.coefficients(u)[dof])
 
     def _amplitude_row(self, a: np.ndarray, omega: float, eta: np.ndarray) -> np.ndarray:
-        """Cosine coefficients (H+1,) of the amplitude DOF's motion."""
+        """Cosine coefficients (H+1,) of the amplitude DOF's motion, from the cosine motion
+        ``a`` (H+1, n_c) of the massless DOFs at Ω (rad/s) and the pole unknowns ``eta``
+        (n_p,): the amplitude DOF's row of the recovery q_l,k = −Z_k a_k (minus the pole
+        terms) alone, the other DOFs with mass not formed (:meth:`_recover` gives them all;
+        the same numbers to round-off)."""
         if self._amp_in_c:
             return np.ascontiguousarray(a[:, self._amp_index])
-        Ql = self._recover(a, omega, eta)
-        row = Ql[int(np.searchsorted(self.model.l, self.amplitude_dof))]
-        return np.concatenate([[row[0]], row[1::2]])
+        i = int(np.searchsorted(self.model.l, self.amplitude_dof))
+        cond = self.cond
+        a = np.asarray(a, dtype=float)
+        if getattr(cond, "backend", None) == "modal":
+            return self._amplitude_row_modal(cond, i, a, omega, eta)
+        # a direct back end (RCM order): the solves of the recovery, one row of each Z_k
+        r = int(np.flatnonzero(cond.perm == i)[0])
+        poles = self.pole_set if self.n_poles else None
+        row = np.empty(self.H + 1)
+        row[0] = -(cond._Z0[r] @ a[0])
+        for k in range(1, self.H + 1):
+            Z = poles._z_regular(k, omega) if poles is not None else cond._solve(k * omega)
+            row[k] = -(Z[r] @ a[k])
+        if poles is not None:
+            for p, (k, j) in enumerate(poles.pairs):
+                row[k] -= poles.phi[r, j] * eta[p]
+        return row
+
+    def _amplitude_row_modal(self, cond, i: int, a: np.ndarray, omega: float, eta: np.ndarray) -> np.ndarray:
+        """:meth:`_amplitude_row` of the modal condensation: row ``i`` (``model.l`` order) of
+        its recovery (:meth:`~mmshbm.harmonic.modal.ModalCondensation.recover`, the same
+        factors, shared through its cache of the last Ω) applied to the cosine columns."""
+        H = a.shape[0] - 1
+        pairs = self.pole_set.pairs if self.n_poles else []
+        key = (H, float(omega), tuple(pairs))
+        last = cond._recovery_factors
+        if last is not None and last[0] == key:
+            x, c = last[1]
+        else:
+            x, c = cond._recovery_coefficients(H, float(omega), key[2])
+            cond._recovery_factors = ((H, float(omega), tuple(map(tuple, pairs))), (x, c))
+        cols = np.concatenate([[0], np.arange(1, 2 * H, 2)])  # the cosine column of each harmonic
+        x, c = x[cols], c[cols]
+        cond._static_recovery()  # Z_0 and Ṽ_i (built once per reduction; done by any recovery before)
+        aT = a.T
+        row = cond._Z0[i] @ aT + cond.phi_j[i] @ ((cond.b_j @ aT) * c.T)
+        if not cond.complete:
+            for n in range(1, KRYLOV_BLOCKS):
+                row += (cond._V[n][i] @ aT) * x**n
+        row = -row
+        if self.n_poles:  # the left-out pole terms, −φ_j η_jk (kΩ)²/ω_j², as the pole set's recovery
+            phi_row = self.pole_set.phi[i]
+            for p, (k, j) in enumerate(pairs):
+                row[k] -= phi_row[j] * eta[p] * (k * omega) ** 2 / self._pole_w2[p]
+        return row
 
     def _amplitude_peak(self, u: np.ndarray):
         """(row, cos kτ* (H+1,), amplitude (m), s): the amplitude DOF's cosine coefficients,
