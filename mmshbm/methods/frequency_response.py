@@ -189,9 +189,10 @@ def _to_tolerance(model: Model, force, frange, tol, harmonics, method: str, *, c
     if not model_has_damping(model):  # the same refusal as the fixed-H run, before it starts
         return frequency_response(model, force, frange, settings["start_harmonics"], method, **options)
     excitation = force if isinstance(force, Excitation) else harmonic_force(model, force)
-    return response_to_tolerance(model, excitation, frange, method=method, run=frequency_response,
-                                 make_problem=make_forced_problem, **settings,
-                                 **options)
+    response = response_to_tolerance(model, excitation, frange, method=method, run=frequency_response,
+                                     make_problem=make_forced_problem, **settings, **options)
+    report_incomplete(response, frange)  # the fixed-H run's finding is not the result's: said again
+    return response
 
 
 def _response_progress(method: str, gap: float, callback):

@@ -26,7 +26,7 @@ def osc():
 def _run(model, frange, **kw):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        r = mmshbm.frequency_response(model, F_OSC, frange, harmonics=4, **kw)
+        r = mmshbm.frequency_response(model, F_OSC, frange, **({} if "tol" in kw else {"harmonics": 4}), **kw)
     kinds = [getattr(w.message, "kind", None) for w in caught if issubclass(w.category, mmshbm.BranchWarning)]
     return r, kinds
 
@@ -49,6 +49,13 @@ def test_a_response_stopped_short_says_so(osc, stop, options, tmp_path):
     back = FrequencyResponse.load(r.save(tmp_path / "r.npz"))
     assert Status.parse(back.status).kind == stop and not back.completed
     assert [f.kind for f in back.findings] == ["incomplete"]
+
+
+def test_a_response_to_tolerance_stopped_short_says_so(osc):
+    f1 = osc.linear_frequencies(1)[0]
+    r, kinds = _run(osc, (0.5 * f1, 1.6 * f1), tol=1e-3, max_steps=5)
+    assert r.status.kind == Status.MAX_STEPS and not r.completed
+    assert "incomplete" in [f.kind for f in r.findings] and "incomplete" in kinds
 
 
 def test_a_response_reaching_the_end_is_complete(osc):
