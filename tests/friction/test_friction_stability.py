@@ -185,3 +185,22 @@ def test_eigendecomposed_phases_agree_with_expm(normal_load, f):
     bound = np.linalg.cond(np.linalg.eig(phis[-1])[1]) * bound_phi
     distance = max(np.abs(mu_expm - m).min() for m in mu)
     assert len(mu) == 3 and distance <= bound, (distance, bound)
+
+
+def test_phase_exponentials_against_closed_forms():
+    """A damped oscillator's generator (diagonalisable) against its closed-form exponential,
+    and a free mass's (defective: a Jordan block, κ(V) = ∞) taken by expm: exp([[0, 1],
+    [0, 0]] t) = [[1, t], [0, 1]]. Tolerance: the eigendecomposition's κ(V)·ε with κ(V) ≈ 1/ζ
+    (the eigenvectors of λ = −ζω ± iω_d are ζ apart) times the entries' scale ω, margin 100."""
+    w, z, t = 2.0, 0.05, 3.7
+    A = np.array([[0.0, 1.0], [-w * w, -2 * z * w]])
+    wd = w * np.sqrt(1 - z * z)
+    c, s, e = np.cos(wd * t), np.sin(wd * t), np.exp(-z * w * t)
+    exact = e * np.array([[c + z * w / wd * s, s / wd], [-w * w / wd * s, c - z * w / wd * s]])
+    ex = PhaseExponentials()
+    got = ex("oscillator", A, t)
+    assert ex._eig["oscillator"] is not False
+    assert np.abs(got - exact).max() <= 100 * (1 / z) * np.finfo(float).eps * w
+    free = ex("free", np.array([[0.0, 1.0], [0.0, 0.0]]), t)
+    assert ex._eig["free"] is False
+    np.testing.assert_allclose(free, [[1.0, t], [0.0, 1.0]], rtol=0, atol=4 * np.finfo(float).eps * t)
