@@ -1,7 +1,8 @@
-"""Checkpoint files of a running backbone: every converged point, written as it comes.
+"""Checkpoint files of a running continuation: every converged point, written as it comes.
 
 Format: JSON lines (UTF-8). The first line is a header (format name and version, and the
-configuration that fixes the branch: method, H, N, model fingerprint, solver options);
+configuration that fixes the branch, as the caller gives it: this module stores and
+compares it without knowing what its entries mean);
 then one line per accepted point holding the full driver state
 (:class:`~mmshbm.core.continuation.ContinuationState`: scaled unknowns ``u``, unit
 ``tangent``, the step ``ds`` that led to the point and the step ``ds_next`` the driver
@@ -20,7 +21,7 @@ is an error.
 Resume. :func:`read_checkpoint` returns the header and the points;
 :meth:`Checkpoint.state` turns them into a :class:`ContinuationState` from which
 :func:`~mmshbm.core.continuation.continue_branch` goes on exactly as the uninterrupted run
-would (``mmshbm.backbone(..., resume=path)``).
+would (a method's ``resume=path``).
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ import json
 import logging
 import os
 import tempfile
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -87,46 +89,55 @@ def _restore(x):
     return x
 
 
-#: how a mismatch names a header entry (or an entry of its ``solver`` settings): the
-#: argument of ``mmshbm.backbone`` / ``frequency_response`` that sets it
-_SETTING_NAMES = {
-    "H": "harmonics (H)", "N": "n_samples (N)", "r": "r", "mode": "mode",
-    "penalty_stiffness": "penalty_stiffness", "steps_per_period": "steps_per_period",
-    "method": "method", "model": "the model's matrices, contact DOF, gap or stop side",
-    "n_unknowns": "the number of unknowns", "pole_scaling": "the scaling of the pole unknowns",
-}
-
-
-#: header entries whose own entries are settings of their own, named one by one
-_BY_ENTRY = ("solver", "method_options")
-
-
-def header_differences(stored: dict, current: dict, keys) -> list[str]:
+def header_differences(stored: dict, current: dict, keys, *, names: Mapping[str, str] | None = None,
+                       by_entry: Iterable[str] = (), fingerprints: Iterable[str] = (),
+                       last: Iterable[str] = ()) -> list[str]:
     """The entries ``keys`` of a run's checkpoint header ``current`` that differ from a
-    file's header ``stored``, one phrase each ("harmonics (H): file 5, now 8"): the
-    solver settings and method options entry by entry, other entries whole, the model by its fingerprint, the
-    number of unknowns last (it follows from the others, and is named alone only when
-    nothing else explains it)."""
-    out, unknowns = [], None
+    file's header ``stored``, one phrase each ("harmonics (H): file 5, now 8").
+
+    The caller (the method that wrote the header) says what its entries mean; this module
+    names no setting of its own.
+
+    Parameters
+    ----------
+    stored, current : dict
+        The file's header and the run's.
+    keys : iterable of str
+        The entries compared, in the order they are named.
+    names : mapping, optional
+        How a phrase names an entry (or an entry of a ``by_entry`` dict): the argument that
+        sets it; an entry not in it is named by its key.
+    by_entry : iterable of str
+        Entries whose values are dicts of settings of their own, compared and named entry
+        by entry (a solver's settings).
+    fingerprints : iterable of str
+        Entries whose values are hashes, named without their values (a model's fingerprint).
+    last : iterable of str
+        Entries that follow from the others (a number of unknowns): named after all the
+        others, and only when nothing else differs.
+    """
+    names = dict(names or {})
+    by_entry, fingerprints, last = set(by_entry), set(fingerprints), set(last)
+    out, after = [], []
     for key in keys:
         old, new = stored.get(key), current.get(key)
         if old == new:
             continue
-        if key == "n_unknowns":
-            unknowns = _difference(key, stored, current)
-        elif key == "model":
-            out.append(_SETTING_NAMES[key] + " (another fingerprint)")
-        elif key in _BY_ENTRY and isinstance(old, dict) and isinstance(new, dict):
+        if key in last:
+            after.append(_difference(key, stored, current, names))
+        elif key in fingerprints:
+            out.append(names.get(key, key) + " (another fingerprint)")
+        elif key in by_entry and isinstance(old, dict) and isinstance(new, dict):
             for name in sorted(set(old) | set(new), key=str):
                 if old.get(name) != new.get(name):
-                    out.append(_difference(name, old, new))
+                    out.append(_difference(name, old, new, names))
         else:
-            out.append(_difference(key, stored, current))
-    return out + ([unknowns] if unknowns else [])
+            out.append(_difference(key, stored, current, names))
+    return out + after
 
 
-def _difference(name: str, stored: dict, current: dict) -> str:
-    return f"{_SETTING_NAMES.get(name, name)}: file {_shown(stored, name)}, now {_shown(current, name)}"
+def _difference(name: str, stored: dict, current: dict, names: Mapping[str, str]) -> str:
+    return f"{names.get(name, name)}: file {_shown(stored, name)}, now {_shown(current, name)}"
 
 
 def _shown(settings: dict, name: str) -> str:

@@ -46,6 +46,14 @@ log = logging.getLogger(__name__)
 CONTINUATION_FIELDS = frozenset(f.name for f in dataclasses.fields(ContinuationOptions))
 #: header entries a resumed run must share with its checkpoint file (before the ``extra`` ones)
 _RESUME_KEYS = ("method", "n_unknowns", "model", "solver", "method_options")
+#: how a resume mismatch names a header entry (or an entry of its ``solver`` settings): the
+#: argument of ``mmshbm.backbone`` / ``frequency_response`` that sets it
+SETTING_NAMES = {
+    "H": "harmonics (H)", "N": "n_samples (N)", "r": "r", "mode": "mode",
+    "penalty_stiffness": "penalty_stiffness", "steps_per_period": "steps_per_period",
+    "method": "method", "model": "the model's matrices, contact DOF, gap or stop side",
+    "n_unknowns": "the number of unknowns", "pole_scaling": "the scaling of the pole unknowns",
+}
 
 
 # ---------------------------------------------------------------------- validation
@@ -206,7 +214,9 @@ def check_resumable(stored: dict, current: dict, path) -> None:
     from ..core.checkpoint import header_differences
 
     keys = _RESUME_KEYS + tuple(k for k in current if k not in _RESUME_KEYS and k != "model_description")
-    differences = header_differences(stored, current, keys)
+    differences = header_differences(stored, current, keys, names=SETTING_NAMES,
+                                     by_entry=("solver", "method_options"), fingerprints=("model",),
+                                     last=("n_unknowns",))
     if differences:
         raise ValueError(f"cannot resume from {str(path)!r}: this run's settings differ from the file's: "
                          f"{'; '.join(differences)}; resume with the file's settings, or start a new run "

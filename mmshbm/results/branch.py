@@ -109,6 +109,26 @@ class Branch(ResultBase):
     FORMAT: ClassVar[str] = BRANCH_FORMAT
     ARRAY_FIELDS: ClassVar[tuple] = ARRAY_FIELDS
     _NOUN: ClassVar[str] = "branch"
+    #: relative amplitude change below which a branch has not left its start: converged
+    #: points of one orbit agree to the corrector's step tolerance (``step_tol``, 1e-8
+    #: relative on the unknowns, which the amplitude follows), 100 times below this
+    START_RTOL: ClassVar[float] = 1e-6
+
+    @property
+    def completed(self) -> bool:
+        """True when the backbone reached one of its bounds (status ``"bound:<name>"``,
+        amplitude or frequency) at a point of larger amplitude than its start.
+
+        A backbone grows from its small start amplitude to its bound; one that reached a
+        bound while coming back to its start (the amplitude's lower bound, 0) or that never
+        left its start (last amplitude within :attr:`START_RTOL` of the first) did not
+        cover its range, and is not completed; nor is one that ran out of steps
+        (``"max_steps"``), of step size, or failed.
+        """
+        if not super().completed or len(self) < 2:
+            return False
+        first, last = float(self.amplitude[0]), float(self.amplitude[-1])
+        return last - first > self.START_RTOL * max(abs(first), abs(last))
 
     @property
     def damping_ratio(self) -> np.ndarray:

@@ -39,8 +39,10 @@ study summaries):
     A branch computed with ``tol`` misses it on part of its family front
     (:mod:`mmshbm.results.tolerance_checks`).
 ``"incomplete"``
-    The branch ended short of its bounds (its status is not ``"bound:<name>"``: a step
-    budget ``max_steps``, a step size below ``ds_min``, a failed start, ...).
+    The branch ended short of its bounds (``not branch.completed``: its status is not
+    ``"bound:<name>"`` (a step budget ``max_steps``, a step size below ``ds_min``, a failed
+    start, ...), or it reached a bound coming back to its start amplitude or without
+    leaving it).
 
 For harmonic balance "penetration" and "negative_force" are truncation effects (more
 harmonics reduce them); ``branch.time_signals(i, admissible=True)`` gives admissible signals
@@ -136,7 +138,7 @@ def check_branch(branch, thresholds: CheckThresholds | None = None, *, warn: boo
         out += _coexisting(branch)
         out += _contact(branch, solver, th)
     out += tolerance_findings(branch)
-    if Status.parse(branch.status).kind != Status.BOUND:
+    if not branch.completed:
         out.append(_incomplete(branch))
     branch.metadata["checks"] = [f.to_dict() for f in out]
     branch.metadata["check_thresholds"] = (dict(_DEFAULT_RECORD) if th is _DEFAULT_THRESHOLDS
@@ -353,6 +355,7 @@ _WHY = {
     "ds_min": "the step size fell below ds_min (the corrector kept failing)",
     "start": "the first point failed",
     "interrupted": "the run was interrupted",
+    "bound": "it reached a bound at no larger amplitude than its start (it came back, or never left it)",
 }
 
 

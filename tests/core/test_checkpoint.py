@@ -197,6 +197,38 @@ def test_resume_rejects_another_configuration(tmp_path):
         mmshbm.backbone(osc.model(), harmonics=3, method="penalty", resume=path)
 
 
+def test_header_differences_name_entries_as_the_caller_says():
+    """The core compares a header without knowing its entries: a key is named as the caller
+    names it (by the key when it says nothing), settings dicts entry by entry, fingerprints
+    without their values, and entries that follow from others only last."""
+    from mmshbm.core import checkpoint
+
+    stored = {"n": 6, "solver": {"H": 3, "N": 64}, "model": "ab12", "method": "a"}
+    current = {"n": 8, "solver": {"H": 5, "N": 64}, "model": "cd34", "method": "a"}
+    keys = ("n", "solver", "model", "method")
+    assert checkpoint.header_differences(stored, current, keys) == [
+        "n: file 6, now 8", "solver: file {'H': 3, 'N': 64}, now {'H': 5, 'N': 64}",
+        "model: file 'ab12', now 'cd34'"]
+    assert checkpoint.header_differences(
+        stored, current, keys, names={"H": "harmonics", "model": "the model"}, by_entry=("solver",),
+        fingerprints=("model",), last=("n",)) == [
+        "harmonics: file 3, now 5", "the model (another fingerprint)", "n: file 6, now 8"]
+    assert not any(isinstance(v, dict) and "H" in v for v in vars(checkpoint).values())
+
+
+def test_a_checkpoint_written_before_the_names_moved_resumes(tmp_path):
+    """The header's format did not change: a file's header as written before (the entries
+    of a header from version 1) is compared as ever, and a matching run resumes from it."""
+    osc = OneDofOscillator(1.0, 1.0, 4.0, 1.0)
+    path = tmp_path / "osc.ckpt"
+    full = mmshbm.backbone(osc.model(), harmonics=3, max_steps=6)
+    mmshbm.backbone(osc.model(), harmonics=3, max_steps=3, checkpoint=path)
+    header = json.loads(path.read_text().splitlines()[0])
+    assert {"format", "version", "method", "n_unknowns", "model", "solver", "method_options"} <= set(header)
+    resumed = mmshbm.backbone(osc.model(), harmonics=3, max_steps=6, resume=path)
+    np.testing.assert_array_equal(resumed.frequency, full.frequency)  # the same computation repeats
+
+
 def test_resume_refuses_a_checkpoint_without_the_pole_scaling(tmp_path):
     """Checkpoints written before the pole unknowns' scaling was recorded hold states in
     another scaling: resuming one is refused by name, not continued from wrong states."""

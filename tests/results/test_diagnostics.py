@@ -97,14 +97,33 @@ def test_incomplete_branch(beam21):
     assert any("ended short of its bounds" in m and "max_steps = 4" in m for m in messages)
 
 
+def _constructed(amplitude, status):
+    n = len(amplitude)
+    return Branch(frequency=np.linspace(1.0, 2.0, n), amplitude=np.asarray(amplitude, dtype=float),
+                  energy=np.ones(n), contact_force_max=np.zeros(n), newton_iterations=np.zeros(n, int),
+                  step_size=np.ones(n), states=np.zeros((n, 3)), status=status, method="mmshbm", harmonics=1)
+
+
 def test_completed_means_reached_bounds():
-    kw = dict(frequency=np.ones(2), amplitude=np.ones(2), energy=np.ones(2), contact_force_max=np.zeros(2),
-              newton_iterations=np.zeros(2, int), step_size=np.ones(2), states=np.zeros((2, 3)),
-              method="mmshbm", harmonics=1)
-    assert Branch(status="bound:amplitude", **kw).completed
-    assert Branch(status="bound:frequency", **kw).completed
+    grown = [1e-4, 5e-3, 1e-2]
+    assert _constructed(grown, "bound:amplitude").completed
+    assert _constructed(grown, "bound:frequency").completed
     for status in ("max_steps", "ds_min: step size fell below 1e-06", "start failed: x", "interrupted"):
-        assert not Branch(status=status, **kw).completed
+        assert not _constructed(grown, status).completed
+
+
+@pytest.mark.parametrize("amplitude", [
+    [1e-4, 5e-3, 0.0],  # turned back and hit the amplitude's lower bound, 0
+    [1e-4, 1e-4 * (1 + 1e-9)],  # never left its start: equal to far below the step tolerance
+    [1e-4],  # the start alone
+    [1e-4, 5e-3, 5e-5],  # came back below its start, to a frequency bound
+])
+def test_a_backbone_back_at_its_start_is_not_completed(amplitude):
+    branch = _constructed(amplitude, "bound:amplitude")
+    assert not branch.completed
+    assert not _constructed(amplitude, "bound:frequency").completed
+    finding = [f for f in check_branch(branch, warn=False) if f.kind == "incomplete"]
+    assert len(finding) == 1 and "no larger amplitude than its start" in finding[0].message
 
 
 def test_checks_survive_save_and_load(beam21, tmp_path):
