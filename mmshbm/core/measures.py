@@ -179,10 +179,12 @@ def _series_peak(c, s, cos_table, sin_table, y):
     N = y.shape[0]
     H = c.shape[0] - 1
     for i in range(N):
-        v = c[0]
-        for k in range(1, H + 1):
-            v += c[k] * cos_table[k, i] + s[k] * sin_table[k, i]
-        y[i] = v
+        y[i] = c[0]
+    for k in range(1, H + 1):  # row by row: the tables are C-ordered (k, i)
+        ck = c[k]
+        sk = s[k]
+        for i in range(N):
+            y[i] += ck * cos_table[k, i] + sk * sin_table[k, i]
     return _best_of_samples(c, s, y, _TWO_PI / N)[0]
 
 

@@ -160,3 +160,41 @@ def test_a_dwell_with_many_near_equal_maxima_peaks_at_the_largest(H, m, delta):
         assert_roundoff_close(value, want, _tolerance_scale(row), terms=H + 3, err_msg=f"H={H} sign={sign}")
         assert_roundoff_close(value, s * row @ cos_k, np.abs(row).sum(), terms=H + 3)
         assert abs(abs(cos_k[1]) - abs(np.cos(np.pi * (1 - 1 / m)))) < 1e-3  # next to τ = π
+
+
+@pytest.mark.parametrize("H", [1, 8, 31, 64])
+def test_the_monitor_series_peak_is_the_dense_search_maximum(H):
+    """_series_peak (cosine and sine terms, on a table of 16H samples as the monitor's):
+    the dense brute-force maximum of g = c_0 + Σ (c_k cos kτ + s_k sin kτ) to round-off,
+    also for the dwell-like g = cos mτ − δ cos τ of the test above (m = H − 2, odd)."""
+    from mmshbm.core.measures import _series_peak
+
+    rng = np.random.default_rng(H)
+    N = max(64, 16 * H)
+    tau = 2 * np.pi * np.arange(N) / N
+    k = np.arange(H + 1)
+    cos_t, sin_t = np.cos(np.outer(k, tau)), np.sin(np.outer(k, tau))
+    rows = [(rng.standard_normal(H + 1) / (1.0 + k), rng.standard_normal(H + 1) / (1.0 + k))]
+    if H > 4:
+        m = H - 2 if H % 2 else H - 3
+        c = np.zeros(H + 1)
+        c[m], c[1] = 1.0, -1e-8
+        rows.append((c, np.zeros(H + 1)))
+    dense = 2 * np.pi * np.arange(DENSE) / DENSE
+    for c, s in rows:
+        s = s.copy()
+        s[0] = 0.0
+        value = _series_peak(c, s, cos_t, sin_t, np.empty(N))
+        def g(t, c=c, s=s):
+            return (np.cos(np.multiply.outer(np.atleast_1d(t), k)) @ c
+                    + np.sin(np.multiply.outer(np.atleast_1d(t), k)) @ s)
+
+        y = g(dense)
+        h = 2 * np.pi / DENSE
+        best = y.max()
+        for i in np.flatnonzero((y >= np.roll(y, 1)) & (y >= np.roll(y, -1)) & (y >= y.max() - 1e-6)):
+            r = minimize_scalar(lambda t, g=g: -g(t)[0], bounds=(dense[i] - h, dense[i] + h),
+                                method="bounded", options={"xatol": 1e-13})
+            best = max(best, -r.fun)
+        scale = _tolerance_scale(c) + _tolerance_scale(s)
+        assert_roundoff_close(value, best, scale, terms=H + 3, err_msg=f"H={H}")
