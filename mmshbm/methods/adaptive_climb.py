@@ -11,20 +11,23 @@ start leaves out. So a point of the family front in contact
   start H where ``tol`` was out of its reach, which is judged at a point's first rung):
   where that is H* > ``start_harmonics``, the point is solved at H* and 2H* first instead
   of climbing H = start, 2·start, … to it;
-  where its estimate at H* then meets ``tol`` with room (times ``contraction``, the
-  weakest contraction per doubling counted as converging, still within ``tol``), the
-  rung below is tried: H*/2 is kept where its estimate meets ``tol`` and the pair above
-  it, (H*, 2H*), contracts (its confirmation, step 4, costs nothing more), and so on
-  down; otherwise the climb goes on from H* by the rules of step 3 (where a point goes
-  to the cap or out of reach from H*, the contraction it is credited is measured on the
-  rung below, solved then: the cheapest solve of the point);
+  the rung below is tried where the estimate predicted there meets ``tol`` (the estimate
+  at H* times the contraction per doubling the predecessor measured between H*/2 and
+  H*, at least ``contraction``, the weakest counted as converging): H*/2 is kept where
+  its estimate meets ``tol`` and the pair above it, (H*, 2H*), contracts (its
+  confirmation, step 4, costs nothing more), and so on down; otherwise the climb goes on
+  from H* by the rules of step 3 (where a point goes to the cap or out of reach from H*,
+  the contraction it is credited is measured on the rung below, solved then: the
+  cheapest solve of the point);
 * **is solved at a higher H from its own coefficients padded with zeros**, and where that
   fails (a stiff contact whose harmonics above H are not small; the pair is then not
   tried so again on the branch, as in :func:`mmshbm.results.point_errors.raise_point`),
   **from its predecessor's solution at that H** with this point's amplitude pinned (the
   continuation's corrector from the neighbouring point: it carries the harmonics the
   padding leaves out), accepted where its change of frequency from H is at most
-  ``SEED_CHANGE`` times the predecessor's (else it is another orbit at the amplitude);
+  ``SEED_CHANGE`` times the predecessor's and, its harmonics above H cut, it solves back
+  to the point's own solution at H (``RETURN_TOL``; else it is another orbit at the
+  amplitude, which the predecessor's start led to);
   only where both fail do the √2 steps of ``raise_point`` follow.
 
 Points off the front and points without contact force get one estimate at the start H,
@@ -37,12 +40,16 @@ import math
 
 import numpy as np
 
-__all__ = ["refine_points_along", "SEED_CHANGE"]
+__all__ = ["refine_points_along", "SEED_CHANGE", "RETURN_TOL"]
 
 #: a solve started from the predecessor's solution is this point refined where its change
 #: of frequency from H to H2 is at most this many times the predecessor's (the truncation's
 #: change varies slowly along a branch; a larger change is another orbit at the amplitude)
 SEED_CHANGE = 4.0
+#: and where, cut to H, it solves back to the point's own frequency at H within this
+#: (relative; both solved to a scaled residual of 1e-10): a solution at H2 connected to the
+#: point, not another orbit that the predecessor's start led to
+RETURN_TOL = 1e-8
 
 
 class _Point:
@@ -77,23 +84,28 @@ class _Solves:
         pair = (H, H2)
         u2 = None
 
-        def solve(start):
+        def solve(solver, start):
             self.solves += 1
             try:
-                return solve_at_amplitude(s2, start, p.amplitude, tol=self.tol, max_iter=DIRECT_ITERATIONS)[0]
+                return solve_at_amplitude(solver, start, p.amplitude, tol=self.tol,
+                                          max_iter=DIRECT_ITERATIONS)[0]
             except errors:
                 return None
 
+        s = self.ladder.at(H)
         if pair not in self.ladder.stepped or STEP * H >= H2:  # the point's own start, padded
-            u2 = solve(pad(self.ladder.at(H), u, s2))
+            u2 = solve(s2, pad(s, u, s2))
             if u2 is None:
                 self.ladder.stepped.add(pair)
         if u2 is None and before is not None and H in before.known and H2 in before.known:
-            u2 = solve(before.known[H2][0])  # the predecessor's solution at H2, this amplitude pinned
+            u2 = solve(s2, before.known[H2][0])  # the predecessor's solution at H2, this amplitude pinned
             if u2 is not None:
                 f_b, f2_b = before.known[H][1], before.known[H2][1]
                 f2 = float(s2.unpack(u2)[1]) / (2 * math.pi)
-                if abs(f2 - f) > SEED_CHANGE * abs(f2_b - f_b) + 1e-12 * abs(f):
+                back = None
+                if abs(f2 - f) <= SEED_CHANGE * abs(f2_b - f_b) + 1e-12 * abs(f):
+                    back = solve(s, pad(s2, u2, s))  # cut to H, it must solve back to this point
+                if back is None or abs(float(s.unpack(back)[1]) / (2 * math.pi) / f - 1) > RETURN_TOL:
                     u2 = None  # another orbit at this amplitude, not this point refined
         if u2 is None:
             self.solves += 1
@@ -165,6 +177,18 @@ def refine_points_along(base, tol: float, start_harmonics: int, max_harmonics: i
     return ladder, H, states, freq, err, (extrapolated, confirmed), most, solves.solves
 
 
+def _predicted_below(e: float, h: int, before: _Point | None, contraction: float) -> float:
+    """The estimate a point with the estimate ``e`` at ``h`` can be expected to have at h/2:
+    ``e`` times the contraction per doubling its predecessor measured between h/2 and h,
+    at least ``contraction`` (the weakest that counts as converging; NaN for a NaN ``e``)."""
+    c = contraction
+    if before is not None:
+        e_low, e_at = before.estimate.get(h // 2, math.nan), before.estimate.get(h, math.nan)
+        if e_low > 0 and e_at > 0:
+            c = max(c, e_low / e_at)
+    return e * c
+
+
 def _climb(p: _Point, first: int, solves: _Solves, seed_from, tol, max_harmonics, patience, contraction,
            confirm: bool, raise_: bool):
     """The rules of :mod:`mmshbm.methods.adaptive` for one point from the rung ``first``
@@ -177,18 +201,20 @@ def _climb(p: _Point, first: int, solves: _Solves, seed_from, tol, max_harmonics
         if not solves.at(p, first, seed_from):  # no start there: climb from the start H
             h = min(p.known)
         else:
-            e = est(h)
-            if math.isfinite(e) and e * contraction <= tol:  # the rungs below may meet tol
-                down = h
-                while down // 2 >= min(p.known):
-                    low = down // 2
-                    e_low = est(low) if solves.at(p, low, seed_from) else math.nan
-                    f_low, f, f2 = p.known[low][1], p.known[down][1], p.known[2 * down][1]
-                    if not (e_low <= tol and abs(f2 - f) < abs(f - f_low)):
-                        break
-                    down = low
-                if down < h:
-                    return down, p.estimate[down], 0, True, False
+            est(h)
+            down = h
+            while down // 2 >= min(p.known) and _predicted_below(p.estimate[down], down, seed_from,
+                                                                 contraction) <= tol:
+                low = down // 2  # the rung below may meet tol: tried
+                if not solves.at(p, low, seed_from):
+                    break
+                e_low = est(low)
+                f_low, f, f2 = p.known[low][1], p.known[down][1], p.known[2 * down][1]
+                if not (e_low <= tol and abs(f2 - f) < abs(f - f_low)):
+                    break
+                down = low
+            if down < h:
+                return down, p.estimate[down], 0, True, False
     last, stalls, held = math.inf, 0, None
     ratio = math.nan
 
