@@ -49,9 +49,16 @@ other DOFs' signals are recovered at ``branch.harmonics``. Points where ``tol`` 
 (estimate above it at the cap, estimate stalled, a failed re-solve) are a
 ``"tolerance_not_met"`` finding (:mod:`mmshbm.results.tolerance_checks`).
 
-Cost: the continuation at ``start_harmonics``, one pinned solve per point at 2H, one more
-per point for each doubling a point needs, and one at 4H per point in contact that met
-``tol`` (its confirmation).
+The points are refined one after the other along the branch
+(:mod:`mmshbm.methods.adaptive_climb`): a front point in contact starts at the rung its
+predecessor decided on instead of climbing to it from ``start_harmonics`` (the rungs below
+tried where the estimate predicted there meets ``tol``), and where its zero-padded start
+fails at a higher H the predecessor's solution there is the start.
+
+Cost: the continuation at ``start_harmonics``, and per point in contact about two pinned
+solves (at the rung its predecessor kept and at twice it), one more for each rung it moves
+up or down, and one at 4H where an estimate that met ``tol`` is confirmed; one pinned solve
+at 2H per other point.
 """
 
 from __future__ import annotations
