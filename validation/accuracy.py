@@ -30,7 +30,9 @@ __all__ = ["ToleranceComparison", "compare_tolerance", "report_tolerance", "esti
 @dataclasses.dataclass
 class ToleranceComparison:
     """One chain: the exact frequency, the fixed-H and the tolerance branch's, their
-    processor times (s)."""
+    processor times (s); ``ringing`` q = √(k_node / m_host) / (2π f_exact), how many times
+    faster than the orbit the contact rings (its contact time about T / (2q)), and the
+    tolerance run's cap on H."""
 
     label: str
     reference: bool
@@ -44,6 +46,8 @@ class ToleranceComparison:
     harmonics: int = 0
     findings: str = ""
     status: str = ""
+    ringing: float = math.nan
+    max_harmonics: int = 64
 
     @property
     def fixed_error(self) -> float:
@@ -73,7 +77,9 @@ def compare_tolerance(case, tol: float = 1e-4, amplitude_gaps: float = 1.3,
         f_exact = float(orbit.frequency)
     except (ValueError, ArithmeticError, np.linalg.LinAlgError, RuntimeError):
         ref, f_exact = False, math.nan
-    out = ToleranceComparison(name(case), ref, f_exact, math.nan, 0.0, math.nan, 0.0)
+    out = ToleranceComparison(name(case), ref, f_exact, math.nan, 0.0, math.nan, 0.0,
+                              ringing=ringing(case, f_exact),
+                              max_harmonics=int((options or {}).get("max_harmonics", 64)))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         t = time.process_time()
@@ -103,6 +109,25 @@ def compare_tolerance(case, tol: float = 1e-4, amplitude_gaps: float = 1.3,
             out.status += f"tol: exception {err}"
             out.adaptive_s = time.process_time() - t
     return out
+
+
+def ringing(case, frequency: float) -> float:
+    """q = √(k_node / m_host) / (2π f) of a one-contact chain (its contact spring and the
+    mass it hangs on; NaN for other cases): the contact rings q times faster than the
+    orbit at f (Hz)."""
+    p = case.params
+    try:
+        k, m = float(p["node_k"][0]), float(p["masses"][p["hosts"][0]])
+    except (KeyError, IndexError, TypeError):
+        return math.nan
+    return math.sqrt(k / m) / (2 * math.pi * frequency) if frequency > 0 else math.nan
+
+
+#: the H a single-contact chain needs for a relative frequency error of 1e-3 and of 1e-4,
+#: in units of its ringing ratio q: measured by pinned solves at H = 16 … 256 on chains
+#: with q = 15–31 (docs/accuracy.md, "Stiff contacts"): the error falls at an order below
+#: 1 until H resolves the contact time, then at 2–4
+NEEDED_H_PER_Q = {1e-3: 4.0, 1e-4: 8.0}
 
 
 def warm_up(case) -> None:
@@ -157,8 +182,21 @@ def report_tolerance(results: list[ToleranceComparison], tol: float, within: flo
         lines.append(f"  {r.label}: exact {r.exact:.7g} Hz, tol {r.adaptive:.7g} Hz "
                      f"(error {r.adaptive_error:.2e}, own point {r.point_error:.2e}, "
                      f"estimate {r.estimate:.2e}, H {r.harmonics}), "
-                     f"fixed error {r.fixed_error:.2e}; "
+                     f"fixed error {r.fixed_error:.2e}; q {r.ringing:.3g}: H needed for 1e-3 about "
+                     f"{NEEDED_H_PER_Q[1e-3] * r.ringing:.0f}, for 1e-4 "
+                     f"{NEEDED_H_PER_Q[1e-4] * r.ringing:.0f} (cap {r.max_harmonics}); "
                      f"findings [{r.findings or 'none'}] {r.status[:60]}")
+    for name_, sel in (("q <= cap / 4", [r for r in ref if r.ringing <= r.max_harmonics / 4]),
+                       ("q > cap / 4", [r for r in ref if not r.ringing <= r.max_harmonics / 4])):
+        if not sel:
+            continue
+        ok = sum(r.adaptive_error <= within for r in sel)
+        told = sum((r.adaptive_error <= within) or bool(r.findings) for r in sel)
+        fx = sum(r.fixed_error <= within for r in sel)
+        lines.append(f"{name_}: {len(sel)} chains, tol within {within:g} {ok} ({100 * ok / len(sel):.1f} %), "
+                     f"within or a finding {told} ({100 * told / len(sel):.1f} %), fixed H = 31 within {fx}; "
+                     f"processor time tol / fixed {sum(r.adaptive_s for r in sel):.2f} s / "
+                     f"{sum(r.fixed_s for r in sel):.2f} s")
     errs = np.array([r.adaptive_error for r in ref])
     if len(errs):
         lines.append(f"tol errors: median {np.nanmedian(errs):.2e}, 99th percentile "
@@ -325,10 +363,10 @@ def main(args) -> int:
     with open(path, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["case", "reference", "exact_hz", "fixed_hz", "fixed_s", "tol_hz", "tol_s", "estimate",
-                    "harmonics", "findings", "status", "point_error"])
+                    "harmonics", "findings", "status", "point_error", "ringing_q"])
         w.writerows([r.label, int(r.reference), repr(r.exact), repr(r.fixed), f"{r.fixed_s:.4f}",
                      repr(r.adaptive), f"{r.adaptive_s:.4f}", repr(r.estimate), r.harmonics, r.findings,
-                     r.status, repr(r.point_error)] for r in results)
+                     r.status, repr(r.point_error), repr(r.ringing)] for r in results)
     common.wrote(path)
     silent = [r for r in results if r.reference and not r.adaptive_error <= 1e-3 and not r.findings]
     return 1 if silent else 0

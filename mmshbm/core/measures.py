@@ -9,11 +9,13 @@ The peak is taken
 
 * from samples (:func:`refined_max`, :func:`amplitude_peak`): the largest sample, refined
   by a parabola through it and its neighbours (baselines with sampled signals);
-* from a series, exactly: the largest sample of the series on a grid refined by Newton on
+* from a series, exactly: every sampled local maximum of the series on a grid that could
+  be the global one (within the sampling error of the largest sample) refined by Newton on
   its derivative (:func:`_series_peak`, value only, inside the MMS-HBM monitor kernel;
   :func:`_cosine_peak`, value, maximiser and sign, for the amplitude's gradient: samples by
-  one FFT of the coefficients, Newton from every sampled maximum within the sampling error
-  of the largest).
+  one FFT of the coefficients on :func:`peak_grid` (16 samples per period of the highest
+  harmonic), Newton from every sampled local maximum within the sampling error of the
+  largest, however many: a contact's dwell has many nearly equal maxima).
 
 Harmonic content: |Q_k| = √(c_k² + s_k²) for k = 0..H (|Q_0| the mean's magnitude) of
 NLvib-ordered coefficients (:func:`harmonic_content`); methods with sampled signals take
@@ -83,43 +85,107 @@ def amplitude_peak(q: np.ndarray, sign: int) -> float:
     return refined_max(y)
 
 
+#: the fewest samples of the grids the series peaks are searched on
+PEAK_GRID_MIN = 64
+#: samples per period of the highest harmonic on those grids
+PEAK_GRID_DENSITY = 16
+
+
+def peak_grid(harmonics: int) -> int:
+    """Samples of the grid a series with harmonics 0..H is searched on for its peak
+    (:func:`_cosine_peak`): the power of two >= ``PEAK_GRID_DENSITY`` (H + 1), at least
+    ``PEAK_GRID_MIN``. Every sampled local maximum that could be the global one is refined,
+    so the grid need only separate the maxima of the highest harmonic."""
+    n = PEAK_GRID_DENSITY * (int(harmonics) + 1)
+    return max(PEAK_GRID_MIN, 1 << (n - 1).bit_length())
+
+
 @njit(**JIT_OPTIONS)
-def _series_peak(c, s, cos_table, sin_table, y):
-    """Largest value of g = c_0 + Σ_k (c_k cos kτ + s_k sin kτ) over the period: the largest of
-    the samples ``y`` (= g on the table's grid, filled here), refined by safeguarded Newton
-    on g′ = 0 between its neighbours (to round-off)."""
-    N = y.shape[0]
-    H = c.shape[0] - 1
-    j = 0
-    for i in range(N):
-        v = c[0]
-        for k in range(1, H + 1):
-            v += c[k] * cos_table[k, i] + s[k] * sin_table[k, i]
-        y[i] = v
-        if v > y[j]:
-            j = i
-    best = y[j]
-    h = _TWO_PI / N
-    lo = (j - 1) * h
-    hi = (j + 1) * h
-    tau = j * h
+def _sampling_margin(c, s, h):
+    """How far below a maximum of g = c_0 + Σ_k (c_k cos kτ + s_k sin kτ) its nearest sample
+    on a grid of spacing ``h`` (rad) can lie: (h/2)²/2 · max|g″| <= (h²/8) Σ k²(|c_k| + |s_k|),
+    plus the round-off of the samples (relative 8(log₂ n + 2) ε of Σ(|c_k| + |s_k|), n the
+    grid's samples)."""
+    curvature = 0.0
+    size = 0.0
+    for k in range(c.shape[0]):
+        curvature += k * k * (abs(c[k]) + abs(s[k]))
+        size += abs(c[k]) + abs(s[k])
+    n = _TWO_PI / h
+    return 0.125 * h * h * curvature + 8.0 * (math.log2(n) + 2.0) * 2.220446049250313e-16 * size
+
+
+@njit(**JIT_OPTIONS)
+def _climb(c, s, tau, h):
+    """The largest value of g = c_0 + Σ_k (c_k cos kτ + s_k sin kτ) that Newton on g′ = 0
+    from ``tau`` meets inside [tau − h, tau + h] (at most 12 steps, to 1e-14 in τ; it stops
+    where g″ >= 0 or a step leaves the interval): (value, its τ; the last iterate whose
+    value ties the largest to round-off, so that τ is Newton's converged one). The start's
+    value is among those compared, so the result is never below g(tau)."""
+    lo = tau - h
+    hi = tau + h
+    size = 0.0
+    for k in range(c.shape[0]):
+        size += abs(c[k]) + abs(s[k])
+    noise = 4.0 * c.shape[0] * 2.220446049250313e-16 * size  # the round-off of one evaluation
+    best = -np.inf
+    best_tau = tau
+    last = np.inf
     for _ in range(12):
         g, g1, g2 = _trig_eval(c, s, tau)
-        if g > best:
-            best = g
-        if g2 >= 0.0:
+        if g >= best - noise:  # Newton's later iterate, where the values tie to round-off
+            best = max(best, g)
+            best_tau = tau
+        if abs(last) <= 1e-14 or g2 >= 0.0:
             break
         step = g1 / g2
         tau_new = tau - step
-        if tau_new <= lo or tau_new >= hi:
+        if tau_new < lo or tau_new > hi:
             break
         tau = tau_new
-        if abs(step) <= 1e-15:
-            g, g1, g2 = _trig_eval(c, s, tau)
-            if g > best:
-                best = g
-            break
-    return best
+        last = step
+    return best, best_tau
+
+
+@njit(**JIT_OPTIONS)
+def _best_of_samples(c, s, y, h):
+    """The peak of g (coefficients c, s (H+1,)) from its samples ``y`` = g(ih) (shape (n,),
+    h = 2π/n): every sampled local maximum within :func:`_sampling_margin` of the largest
+    sample (any of them can be the nearest sample of the global maximum) refined by
+    :func:`_climb`; (the largest value, its τ)."""
+    n = y.shape[0]
+    j = 0
+    for i in range(n):
+        if y[i] > y[j]:
+            j = i
+    floor = y[j] - _sampling_margin(c, s, h)
+    best = -np.inf
+    best_tau = j * h
+    for i in range(n):
+        if y[i] < floor or y[i] < y[i - 1] or y[i] < y[(i + 1) % n]:
+            continue
+        value, tau = _climb(c, s, i * h, h)
+        if value > best:
+            best = value
+            best_tau = tau
+    return best, best_tau
+
+
+@njit(**JIT_OPTIONS)
+def _series_peak(c, s, cos_table, sin_table, y):
+    """Largest value of g = c_0 + Σ_k (c_k cos kτ + s_k sin kτ) over the period: the samples
+    ``y`` (= g on the table's grid, filled here), every sampled local maximum that could be
+    the global one refined by Newton on g′ = 0 (:func:`_best_of_samples`; to round-off)."""
+    N = y.shape[0]
+    H = c.shape[0] - 1
+    for i in range(N):
+        y[i] = c[0]
+    for k in range(1, H + 1):  # row by row: the tables are C-ordered (k, i)
+        ck = c[k]
+        sk = s[k]
+        for i in range(N):
+            y[i] += ck * cos_table[k, i] + sk * sin_table[k, i]
+    return _best_of_samples(c, s, y, _TWO_PI / N)[0]
 
 
 def _cosine_samples(row: np.ndarray, n: int) -> np.ndarray:
@@ -132,106 +198,49 @@ def _cosine_samples(row: np.ndarray, n: int) -> np.ndarray:
     return np.fft.hfft(spectrum, n)
 
 
-def _cosine_peak(row: np.ndarray, sign: float, n_fine: int, cos_k: np.ndarray) -> tuple[float, float]:
+def _cosine_peak(row: np.ndarray, sign: float, cos_k: np.ndarray,
+                 n_fine: int | None = None) -> tuple[float, float]:
     """Largest value of sign·q (|q| when sign is 0) for q(τ) = Σ_k row_k cos kτ (row shape
-    (H+1,), units of q) over the period: ``n_fine`` equispaced samples by one FFT
-    (:func:`_cosine_samples`), then Newton on q′(τ) = 0 from each sampled local maximum
-    within the sampling error of the largest sample (:func:`_cosine_refine_best`; compiled).
-    Returns (the value, the sign s with value = s·q(τ*)); ``cos_k`` (H+1,) <- cos kτ* (the
-    gradient of q(τ*) in row, envelope theorem)."""
+    (H+1,), units of q) over the period: equispaced samples by one FFT
+    (:func:`_cosine_samples`; ``n_fine`` of them, default :func:`peak_grid` (H)), then
+    Newton on q′(τ) = 0 from every sampled local maximum within the sampling error of the
+    largest sample (:func:`_cosine_refine_best`; compiled). Returns (the value, the sign s
+    with value = s·q(τ*)); ``cos_k`` (H+1,) <- cos kτ* (the gradient of q(τ*) in row,
+    envelope theorem)."""
     row = np.ascontiguousarray(row, dtype=float)
+    n_fine = peak_grid(row.shape[0] - 1) if n_fine is None else int(n_fine)
     if not 2 * row.shape[0] <= n_fine:
         raise ValueError(f"n_fine must be at least 2(H + 1) = {2 * row.shape[0]}, got {n_fine}")
     y = _cosine_samples(row, n_fine)
     return _cosine_refine_best(row, float(sign), y, cos_k)
 
 
-#: the most sampled local maxima :func:`_cosine_refine_best` refines (the largest ones)
-_PEAK_CANDIDATES = 8
-
-
 @njit(**JIT_OPTIONS)
 def _cosine_refine_best(row, sign, q_samples, cos_k):
-    """The peak of :func:`_cosine_peak` from the samples q(2πi/n) (shape (n,)): every sampled
-    local maximum of y = sign·q (|q| for sign 0) within the sampling error of the largest,
-    (h²/8) Σ k²|row_k| (h = 2π/n, the drop of y from its maximum to the nearest sample)
-    plus the samples' round-off, is refined by :func:`_cosine_refine` (the
-    ``_PEAK_CANDIDATES`` largest of them); the largest refined value wins. Returns
-    (value, s); ``cos_k`` <- cos kτ* of the winner."""
+    """The peak of :func:`_cosine_peak` from the samples q(2πi/n) (shape (n,)): the peak of
+    sign·q (sign ±1) by :func:`_best_of_samples`; for sign 0 (|q|) the larger of the peaks
+    of q and −q. Returns (value, s), the value recomputed as s·Σ_k row_k cos kτ* from
+    ``cos_k`` <- cos kτ* (each by ``math.cos``)."""
     n = q_samples.shape[0]
     H1 = row.shape[0]
-    y = np.empty(n)
-    j = 0
-    for i in range(n):
-        y[i] = sign * q_samples[i] if sign != 0.0 else abs(q_samples[i])
-        if y[i] > y[j]:
-            j = i
     h = _TWO_PI / n
-    curvature = 0.0
-    size = 0.0
-    for k in range(H1):
-        curvature += k * k * abs(row[k])
-        size += abs(row[k])
-    margin = 0.125 * h * h * curvature + 8.0 * (math.log2(n) + 2.0) * 2.220446049250313e-16 * size
-    cand = np.empty(_PEAK_CANDIDATES, dtype=np.int64)
-    n_cand = 0
-    for i in range(n):
-        if y[i] < y[j] - margin or y[i] < y[i - 1] or y[i] < y[(i + 1) % n]:
-            continue
-        if n_cand < _PEAK_CANDIDATES:
-            cand[n_cand] = i
-            n_cand += 1
-        else:  # replace the smallest candidate kept
-            low = 0
-            for c in range(1, n_cand):
-                if y[cand[c]] < y[cand[low]]:
-                    low = c
-            if y[i] > y[cand[low]]:
-                cand[low] = i
-    if n_cand == 0:
-        cand[0] = j
-        n_cand = 1
+    zeros = np.zeros(H1)
     best = -np.inf
+    best_tau = 0.0
     best_s = 1.0
-    trial = np.empty(H1)
-    for c in range(n_cand):
-        value, s = _cosine_refine(row, sign, cand[c] * h, trial)
+    for s in (1.0, -1.0):
+        if sign != 0.0 and s != sign:
+            continue
+        value, tau = _best_of_samples(s * row, zeros, s * q_samples, h)
         if value > best:
             best = value
+            best_tau = tau
             best_s = s
-            cos_k[:] = trial
-    return best, best_s
-
-
-@njit(**JIT_OPTIONS)
-def _cosine_refine(row, sign, tau, cos_k):
-    """Newton on q′(τ) = 0 from τ for q(τ) = Σ_k row_k cos kτ (at most 8 steps, to 1e-14 in
-    τ; q′, q″ by the angle-addition recurrence). Returns (s·q(τ*), s), s = sign (that of
-    q(τ*) when sign is 0); ``cos_k`` <- cos kτ* (each by ``math.cos``)."""
-    H1 = row.shape[0]
-    for _ in range(8):
-        c1 = math.cos(tau)
-        s1 = math.sin(tau)
-        ck = 1.0
-        sk = 0.0
-        d1 = 0.0
-        d2 = 0.0
-        for k in range(1, H1):
-            ck, sk = ck * c1 - sk * s1, sk * c1 + ck * s1
-            d1 -= k * row[k] * sk
-            d2 -= k * k * row[k] * ck
-        if d2 == 0.0:
-            break
-        step = d1 / d2
-        tau -= step
-        if abs(step) < 1e-14:
-            break
     value = 0.0
     for k in range(H1):
-        cos_k[k] = math.cos(k * tau)
+        cos_k[k] = math.cos(k * best_tau)
         value += row[k] * cos_k[k]
-    s = sign if sign != 0.0 else math.copysign(1.0, value)
-    return s * value, s
+    return best_s * value, best_s
 
 
 # ---------------------------------------------------------------------------- harmonic content

@@ -102,12 +102,17 @@ def solve_at_amplitude(problem, u0: np.ndarray, amplitude: float, *, tol: float 
     history = []
     du_norm = math.inf
     gradient = problem.amplitude_and_gradient or (lambda v: amplitude_and_gradient(problem, v))
+    carried = None  # (R, J, A, g) at u, evaluated by the line search's full step
     for it in range(max_iter + 1):
-        try:
-            R, J = problem.residual_and_jacobian(u)
-            A, g = gradient(u)
-        except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError) as err:
-            raise PinnedFailure(f"evaluation failed: {err}") from None
+        if carried is not None:
+            R, J, A, g = carried
+            carried = None
+        else:
+            try:
+                R, J = problem.residual_and_jacobian(u)
+                A, g = gradient(u)
+            except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError) as err:
+                raise PinnedFailure(f"evaluation failed: {err}") from None
         c = A / amplitude - 1.0
         norm = max(float(np.abs(R).max()) if R.size else 0.0, abs(c))
         history.append(norm)
@@ -132,7 +137,9 @@ def solve_at_amplitude(problem, u0: np.ndarray, amplitude: float, *, tol: float 
         du_norm = float(np.abs(du).max())
         # backtracking: halve the step while the residual grows (nonsmooth, and far from
         # the solution a full step can land on another branch); the last halving
-        # (λ = 1/32) is taken whatever its residual, so it is not evaluated
+        # (λ = 1/32) is taken whatever its residual, so it is not evaluated. The full step
+        # is tried with the Jacobian and the amplitude's gradient (most full steps are
+        # taken, and the next iteration needs both there); shorter ones with the residual.
         lam = 1.0
         for _ in range(7):
             trial = u - lam * du
@@ -141,11 +148,33 @@ def solve_at_amplitude(problem, u0: np.ndarray, amplitude: float, *, tol: float 
                     raise PinnedFailure(f"Newton left the trust region (iteration {it + 1})")
                 lam *= 0.5
                 continue
-            if lam < 0.05 or _decreases(problem, trial, amplitude, norm):
+            if lam < 0.05:
+                break
+            if lam == 1.0:
+                carried = _full_step(problem, gradient, trial, amplitude, norm)
+                if carried is not None:
+                    break
+            elif _decreases(problem, trial, amplitude, norm):
                 break
             lam *= 0.5
         u = u - lam * du
     raise PinnedFailure(f"no convergence in {max_iter} iterations (residual {history[-1]:.2e})")
+
+
+def _full_step(problem, gradient, u: np.ndarray, amplitude: float, norm: float):
+    """(R, J, A, ∇A) at ``u`` when the scaled residual's norm there is below ``norm``, else
+    None (a failed evaluation: None). The evaluation the next Newton iteration starts from
+    where the full step is taken; the residual rows come first, as in :func:`_decreases`."""
+    try:
+        R, J = problem.residual_and_jacobian(u)
+        if not (float(np.abs(R).max()) if R.size else 0.0) < norm:
+            return None
+        A, g = gradient(u)
+        if not abs(A / amplitude - 1.0) < norm:
+            return None
+        return R, J, A, g
+    except (ArithmeticError, np.linalg.LinAlgError, ValueError, RuntimeError):
+        return None
 
 
 def _decreases(problem, u: np.ndarray, amplitude: float, norm: float) -> bool:

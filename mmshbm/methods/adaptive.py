@@ -49,9 +49,16 @@ other DOFs' signals are recovered at ``branch.harmonics``. Points where ``tol`` 
 (estimate above it at the cap, estimate stalled, a failed re-solve) are a
 ``"tolerance_not_met"`` finding (:mod:`mmshbm.results.tolerance_checks`).
 
-Cost: the continuation at ``start_harmonics``, one pinned solve per point at 2H, one more
-per point for each doubling a point needs, and one at 4H per point in contact that met
-``tol`` (its confirmation).
+The points are refined one after the other along the branch
+(:mod:`mmshbm.methods.adaptive_climb`): a front point in contact starts at the rung its
+predecessor decided on instead of climbing to it from ``start_harmonics`` (the rungs below
+tried where the estimate predicted there meets ``tol``), and where its zero-padded start
+fails at a higher H the predecessor's solution there is the start.
+
+Cost: the continuation at ``start_harmonics``, and per point in contact about two pinned
+solves (at the rung its predecessor kept and at twice it), one more for each rung it moves
+up or down, and one at 4H where an estimate that met ``tol`` is confirmed; one pinned solve
+at 2H per other point.
 """
 
 from __future__ import annotations
@@ -156,93 +163,21 @@ def backbone_to_tolerance(model, tol: float, *, start_harmonics: int, max_harmon
         ``metadata["tolerance"]``.
     """
     from .._threads import blas_limit
+    from .adaptive_climb import refine_points_along
 
     t0 = time.perf_counter()
     with warnings.catch_warnings():  # the findings of the start H are not the result's: it is checked below
         warnings.simplefilter("ignore")
         base = run(model, harmonics=start_harmonics, **kwargs)
     with blas_limit():  # small dense solves: one BLAS thread unless the user chose (mmshbm._threads)
-        refined = _refine(base, tol, start_harmonics, max_harmonics, patience, contraction, confirm)
-        ladder, H, states, freq, err, flags, levels = refined
+        refined = refine_points_along(base, tol, start_harmonics, max_harmonics, patience, contraction,
+                                      confirm)
+        ladder, H, states, freq, err, flags, levels, solves = refined
         return _assemble(base, ladder, H, states, freq, err, flags, settings={
             "tol": float(tol), "start_harmonics": start_harmonics, "max_harmonics": max_harmonics,
             "patience": patience, "contraction": float(contraction), "confirm": bool(confirm), "rate": 2.0,
-            "levels": levels,
+            "levels": levels, "pinned_solves": solves,
             "elapsed_s": time.perf_counter() - t0})
-
-
-def _refine(base, tol, start_harmonics, max_harmonics, patience, contraction, confirm):
-    """Steps 2 and 3 of the module docstring: (solvers, H, states, frequency, estimate, flags) per
-    point and the number of estimate passes."""
-    from ..results.point_errors import SolverLadder, estimate_point_errors
-
-    n = len(base)
-    ladder = SolverLadder(base)
-    H = np.full(n, start_harmonics, dtype=int)
-    states = [np.asarray(u, dtype=float) for u in base.states]
-    freq = np.asarray(base.frequency, dtype=float).copy()
-    amp = np.asarray(base.amplitude, dtype=float)
-    err = np.full(n, np.nan)
-    last = np.full(n, np.inf)  # the previous estimate per point
-    ratio = np.full(n, math.nan)  # its last contraction per doubling
-    extrapolated = np.zeros(n, dtype=np.int8)
-    # 1: the next pair contracted (or no contact force: exact at every H); 0: not checked
-    confirmed = np.zeros(n, dtype=np.int8)
-    touching = np.asarray(base.contact_force_max, dtype=float) > 0
-    confirmed[~touching] = 1
-    held = {}  # point -> (H, state, frequency, estimate) it returns to when its next pair contracts
-    stalls = np.zeros(n, dtype=int)
-    on_front = np.zeros(n, dtype=bool)
-    on_front[np.asarray(base.family_front(), dtype=int)] = True
-    active = np.arange(n)
-    levels = 0
-    while len(active):
-        levels += 1
-        pe = estimate_point_errors(ladder, H[active], [states[i] for i in active], amp[active], freq[active])
-        promote = []
-        for j, i in enumerate(active):
-            e = pe.error[j]
-            if i in held:  # a confirmation: the pair above the one that met tol
-                h0, u0, f0, e0 = held.pop(i)
-                if math.isfinite(e) and e < e0:  # it contracts: the lower pair was asymptotic
-                    H[i], states[i], freq[i], err[i], confirmed[i] = h0, u0, f0, e0, 1
-                    continue
-                if not math.isfinite(e):  # no estimate above: the lower one stands, unconfirmed
-                    H[i], states[i], freq[i], err[i] = h0, u0, f0, e0
-                    continue
-                last[i] = math.inf  # pre-asymptotic pair: the point goes on from 2H, afresh
-            err[i] = e
-            if not math.isfinite(e):
-                continue
-            if e <= tol:
-                if (confirm and touching[i] and on_front[i] and 4 * H[i] <= max_harmonics):
-                    held[i] = (int(H[i]), states[i], float(freq[i]), float(e))
-                    promote.append((i, pe.states_raised[j], pe.frequency_raised[j], pe.harmonics_raised[j]))
-                continue
-            ratio[i] = last[i] / e if math.isfinite(last[i]) else math.nan
-            stalls[i] = 0 if e * contraction <= last[i] else stalls[i] + 1
-            last[i] = e
-            left = math.floor(math.log2(max_harmonics / H[i]) + 1e-9)  # the doublings the cap allows
-            if not on_front[i] or stalls[i] >= patience or left < 1:
-                continue  # not converging in H here, or the cap reached
-            if e > tol * FASTEST ** left:  # out of reach: the finer solve is the better point
-                c = min(max(ratio[i], 1.0), FASTEST) if math.isfinite(ratio[i]) else ASSUMED_CONTRACTION
-                states[i], freq[i] = pe.states_raised[j], pe.frequency_raised[j]
-                H[i], err[i], extrapolated[i] = int(pe.harmonics_raised[j]), e / c, 1
-                continue
-            promote.append((i, pe.states_raised[j], pe.frequency_raised[j], pe.harmonics_raised[j]))
-        nxt = []
-        for i, u2, f2, h2 in promote:
-            states[i], freq[i], H[i] = u2, f2, int(h2)
-            if 2 * H[i] <= max_harmonics:
-                nxt.append(i)
-            else:  # the top: no solve above the cap, the estimate extrapolated (module docstring)
-                c = ratio[i] if math.isfinite(ratio[i]) else ASSUMED_CONTRACTION
-                err[i] = err[i] / min(max(c, ASSUMED_CONTRACTION), FASTEST)
-                extrapolated[i] = 1
-        active = np.array(nxt, dtype=int)
-        log.info("tolerance %.3g: level %d, %d points raised", tol, levels, len(promote))
-    return ladder, H, states, freq, err, (extrapolated, confirmed), levels
 
 
 def _assemble(base, ladder, H, states, freq, err, flags, settings: dict):

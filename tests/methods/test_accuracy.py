@@ -201,7 +201,8 @@ def test_a_pre_asymptotic_pair_is_not_taken_for_convergence():
     resolves the contact; at 32 the error drops to 8e-5). The estimate at H = 8 met tol =
     1e-4; its confirmation on the next pair (16, 32) does not contract, so the point goes on
     from 16. With the confirmation every family point with a clean exact orbit is within
-    3 × tol of it; without it, one point is off by 10 × tol under an estimate below tol."""
+    3 × tol of it; that point climbing from H = 8 without it stops at 8, 10 × tol off under
+    an estimate below tol (in the run its predecessor's rung, 32, spares it the plateau)."""
     case = ce.chains(5, seed=3, max_masses=3, contact_decades=(0, 6))[4]
     model = case.model()
 
@@ -220,8 +221,23 @@ def test_a_pre_asymptotic_pair_is_not_taken_for_convergence():
     assert err <= 3e-4
     touching = b.contact_force_max > 0
     assert np.all(b.records["error_confirmed"][~touching] == 1)  # exact at every H
-    _, err_unchecked = worst(confirm=False)
-    assert err_unchecked > 5e-4
+    # the point at 1.34 gaps climbing from H = 8 (as a point does whose predecessor kept 8)
+    from mmshbm.methods.adaptive_climb import _climb, _Point, _Solves
+    from mmshbm.results.point_errors import SolverLadder, error_factor
+
+    b8 = _quiet(mmshbm.backbone, model, harmonics=8, max_amplitude=1.56 * model.gap)
+    i = int(np.argmin(np.abs(b8.amplitude - 1.34 * model.gap)))
+    f_exact = exact.periodic_orbit(model, float(b8.amplitude[i])).frequency
+    ladder = SolverLadder(b8)
+    for confirm in (True, False):
+        p = _Point(8, b8.states[i], b8.frequency[i], b8.amplitude[i])
+        solves = _Solves(ladder, error_factor(2.0))
+        h, e, _, confirmed, _ = _climb(p, 8, solves, None, 1e-4, 64, 2, 1.5, confirm, True)
+        true = abs(p.known[h][1] / f_exact - 1)
+        if confirm:
+            assert h >= 32 and true <= 3e-4 and not confirmed, (h, e, true)
+        else:
+            assert h == 8 and e <= 1e-4 and true > 5e-4, (h, e, true)
 
 
 def test_a_stepped_re_solve_lands_where_the_direct_one_does():
@@ -263,3 +279,29 @@ def test_a_point_out_of_reach_keeps_its_finer_solve():
         assert true <= true8 / 2
         assert 1e-6 < b.frequency_error[i] and 1 / 3 <= b.frequency_error[i] / true <= 3, (i, true)
     assert "tolerance_not_met" in {f.kind for f in b.findings}
+
+
+def test_a_solve_from_the_predecessor_lands_where_the_steps_do():
+    """Chain 8 of seed 3 (q = 29): the zero-padded solve from 32 to 64 fails past grazing,
+    so the refinement along the branch starts it from the predecessor's 64-harmonic
+    solution. Every front point's frequency at 64 so found agrees with the √2 steps from its
+    own 32-harmonic solution (raise_point, an independent path; both to a residual of
+    1e-10) within 1e-8, and the predecessor's start was used (fewer solves than points
+    would need by the steps)."""
+    from mmshbm.methods.adaptive_climb import refine_points_along
+    from mmshbm.results.point_errors import SolverLadder, raise_point
+
+    model = ce.chains(9, seed=3, max_masses=3, contact_decades=(0, 6))[8].model()
+    base = _quiet(mmshbm.backbone, model, harmonics=8, max_amplitude=1.3 * model.gap)
+    ladder, H, states, freq, err, flags, _, solves = refine_points_along(base, 1e-4, 8, 64, 2, 1.5, True)
+    steps = SolverLadder(base)
+    steps.stepped.update({(8, 16), (16, 32), (32, 64), (8, 32)})
+    checked = 0
+    for i in np.flatnonzero((H == 64) & (base.contact_force_max > 0)):
+        u32 = raise_point(steps, 8, base.states[i], float(base.amplitude[i]), 32)
+        u64 = raise_point(steps, 32, u32, float(base.amplitude[i]), 64)
+        f64 = float(steps.at(64).unpack(u64)[1]) / (2 * math.pi)
+        assert abs(freq[i] / f64 - 1) <= 1e-8, (i, freq[i], f64)
+        checked += 1
+    assert checked >= 5
+    assert solves < 6 * checked  # the steps alone take 8 -> 12 -> 18 -> 26 -> 32 -> 46 -> 64

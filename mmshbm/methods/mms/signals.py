@@ -263,7 +263,7 @@ class SignalsMixin:
         a, omega = self.unpack(u)
         row = np.ascontiguousarray(self._amplitude_row(a, omega, self.unpack_eta(u)), dtype=float)
         cos_k = np.empty(self.H + 1)
-        amplitude, s = _cosine_peak(row, self._amp_sign, self._tau_fine.shape[0], cos_k)
+        amplitude, s = _cosine_peak(row, self._amp_sign, cos_k)
         return row, cos_k, amplitude, s
 
     def amplitude_value(self, u: np.ndarray) -> float:
