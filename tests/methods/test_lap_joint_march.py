@@ -131,3 +131,20 @@ def test_lap_joint_damping_against_the_march_where_it_converges_slowly():
     march = _march_pair(joint, f, (2048, 4096))
     hbm = [_record(low, u_low), _record(high, u)]
     _agree(hbm, march, 0.005)
+
+
+def test_start_point_at_many_harmonics_converges():
+    """At H = 33 (1000 N) Newton from the linear or stuck response does not converge; from
+    the solution at H = 16 (itself from H = 8) it does: the returned point's scaled residual
+    is at the Newton tolerance, not the stuck point's."""
+    joint = mmshbm.lap_joint(8, modal_damping=0.01, preload=1000.0)
+    f = 0.98 * joint.bending_frequency
+    problem = FrictionForcedProblem(joint.model, joint.force, harmonics=33)
+    assert problem.fewer_harmonics().H == 16
+    u = problem.start_point(f)
+    assert np.abs(problem.residual(u)).max() <= 1e-11
+    # what it returned when neither guess converged: 3.2e-4 off
+    stuck = problem.stuck_point(f)
+    assert np.abs(problem.residual(stuck)).max() > 1e-6
+    with pytest.raises(ValueError, match="harmonics must be in"):
+        problem.fewer_harmonics(33)
