@@ -68,14 +68,36 @@ def test_march_rejects_coupled_friction():
         FrictionPairMarch(joint.model, joint.force, 30.0)
 
 
-@pytest.mark.parametrize("preload", [
-    500.0, 2000.0, 8000.0,
-    # here the harmonic balance stays 0.7-1.2 % above the march's amplitude from H = 5 to 17
-    # (3.587, 3.578, 3.567, 3.569 mm against 3.544 mm, the march converged in its steps and
-    # ρ∞), far more than its change from H = 5 to 9; from the march's orbit as the guess the
-    # harmonic balance returns to its own solution
-    pytest.param(1000.0, marks=pytest.mark.xfail(strict=True, reason="harmonic balance 1 % off the march")),
-])
+def _march_pair(joint, f, steps):
+    """(amplitude (m), friction work (J)) of the march at each of ``steps`` per period; its
+    energy balance over the steady period checked to the scheme's order."""
+    out = []
+    for n in steps:
+        orbit = march_pairs_to_steady(joint.model, joint.force, f, n)
+        assert orbit.converged
+        out.append((orbit.amplitude(0), orbit.work_friction))
+        balance = orbit.work_input - orbit.work_viscous - orbit.work_friction
+        assert abs(balance) <= 1e-4 * orbit.work_input
+    return out
+
+
+def _agree(hbm, march, share):
+    """The finer harmonic balance equals the finer march within the harmonic balance's
+    change between its two H plus the march's change between its two step counts, a bound
+    that is itself at most ``share`` of the march's value (the check is not vacuous)."""
+    for k in range(2):
+        tol = abs(hbm[0][k] - hbm[1][k]) + abs(march[0][k] - march[1][k])
+        assert abs(hbm[1][k] - march[1][k]) <= tol
+        assert tol <= share * abs(march[1][k])
+    assert march[1][1] > 0
+
+
+def _record(problem, u):
+    rec = problem.monitor(u)
+    return rec["amplitude"], rec["friction_dissipation"]
+
+
+@pytest.mark.parametrize("preload", [500.0, 2000.0, 8000.0])
 def test_lap_joint_damping_against_the_march(preload):
     """At 0.98 f_1, 8 pairs: the tip amplitude and the friction work per period (the
     interface's damping) of the H = 9 harmonic balance equal the march's within the
@@ -86,18 +108,43 @@ def test_lap_joint_damping_against_the_march(preload):
     hbm = []
     for H in (5, 9):
         problem = FrictionForcedProblem(joint.model, joint.force, harmonics=H)
-        rec = problem.monitor(problem.start_point(f))
-        hbm.append((rec["amplitude"], rec["friction_dissipation"]))
-    march = []
-    for n in (512, 1024):
-        orbit = march_pairs_to_steady(joint.model, joint.force, f, n)
-        assert orbit.converged
-        march.append((orbit.amplitude(0), orbit.work_friction))
-        # the energy balance over the steady period, to the scheme's order
-        balance = orbit.work_input - orbit.work_viscous - orbit.work_friction
-        assert abs(balance) <= 1e-4 * orbit.work_input
-    for k in range(2):
-        tol = abs(hbm[0][k] - hbm[1][k]) + abs(march[0][k] - march[1][k])
-        assert abs(hbm[1][k] - march[1][k]) <= tol
-        assert tol <= 0.05 * abs(march[1][k])  # the check is not vacuous: a few per cent at most
-    assert march[1][1] > 0
+        hbm.append(_record(problem, problem.start_point(f)))
+    _agree(hbm, _march_pair(joint, f, (512, 1024)), 0.05)
+
+
+@pytest.mark.slow  # 13 min wall at load 8 on 2 cores, most of it the Newton steps at H = 129
+def test_lap_joint_damping_against_the_march_where_it_converges_slowly():
+    """1000 N: the lightly loaded corner pairs' transverse slip DOFs stick over ~11 % of the
+    period within a play of 7 nm against 43 µm of slip, and the heavily loaded pairs slip
+    transversely in near-jumps; the harmonic balance's error then changes sign and size with
+    H (+0.9 % at H = 9, +1.3 % at 25, +0.12 to 0.17 % at 33 to 97) and its change from H = 5
+    to 9 does not bound it. At H = 129 it is 0.04 %: there the check holds with
+    the change from H = 64 to 129 and the march's from 2048 to 4096 steps, a bound under
+    0.5 % (H = 9 is 1 % off)."""
+    joint = mmshbm.lap_joint(8, modal_damping=0.01, preload=1000.0)
+    f = 0.98 * joint.bending_frequency
+    low = FrictionForcedProblem(joint.model, joint.force, harmonics=64)
+    u_low = low.start_point(f)
+    high = FrictionForcedProblem(joint.model, joint.force, harmonics=129)
+    u, ok = high.solve_at(f, high.from_fewer_harmonics(low, u_low, f))
+    assert ok
+    march = _march_pair(joint, f, (2048, 4096))
+    hbm = [_record(low, u_low), _record(high, u)]
+    _agree(hbm, march, 0.005)
+
+
+def test_start_point_at_many_harmonics_converges():
+    """At H = 33 (1000 N) Newton from the linear or stuck response does not converge; from
+    the solution at H = 16 (itself from H = 8) it does: the returned point's scaled residual
+    is at the Newton tolerance, not the stuck point's."""
+    joint = mmshbm.lap_joint(8, modal_damping=0.01, preload=1000.0)
+    f = 0.98 * joint.bending_frequency
+    problem = FrictionForcedProblem(joint.model, joint.force, harmonics=33)
+    assert problem.fewer_harmonics().H == 16
+    u = problem.start_point(f)
+    assert np.abs(problem.residual(u)).max() <= 1e-11
+    # what it returned when neither guess converged: 3.2e-4 off
+    stuck = problem.stuck_point(f)
+    assert np.abs(problem.residual(stuck)).max() > 1e-6
+    with pytest.raises(ValueError, match="harmonics must be in"):
+        problem.fewer_harmonics(33)

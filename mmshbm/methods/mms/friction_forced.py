@@ -128,6 +128,11 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
     #: the compiled evaluation (:class:`~mmshbm.methods.mms.friction_fused.FusedFrictionEvaluation`):
     #: None until first asked, False where the problem is not of the kind it evaluates
     _fused = None
+    #: :meth:`start_point` above this many harmonics first solves at half as many (recursively)
+    #: and starts Newton from that solution, its higher harmonics zero: from the linear or
+    #: stuck response Newton does not reach the stick arcs of a lap joint's lightly loaded
+    #: pairs at H = 25 to 33 (it returns the stuck point), from the solution at H/2 it does
+    start_ladder_harmonics = 8
     #: the corrector's Newton loop compiled where the evaluation is fused
     #: (:meth:`~mmshbm.methods.mms.friction_fused.FusedFrictionEvaluation.correct`); False:
     #: the Python loop (:func:`~mmshbm.methods.mms.corrector.corrector_to_roundoff`), its reference
@@ -144,6 +149,9 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
             raise NotImplementedError("Floquet multipliers with friction take the stick arcs of the play "
                                       "form: pass law='play'")
         super().__init__(model, force, harmonics, n_samples, r, backend, False, projection)
+        # what a problem at fewer harmonics needs (:meth:`fewer_harmonics`)
+        self._options = {"force": force, "r": r, "backend": backend, "projection": projection, "law": law,
+                         "linear_solver": linear_solver}
         self._init_friction(model, law, projection)
         if stability is True:
             from .friction_stability import FrictionFloquet, ImpactFrictionFloquet
@@ -369,13 +377,40 @@ class FrictionForcedProblem(FrictionRows, ForcedResponseProblem):
         solve = self._krylov.bordered_solve if self._krylov is not None else None
         return corrector_to_roundoff(self, u, u_pred, tangent, tol, max_iter, step_tol, solve)
 
+    def fewer_harmonics(self, harmonics: int | None = None) -> FrictionForcedProblem:
+        """The same problem at h = ``harmonics`` (default H // 2) harmonics, 1 <= h < H
+        (ValueError otherwise), its time sampling the default."""
+        h = self.H // 2 if harmonics is None else int(harmonics)
+        if not 1 <= h < self.H:
+            raise ValueError(f"harmonics must be in [1, {self.H - 1}], got {h}")
+        return type(self)(self.model, harmonics=h, **self._options)
+
+    def from_fewer_harmonics(self, low: FrictionForcedProblem, u_low: np.ndarray,
+                             frequency: float) -> np.ndarray:
+        """Scaled unknowns at ``frequency`` (Hz) whose harmonics 0..h are those of ``u_low``,
+        scaled unknowns of ``low`` (the same problem at h <= H harmonics,
+        :meth:`fewer_harmonics`), the higher ones zero: a guess for :meth:`solve_at`."""
+        if low.n_c != self.n_c or low.H > self.H:
+            raise ValueError(f"low must be the same problem at <= {self.H} harmonics")
+        x_low, _ = low.unpack(u_low)
+        x = np.zeros((self.n_coef, self.n_c))
+        x[:low.n_coef] = x_low.reshape(low.n_coef, low.n_c)
+        return self.pack(x.ravel(), 2 * np.pi * frequency)
+
     def start_point(self, frequency: float, max_iter: int = 50, tol: float = 1e-11) -> np.ndarray:
         """Converged unknowns at ``frequency`` (Hz) by Newton from the free-slip, then the
         full-stick linear response, then (with unilateral contacts) the force ramped up from
         a level that keeps the stops open (the first that converges); the stuck response when
-        none does (the continuation's first corrector then tries). ``tol`` as
-        :meth:`solve_at`."""
+        none does (the continuation's first corrector then tries). Above
+        :attr:`start_ladder_harmonics` harmonics Newton starts first from the solution at
+        half as many (:meth:`fewer_harmonics`). ``tol`` as :meth:`solve_at`."""
         guesses = [self.linear_response_point, self.stuck_point]
+        if self.H > self.start_ladder_harmonics:
+            def ladder(f):
+                low = self.fewer_harmonics()
+                return self.from_fewer_harmonics(low, low.start_point(f, max_iter, tol), f)
+
+            guesses.insert(0, ladder)
         if self.model.contacts:  # the force raised from a level that keeps the stops open
             guesses.append(lambda f: ForcedResponseProblem.start_point(self, f))
         for guess in guesses:
