@@ -10,7 +10,12 @@ Every orbit u_k found at A_i is *deflated*: Newton then solves F(u) = M(u) G(u) 
     M(u) = Π_k (‖u − u_k‖⁻ᵖ + σ),      p = :data:`POWER`, σ = :data:`SHIFT`,
 
 which has the same roots as G except the u_k (M → ∞ there), so from the same start Newton
-goes to another orbit or fails. With d the Newton step of G, the Newton step of F is
+goes to another orbit or fails. Each start is solved from at most ``max_roots`` times
+(its deflation depth: every orbit found at the target deflated) and stops at its first
+orbit of the family; the target ends once ``max_roots`` orbits are found at it with one
+of the family among them, otherwise after every start (at most starts × ``max_roots``
+solves per target), so orbits off the family found from the first starts do not keep
+the later ones from the family. With d the Newton step of G, the Newton step of F is
 d / (1 − ∇log M·d) (Sherman–Morrison on the rank-one change of the Jacobian), so one
 bordered solve per iteration serves both. At the first target where orbits of the
 family are found (:func:`mmshbm.family.definition.on_family` with the first mode's
@@ -344,21 +349,15 @@ def search_beyond(problem, guard: FamilyGuard, us: list, recs: list, *, options:
         for name, u0 in own + starts.starts(us, recs, guard, target, amplitude_max):
             if any(n == len(found) and _same(u0, v) for v, n in settled):
                 continue  # the same start with the same orbits deflated fails the same way
-            while len(found) < options.max_roots:
+            for _ in range(options.max_roots):  # the start's deflation depth
                 try:
                     u, nit, hist, t = deflated_solve(
                         problem, u0, target, [f[0] for f in found],
                         tol=newton_tol, max_iter=_NEWTON_FACTOR * max_newton, admissible=admissible)
-                except StartOutside:
-                    tried.append(Attempt("deflated", name, target, "outside"))
-                    settled.append((u0, len(found)))
-                    break
-                except KnownOrbit:
-                    tried.append(Attempt("deflated", name, target, "known"))
-                    settled.append((u0, len(found)))
-                    break
-                except PinnedFailure:
-                    tried.append(Attempt("deflated", name, target, "failed"))
+                except PinnedFailure as err:
+                    outcome = ("outside" if isinstance(err, StartOutside)
+                               else "known" if isinstance(err, KnownOrbit) else "failed")
+                    tried.append(Attempt("deflated", name, target, outcome))
                     settled.append((u0, len(found)))
                     break
                 rec = monitor(problem, u)
@@ -371,7 +370,9 @@ def search_beyond(problem, guard: FamilyGuard, us: list, recs: list, *, options:
                 found.append((u, nit, hist, rec, t, member))
                 log.debug("deflated search at %.4g from the %s start: %.4g Hz, share %.3f (%s)", target, name,
                           f, share, "family" if member else "not the family")
-            if len(found) >= options.max_roots:
+                if member:
+                    break  # the start has reached the family
+            if len(found) >= options.max_roots and any(x[5] for x in found):
                 break
         family = [x for x in found if x[5]]
         if family:
