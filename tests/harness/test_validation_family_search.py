@@ -3,7 +3,6 @@
 import pytest
 
 from mmshbm.cli.common import Usage
-
 from validation.__main__ import _proximal, build_parser
 
 
