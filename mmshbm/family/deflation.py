@@ -230,6 +230,8 @@ class BranchStarts:
         self.amplitude_max = math.inf
         #: (tol, max_iter, admissible) of the search's pinned solves, for starts that solve
         self.solver = (1e-10, 30, None)
+        #: deflated solves per start, for starts that deflate (the search's ``max_roots``)
+        self.depth = 3
 
     def landings(self, us: list, recs: list, guard: FamilyGuard,
                  amplitude_max: float) -> list[tuple[str, np.ndarray, float]]:
@@ -336,6 +338,7 @@ def search_beyond(problem, guard: FamilyGuard, us: list, recs: list, *, options:
     tried = []
     starts.amplitude_max = amplitude_max
     starts.solver = (newton_tol, _NEWTON_FACTOR * max_newton, admissible)
+    starts.depth = options.max_roots
     # the method's landings (a start that picks its own amplitude, MMS-HBM's filtered
     # passage, costly) join the targets once the first target has found no family orbit
     landings = None
