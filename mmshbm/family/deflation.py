@@ -273,6 +273,12 @@ class BranchStarts:
         """Starts tried first at ``amplitude`` (none here)."""
         return []
 
+    def last_resort(self, us: list, recs: list, guard: FamilyGuard, amplitude: float,
+                    amplitude_max: float) -> list[tuple[str, np.ndarray]]:
+        """Costly starts at ``amplitude``, tried at the targets in turn only where the
+        others found no orbit of the family at any target (none here)."""
+        return []
+
 
 def extrapolated(us: list, recs: list, clean: list, amplitude: float) -> np.ndarray:
     """u at ``amplitude`` by a polynomial in the amplitude (degree <= 2) through the last
@@ -344,12 +350,13 @@ def search_beyond(problem, guard: FamilyGuard, us: list, recs: list, *, options:
     landings = None
     queue = _targets(frontier, amplitude_max, options)
     searched = queue[-1]
-    while queue:
-        target = queue.pop(0)
-        found = []  # (u, iterations, history, record, tangent) of every orbit found at target
-        own = [(name, u0) for name, u0, a in landings or () if a == target]
+    done = []  # the targets searched, in order
+
+    def at(target, candidates):
+        """The landing at ``target`` from the starts ``candidates``, or None."""
+        found = []  # (u, iterations, history, record, tangent, member) of every orbit found at target
         settled = []  # (start, orbits found when it failed) at this target
-        for name, u0 in own + starts.starts(us, recs, guard, target, amplitude_max):
+        for name, u0 in candidates:
             if any(n == len(found) and _same(u0, v) for v, n in settled):
                 continue  # the same start with the same orbits deflated fails the same way
             for _ in range(options.max_roots):  # the start's deflation depth
@@ -378,14 +385,29 @@ def search_beyond(problem, guard: FamilyGuard, us: list, recs: list, *, options:
             if len(found) >= options.max_roots and any(x[5] for x in found):
                 break
         family = [x for x in found if x[5]]
-        if family:
-            # the tangent solves [J; ∇A/A*] t = e_n: oriented to growing amplitude
-            u, nit, hist, rec, t, _ = max(family, key=lambda x: family_value(x[3]) or 0.0)
-            return u, nit, hist, rec, t, target, i
+        if not family:
+            return None
+        # the tangent solves [J; ∇A/A*] t = e_n: oriented to growing amplitude
+        u, nit, hist, rec, t, _ = max(family, key=lambda x: family_value(x[3]) or 0.0)
+        return u, nit, hist, rec, t, target, i
+
+    while queue:
+        target = queue.pop(0)
+        done.append(target)
+        own = [(name, u0) for name, u0, a in landings or () if a == target]
+        landing = at(target, own + starts.starts(us, recs, guard, target, amplitude_max))
+        if landing is not None:
+            return landing
         if landings is None:
             landings = starts.landings(us, recs, guard, amplitude_max)
             queue = sorted(set(queue) | {a for _, _, a in landings})
             searched = max([searched] + queue)
+    # the costly starts, at the targets in turn, where the others found nothing at any
+    last = getattr(starts, "last_resort", None)
+    for target in done if last is not None else ():
+        landing = at(target, last(us, recs, guard, target, amplitude_max))
+        if landing is not None:
+            return landing
     cross = crossing(recs, guard, problem)
     end = FamilyEnd(ended=cross is not None, frontier=frontier, frontier_frequency=f_frontier,
                     searched_to=float(searched), crossing=cross, attempts=tuple(tried))

@@ -15,6 +15,11 @@ __all__ = ["MMSHBMStarts"]
 
 log = logging.getLogger(__name__)
 
+#: homotopies from the fundamental's family per search (each a curve of up to a few
+#: hundred steps), at its first targets, where the other starts found no family orbit at
+#: any
+HOMOTOPIES = 4
+
 
 class MMSHBMStarts(BranchStarts):
     """The branch's starts (:class:`~mmshbm.family.deflation.BranchStarts`) and MMS-HBM's:
@@ -27,6 +32,7 @@ class MMSHBMStarts(BranchStarts):
     def __init__(self, problem):
         super().__init__(problem)
         self._landed: list[tuple[np.ndarray, float]] = []  # (u0, amplitude) of this search's landings
+        self._homotopies: dict[float, int] = {}  # homotopies run per frontier amplitude
 
     def landings(self, us: list, recs: list, guard: FamilyGuard,
                  amplitude_max: float) -> list[tuple[str, np.ndarray, float]]:
@@ -127,6 +133,25 @@ class MMSHBMStarts(BranchStarts):
             if start is not None and start[1] >= guard.family_share:
                 out.append(("harmonic ladder" + (" from the fundamental" if fundamental else ""), start[0]))
         return out
+
+    def last_resort(self, us: list, recs: list, guard: FamilyGuard, amplitude: float,
+                    amplitude_max: float) -> list[tuple[str, np.ndarray]]:
+        """The orbit at ``amplitude`` reached by a Newton homotopy from the fundamental's
+        family's (``homotopy_landing``: where the family resumes above a fold of the
+        branch, at another frequency, and no start taken from the branch converges to it),
+        at the first :data:`HOMOTOPIES` targets of a search."""
+        frontier = float(recs[guard.frontier_index]["amplitude"])
+        done = self._homotopies.get(frontier, 0)
+        if done >= HOMOTOPIES:
+            return []
+        self._homotopies[frontier] = done + 1
+        tol, max_iter, admissible = self.solver
+        try:
+            u, _ = self.problem.homotopy_landing(amplitude, amplitude_max, tol=tol, max_iter=max_iter,
+                                                 admissible=admissible)
+        except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
+            return []
+        return [("homotopy from the fundamental's family", u)]
 
     def origin_starts(self, us: list, recs: list, guard: FamilyGuard, origin: int, amplitude: float,
                       amplitude_max: float) -> list[tuple[str, np.ndarray]]:
