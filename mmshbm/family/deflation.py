@@ -21,7 +21,9 @@ bordered solve per iteration serves both. At the first target where orbits of th
 family are found (:func:`mmshbm.family.definition.on_family` with the first mode's
 frequency band, :func:`~mmshbm.family.definition.frequency_band`), the one of largest fundamental share is the
 landing (the backbone rule of docs/resonances.md); the follower fills the family back
-down from it to the frontier. When none is found up to the last target the search ends
+down from it to the frontier. Where no target has one, the method's costly starts
+(``last_resort``: MMS-HBM's homotopy from the fundamental's family) are tried at the
+targets in turn. When none is found then the search ends
 the branch with a :class:`~mmshbm.family.end.FamilyEnd` that lists every solve.
 """
 
