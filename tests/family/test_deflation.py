@@ -207,3 +207,45 @@ def test_orbits_off_the_family_found_from_the_first_start_leave_the_later_starts
     assert target == pytest.approx(A, rel=1e-15) and origin == 2
     assert np.abs(u - np.array([A - 2.0, 0.5])).max() < 1e-12
     assert rec["fundamental_share"] >= options.family_share
+
+
+class _Costly(_Starts):
+    """Regular starts at ``ys``; the costly start y = 0.45 (by the family's orbit) only as
+    ``last_resort``, counting its calls."""
+
+    def __init__(self, *ys):
+        super().__init__(*ys)
+        self.calls = []
+
+    def last_resort(self, us, recs, guard, amplitude, amplitude_max):
+        self.calls.append(amplitude)
+        return [("costly", np.array([amplitude - 2.0, 0.45]))]
+
+
+def _quartic_branch(problem):
+    us = [np.array([a - 2.0, 0.5]) for a in (1.3, 1.4, 1.5)]
+    recs = [problem.monitor(u) for u in us]
+    guard = FamilyGuard(0.5, 60)
+    for i, rec in enumerate(recs):
+        guard.observe(i, rec)
+    return us, recs, guard
+
+
+def test_the_costly_starts_run_at_the_targets_in_turn_only_where_the_others_found_nothing():
+    """With only starts among the orbits off the family, every target is searched first;
+    then the costly start lands at the first target (y = 0.5 to 1e-12). Where a regular
+    start reaches the family, the costly one is never called."""
+    problem = Quartic()
+    options = FamilyOptions(search="deflated")
+    us, recs, guard = _quartic_branch(problem)
+    costly = _Costly(-0.22)
+    u, *_, target, _ = search_beyond(problem, guard, us, recs, options=options, amplitude_max=1.7,
+                                     newton_tol=1e-12, max_newton=10, monitor=lambda p, v: p.monitor(v),
+                                     starts=costly)
+    first = 1.5 * (1 + options.jump_step)
+    assert target == pytest.approx(first, rel=1e-15) and costly.calls == [target]
+    assert abs(u[1] - 0.5) < 1e-12
+    costly = _Costly(-0.22, 0.45)
+    search_beyond(problem, guard, us, recs, options=options, amplitude_max=1.7, newton_tol=1e-12,
+                  max_newton=10, monitor=lambda p, v: p.monitor(v), starts=costly)
+    assert costly.calls == []
