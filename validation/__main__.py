@@ -214,6 +214,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--workers", type=common.positive_int, default=1, help="processes (chains in parallel)")
     p.add_argument("--tol", type=common.positive_float, default=None,
                    help="run backbone(tol=TOL) instead of H = 31 (its own error estimate explains misses)")
+    p.add_argument("--family-search", choices=("stages", "deflated"), default=None,
+                   help="the search for the family beyond a frontier (docs/resonances.md; default: the "
+                        "backbone's)")
     p.add_argument("--out", default="out", help="folder of corpus_exact.csv")
 
     p = add("accuracy", _accuracy, "backbone(tol=...) against the exact orbit and fixed H = 31 on N chains")

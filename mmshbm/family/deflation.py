@@ -10,13 +10,20 @@ Every orbit u_k found at A_i is *deflated*: Newton then solves F(u) = M(u) G(u) 
     M(u) = Π_k (‖u − u_k‖⁻ᵖ + σ),      p = :data:`POWER`, σ = :data:`SHIFT`,
 
 which has the same roots as G except the u_k (M → ∞ there), so from the same start Newton
-goes to another orbit or fails. With d the Newton step of G, the Newton step of F is
+goes to another orbit or fails. Each start is solved from at most ``max_roots`` times
+(its deflation depth: every orbit found at the target deflated) and stops at its first
+orbit of the family; the target ends once ``max_roots`` orbits are found at it with one
+of the family among them, otherwise after every start (at most starts × ``max_roots``
+solves per target), so orbits off the family found from the first starts do not keep
+the later ones from the family. With d the Newton step of G, the Newton step of F is
 d / (1 − ∇log M·d) (Sherman–Morrison on the rank-one change of the Jacobian), so one
 bordered solve per iteration serves both. At the first target where orbits of the
 family are found (:func:`mmshbm.family.definition.on_family` with the first mode's
 frequency band, :func:`~mmshbm.family.definition.frequency_band`), the one of largest fundamental share is the
 landing (the backbone rule of docs/resonances.md); the follower fills the family back
-down from it to the frontier. When none is found up to the last target the search ends
+down from it to the frontier. Where no target has one, the method's costly starts
+(``last_resort``: MMS-HBM's homotopy from the fundamental's family) are tried at the
+targets in turn. When none is found then the search ends
 the branch with a :class:`~mmshbm.family.end.FamilyEnd` that lists every solve.
 """
 
@@ -225,6 +232,8 @@ class BranchStarts:
         self.amplitude_max = math.inf
         #: (tol, max_iter, admissible) of the search's pinned solves, for starts that solve
         self.solver = (1e-10, 30, None)
+        #: deflated solves per start, for starts that deflate (the search's ``max_roots``)
+        self.depth = 3
 
     def landings(self, us: list, recs: list, guard: FamilyGuard,
                  amplitude_max: float) -> list[tuple[str, np.ndarray, float]]:
@@ -264,6 +273,12 @@ class BranchStarts:
     def before(self, us: list, recs: list, guard: FamilyGuard,
                amplitude: float) -> list[tuple[str, np.ndarray]]:
         """Starts tried first at ``amplitude`` (none here)."""
+        return []
+
+    def last_resort(self, us: list, recs: list, guard: FamilyGuard, amplitude: float,
+                    amplitude_max: float) -> list[tuple[str, np.ndarray]]:
+        """Costly starts at ``amplitude``, tried at the targets in turn only where the
+        others found no orbit of the family at any target (none here)."""
         return []
 
 
@@ -331,34 +346,30 @@ def search_beyond(problem, guard: FamilyGuard, us: list, recs: list, *, options:
     tried = []
     starts.amplitude_max = amplitude_max
     starts.solver = (newton_tol, _NEWTON_FACTOR * max_newton, admissible)
+    starts.depth = options.max_roots
     # the method's landings (a start that picks its own amplitude, MMS-HBM's filtered
     # passage, costly) join the targets once the first target has found no family orbit
     landings = None
     queue = _targets(frontier, amplitude_max, options)
     searched = queue[-1]
-    while queue:
-        target = queue.pop(0)
-        found = []  # (u, iterations, history, record, tangent) of every orbit found at target
-        own = [(name, u0) for name, u0, a in landings or () if a == target]
+    done = []  # the targets searched, in order
+
+    def at(target, candidates):
+        """The landing at ``target`` from the starts ``candidates``, or None."""
+        found = []  # (u, iterations, history, record, tangent, member) of every orbit found at target
         settled = []  # (start, orbits found when it failed) at this target
-        for name, u0 in own + starts.starts(us, recs, guard, target, amplitude_max):
+        for name, u0 in candidates:
             if any(n == len(found) and _same(u0, v) for v, n in settled):
                 continue  # the same start with the same orbits deflated fails the same way
-            while len(found) < options.max_roots:
+            for _ in range(options.max_roots):  # the start's deflation depth
                 try:
                     u, nit, hist, t = deflated_solve(
                         problem, u0, target, [f[0] for f in found],
                         tol=newton_tol, max_iter=_NEWTON_FACTOR * max_newton, admissible=admissible)
-                except StartOutside:
-                    tried.append(Attempt("deflated", name, target, "outside"))
-                    settled.append((u0, len(found)))
-                    break
-                except KnownOrbit:
-                    tried.append(Attempt("deflated", name, target, "known"))
-                    settled.append((u0, len(found)))
-                    break
-                except PinnedFailure:
-                    tried.append(Attempt("deflated", name, target, "failed"))
+                except PinnedFailure as err:
+                    outcome = ("outside" if isinstance(err, StartOutside)
+                               else "known" if isinstance(err, KnownOrbit) else "failed")
+                    tried.append(Attempt("deflated", name, target, outcome))
                     settled.append((u0, len(found)))
                     break
                 rec = monitor(problem, u)
@@ -371,17 +382,34 @@ def search_beyond(problem, guard: FamilyGuard, us: list, recs: list, *, options:
                 found.append((u, nit, hist, rec, t, member))
                 log.debug("deflated search at %.4g from the %s start: %.4g Hz, share %.3f (%s)", target, name,
                           f, share, "family" if member else "not the family")
-            if len(found) >= options.max_roots:
+                if member:
+                    break  # the start has reached the family
+            if len(found) >= options.max_roots and any(x[5] for x in found):
                 break
         family = [x for x in found if x[5]]
-        if family:
-            # the tangent solves [J; ∇A/A*] t = e_n: oriented to growing amplitude
-            u, nit, hist, rec, t, _ = max(family, key=lambda x: family_value(x[3]) or 0.0)
-            return u, nit, hist, rec, t, target, i
+        if not family:
+            return None
+        # the tangent solves [J; ∇A/A*] t = e_n: oriented to growing amplitude
+        u, nit, hist, rec, t, _ = max(family, key=lambda x: family_value(x[3]) or 0.0)
+        return u, nit, hist, rec, t, target, i
+
+    while queue:
+        target = queue.pop(0)
+        done.append(target)
+        own = [(name, u0) for name, u0, a in landings or () if a == target]
+        landing = at(target, own + starts.starts(us, recs, guard, target, amplitude_max))
+        if landing is not None:
+            return landing
         if landings is None:
             landings = starts.landings(us, recs, guard, amplitude_max)
             queue = sorted(set(queue) | {a for _, _, a in landings})
             searched = max([searched] + queue)
+    # the costly starts, at the targets in turn, where the others found nothing at any
+    last = getattr(starts, "last_resort", None)
+    for target in done if last is not None else ():
+        landing = at(target, last(us, recs, guard, target, amplitude_max))
+        if landing is not None:
+            return landing
     cross = crossing(recs, guard, problem)
     end = FamilyEnd(ended=cross is not None, frontier=frontier, frontier_frequency=f_frontier,
                     searched_to=float(searched), crossing=cross, attempts=tuple(tried))

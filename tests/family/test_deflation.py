@@ -94,15 +94,16 @@ def _branch(problem, amplitudes):
 
 
 def test_the_search_returns_both_coexisting_orbits_and_lands_on_the_larger_share():
-    """Both orbits at the first target hold the family's share (0.6 ± 0.1·y): the search
-    finds both (two "landed" attempts, then a failure with both deflated) and lands on
-    the one of larger share, y > 0."""
+    """Both orbits at the first target hold the family's share (0.6 ± 0.1·y): a start
+    stops at its first orbit of the family, so from a start below (y = −0.5) and one
+    above (y = 0.5) the search finds both (two "landed" attempts) and lands on the one
+    of larger share, y > 0, whichever start found it."""
     problem = Circle(0.6, 0.1)
     us, recs, guard = _branch(problem, [1.3, 1.4, 1.5])
     options = FamilyOptions(search="deflated")
     u, _, _, rec, t, target, origin = search_beyond(
         problem, guard, us, recs, options=options, amplitude_max=2.5, newton_tol=1e-12, max_newton=10,
-        monitor=lambda p, v: p.monitor(v), starts=_Start(-0.2))
+        monitor=lambda p, v: p.monitor(v), starts=_Starts(-0.5, 0.5))
     assert target == pytest.approx(1.5 * 1.02, rel=1e-15) and origin == 2
     assert np.abs(u - _roots(target)[0]).max() < 1e-12
     assert abs(rec["fundamental_share"] - (0.6 + 0.1 * u[1])) < 1e-15
@@ -146,3 +147,105 @@ def test_the_targets_double_their_step_then_grow_by_at_most_the_target_ratio_to_
     doubling = frontier * (1 + options.jump_step * 2.0 ** np.arange(4))
     n = min(len(t), 4)
     assert np.allclose(t[:n], np.minimum(doubling[:n], min(bound, frontier / options.jump_step)))
+
+
+class Quartic:
+    """u = (x, y); R(u) = Π_k (y − r_k) with roots ``ROOTS``; amplitude x + 2; frequency
+    1 + y Hz; fundamental share 0.45 + 0.5·y: only the root y = 0.5 (share 0.7) holds the
+    family's majority, the three at y <= −0.1 (share <= 0.4) do not."""
+
+    ROOTS = (-0.3, -0.2, -0.1, 0.5)
+    n_unknowns = 2
+
+    def residual(self, u):
+        return np.array([np.prod([u[1] - r for r in self.ROOTS])])
+
+    def residual_and_jacobian(self, u):
+        d = sum(np.prod([u[1] - r for r in self.ROOTS if r != q]) for q in self.ROOTS)
+        return self.residual(u), np.array([[0.0, d]])
+
+    def monitor(self, u):
+        return {"amplitude": float(u[0] + 2.0), "frequency": float(1.0 + u[1]),
+                "fundamental_share": float(0.45 + 0.5 * u[1])}
+
+
+class _Starts:
+    def __init__(self, *ys):
+        self.ys = ys
+
+    def landings(self, us, recs, guard, amplitude_max):
+        return []
+
+    def starts(self, us, recs, guard, amplitude, amplitude_max):
+        return [(f"y = {y}", np.array([amplitude - 2.0, y])) for y in self.ys]
+
+
+def test_orbits_off_the_family_found_from_the_first_start_leave_the_later_starts_their_turn():
+    """The first start (y = −0.22) lies among the three orbits off the family: its three
+    deflated solves find exactly those (checked below, to 1e-12). The second start
+    (y = 0.45) lies by the family's orbit y = 0.5. Each start's deflation depth is
+    ``max_roots`` = 3, so the second start is still tried at the first target and the
+    search lands there on y = 0.5 (to 1e-12, Newton's tolerance on a simple root); a
+    budget of three orbits per target would end at the first start, at every target."""
+    problem = Quartic()
+    options = FamilyOptions(search="deflated", max_roots=3)
+    A = 1.5 * (1 + options.jump_step)
+    known = []
+    for _ in range(3):
+        known.append(deflated_solve(problem, np.array([A - 2.0, -0.22]), A, known, tol=1e-12,
+                                    max_iter=30)[0])
+    assert sorted(round(float(u[1]), 9) for u in known) == [-0.3, -0.2, -0.1]
+    amplitudes = [1.3, 1.4, 1.5]
+    us = [np.array([a - 2.0, 0.5]) for a in amplitudes]
+    recs = [problem.monitor(u) for u in us]
+    guard = FamilyGuard(0.5, 60)
+    for i, rec in enumerate(recs):
+        guard.observe(i, rec)
+    u, _, _, rec, t, target, origin = search_beyond(
+        problem, guard, us, recs, options=options, amplitude_max=2.5, newton_tol=1e-12, max_newton=10,
+        monitor=lambda p, v: p.monitor(v), starts=_Starts(-0.22, 0.45))
+    assert target == pytest.approx(A, rel=1e-15) and origin == 2
+    assert np.abs(u - np.array([A - 2.0, 0.5])).max() < 1e-12
+    assert rec["fundamental_share"] >= options.family_share
+
+
+class _Costly(_Starts):
+    """Regular starts at ``ys``; the costly start y = 0.45 (by the family's orbit) only as
+    ``last_resort``, counting its calls."""
+
+    def __init__(self, *ys):
+        super().__init__(*ys)
+        self.calls = []
+
+    def last_resort(self, us, recs, guard, amplitude, amplitude_max):
+        self.calls.append(amplitude)
+        return [("costly", np.array([amplitude - 2.0, 0.45]))]
+
+
+def _quartic_branch(problem):
+    us = [np.array([a - 2.0, 0.5]) for a in (1.3, 1.4, 1.5)]
+    recs = [problem.monitor(u) for u in us]
+    guard = FamilyGuard(0.5, 60)
+    for i, rec in enumerate(recs):
+        guard.observe(i, rec)
+    return us, recs, guard
+
+
+def test_the_costly_starts_run_at_the_targets_in_turn_only_where_the_others_found_nothing():
+    """With only starts among the orbits off the family, every target is searched first;
+    then the costly start lands at the first target (y = 0.5 to 1e-12). Where a regular
+    start reaches the family, the costly one is never called."""
+    problem = Quartic()
+    options = FamilyOptions(search="deflated")
+    us, recs, guard = _quartic_branch(problem)
+    costly = _Costly(-0.22)
+    u, *_, target, _ = search_beyond(problem, guard, us, recs, options=options, amplitude_max=1.7,
+                                     newton_tol=1e-12, max_newton=10, monitor=lambda p, v: p.monitor(v),
+                                     starts=costly)
+    first = 1.5 * (1 + options.jump_step)
+    assert target == pytest.approx(first, rel=1e-15) and costly.calls == [target]
+    assert abs(u[1] - 0.5) < 1e-12
+    costly = _Costly(-0.22, 0.45)
+    search_beyond(problem, guard, us, recs, options=options, amplitude_max=1.7, newton_tol=1e-12,
+                  max_newton=10, monitor=lambda p, v: p.monitor(v), starts=costly)
+    assert costly.calls == []
