@@ -81,15 +81,6 @@ TOLERANCE_DEFAULTS = {"start_harmonics": 8, "max_harmonics": 64, "patience": 2, 
                       "confirm": True}
 
 
-#: the fastest contraction of an estimate per doubling of H that a point is credited with
-#: (rate 6; a stiff contact's points just past grazing were measured contracting 28-fold
-#: once H resolves the contact time): a point whose estimate exceeds ``tol`` by more than
-#: FASTEST ** (the doublings the cap still allows) cannot meet it below the cap and is left
-#: where it is
-FASTEST = 64.0
-#: the contraction per doubling credited to a point at the cap whose last doubling was not
-#: measured (rate 2, the estimator's own)
-ASSUMED_CONTRACTION = 4.0
 
 
 def check_tolerance(tol, harmonics, method: str, options: dict) -> dict:

@@ -39,7 +39,17 @@ import math
 
 import numpy as np
 
-__all__ = ["refine_points_along", "SEED_CHANGE"]
+__all__ = ["refine_points_along", "SEED_CHANGE", "FASTEST", "ASSUMED_CONTRACTION"]
+
+#: the fastest contraction of an estimate per doubling of H that a point is credited with
+#: (rate 6; a stiff contact's points just past grazing were measured contracting 28-fold
+#: once H resolves the contact time): a point whose estimate exceeds ``tol`` by more than
+#: FASTEST ** (the doublings the cap still allows) cannot meet it below the cap and is left
+#: where it is
+FASTEST = 64.0
+#: the contraction per doubling credited to a point at the cap whose last doubling was not
+#: measured (rate 2, the estimator's own)
+ASSUMED_CONTRACTION = 4.0
 
 #: a solve started from the predecessor's solution is this point refined where its change
 #: of frequency from H to H2 is at most this many times the predecessor's (the truncation's
@@ -185,8 +195,6 @@ def _climb(p: _Point, first: int, solves: _Solves, seed_from, tol, max_harmonics
            confirm: bool, raise_: bool):
     """The rules of :mod:`mmshbm.methods.adaptive` for one point from the rung ``first``
     (module docstring): (H kept, its estimate, extrapolated 0/1, confirmed, out of reach)."""
-    from .adaptive import ASSUMED_CONTRACTION, FASTEST
-
     est = lambda h: solves.estimate(p, h, seed_from)  # noqa: E731
     h = first
     if first > min(p.known):

@@ -7,8 +7,8 @@ unknowns are those of :class:`~mmshbm.methods.mms.damped.DampedHBMBase`: the cos
 sine coefficients of the massless DOFs, harmonic by harmonic (blocks of ``n_x / (2H+1)``
 numbers: the mean, then cos 1, sin 1, cos 2, ...), followed by a few numbers that do not
 depend on H (Ω, the damping ξ of a nonlinear mode, a tracked first harmonic). The
-thresholds of the loop (:data:`~mmshbm.methods.adaptive.FASTEST`,
-:data:`~mmshbm.methods.adaptive.ASSUMED_CONTRACTION`) are the backbone's: a point is
+thresholds of the loop (:data:`~mmshbm.methods.adaptive_climb.FASTEST`,
+:data:`~mmshbm.methods.adaptive_climb.ASSUMED_CONTRACTION`) are the backbone's: a point is
 promoted to its 2H solution while its estimate exceeds ``tol``, contracts by
 ``contraction`` per doubling (``patience`` doublings without it stop the point), and
 ``tol`` stays within reach below ``max_harmonics``; a point promoted to the top gets its

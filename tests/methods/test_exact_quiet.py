@@ -11,7 +11,10 @@ import numpy as np
 from mmshbm import OneDofOscillator, exact
 
 
-def test_a_failed_point_is_in_the_result_not_on_stderr(caplog, capfd):
+def test_a_failed_point_is_in_the_result_not_on_stderr(caplog, capfd, monkeypatch):
+    # as a library caller without logging configured: no handler a command line run in this
+    # process may have left on the package's logger
+    monkeypatch.setattr(logging.getLogger("mmshbm"), "handlers", [])
     model = OneDofOscillator(m=1.0, k1=1.0, k2=4.0, gap=1.0).model()
     caplog.set_level(logging.DEBUG, logger="mmshbm")
     # one Newton iteration from the open orbit's guess cannot reach the 1e-13 residual past the gap,
