@@ -25,7 +25,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..core.problem import ContinuationProblemBase
-from .adaptive import ASSUMED_CONTRACTION, FASTEST
+from .adaptive_climb import ASSUMED_CONTRACTION, FASTEST
 
 __all__ = ["pad_damped", "solve_at_frequency", "raise_H", "DampedLadder", "refine_points", "Refined",
            "AmplitudePinned"]
