@@ -32,11 +32,7 @@ def _out(args) -> Path:
 
 def _proximal(args) -> dict:
     """The backbone options the corpus runs take from the command line."""
-    out = {} if args.proximal == "static" else {"r": args.proximal}
-    search = getattr(args, "family_search", None)
-    if search is not None:
-        out["family_search"] = search
-    return out
+    return {} if args.proximal == "static" else {"r": args.proximal}
 
 
 def _corpus(args) -> int:
@@ -196,9 +192,6 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--workers", type=common.positive_int, default=1, help="processes")
     p.add_argument("--proximal", choices=("static", "residual"), default="static",
                    help="MMS-HBM's proximal parameter r (docs/exact.md)")
-    p.add_argument("--family-search", choices=("stages", "deflated"), default=None,
-                   help="the search for the family beyond a frontier (docs/resonances.md; default: the "
-                        "backbone's)")
     p.add_argument("--only", type=common.non_negative_int, nargs="+", default=None, metavar="I",
                    help="run only the models of these indices (of the N drawn)")
     p.add_argument("--out", default="out", help="folder of corpus.csv")
@@ -214,9 +207,6 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--workers", type=common.positive_int, default=1, help="processes (chains in parallel)")
     p.add_argument("--tol", type=common.positive_float, default=None,
                    help="run backbone(tol=TOL) instead of H = 31 (its own error estimate explains misses)")
-    p.add_argument("--family-search", choices=("stages", "deflated"), default=None,
-                   help="the search for the family beyond a frontier (docs/resonances.md; default: the "
-                        "backbone's)")
     p.add_argument("--out", default="out", help="folder of corpus_exact.csv")
 
     p = add("accuracy", _accuracy, "backbone(tol=...) against the exact orbit and fixed H = 31 on N chains")

@@ -79,8 +79,6 @@ class ContinuationOptions:
     family_share, max_excursion, jump_step, max_jumps
         The family following's options, forwarded to
         :class:`~mmshbm.family.options.FamilyOptions` (:attr:`family`).
-    family_search : {"stages", "deflated"}
-        Forwarded to ``FamilyOptions.search``: how the family is sought beyond a frontier.
     """
 
     ds: float = 0.1
@@ -102,7 +100,6 @@ class ContinuationOptions:
     max_excursion: int = 60
     jump_step: float = 0.02
     max_jumps: int = 50
-    family_search: str = "stages"
 
     def __post_init__(self):
         ds_min = check.positive("ds_min", self.ds_min)
@@ -139,8 +136,7 @@ class ContinuationOptions:
 
     def _family_options(self) -> FamilyOptions:
         return FamilyOptions(family_share=self.family_share, max_excursion=self.max_excursion,
-                             jump_step=self.jump_step, max_jumps=self.max_jumps,
-                             search=self.family_search)
+                             jump_step=self.jump_step, max_jumps=self.max_jumps)
 
     @property
     def family(self) -> FamilyOptions | None:

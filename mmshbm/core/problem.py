@@ -40,25 +40,22 @@ runners call them directly and never probe a problem for attributes.
     with the amplitude pinned (:mod:`mmshbm.core.pinned`); None: the amplitude is
     differenced from ``monitor(u)["amplitude"]``.
 :class:`FamilyEvents`
-    What the jumps over internal-resonance tongues use (:mod:`mmshbm.family.stages`):
+    What the search for the family beyond a frontier uses (:mod:`mmshbm.family`):
     ``frequency_of(u)`` (Hz, no evaluation), ``family_frequency_limit()`` (Hz, where the
-    starting mode's backbone tends far above the gaps: the far search's window),
-    ``family_frequency_ceiling()`` (Hz, above which no landing of the harmonic ladder
-    counts; the limit when not offered),
+    starting mode's backbone tends far above the gaps),
+    ``family_frequency_ceiling()`` (Hz, the first mode with every contact held: the top
+    of the family's frequency band; the limit when not offered),
     ``scaled_state(u, factor)``, ``family_predictor(u_from, A_from, A_to, A_max)``,
     ``family_landing(u_from, rec_from, excursion, A_max, A_min)``,
     ``harmonic_landing(A, A_max, tol=, max_iter=, admissible=, fundamental=) -> (u, share_ref)``
     (None where ``fundamental=True`` names no ladder of its own),
     ``homotopy_landing(A, A_max, tol=, max_iter=, admissible=) -> (u, f_start)`` (the orbit
-    reached by a homotopy from another family's orbit of frequency f_start, Hz;
-    :mod:`mmshbm.family.landings`), ``with_frequency(u, f)`` (``u`` with its
-    frequency set to f, Hz), ``scan_starts(u_front, A_front, A) -> list`` (states to
-    start Newton from at amplitude A, frequency aside) and ``leads_fundamental(u) ->
-    bool`` (the starting mode holds the largest share of the fundamental harmonic's
-    kinetic energy among the tracked modes): the frequency scan above a tongue; and
-    ``family_starts()``, the object that supplies the starts of the deflated search
-    (:class:`mmshbm.family.deflation.FamilyStarts`; MMS-HBM's adds the filtered passage,
-    the predictor and the scaled orbit). Each is None when not offered.
+    reached by a homotopy from another family's orbit of frequency f_start, Hz:
+    :mod:`mmshbm.family.homotopy`), ``leads_fundamental(u) -> bool`` (the starting mode
+    holds the largest share of the fundamental harmonic's kinetic energy among the
+    tracked modes), and ``family_starts()``, the object that supplies the starts of the
+    deflated search (:class:`mmshbm.family.deflation.FamilyStarts`; MMS-HBM's adds the
+    filtered passage, the predictor and the scaled orbit). Each is None when not offered.
 :class:`AmplitudeStart` (backbones, :class:`BackboneProblemBase`)
     ``linear_mode_point(amplitude)`` (the linear mode at that amplitude, m),
     ``initial_tangent()``, ``open_amplitude()`` (the amplitude at which the linear mode
@@ -154,7 +151,7 @@ class PinnedSolves(Protocol):
 
 @runtime_checkable
 class FamilyEvents(Protocol):
-    """Predictors, landings and the frequency trust region of the family's jumps."""
+    """The starts and the frequency band of the search for the family beyond a frontier."""
 
     frequency_of: Callable[[np.ndarray], float] | None
     family_frequency_limit: Callable[[], float] | None
@@ -164,8 +161,6 @@ class FamilyEvents(Protocol):
     family_landing: Callable[..., tuple[np.ndarray, float]] | None
     harmonic_landing: Callable[..., tuple[np.ndarray, float] | None] | None
     homotopy_landing: Callable[..., tuple[np.ndarray, float]] | None
-    with_frequency: Callable[[np.ndarray, float], np.ndarray] | None
-    scan_starts: Callable[[np.ndarray, float, float], list] | None
     leads_fundamental: Callable[[np.ndarray], bool] | None
     family_starts: Callable[[], Any] | None
 
@@ -252,8 +247,6 @@ class ContinuationProblemBase:
     family_landing: Callable[..., tuple[np.ndarray, float]] | None = None
     harmonic_landing: Callable[..., tuple[np.ndarray, float] | None] | None = None
     homotopy_landing: Callable[..., tuple[np.ndarray, float]] | None = None
-    with_frequency: Callable[[np.ndarray, float], np.ndarray] | None = None
-    scan_starts: Callable[[np.ndarray, float, float], list] | None = None
     leads_fundamental: Callable[[np.ndarray], bool] | None = None
     family_starts: Callable[[], Any] | None = None
     # AmplitudeStart

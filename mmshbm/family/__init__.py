@@ -10,9 +10,10 @@ Method-agnostic; it uses the continuation core (:mod:`mmshbm.core`) and nothing 
   branch has left it;
 * :mod:`~mmshbm.family.follower`: the continuation driver's event plug-in (search beyond
   the frontier, backfill);
-* :mod:`~mmshbm.family.deflation`: the deflated pinned search beyond a frontier;
-* :mod:`~mmshbm.family.stages`, :mod:`~mmshbm.family.landings`,
-  :mod:`~mmshbm.family.homotopy`: the staged search (the default);
+* :mod:`~mmshbm.family.deflation`: the one search beyond a frontier, deflated Newton at
+  pinned amplitudes;
+* :mod:`~mmshbm.family.homotopy`: the Newton homotopy of the pinned system (a start from
+  a distant orbit);
 * :mod:`~mmshbm.family.end`: why a family ends, as a value
   (:class:`~mmshbm.family.end.FamilyEnd`).
 

@@ -318,8 +318,9 @@ def search_beyond(problem, guard: FamilyGuard, us: list, recs: list, *, options:
 
     Returns
     -------
-    (u, iterations, history, record, tangent, target, origin) of the landing, as
-    :func:`mmshbm.family.stages.jump`.
+    (u, iterations, history, record, tangent, target, origin) of the landing: the state,
+    its Newton iterations and residual history, its record, its unit tangent oriented to
+    growing amplitude, the target amplitude (m) and the index of the frontier point.
 
     Raises
     ------

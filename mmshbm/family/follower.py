@@ -1,15 +1,17 @@
 """Following the family of a nonlinear mode: the event plug-in of the driver.
 
 :class:`FamilyFollower` implements :class:`mmshbm.core.events.BranchEvents` with the
-bookkeeping of :class:`mmshbm.family.stages.FamilyGuard`: it marks every point on or off
-the starting mode's family (``record["on_family"]``) and asks for a jump
-(:func:`mmshbm.family.stages.jump`) when the branch has left the family for good (an
-excursion, a loop), when a tongue climbs to a bound, or when the step size fails at
-``ds_min``. A jump lands beyond the family's frontier; the family below the landing is
-filled back down by plain path following (:func:`_backfill`) and joins the branch in
-increasing amplitude, the first point marked by a ``"jump"`` special point. Its options
-are :class:`mmshbm.core.options.FamilyOptions`
-(``ContinuationOptions(follow="family", ...)`` builds them).
+bookkeeping of :class:`mmshbm.family.guard.FamilyGuard`: it marks every point on or off
+the starting mode's family (``record["on_family"]``) and asks for the search beyond the
+family's frontier (:func:`mmshbm.family.deflation.search_beyond`) when the branch has left
+the family for good (an excursion, a loop), when a tongue climbs to a bound, or when the
+step size fails at ``ds_min``. Where the search finds nothing and the branch itself still
+goes on, the path is followed on to the first orbit of the family beyond the frontier
+(:func:`_along_path`). The family below the landing is filled back down by plain path
+following (:func:`_backfill`) and joins the branch in increasing amplitude, the first
+point marked by a ``"jump"`` special point. Its options are
+:class:`mmshbm.family.options.FamilyOptions` (``ContinuationOptions(follow="family", ...)``
+builds them).
 """
 
 from __future__ import annotations
@@ -31,7 +33,6 @@ from .definition import FAMILY_RECORD, family_value, frequency_band, on_family
 from .deflation import FamilyStarts, search_beyond
 from .end import FamilyEnded
 from .guard import FamilyGuard
-from .stages import jump
 
 __all__ = ["FamilyFollower", "default_events"]
 
@@ -51,8 +52,8 @@ class FamilyFollower:
     follow : callable
         The path follower of the backfill (:func:`mmshbm.core.continuation.continue_branch`).
     starts : FamilyStarts, optional
-        The starts of the deflated search (``family.search == "deflated"``); default
-        :class:`~mmshbm.family.deflation.ProblemStarts` of the problem.
+        The starts of the search beyond a frontier; default the problem's own
+        (``problem.family_starts()``) or :class:`~mmshbm.family.deflation.BranchStarts`.
     """
 
     def __init__(self, family: FamilyOptions, options: ContinuationOptions, follow: Callable,
@@ -108,23 +109,13 @@ class FamilyFollower:
         point (:func:`_backfill`); the points in increasing amplitude, the landing last."""
         opt, guard = self.options, self.guard
         try:
-            if self.family.search == "deflated":
-                u_j, nit_j, hist_j, rec_j, t_j, target, i_from = search_beyond(
-                    problem, guard, points, records, options=self.family, amplitude_max=self.amplitude_max,
-                    newton_tol=opt.newton_tol, max_newton=opt.max_newton, monitor=_pinned_monitor,
-                    starts=self.starts)
-            else:
-                u_j, nit_j, hist_j, rec_j, t_j, target, i_from = jump(
-                    problem, guard, points, records, step=self.family.jump_step,
-                    amplitude_max=self.amplitude_max, newton_tol=opt.newton_tol, max_newton=opt.max_newton,
-                    monitor=_pinned_monitor,
-                    coexisting=lambda u, t, a, rec: _coexisting(self.follow, problem, u, t, a, rec, opt,
-                                                                self.family, self.amplitude_max),
-                    descend=lambda u, t, a, a_to: _descend(self.follow, problem, u, t, a, a_to, opt,
-                                                           self.family))
+            u_j, nit_j, hist_j, rec_j, t_j, target, i_from = search_beyond(
+                problem, guard, points, records, options=self.family, amplitude_max=self.amplitude_max,
+                newton_tol=opt.newton_tol, max_newton=opt.max_newton, monitor=_pinned_monitor,
+                starts=self.starts)
         except (FamilyEnded, PinnedFailure) as err:
             along = (_along_path(self.follow, problem, points, records, guard, opt, self.family)
-                     if reason in _MOVING and self.family.search == "deflated" else None)
+                     if reason in _MOVING else None)
             if along is None:
                 if isinstance(err, FamilyEnded):
                     end = err.end
@@ -211,49 +202,6 @@ def _outside(rec: dict, bounds) -> bool:
 _BACKFILL_TARGET_RESIDUAL = 1e-3
 
 
-#: relative frequency difference below which a branch crossing an amplitude passes
-#: through a given point there (crossings are interpolated linearly between branch points)
-_SAME_ORBIT = 1e-3
-
-
-def _coexisting(follow: Callable, problem, u, t, landing: float, rec_land: dict, opt: ContinuationOptions,
-                family: FamilyOptions, amplitude_max: float) -> bool:
-    """Whether the branch through a landing ``u`` (tangent ``t``, oriented to growing
-    amplitude) found below a jump's landing (amplitude ``landing``, record ``rec_land``)
-    is another orbit's: followed up (plain path following, at most 2·``max_excursion``
-    steps) it crosses the landing's amplitude with the fundamental's majority, but never
-    through the landing point (the frequency there differs by more than ``_SAME_ORBIT``).
-    Two orbits with the fundamental's majority then coexist at that amplitude; the one
-    the filtered passage reached continues the family, the other is the side of a tongue
-    (it folds back above while the fundamental keeps the majority). False when the
-    branch passes through the landing (an S-bend may cross its amplitude first
-    elsewhere), or never crosses it on the family within those steps."""
-    f_land = float(rec_land.get("frequency", math.nan))
-    if not math.isfinite(f_land):
-        return False
-    up = dataclasses.replace(
-        opt, max_steps=2 * family.max_excursion, follow="path", step_control="auto",
-        target_residual=_BACKFILL_TARGET_RESIDUAL, bounds={"amplitude": (0.0, amplitude_max)})
-    try:
-        res = follow(problem, u, t, up, catch_interrupt=False)
-    except (PinnedFailure, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
-        return False
-    A = np.asarray(res.records.get("amplitude", []), dtype=float)
-    f = np.asarray(res.records.get("frequency", np.full(len(A), np.nan)), dtype=float)
-    share = res.records.get(FAMILY_RECORD)
-    crossed = False
-    for i in range(len(A) - 1):
-        if (A[i] - landing) * (A[i + 1] - landing) > 0 or A[i] == A[i + 1]:
-            continue
-        w = (landing - A[i]) / (A[i + 1] - A[i])
-        f_x = (1 - w) * f[i] + w * f[i + 1]
-        if abs(f_x / f_land - 1.0) <= _SAME_ORBIT:
-            return False
-        if share is None or (1 - w) * share[i] + w * share[i + 1] >= family.family_share:
-            crossed = True
-    return crossed
-
-
 def _backfill(follow: Callable, problem, u, t, frontier: float, landing: float, opt: ContinuationOptions,
               family: FamilyOptions) -> list:
     """The family below a jump's landing point: continued backwards from it (plain path
@@ -281,35 +229,3 @@ def _backfill(follow: Callable, problem, u, t, frontier: float, landing: float, 
         tangent /= max(np.linalg.norm(tangent), 1e-300)
         out.append((res.u[i], int(res.newton_iterations[i]), res.residual_histories[i], rec, tangent))
     return out
-
-
-def _descend(follow: Callable, problem, u, t, amplitude: float, amplitude_to: float, opt: ContinuationOptions,
-             family: FamilyOptions):
-    """The family point at ``amplitude_to`` below a family point ``u`` (amplitude
-    ``amplitude``, tangent ``t`` oriented to growing amplitude) found above the bound:
-    the branch through it followed back down (plain path following, at most
-    ``max_excursion`` steps, the backfill's step rule) onto ``amplitude_to``, where the
-    driver refines its end onto the bound. Returns (u, iterations, history, record,
-    tangent oriented to growing amplitude) there, or None when the branch leaves the
-    family (its family measure below ``family_share``) or turns back first."""
-    down = dataclasses.replace(
-        opt, max_steps=family.max_excursion, follow="path", step_control="auto",
-        target_residual=_BACKFILL_TARGET_RESIDUAL,
-        bounds={"amplitude": (amplitude_to, amplitude * (1 + 1e-6)),
-                FAMILY_RECORD: (family.family_share, 2.0)})
-    try:
-        res = follow(problem, u, -t, down, catch_interrupt=False)
-    except (PinnedFailure, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
-        return None
-    if len(res.u) < 2:
-        return None
-    rec = {k: v[-1] for k, v in res.records.items()}
-    share = family_value(rec)
-    log.debug("descent from %.4g to %.4g: %s after %d points at %.4g (share %s)", amplitude, amplitude_to,
-              res.status, len(res.u), float(rec["amplitude"]), share)
-    if abs(float(rec["amplitude"]) / amplitude_to - 1.0) > 1e-6 or (
-            share is not None and share < family.family_share):
-        return None
-    tangent = res.u[-2] - res.u[-1]
-    tangent /= max(np.linalg.norm(tangent), 1e-300)
-    return res.u[-1], int(res.newton_iterations[-1]), res.residual_histories[-1], rec, tangent

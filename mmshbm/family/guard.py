@@ -1,5 +1,5 @@
 """The family guard: which points of a branch belong to the starting mode's family, and
-when the branch must jump (see :mod:`mmshbm.family.stages` for the whole picture and
+when the branch must search beyond its frontier (see :mod:`mmshbm.family.follower` for the whole picture and
 docs/resonances.md for the definition, :func:`mmshbm.family.definition.on_family`)."""
 
 from __future__ import annotations

@@ -11,13 +11,7 @@ from dataclasses import dataclass
 
 from .. import _validate as check
 
-__all__ = ["FamilyOptions", "SEARCHES"]
-
-#: the searches beyond a frontier: ``"stages"``, the staged jump of
-#: :mod:`mmshbm.family.stages`; ``"deflated"``, the one deflated pinned search of
-#: :mod:`mmshbm.family.deflation`
-SEARCHES = ("stages", "deflated")
-
+__all__ = ["FamilyOptions"]
 
 @dataclass(frozen=True)
 class FamilyOptions:
@@ -38,11 +32,6 @@ class FamilyOptions:
         targets are ``frontier·(1 + jump_step·2^i)``. Default 0.02.
     max_jumps : int
         Searches beyond a frontier allowed per branch. Default 50.
-    search : {"stages", "deflated"}
-        How the family's continuation beyond a frontier is sought: ``"stages"`` (default),
-        the staged jump (:func:`mmshbm.family.stages.jump`); ``"deflated"``, Newton at
-        pinned amplitudes from a fixed set of starts with the orbits already found
-        deflated (:func:`mmshbm.family.deflation.search_beyond`).
     target_ratio : float
         Largest ratio (> 1) of consecutive amplitude targets of the deflated search: the
         targets frontier·(1 + jump_step·2^i) double their step until consecutive ones are
@@ -69,7 +58,6 @@ class FamilyOptions:
     max_excursion: int = 60
     jump_step: float = 0.02
     max_jumps: int = 50
-    search: str = "stages"
     target_ratio: float = 1.1
     max_roots: int = 3
     band_slack: float = 0.01
@@ -81,8 +69,6 @@ class FamilyOptions:
         check.integer("max_excursion", self.max_excursion, minimum=1)
         check.positive("jump_step", self.jump_step)
         check.integer("max_jumps", self.max_jumps, minimum=0)
-        if self.search not in SEARCHES:
-            raise ValueError(f"search must be one of {SEARCHES}, got {self.search!r}")
         ratio = check.real_number("target_ratio", self.target_ratio)
         if not ratio > 1.0:
             raise ValueError(f"target_ratio must be > 1, got {self.target_ratio!r}")

@@ -255,11 +255,11 @@ def _coefficients(solver, u, n_samples: int) -> np.ndarray:
 def _family_measure(branch, fundamental: np.ndarray, th: CheckThresholds) -> np.ndarray:
     """The fundamental's share where the point is off the family, 1 where it is on it: a
     branch followed plainly is classified by replaying the family guard over its points
-    (:class:`mmshbm.family.stages.FamilyGuard`: a stretch where a higher harmonic holds most
+    (:class:`mmshbm.family.guard.FamilyGuard`: a stretch where a higher harmonic holds most
     of the kinetic energy but the backbone keeps rising without folding or locking is the
     family, not a tongue; one still pending where the branch reaches its amplitude bound
     is judged there as the family follower judges it,
-    :meth:`~mmshbm.family.stages.FamilyGuard.locked_at_bound`)."""
+    :meth:`~mmshbm.family.guard.FamilyGuard.locked_at_bound`)."""
     if "on_family" in branch.records:
         return fundamental
     from ..family.guard import FamilyGuard

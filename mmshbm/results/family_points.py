@@ -1,6 +1,6 @@
 """The starting mode's backbone inside a branch: its family front and exact points on it.
 
-A branch continued with ``follow="family"`` (:mod:`mmshbm.family.stages`) holds, besides
+A branch continued with ``follow="family"`` (:mod:`mmshbm.family`) holds, besides
 the first-mode backbone, the points of the internal-resonance tongues it followed out and
 back (``records["on_family"] = 0``). :func:`family_front` picks the backbone's points;
 :func:`frequency_at` solves the backbone at a given amplitude, and returns NaN where the
@@ -141,7 +141,7 @@ def warn_outside_front(branch, amplitude: float, stacklevel: int = 3) -> bool:
 
 
 def _share_record(branch):
-    """The branch's family measure per point (:func:`mmshbm.family.stages.family_value`)."""
+    """The branch's family measure per point (:func:`mmshbm.family.definition.family_value`)."""
     from ..family.definition import FAMILY_RECORD
 
     share = branch.records.get(FAMILY_RECORD)

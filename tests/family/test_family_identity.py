@@ -7,7 +7,7 @@ import pytest
 
 import mmshbm
 from mmshbm.cli import main
-from mmshbm.family.stages import FamilyGuard
+from mmshbm.family.guard import FamilyGuard
 
 
 def _chain(springs, masses, gap=0.01, side=1):

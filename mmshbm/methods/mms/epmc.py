@@ -26,7 +26,7 @@ energy identity removes, so the bordered Jacobian stays regular at C = 0.
 Ω is the last unknown (the continuation's folds are folds in frequency, as for
 backbones).
 
-The family guard of :mod:`mmshbm.family.stages` keeps the branch on the starting mode's
+The family guard of :mod:`mmshbm.family.guard` keeps the branch on the starting mode's
 family as for conservative backbones: every point records ``fundamental_share``, the
 fundamental harmonic's share of the period-mean kinetic energy. Where a harmonic k meets
 a damped higher mode j (kΩ ≈ ω_j) the energy moves into mode j, the damping ratio of
@@ -274,7 +274,7 @@ class EPMCProblem(OneEvaluation, DampedHBMBase, BackboneProblemBase):
         excursion's last states (``excursion``, scaled unknowns, in order), plain path
         following until a point on the family (fundamental share >= 0.5) lies above
         ``amplitude_min`` (the frontier, m). Returns (u, amplitude) of that point for the
-        jump's pinned solve (:func:`mmshbm.family.stages.jump`). A damped mode often passes
+        search's pinned solve (:func:`mmshbm.family.deflation.search_beyond`). A damped mode often passes
         a tongue by itself once the branch comes back up; where the path instead closes
         into a loop (it comes back to the excursion's first state) or does not come back
         within twice the excursion's length, raises ValueError and the jump goes on with

@@ -1,7 +1,7 @@
 """How an MMS-HBM branch stays on its family: modal energy shares per point, and the
-landings of the jumps over internal-resonance tongues (a mixin of
-:class:`~mmshbm.methods.mms.conservative.MMSHBMProblem`, used by :mod:`mmshbm.family.stages`;
-the last-resort landings from low-harmonic families: :mod:`mmshbm.methods.mms.landings`)."""
+starts of the search beyond a frontier (a mixin of
+:class:`~mmshbm.methods.mms.conservative.MMSHBMProblem`, used by :mod:`mmshbm.family`;
+the starts from low-harmonic families: :mod:`mmshbm.methods.mms.landings`)."""
 
 from __future__ import annotations
 
@@ -66,19 +66,6 @@ class FamilyMixin(LandingsMixin):
                 out = min(out, ct.gap / motion)
         return float(out)
 
-    def with_frequency(self, u: np.ndarray, frequency: float) -> np.ndarray:
-        """``u`` with Ω = 2π·``frequency`` (Hz), the coefficients kept."""
-        out = np.array(u, dtype=float)
-        out[-1] = 2 * np.pi * frequency / self.colscale[-1]
-        return out
-
-    def scan_starts(self, u_front: np.ndarray, amplitude_front: float, amplitude: float) -> list:
-        """States to start the frequency scan above a tongue from at ``amplitude`` (m): the
-        linear mode's there (the tongue's other side keeps the fundamental's majority, its
-        shape near the mode's) and the frontier's state ``u_front`` scaled to it."""
-        return [np.asarray(self.linear_mode_point(amplitude), dtype=float),
-                self.scaled_state(u_front, amplitude / amplitude_front)]
-
     def leads_fundamental(self, u: np.ndarray) -> bool:
         """Whether the starting mode holds the largest share of the fundamental harmonic's
         kinetic energy among the tracked open-contact modes (:meth:`modal_shares`): the
@@ -132,8 +119,9 @@ class FamilyMixin(LandingsMixin):
         point ``u_from`` (record ``rec_from``): the resonant pair (harmonic k, mode j) is
         the one whose energy share peaked over the ``excursion`` states; the branch is
         continued with harmonic k filtered out past kΩ = ω_j and released there
-        (:func:`mmshbm.methods.mms.filtered.pass_resonance`). Returns (u, amplitude). Used by
-        the jumps of :mod:`mmshbm.family.stages`; the landing lies above ``amplitude_min``."""
+        (:func:`mmshbm.methods.mms.filtered.pass_resonance`). Returns (u, amplitude).
+        A start of the search beyond a frontier (:mod:`mmshbm.family.deflation`); the
+        landing lies above ``amplitude_min``."""
         from .filtered import pass_resonance
 
         freqs = self.tracked_frequencies
@@ -221,7 +209,7 @@ class FamilyMixin(LandingsMixin):
 
     def mode_share(self, u: np.ndarray) -> float:
         """Share of the period-mean kinetic energy in the starting mode at the fundamental
-        harmonic (the family test of :mod:`mmshbm.family.stages`); with the modal back end
+        harmonic (the starting mode's share, records ``mode_share``); with the modal back end
         from one projected row, else from :meth:`modal_shares`."""
         fast = self._fast_setup()
         if not fast:
@@ -254,7 +242,7 @@ class FamilyMixin(LandingsMixin):
     def fundamental_share(self, u: np.ndarray) -> float:
         """Share (0..1) of the period-mean kinetic energy in the fundamental harmonic (k = 1),
         all DOFs together (:meth:`harmonic_energies`): the family measure of
-        :mod:`mmshbm.family.stages` (see docs/resonances.md). A change of the fundamental's
+        :mod:`mmshbm.family.definition` (see docs/resonances.md). A change of the fundamental's
         shape (toward the closed-contact mode) leaves it unchanged; energy moving into a
         harmonic k >= 2 (near an internal resonance kΩ ≈ ω_j) lowers it."""
         energies = self.harmonic_energies(u)

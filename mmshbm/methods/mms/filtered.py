@@ -10,8 +10,8 @@ at the same amplitude only by the (small, non-resonant) harmonic-k content, so N
 the full problem with the amplitude pinned releases the filter there.
 
 :class:`FilteredProblem` wraps a continuation problem; :func:`pass_resonance` does the
-continuation and the release. Used by MMS-HBM's ``family_landing`` (the jumps of
-:mod:`mmshbm.family.stages`).
+continuation and the release. Used by MMS-HBM's ``family_landing`` (a start of the
+search beyond a frontier, :mod:`mmshbm.family.deflation`).
 """
 
 from __future__ import annotations

@@ -1,8 +1,8 @@
-"""The jumps' last-resort landings of an MMS-HBM branch, from families with fewer
+"""Starts of the search beyond a frontier of an MMS-HBM branch, from families with fewer
 harmonics: the orbit continued in the harmonics (:meth:`LandingsMixin.harmonic_landing`)
 and reached by a homotopy (:meth:`LandingsMixin.homotopy_landing`), with the low-harmonic
 branches they start from (a mixin of :class:`~mmshbm.methods.mms.family.FamilyMixin`,
-used by :mod:`mmshbm.family.landings`)."""
+used by :mod:`mmshbm.methods.mms.family_starts`)."""
 
 from __future__ import annotations
 
