@@ -268,14 +268,15 @@ def test_cli_corpus_exact(tmp_path, capsys):
 
 
 def test_the_time_limit_holds_inside_a_jump(monkeypatch):
-    """A jump's pinned solves call no continuation callback, so a limit checked at the
-    points alone lets a slow jump run on. Each pinned solve made to burn 2 s of processor
-    time: with a 0.5 s limit the case is interrupted inside the first one, not after it."""
+    """A search's pinned solves call no continuation callback, so a limit checked at the
+    points alone lets a slow search run on. Each deflated solve made to burn 2 s of
+    processor time: with a 0.5 s limit the case is interrupted inside the first one, not
+    after it."""
     import time
 
-    import mmshbm.family.stages as family
+    import mmshbm.family.deflation as family
 
-    original = family.solve_at_amplitude
+    original = family.deflated_solve
 
     def slow(*args, **kwargs):
         t0 = time.process_time()
@@ -283,7 +284,7 @@ def test_the_time_limit_holds_inside_a_jump(monkeypatch):
             pass
         return original(*args, **kwargs)
 
-    monkeypatch.setattr(family, "solve_at_amplitude", slow)
+    monkeypatch.setattr(family, "deflated_solve", slow)
     case = corpus.generate(14, seed=0)[13]  # a tree whose branch jumps twice in 0.03 s
     r = corpus.run_case(case, time_limit=0.5)
     assert not r.completed and r.status.startswith("interrupted")
