@@ -2,8 +2,6 @@
 
 import warnings
 
-import numpy as np
-
 import mmshbm
 
 
