@@ -206,7 +206,9 @@ def _backfill(follow: Callable, problem, u, t, frontier: float, landing: float, 
               family: FamilyOptions) -> list:
     """The family below a jump's landing point: continued backwards from it (plain path
     following) until it leaves the family (its family measure refined onto
-    ``family_share``) or reaches the frontier. Returns the points in increasing amplitude,
+    ``family_share``), reaches the frontier, or turns back in amplitude (a fold: the
+    piece of the family the landing lies on begins there; beyond the fold the path goes
+    up again on another orbit of the family). Returns the points in increasing amplitude,
     as tuples (u, iterations, history, record, tangent oriented to growing amplitude),
     without the landing point.
 
@@ -219,8 +221,14 @@ def _backfill(follow: Callable, problem, u, t, frontier: float, landing: float, 
         target_residual=_BACKFILL_TARGET_RESIDUAL,
         bounds={"amplitude": (frontier, landing * (1 + 1e-6)), FAMILY_RECORD: (family.family_share, 2.0)})
     res = follow(problem, u, -t, back, catch_interrupt=False)
+    amplitude = np.asarray(res.records["amplitude"], dtype=float)
+    end = len(res.u)
+    for i in range(1, end):
+        if amplitude[i] > amplitude[i - 1]:
+            end = i  # the fold lies at point i - 1
+            break
     out = []
-    for i in range(len(res.u) - 1, 0, -1):
+    for i in range(end - 1, 0, -1):
         rec = {k: v[i] for k, v in res.records.items()}
         share = family_value(rec)
         if share is not None and share < family.family_share * (1 - 1e-6):

@@ -96,10 +96,10 @@ def test_a_backbone_folded_by_its_truncation_resumes_on_the_exact_orbit():
     amplitude at 7.35 gaps with the fundamental's whole share (0.997): plain path following
     turns back there too and returns to the linear mode. The exact orbit (two contacts per
     period) goes on smoothly to 10 gaps between the two: the fold is the truncation's. The
-    H = 15 orbits beyond it lie below the fold's frequency, where no predictor taken from
-    the branch below converges; the homotopy from the fundamental's family reaches them
-    (before: "jump failed: the branch turns back in amplitude at the frontier"). Beyond
-    the landing the branch agrees with the exact orbit as well as it did below the fold."""
+    H = 15 orbits beyond it lie below the fold's frequency, on a piece of the family that
+    begins at a fold of its own (7.77 gaps) and that no predictor taken from the branch
+    below reaches; the search lands on it and the backfill follows it down to its fold.
+    On it the branch agrees with the exact orbit as well as it did below the first fold."""
     from mmshbm.methods.exact import orbits
 
     model = _tree_one_sided()
@@ -113,8 +113,8 @@ def test_a_backbone_folded_by_its_truncation_resumes_on_the_exact_orbit():
     fold, f_fold = float(path.amplitude[i]), float(path.frequency[i])
     jumps = [sp for sp in b.special_points if sp.kind == "jump"]
     assert len(jumps) == 1
-    landing = float(jumps[0].data["landing_amplitude"])
-    assert fold < landing < 1.1 * fold  # the first targets above the fold
+    resumed = float(jumps[0].data["amplitude_to"])
+    assert fold < resumed < 1.1 * fold  # the family's next piece begins just above the fold
     assert float(jumps[0].data["frequency_to"]) < f_fold  # below the fold's frequency
 
     def error(gaps):
