@@ -10,7 +10,12 @@ where T_k is the kinetic energy of harmonic k (all DOFs together), and its frequ
 in the first mode's band, from the open-contact linear mode's to the first mode's with
 every contact held (contacts only stiffen the structure; for one contact the band ends
 below the second open-contact mode, by interlacing, which separates the second mode's
-orbits whose fundamental also dominates). The measure is the
+orbits whose fundamental also dominates), and, where its frequency lies above the next
+open-contact mode's (several contacts can lift the band that far, and there the next
+mode's own orbits with a dominant fundamental exist), the starting mode leads its
+fundamental: of the open-contact modes, the starting mode holds the largest share of
+the fundamental harmonic's kinetic energy (record ``"mode_leads"``: 1 or 0, NaN below
+that frequency, where the condition is void). The measure is the
 record ``"fundamental_share"`` of a converged point (MMS-HBM:
 :meth:`mmshbm.methods.mms.family.FamilyMixin.fundamental_share`). It depends on the orbit
 only: not on how the continuation reached it, and not on the time origin or the
@@ -23,11 +28,16 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
-__all__ = ["FAMILY_RECORD", "family_value", "frequency_band", "on_family"]
+__all__ = ["FAMILY_RECORD", "LEAD_RECORD", "family_value", "frequency_band", "on_family"]
 
 #: the record that decides membership of the family: the fundamental harmonic's share of
 #: the period-mean kinetic energy (MMS-HBM's ``fundamental_share``)
 FAMILY_RECORD = "fundamental_share"
+
+#: the record of the definition's third condition: 1.0 where the starting mode holds the
+#: largest share of the fundamental harmonic's kinetic energy, 0.0 where another mode
+#: does, NaN where the orbit's frequency lies below the next open-contact mode's (void)
+LEAD_RECORD = "mode_leads"
 
 
 def family_value(rec: Mapping) -> float | None:
@@ -43,13 +53,16 @@ def family_value(rec: Mapping) -> float | None:
 def on_family(rec: Mapping, family_share: float, band: tuple[float, float] | None = None) -> bool | None:
     """The definition's predicate: whether the orbit with record ``rec`` belongs to the
     first mode's family: its fundamental share (:func:`family_value`) is at least
-    ``family_share`` (0..1) and, given the first mode's frequency ``band`` (lo, hi) in Hz
-    (:func:`frequency_band`), its ``rec["frequency"]`` lies in it.
+    ``family_share`` (0..1), the starting mode leads its fundamental where that is
+    decided (``rec["mode_leads"]`` is not 0) and, given the first mode's frequency
+    ``band`` (lo, hi) in Hz (:func:`frequency_band`), its ``rec["frequency"]`` lies in it.
     None when the record carries no family measure (a problem that does not record it:
     every orbit counts)."""
     value = family_value(rec)
     if value is None:
         return None
+    if rec.get(LEAD_RECORD, math.nan) == 0.0:
+        return False
     if band is not None:
         f = float(rec.get("frequency", math.nan))
         if not band[0] <= f <= band[1]:

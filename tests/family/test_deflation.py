@@ -100,7 +100,7 @@ def test_the_search_returns_both_coexisting_orbits_and_lands_on_the_larger_share
     of larger share, y > 0, whichever start found it."""
     problem = Circle(0.6, 0.1)
     us, recs, guard = _branch(problem, [1.3, 1.4, 1.5])
-    options = FamilyOptions(search="deflated")
+    options = FamilyOptions()
     u, _, _, rec, t, target, origin = search_beyond(
         problem, guard, us, recs, options=options, amplitude_max=2.5, newton_tol=1e-12, max_newton=10,
         monitor=lambda p, v: p.monitor(v), starts=_Starts(-0.5, 0.5))
@@ -120,7 +120,7 @@ def test_a_search_that_finds_only_orbits_off_the_family_ends_it_with_what_it_tri
     guard = FamilyGuard(0.5, 60)
     for i, rec in enumerate(recs):
         guard.observe(i, rec)
-    options = FamilyOptions(search="deflated")
+    options = FamilyOptions()
     with pytest.raises(FamilyEnded) as info:
         search_beyond(problem, guard, us, recs, options=options, amplitude_max=1.6, newton_tol=1e-12,
                       max_newton=10, monitor=lambda p, v: p.monitor(v), starts=_Start(0.2))
@@ -138,7 +138,7 @@ def test_the_targets_double_their_step_then_grow_by_at_most_the_target_ratio_to_
     apart, then that ratio, up to the bound or frontier/jump_step, whichever is lower."""
     from mmshbm.family.deflation import _targets
 
-    options = FamilyOptions(search="deflated")
+    options = FamilyOptions()
     t = np.array(_targets(frontier, bound, options))
     assert t[0] == pytest.approx(frontier * (1 + options.jump_step))
     assert t[-1] == pytest.approx(min(bound, frontier / options.jump_step))
@@ -188,7 +188,7 @@ def test_orbits_off_the_family_found_from_the_first_start_leave_the_later_starts
     search lands there on y = 0.5 (to 1e-12, Newton's tolerance on a simple root); a
     budget of three orbits per target would end at the first start, at every target."""
     problem = Quartic()
-    options = FamilyOptions(search="deflated", max_roots=3)
+    options = FamilyOptions(max_roots=3)
     A = 1.5 * (1 + options.jump_step)
     known = []
     for _ in range(3):
@@ -236,7 +236,7 @@ def test_the_costly_starts_run_at_the_targets_in_turn_only_where_the_others_foun
     then the costly start lands at the first target (y = 0.5 to 1e-12). Where a regular
     start reaches the family, the costly one is never called."""
     problem = Quartic()
-    options = FamilyOptions(search="deflated")
+    options = FamilyOptions()
     us, recs, guard = _quartic_branch(problem)
     costly = _Costly(-0.22)
     u, *_, target, _ = search_beyond(problem, guard, us, recs, options=options, amplitude_max=1.7,

@@ -456,7 +456,8 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         (J), contact_force_max (N), mode_share (share of the kinetic energy in the
         starting mode at the fundamental harmonic) and fundamental_share (share of the
         kinetic energy in the fundamental harmonic: what makes a point a member of the
-        starting mode's family, rather than an internal resonance). The
+        starting mode's family, rather than an internal resonance) and mode_leads (the
+        definition's third condition, :meth:`mode_leads`). The
         table of every tracked mode and harmonic, ``modal_shares``, is added for the whole
         branch at the end (:meth:`branch_records`)."""
         a, omega, eta = self._unpack_all(u)
@@ -491,7 +492,7 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         if not shares:
             return {"frequency": omega / (2 * np.pi), "amplitude": amplitude, "energy": energy,
                     "contact_force_max": force, "mode_share": self._mode_share_at(u, a, omega, eta, dD),
-                    **self._family_records_at(a, omega, eta, dD)}
+                    **self._family_records_at(a, omega, eta, dD), "mode_leads": self.mode_leads(u, omega)}
         # the compiled corrector's problems: the share kernels' overloads typed once
         share_call, share_args, family_call, family_args, records = shares
         share = share_call(a, eta, omega, dD, self._pole_k, *share_args)
@@ -499,7 +500,8 @@ class MMSHBMProblem(OneEvaluation, SignalsMixin, FamilyMixin, BackboneProblemBas
         fundamental, harmonic, mode, detuning = records.tolist()
         return {"frequency": omega / _TWO_PI, "amplitude": amplitude, "energy": energy,
                 "contact_force_max": force, "mode_share": float(share), "fundamental_share": fundamental,
-                "resonance_harmonic": harmonic, "resonance_mode": mode, "resonance_detuning": detuning}
+                "resonance_harmonic": harmonic, "resonance_mode": mode, "resonance_detuning": detuning,
+                "mode_leads": self.mode_leads(u, omega)}
 
     def _point_records_setup(self):
         """(entry, arguments after pole_k, entry, arguments after Ω, records (4,)): the

@@ -74,6 +74,18 @@ class FamilyMixin(LandingsMixin):
         fundamental = self.modal_shares(u)[:, 1]
         return bool(fundamental[self.mode - 1] >= fundamental.max())
 
+    def mode_leads(self, u: np.ndarray, omega: float) -> float:
+        """The definition's third condition at the orbit ``u`` of angular frequency
+        ``omega`` (rad/s): 1.0 where the starting mode holds the largest share of the
+        fundamental harmonic's kinetic energy among the tracked open-contact modes
+        (:meth:`leads_fundamental`), 0.0 where another mode does, NaN where Ω lies at or
+        below the next open-contact mode's frequency (there no other mode's orbit has a
+        dominant fundamental at Ω: the condition is void, and not evaluated)."""
+        freqs = self._modal_basis()[0]
+        if len(freqs) <= self.mode or omega <= 2 * np.pi * float(freqs[self.mode]):
+            return float("nan")
+        return 1.0 if self.leads_fundamental(u) else 0.0
+
     def family_starts(self):
         """The starts of the deflated search beyond a frontier
         (:class:`~mmshbm.methods.mms.family_starts.MMSHBMStarts`, a new one per call)."""
