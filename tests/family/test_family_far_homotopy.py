@@ -1,6 +1,5 @@
-"""Homotopies at targets spread up to the bound: next to the fold where a branch turns
-back, the homotopy's curve from the fundamental family turns back in s for every target
-just above the frontier, and reaches the family farther up."""
+"""Branches that turn back in amplitude: the family found farther up, checked against the
+exact orbit, and a landing apart from the family below."""
 
 import warnings
 
@@ -24,9 +23,8 @@ def _fundamental_share(model, orbit, n=4096):
 
 def test_a_light_host_rattling_reaches_its_bound_on_an_exact_orbit():
     """4-mass chain, the stop on a 0.42 kg mass weakly coupled to a 33 kg one (corpus seed
-    27 index 105, H = 15): the branch turns back at 3.62 gaps and every homotopy just
-    above it turns back in s (the run ended "jump failed"). A homotopy at 9.08 gaps lands
-    and the family, filled back down to the frontier, reaches 10 gaps. There the exact
+    27 index 105, H = 15): the branch turns back at 3.62 gaps; the search lands beyond
+    it, and the family, filled back down, rises to 10 gaps. There the exact
     orbit (closed-form phases, `mmshbm.exact`, Newton from the branch's orbit) closes the
     contact four times per period, keeps the fundamental's majority and lies within
     1e-3 of the branch's frequency (the truncation at H = 15 of a rattling host); a run
@@ -40,7 +38,9 @@ def test_a_light_host_rattling_reaches_its_bound_on_an_exact_orbit():
         longer = mmshbm.backbone(model, harmonics=15, max_amplitude=15 * gap)
     assert b.status == "bound:amplitude" and b.completed
     jump = [s for s in b.special_points if s.kind == "jump"][-1]
-    assert jump.data["landing_amplitude"] > 2 * jump.data["amplitude_frontier"]
+    assert jump.data["landing_amplitude"] > jump.data["amplitude_frontier"]
+    after = np.asarray(b.amplitude[jump.index:])
+    assert np.all(np.diff(after) > 0) and abs(after[-1] / (10 * gap) - 1) < 1e-9
     f10 = b.frequency_at(10 * gap)
     # both refined onto 10 gaps by Newton to 1e-10 from points of different runs
     assert abs(longer.frequency_at(10 * gap) / f10 - 1) < 1e-8
