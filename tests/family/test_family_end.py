@@ -156,8 +156,7 @@ def test_a_backbone_that_turns_back_resumes_only_beyond_a_reported_skip():
     for A in (lo, hi):
         i = int(np.argmin(np.abs(b.amplitude - A)))
         assert b.records["fundamental_share"][i] >= 0.5
-    front = b.family_front()
-    top = front[int(np.argmax(b.amplitude[front]))]
+    top = int(first.data["from_index"])
     path = mmshbm.backbone(model, harmonics=15, max_amplitude=bound, follow="path", max_steps=120)
     i = int(np.argmax(path.amplitude))
     assert 0 < i < len(path) - 1 and path.amplitude[-1] < path.amplitude[i]
