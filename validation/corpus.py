@@ -26,7 +26,8 @@ from collections.abc import Iterable
 
 import numpy as np
 
-__all__ = ["CorpusCase", "CaseResult", "generate", "run_case", "run_corpus", "summary"]
+__all__ = ["CSV_COLUMNS", "EXCEPTION", "CaseResult", "CorpusCase", "csv_row", "generate", "run_case",
+           "run_corpus", "summary"]
 
 KINDS = ("chain", "tree", "beam")
 CONTACTS = ("one-sided", "clearance", "several")
@@ -180,6 +181,19 @@ def _beam_model(p: dict):
                                description={"kind": "corpus-beam"})
 
 
+#: the status kind of a case whose run raised (no Status kind: the branch never ended)
+EXCEPTION = "exception"
+
+#: the search stage of the staged family search that seeks the family above the bound
+#: (:attr:`mmshbm.family.end.Attempt.search`)
+ABOVE_THE_BOUND = "above the bound"
+
+#: the columns of corpus.csv, in order (:func:`csv_row`); new columns go at the end
+CSV_COLUMNS = ("index", "seed", "kind", "contact", "harmonics", "completed", "status", "seconds", "points",
+               "jumps", "frequency", "path_completed", "same_as_path", "cpu_seconds", "status_kind",
+               "status_detail", "bound_in_tongue", "raised", "family_ended")
+
+
 @dataclasses.dataclass
 class CaseResult:
     """What one case gave.
@@ -190,7 +204,8 @@ class CaseResult:
     completed : bool
         Reached the amplitude bound on the first mode's family.
     status : str
-        The branch's status, or ``"exception: ..."``.
+        The branch's status text, or ``"exception: <type>: <message>"`` (for display and
+        the CSV; nothing is classified from it).
     seconds : float
     points, jumps : int
     frequency : float
@@ -204,6 +219,20 @@ class CaseResult:
     cpu_seconds : float
         Processor time of the default run (s): its duration on an idle core, where
         ``seconds`` (wall clock) grows with the load of a shared machine.
+    status_kind : str
+        The branch's :attr:`mmshbm.core.status.Status.kind` (``"bound"``,
+        ``"family ended"``, ``"max_steps"``, ...), or :data:`EXCEPTION` when the run
+        raised. :func:`run_case` sets it from the status value; left empty, it is the kind
+        of ``Status.parse(status)`` (a status read back from corpus.csv's text).
+    status_detail : str
+        The status's detail (the bound's name, a failure's message, the exception's type
+        and message): human text, for display only. Left empty with ``status_kind`` also
+        empty, it is the detail of ``Status.parse(status)``.
+    bound_in_tongue : bool
+        The family search, finding nothing up to the bound, found an orbit of the family
+        above it (the bound lies inside a tongue): from the structured reason on the
+        status (:class:`mmshbm.family.end.FamilyEnd`, an attempt of the stage
+        :data:`ABOVE_THE_BOUND` that landed on the family), never from its text.
     """
 
     case: CorpusCase
@@ -216,18 +245,66 @@ class CaseResult:
     path_completed: bool | None = None
     same_as_path: bool | None = None
     cpu_seconds: float = math.nan
+    status_kind: str = ""
+    status_detail: str = ""
+    bound_in_tongue: bool = False
+
+    def __post_init__(self):
+        if not self.status_kind:
+            from mmshbm.core.status import Status
+
+            parsed = Status.parse(self.status)
+            self.status_kind, self.status_detail = parsed.kind, self.status_detail or parsed.detail
+
+    @property
+    def raised(self) -> bool:
+        """The run raised an exception (the case's status kind is :data:`EXCEPTION`)."""
+        return self.status_kind == EXCEPTION
+
+    @property
+    def family_ended(self) -> bool:
+        """The branch ended where the starting mode's family ends (status kind
+        ``"family ended"``)."""
+        from mmshbm.core.status import Status
+
+        return self.status_kind == Status.FAMILY_ENDED
 
     @property
     def reason(self) -> str:
-        """The failure's reason in a few words (empty when completed)."""
+        """The failure's reason in a few words (empty when completed): the status kind,
+        and a short piece of its detail for display."""
+        from mmshbm.core.status import Status
+
         if self.completed:
             return ""
-        s = self.status
-        if s.startswith("exception"):
-            return s[:80]
-        if s.startswith("bound:"):
-            return "bound off the family" if s == "bound:amplitude" else s
-        return s.split(":", 1)[0] + (": " + s.split(":", 2)[1].strip()[:40] if ":" in s else "")
+        if self.raised:
+            return f"{EXCEPTION}: {self.status_detail}"[:80]
+        if self.status_kind == Status.BOUND:
+            return "bound off the family" if self.status_detail == "amplitude" else f"bound:{self.status_detail}"
+        detail = self.status_detail.split(":", 1)[0].strip()[:40]
+        return self.status_kind + (f": {detail}" if detail else "")
+
+
+def csv_row(result: CaseResult) -> list:
+    """The row of ``result`` in corpus.csv, one value per :data:`CSV_COLUMNS` entry."""
+    r = result
+    return [r.case.index, r.case.seed, r.case.kind, r.case.contact, r.case.harmonics, int(r.completed),
+            str(r.status), f"{r.seconds:.4f}", r.points, r.jumps, repr(r.frequency), r.path_completed,
+            r.same_as_path, f"{r.cpu_seconds:.4f}", r.status_kind, r.status_detail, int(r.bound_in_tongue),
+            int(r.raised), int(r.family_ended)]
+
+
+def _bound_in_tongue(status) -> bool:
+    """Whether the structured reason on ``status`` (a :class:`~mmshbm.core.status.Status`)
+    says the family search found the family only above the bound: a
+    :class:`~mmshbm.family.end.FamilyEnd` that does not end the family, with an attempt of
+    the stage :data:`ABOVE_THE_BOUND` that landed on it."""
+    from mmshbm.family.end import FamilyEnd
+
+    end = getattr(status, "cause", None)
+    if not isinstance(end, FamilyEnd) or end.ended:
+        return False
+    return any(a.search == ABOVE_THE_BOUND and a.outcome == "landed" for a in end.attempts)
 
 
 class _TimeLimit(KeyboardInterrupt):
