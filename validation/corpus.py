@@ -280,7 +280,9 @@ class CaseResult:
         if self.raised:
             return f"{EXCEPTION}: {self.status_detail}"[:80]
         if self.status_kind == Status.BOUND:
-            return "bound off the family" if self.status_detail == "amplitude" else f"bound:{self.status_detail}"
+            if self.status_detail == "amplitude":
+                return "bound off the family"
+            return f"bound:{self.status_detail}"
         detail = self.status_detail.split(":", 1)[0].strip()[:40]
         return self.status_kind + (f": {detail}" if detail else "")
 
@@ -352,6 +354,7 @@ def run_case(case: CorpusCase, *, time_limit: float = 30.0, compare_path: bool =
     exception is a result), with the further keyword arguments ``options`` of
     :func:`~mmshbm.backbone` (e.g. ``{"r": "residual"}``). A run past ``time_limit``
     seconds of processor time is interrupted at its next point (status "interrupted")."""
+    from mmshbm.core.status import Status
     from mmshbm.methods.backbone import backbone
 
     t0, c0 = time.perf_counter(), time.process_time()
@@ -362,24 +365,29 @@ def run_case(case: CorpusCase, *, time_limit: float = 30.0, compare_path: bool =
             b = backbone(model, harmonics=case.harmonics, max_amplitude=max_gaps * model.gap,
                          callback=_limited(time_limit), **(options or {}))
     except _TimeLimit:  # outside the continuation (setup, the branch's checks)
-        return CaseResult(case, False, f"interrupted: past {time_limit:g} s of processor time",
-                          time.perf_counter() - t0, cpu_seconds=time.process_time() - c0)
+        detail = f"past {time_limit:g} s of processor time"
+        return CaseResult(case, False, str(Status(Status.INTERRUPTED, detail)), time.perf_counter() - t0,
+                          cpu_seconds=time.process_time() - c0, status_kind=Status.INTERRUPTED,
+                          status_detail=detail)
     except Exception as err:  # noqa: BLE001 - an exception is what the corpus counts
-        return CaseResult(case, False, f"exception: {type(err).__name__}: {err}", time.perf_counter() - t0,
-                          cpu_seconds=time.process_time() - c0)
+        detail = f"{type(err).__name__}: {err}"
+        return CaseResult(case, False, f"{EXCEPTION}: {detail}", time.perf_counter() - t0,
+                          cpu_seconds=time.process_time() - c0, status_kind=EXCEPTION, status_detail=detail)
     seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
+    status = Status.parse(b.status)
     on = b.records.get("on_family")
-    completed = b.status == "bound:amplitude" and (on is None or (len(on) and on[-1] > 0.5))
-    out = CaseResult(case, bool(completed), b.status, seconds, len(b),
+    completed = _at_amplitude_bound(status) and (on is None or (len(on) and on[-1] > 0.5))
+    out = CaseResult(case, bool(completed), str(status), seconds, len(b),
                      sum(1 for s in b.special_points if s.kind == "jump"),
-                     float(b.frequency[-1]) if len(b) else math.nan, cpu_seconds=cpu)
+                     float(b.frequency[-1]) if len(b) else math.nan, cpu_seconds=cpu, status_kind=status.kind,
+                     status_detail=status.detail, bound_in_tongue=_bound_in_tongue(status))
     if compare_path:
         try:
             with warnings.catch_warnings(), _hard_limit(time_limit):
                 warnings.simplefilter("ignore")
                 p = backbone(model, harmonics=case.harmonics, max_amplitude=max_gaps * model.gap,
                              follow="path", callback=_limited(time_limit), **(options or {}))
-            clean = p.status == "bound:amplitude" and not [
+            clean = _at_amplitude_bound(Status.parse(p.status)) and not [
                 f for f in p.metadata.get("checks", []) if f["kind"] == "left_family"]
         except (Exception, _TimeLimit):  # noqa: BLE001
             clean = False
@@ -387,6 +395,14 @@ def run_case(case: CorpusCase, *, time_limit: float = 30.0, compare_path: bool =
         if clean:
             out.same_as_path = bool(completed and abs(out.frequency / float(p.frequency[-1]) - 1) < 1e-6)
     return out
+
+
+def _at_amplitude_bound(status) -> bool:
+    """The status (a :class:`~mmshbm.core.status.Status`) says the branch reached its
+    bound on the amplitude."""
+    from mmshbm.core.status import Status
+
+    return status.kind == Status.BOUND and status.detail == "amplitude"
 
 
 def _run_one(args):
@@ -434,12 +450,12 @@ def summary(results: list[CaseResult], slowest: int = 5) -> str:
         if rs:
             done = sum(r.completed for r in rs)
             lines.append(f"all    {contact:<10} {len(rs):>6} {done:>9} {100 * done / len(rs):>6.1f}%")
-    n_exc = sum(r.status.startswith("exception") for r in results)
-    ended = sum(r.status.startswith("family ended") for r in results)
+    n_exc = sum(r.raised for r in results)
+    ended = sum(r.family_ended for r in results)
     if ended:
         lines.append(f"family ended (the starting mode's orbit loses the fundamental's majority, no orbit "
                      f"with it found beyond): {ended}")
-    inside = sum("the bound lies inside a tongue" in r.status for r in results if not r.completed)
+    inside = sum(r.bound_in_tongue for r in results if not r.completed)
     if inside:
         lines.append(f"bound inside a tongue (the family found again only above the bound, its branch not "
                      f"coming down onto it on the family): {inside}")
