@@ -54,14 +54,11 @@ def _corpus(args) -> int:
     path = _out(args) / "corpus.csv"
     with open(path, "w", newline="") as fh:
         w = csv.writer(fh)
-        w.writerow(["index", "seed", "kind", "contact", "harmonics", "completed", "status", "seconds",
-                    "points", "jumps", "frequency", "path_completed", "same_as_path", "cpu_seconds"])
+        w.writerow(corpus.CSV_COLUMNS)
         for r in results:
-            w.writerow([r.case.index, r.case.seed, r.case.kind, r.case.contact, r.case.harmonics,
-                        int(r.completed), r.status, f"{r.seconds:.4f}", r.points, r.jumps, repr(r.frequency),
-                        r.path_completed, r.same_as_path, f"{r.cpu_seconds:.4f}"])
+            w.writerow(corpus.csv_row(r))
     common.wrote(path)
-    return 1 if any(r.status.startswith("exception") for r in results) else 0
+    return 1 if any(r.raised for r in results) else 0
 
 
 def _exact(args) -> int:

@@ -26,7 +26,8 @@ from collections.abc import Iterable
 
 import numpy as np
 
-__all__ = ["CorpusCase", "CaseResult", "generate", "run_case", "run_corpus", "summary"]
+__all__ = ["CSV_COLUMNS", "EXCEPTION", "CaseResult", "CorpusCase", "csv_row", "generate", "run_case",
+           "run_corpus", "summary"]
 
 KINDS = ("chain", "tree", "beam")
 CONTACTS = ("one-sided", "clearance", "several")
@@ -180,6 +181,19 @@ def _beam_model(p: dict):
                                description={"kind": "corpus-beam"})
 
 
+#: the status kind of a case whose run raised (no Status kind: the branch never ended)
+EXCEPTION = "exception"
+
+#: the search stage of the staged family search that seeks the family above the bound
+#: (:attr:`mmshbm.family.end.Attempt.search`)
+ABOVE_THE_BOUND = "above the bound"
+
+#: the columns of corpus.csv, in order (:func:`csv_row`); new columns go at the end
+CSV_COLUMNS = ("index", "seed", "kind", "contact", "harmonics", "completed", "status", "seconds", "points",
+               "jumps", "frequency", "path_completed", "same_as_path", "cpu_seconds", "status_kind",
+               "status_detail", "bound_in_tongue", "raised", "family_ended")
+
+
 @dataclasses.dataclass
 class CaseResult:
     """What one case gave.
@@ -190,7 +204,8 @@ class CaseResult:
     completed : bool
         Reached the amplitude bound on the first mode's family.
     status : str
-        The branch's status, or ``"exception: ..."``.
+        The branch's status text, or ``"exception: <type>: <message>"`` (for display and
+        the CSV; nothing is classified from it).
     seconds : float
     points, jumps : int
     frequency : float
@@ -204,6 +219,20 @@ class CaseResult:
     cpu_seconds : float
         Processor time of the default run (s): its duration on an idle core, where
         ``seconds`` (wall clock) grows with the load of a shared machine.
+    status_kind : str
+        The branch's :attr:`mmshbm.core.status.Status.kind` (``"bound"``,
+        ``"family ended"``, ``"max_steps"``, ...), or :data:`EXCEPTION` when the run
+        raised. :func:`run_case` sets it from the status value; left empty, it is the kind
+        of ``Status.parse(status)`` (a status read back from corpus.csv's text).
+    status_detail : str
+        The status's detail (the bound's name, a failure's message, the exception's type
+        and message): human text, for display only. Left empty with ``status_kind`` also
+        empty, it is the detail of ``Status.parse(status)``.
+    bound_in_tongue : bool
+        The family search, finding nothing up to the bound, found an orbit of the family
+        above it (the bound lies inside a tongue): from the structured reason on the
+        status (:class:`mmshbm.family.end.FamilyEnd`, an attempt of the stage
+        :data:`ABOVE_THE_BOUND` that landed on the family), never from its text.
     """
 
     case: CorpusCase
@@ -216,18 +245,68 @@ class CaseResult:
     path_completed: bool | None = None
     same_as_path: bool | None = None
     cpu_seconds: float = math.nan
+    status_kind: str = ""
+    status_detail: str = ""
+    bound_in_tongue: bool = False
+
+    def __post_init__(self):
+        if not self.status_kind:
+            from mmshbm.core.status import Status
+
+            parsed = Status.parse(self.status)
+            self.status_kind, self.status_detail = parsed.kind, self.status_detail or parsed.detail
+
+    @property
+    def raised(self) -> bool:
+        """The run raised an exception (the case's status kind is :data:`EXCEPTION`)."""
+        return self.status_kind == EXCEPTION
+
+    @property
+    def family_ended(self) -> bool:
+        """The branch ended where the starting mode's family ends (status kind
+        ``"family ended"``)."""
+        from mmshbm.core.status import Status
+
+        return self.status_kind == Status.FAMILY_ENDED
 
     @property
     def reason(self) -> str:
-        """The failure's reason in a few words (empty when completed)."""
+        """The failure's reason in a few words (empty when completed): the status kind,
+        and a short piece of its detail for display."""
+        from mmshbm.core.status import Status
+
         if self.completed:
             return ""
-        s = self.status
-        if s.startswith("exception"):
-            return s[:80]
-        if s.startswith("bound:"):
-            return "bound off the family" if s == "bound:amplitude" else s
-        return s.split(":", 1)[0] + (": " + s.split(":", 2)[1].strip()[:40] if ":" in s else "")
+        if self.raised:
+            return f"{EXCEPTION}: {self.status_detail}"[:80]
+        if self.status_kind == Status.BOUND:
+            if self.status_detail == "amplitude":
+                return "bound off the family"
+            return f"bound:{self.status_detail}"
+        detail = self.status_detail.split(":", 1)[0].strip()[:40]
+        return self.status_kind + (f": {detail}" if detail else "")
+
+
+def csv_row(result: CaseResult) -> list:
+    """The row of ``result`` in corpus.csv, one value per :data:`CSV_COLUMNS` entry."""
+    r = result
+    return [r.case.index, r.case.seed, r.case.kind, r.case.contact, r.case.harmonics, int(r.completed),
+            str(r.status), f"{r.seconds:.4f}", r.points, r.jumps, repr(r.frequency), r.path_completed,
+            r.same_as_path, f"{r.cpu_seconds:.4f}", r.status_kind, r.status_detail, int(r.bound_in_tongue),
+            int(r.raised), int(r.family_ended)]
+
+
+def _bound_in_tongue(status) -> bool:
+    """Whether the structured reason on ``status`` (a :class:`~mmshbm.core.status.Status`)
+    says the family search found the family only above the bound: a
+    :class:`~mmshbm.family.end.FamilyEnd` that does not end the family, with an attempt of
+    the stage :data:`ABOVE_THE_BOUND` that landed on it."""
+    from mmshbm.family.end import FamilyEnd
+
+    end = getattr(status, "cause", None)
+    if not isinstance(end, FamilyEnd) or end.ended:
+        return False
+    return any(a.search == ABOVE_THE_BOUND and a.outcome == "landed" for a in end.attempts)
 
 
 class _TimeLimit(KeyboardInterrupt):
@@ -275,6 +354,7 @@ def run_case(case: CorpusCase, *, time_limit: float = 30.0, compare_path: bool =
     exception is a result), with the further keyword arguments ``options`` of
     :func:`~mmshbm.backbone` (e.g. ``{"r": "residual"}``). A run past ``time_limit``
     seconds of processor time is interrupted at its next point (status "interrupted")."""
+    from mmshbm.core.status import Status
     from mmshbm.methods.backbone import backbone
 
     t0, c0 = time.perf_counter(), time.process_time()
@@ -285,24 +365,29 @@ def run_case(case: CorpusCase, *, time_limit: float = 30.0, compare_path: bool =
             b = backbone(model, harmonics=case.harmonics, max_amplitude=max_gaps * model.gap,
                          callback=_limited(time_limit), **(options or {}))
     except _TimeLimit:  # outside the continuation (setup, the branch's checks)
-        return CaseResult(case, False, f"interrupted: past {time_limit:g} s of processor time",
-                          time.perf_counter() - t0, cpu_seconds=time.process_time() - c0)
+        detail = f"past {time_limit:g} s of processor time"
+        return CaseResult(case, False, str(Status(Status.INTERRUPTED, detail)), time.perf_counter() - t0,
+                          cpu_seconds=time.process_time() - c0, status_kind=Status.INTERRUPTED,
+                          status_detail=detail)
     except Exception as err:  # noqa: BLE001 - an exception is what the corpus counts
-        return CaseResult(case, False, f"exception: {type(err).__name__}: {err}", time.perf_counter() - t0,
-                          cpu_seconds=time.process_time() - c0)
+        detail = f"{type(err).__name__}: {err}"
+        return CaseResult(case, False, f"{EXCEPTION}: {detail}", time.perf_counter() - t0,
+                          cpu_seconds=time.process_time() - c0, status_kind=EXCEPTION, status_detail=detail)
     seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
+    status = Status.parse(b.status)
     on = b.records.get("on_family")
-    completed = b.status == "bound:amplitude" and (on is None or (len(on) and on[-1] > 0.5))
-    out = CaseResult(case, bool(completed), b.status, seconds, len(b),
+    completed = _at_amplitude_bound(status) and (on is None or (len(on) and on[-1] > 0.5))
+    out = CaseResult(case, bool(completed), str(status), seconds, len(b),
                      sum(1 for s in b.special_points if s.kind == "jump"),
-                     float(b.frequency[-1]) if len(b) else math.nan, cpu_seconds=cpu)
+                     float(b.frequency[-1]) if len(b) else math.nan, cpu_seconds=cpu, status_kind=status.kind,
+                     status_detail=status.detail, bound_in_tongue=_bound_in_tongue(status))
     if compare_path:
         try:
             with warnings.catch_warnings(), _hard_limit(time_limit):
                 warnings.simplefilter("ignore")
                 p = backbone(model, harmonics=case.harmonics, max_amplitude=max_gaps * model.gap,
                              follow="path", callback=_limited(time_limit), **(options or {}))
-            clean = p.status == "bound:amplitude" and not [
+            clean = _at_amplitude_bound(Status.parse(p.status)) and not [
                 f for f in p.metadata.get("checks", []) if f["kind"] == "left_family"]
         except (Exception, _TimeLimit):  # noqa: BLE001
             clean = False
@@ -310,6 +395,14 @@ def run_case(case: CorpusCase, *, time_limit: float = 30.0, compare_path: bool =
         if clean:
             out.same_as_path = bool(completed and abs(out.frequency / float(p.frequency[-1]) - 1) < 1e-6)
     return out
+
+
+def _at_amplitude_bound(status) -> bool:
+    """The status (a :class:`~mmshbm.core.status.Status`) says the branch reached its
+    bound on the amplitude."""
+    from mmshbm.core.status import Status
+
+    return status.kind == Status.BOUND and status.detail == "amplitude"
 
 
 def _run_one(args):
@@ -357,12 +450,12 @@ def summary(results: list[CaseResult], slowest: int = 5) -> str:
         if rs:
             done = sum(r.completed for r in rs)
             lines.append(f"all    {contact:<10} {len(rs):>6} {done:>9} {100 * done / len(rs):>6.1f}%")
-    n_exc = sum(r.status.startswith("exception") for r in results)
-    ended = sum(r.status.startswith("family ended") for r in results)
+    n_exc = sum(r.raised for r in results)
+    ended = sum(r.family_ended for r in results)
     if ended:
         lines.append(f"family ended (the starting mode's orbit loses the fundamental's majority, no orbit "
                      f"with it found beyond): {ended}")
-    inside = sum("the bound lies inside a tongue" in r.status for r in results if not r.completed)
+    inside = sum(r.bound_in_tongue for r in results if not r.completed)
     if inside:
         lines.append(f"bound inside a tongue (the family found again only above the bound, its branch not "
                      f"coming down onto it on the family): {inside}")
