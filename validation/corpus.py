@@ -184,14 +184,10 @@ def _beam_model(p: dict):
 #: the status kind of a case whose run raised (no Status kind: the branch never ended)
 EXCEPTION = "exception"
 
-#: the search stage of the staged family search that seeks the family above the bound
-#: (:attr:`mmshbm.family.end.Attempt.search`)
-ABOVE_THE_BOUND = "above the bound"
-
 #: the columns of corpus.csv, in order (:func:`csv_row`); new columns go at the end
 CSV_COLUMNS = ("index", "seed", "kind", "contact", "harmonics", "completed", "status", "seconds", "points",
                "jumps", "frequency", "path_completed", "same_as_path", "cpu_seconds", "status_kind",
-               "status_detail", "bound_in_tongue", "raised", "family_ended")
+               "status_detail", "raised", "family_ended")
 
 
 @dataclasses.dataclass
@@ -228,11 +224,6 @@ class CaseResult:
         The status's detail (the bound's name, a failure's message, the exception's type
         and message): human text, for display only. Left empty with ``status_kind`` also
         empty, it is the detail of ``Status.parse(status)``.
-    bound_in_tongue : bool
-        The family search, finding nothing up to the bound, found an orbit of the family
-        above it (the bound lies inside a tongue): from the structured reason on the
-        status (:class:`mmshbm.family.end.FamilyEnd`, an attempt of the stage
-        :data:`ABOVE_THE_BOUND` that landed on the family), never from its text.
     """
 
     case: CorpusCase
@@ -247,7 +238,6 @@ class CaseResult:
     cpu_seconds: float = math.nan
     status_kind: str = ""
     status_detail: str = ""
-    bound_in_tongue: bool = False
 
     def __post_init__(self):
         if not self.status_kind:
@@ -292,21 +282,8 @@ def csv_row(result: CaseResult) -> list:
     r = result
     return [r.case.index, r.case.seed, r.case.kind, r.case.contact, r.case.harmonics, int(r.completed),
             str(r.status), f"{r.seconds:.4f}", r.points, r.jumps, repr(r.frequency), r.path_completed,
-            r.same_as_path, f"{r.cpu_seconds:.4f}", r.status_kind, r.status_detail, int(r.bound_in_tongue),
+            r.same_as_path, f"{r.cpu_seconds:.4f}", r.status_kind, r.status_detail,
             int(r.raised), int(r.family_ended)]
-
-
-def _bound_in_tongue(status) -> bool:
-    """Whether the structured reason on ``status`` (a :class:`~mmshbm.core.status.Status`)
-    says the family search found the family only above the bound: a
-    :class:`~mmshbm.family.end.FamilyEnd` that does not end the family, with an attempt of
-    the stage :data:`ABOVE_THE_BOUND` that landed on it."""
-    from mmshbm.family.end import FamilyEnd
-
-    end = getattr(status, "cause", None)
-    if not isinstance(end, FamilyEnd) or end.ended:
-        return False
-    return any(a.search == ABOVE_THE_BOUND and a.outcome == "landed" for a in end.attempts)
 
 
 class _TimeLimit(KeyboardInterrupt):
@@ -380,7 +357,7 @@ def run_case(case: CorpusCase, *, time_limit: float = 30.0, compare_path: bool =
     out = CaseResult(case, bool(completed), str(status), seconds, len(b),
                      sum(1 for s in b.special_points if s.kind == "jump"),
                      float(b.frequency[-1]) if len(b) else math.nan, cpu_seconds=cpu, status_kind=status.kind,
-                     status_detail=status.detail, bound_in_tongue=_bound_in_tongue(status))
+                     status_detail=status.detail)
     if compare_path:
         try:
             with warnings.catch_warnings(), _hard_limit(time_limit):
@@ -455,10 +432,6 @@ def summary(results: list[CaseResult], slowest: int = 5) -> str:
     if ended:
         lines.append(f"family ended (the starting mode's orbit loses the fundamental's majority, no orbit "
                      f"with it found beyond): {ended}")
-    inside = sum(r.bound_in_tongue for r in results if not r.completed)
-    if inside:
-        lines.append(f"bound inside a tongue (the family found again only above the bound, its branch not "
-                     f"coming down onto it on the family): {inside}")
     over = sum(r.seconds > 30.0 for r in results)
     over_cpu = sum(r.cpu_seconds > 30.0 for r in results)
     total = sum(r.seconds for r in results)

@@ -11,7 +11,6 @@ import re
 import pytest
 
 from mmshbm.core.status import Status
-from mmshbm.family.end import Attempt, Crossing, FamilyEnd
 from validation import corpus
 from validation.__main__ import main as validation_main
 
@@ -27,22 +26,22 @@ def _result(i, status, **kw):
 
 
 def test_the_summary_counts_from_the_fields_not_the_text():
-    """A status text that names an exception, a family's end or a tongue does not count as
-    one; the fields do, whatever the text says."""
+    """A status text that names an exception or a family's end does not count as one; the
+    fields do, whatever the text says."""
     misleading = [
-        _result(0, "max_steps: exception: family ended; the bound lies inside a tongue",
+        _result(0, "max_steps: exception: family ended",
                 status_kind=Status.MAX_STEPS, status_detail="exception"),
-        _result(1, "ds_min: family ended: the bound lies inside a tongue", status_kind=Status.DS_MIN),
+        _result(1, "ds_min: family ended: ...", status_kind=Status.DS_MIN),
     ]
     for r in misleading:
-        assert not r.raised and not r.family_ended and not r.bound_in_tongue
+        assert not r.raised and not r.family_ended
     text = corpus.summary(misleading)
     assert "exceptions: 0;" in text
-    assert "family ended (" not in text and "bound inside a tongue (" not in text
+    assert "family ended (" not in text
 
     counted = [
         _result(0, "a text without a kind", status_kind=corpus.EXCEPTION, status_detail="ValueError: x"),
-        _result(1, "jump failed: ...", status_kind=Status.JUMP_FAILED, bound_in_tongue=True),
+        _result(1, "jump failed: ...", status_kind=Status.JUMP_FAILED),
         _result(2, "family ended: ...", status_kind=Status.FAMILY_ENDED),
     ]
     assert [r.raised for r in counted] == [True, False, False]
@@ -50,14 +49,7 @@ def test_the_summary_counts_from_the_fields_not_the_text():
     text = corpus.summary(counted)
     assert "exceptions: 1;" in text
     assert re.search(r"^family ended \(.*\): 1$", text, re.M)
-    assert re.search(r"^bound inside a tongue \(.*\): 1$", text, re.M)
     assert "exception: ValueError: x" in text  # the failure's reason, from kind and detail
-
-
-def test_a_completed_case_is_not_counted_in_a_tongue():
-    r = corpus.CaseResult(CASES[0], True, "bound:amplitude", 0.1, 10, 0, 1.0, status_kind=Status.BOUND,
-                          status_detail="amplitude", bound_in_tongue=True)
-    assert "bound inside a tongue (" not in corpus.summary([r])
 
 
 def test_a_status_read_back_as_text_has_its_kind_and_detail():
@@ -73,36 +65,16 @@ def test_a_status_read_back_as_text_has_its_kind_and_detail():
     assert _result(2, "bound:amplitude").reason == "bound off the family"
 
 
-def _ended(ended: bool, attempts) -> Status:
-    cross = Crossing(1.0, 2.0, 0.5, 0.9, 0.6, 1.1, 0.4) if ended else None
-    end = FamilyEnd(ended=ended, frontier=1.0, frontier_frequency=2.0, searched_to=4.0, crossing=cross,
-                    attempts=tuple(attempts))
-    kind = Status.FAMILY_ENDED if ended else Status.JUMP_FAILED
-    return Status(kind, end.detail(), cause=end)
-
-
-def test_bound_in_tongue_is_a_landing_above_the_bound_on_the_family_end():
-    landed = Attempt(corpus.ABOVE_THE_BOUND, corpus.ABOVE_THE_BOUND, 3.0, "landed", 2.5, 0.8)
-    assert corpus._bound_in_tongue(_ended(False, [Attempt("far", "far", 2.0, "failed"), landed]))
-    assert not corpus._bound_in_tongue(_ended(False, [Attempt(corpus.ABOVE_THE_BOUND,
-                                                              corpus.ABOVE_THE_BOUND, 3.0, "failed")]))
-    assert not corpus._bound_in_tongue(_ended(False, [Attempt("far", "far", 2.0, "landed", 2.5, 0.8)]))
-    assert not corpus._bound_in_tongue(_ended(True, [landed]))  # the family ends below
-    # the text alone says nothing
-    assert not corpus._bound_in_tongue(Status(Status.JUMP_FAILED, "the bound lies inside a tongue"))
-    assert not corpus._bound_in_tongue("jump failed: the bound lies inside a tongue")
-
-
 def test_csv_columns_keep_the_old_ones_first():
     assert corpus.CSV_COLUMNS[:len(OLD_COLUMNS)] == OLD_COLUMNS
-    assert {"status_kind", "status_detail", "bound_in_tongue", "raised", "family_ended"} <= set(
+    assert {"status_kind", "status_detail", "raised", "family_ended"} <= set(
         corpus.CSV_COLUMNS[len(OLD_COLUMNS):])
     assert len(set(corpus.CSV_COLUMNS)) == len(corpus.CSV_COLUMNS)
-    r = _result(1, "jump failed: x", status_kind=Status.JUMP_FAILED, status_detail="x", bound_in_tongue=True)
+    r = _result(1, "jump failed: x", status_kind=Status.JUMP_FAILED, status_detail="x")
     row = dict(zip(corpus.CSV_COLUMNS, corpus.csv_row(r), strict=True))
     assert (row["index"], row["status"], row["status_kind"], row["status_detail"]) == (1, "jump failed: x",
                                                                                       "jump failed", "x")
-    assert (row["bound_in_tongue"], row["raised"], row["family_ended"], row["completed"]) == (1, 0, 0, 0)
+    assert (row["raised"], row["family_ended"], row["completed"]) == (0, 0, 0)
 
 
 def _raise(*args, **kwargs):
@@ -131,7 +103,7 @@ def test_a_real_run_carries_the_status_value(case):
     ``max_steps`` 3 the run stops short, of kind ``max_steps``."""
     r = corpus.run_case(case, time_limit=30.0)
     assert r.completed and (r.status_kind, r.status_detail) == (Status.BOUND, "amplitude")
-    assert not (r.raised or r.family_ended or r.bound_in_tongue) and math.isfinite(r.frequency)
+    assert not (r.raised or r.family_ended) and math.isfinite(r.frequency)
     assert r.status == "bound:amplitude" and type(r.status) is str
     short = corpus.run_case(case, time_limit=30.0, options={"max_steps": 3})
     assert not short.completed and short.status_kind == Status.MAX_STEPS and not short.raised
