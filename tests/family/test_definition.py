@@ -114,3 +114,31 @@ def test_the_band_ends_below_the_second_open_mode_for_one_contact(beam7):
     lo, hi = frequency_band(beam7.solver, [{"frequency": f[0]}], 0.0)
     assert len(model.contacts) == 1
     assert lo == f[0] and f[0] < hi <= f[1] * (1 + 1e-9)
+
+
+def test_above_the_second_open_mode_the_first_mode_must_lead_the_fundamental():
+    """Condition 3: where the record says another mode leads the fundamental (above f₂)
+    the orbit fails, whatever its share; void (NaN or absent) it does not decide."""
+    from mmshbm.family.definition import LEAD_RECORD
+
+    assert on_family({FAMILY_RECORD: 0.99, LEAD_RECORD: 0.0}, 0.5) is False
+    assert on_family({FAMILY_RECORD: 0.99, LEAD_RECORD: 1.0}, 0.5) is True
+    assert on_family({FAMILY_RECORD: 0.99, LEAD_RECORD: float("nan")}, 0.5) is True
+    assert on_family({FAMILY_RECORD: 0.4, LEAD_RECORD: 1.0}, 0.5) is False
+
+
+def test_the_lead_is_void_below_the_second_open_mode_and_read_from_the_modal_shares(beam7):
+    """Below f₂ (the beam's backbone stays near f₁ with one contact) every point records
+    NaN; at a state whose Ω is set above f₂ the record is 1 exactly when mode 1 holds the
+    largest share of harmonic 1 in the modal decomposition (``modal_shares``)."""
+    from mmshbm.family.definition import LEAD_RECORD
+
+    leads = np.asarray(beam7.records[LEAD_RECORD], dtype=float)
+    assert np.all(np.isnan(leads))
+    P = beam7.solver
+    f2 = P.tracked_frequencies[1]
+    u = np.array(beam7.states[-1], dtype=float)
+    omega = 2 * np.pi * 1.1 * f2
+    lead = P.mode_leads(u, omega)
+    fundamental = P.modal_shares(u)[:, 1]
+    assert lead == (1.0 if fundamental[0] >= fundamental.max() else 0.0)
