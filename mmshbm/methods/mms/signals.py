@@ -277,9 +277,10 @@ class SignalsMixin:
         cond = self.cond
         if getattr(cond, "backend", None) == "modal":
             R, dR, P, dP = self._row_coefficients_modal(cond, i, omega)
-        else:  # a direct back end: Ω by central differences (the step of the scaled Ω, 1e-7)
+        else:  # a direct back end: Ω by central differences, step 1e-6 of the scaled Ω (the
+            # solves' round-off and the truncation ~1e-8 of the derivative each)
             R, P = self._row_coefficients_direct(cond, i, omega)
-            delta = 1e-7 * float(self.colscale[-1])
+            delta = 1e-6 * float(self.colscale[-1])
             Rp, _ = self._row_coefficients_direct(cond, i, omega + delta)
             Rm, _ = self._row_coefficients_direct(cond, i, omega - delta)
             dR, dP = (Rp - Rm) / (2 * delta), np.zeros(self.n_poles)
