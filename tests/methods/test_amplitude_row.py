@@ -64,8 +64,8 @@ def test_the_amplitude_gradient_is_that_of_central_differences(clearance_beam, c
     ≤ 4ε|A|/h), D(2h) − D(h) ≈ 3c h², so |∇A − D(h)| ≤ |D(2h) − D(h)| + 8ε|A|/h bounds the
     difference with room (factor 3 on the truncation, 2 on the round-off); a wrong entry
     (a term or a scale missing) is off by O(|∇A|). A direct back end differences its row in Ω
-    itself (step 1e-6: ≲ 4e-8 of the derivative against Richardson extrapolation; 1e-7 of
-    |∂A/∂u_Ω| allowed). The amplitude from the gradient's call is
+    itself (step 1e-6: ≲ 4e-8 of the coefficients' derivative against Richardson
+    extrapolation; 1e-7 of Σ_k |cos kτ*| |∂G/∂u_Ω| |u| allowed). The amplitude from the gradient's call is
     the value's, and that of the row of the full recovery to round-off."""
     model = clearance_beam if which == "beam" else chain
     p = MMSHBMProblem(model, harmonics=15, backend=backend, poles=poles)
@@ -89,7 +89,11 @@ def test_the_amplitude_gradient_is_that_of_central_differences(clearance_beam, c
             e[j] = h
             d1 = (p.amplitude_value(u + e) - p.amplitude_value(u - e)) / (2 * h)
             d2 = (p.amplitude_value(u + 2 * e) - p.amplitude_value(u - 2 * e)) / (4 * h)
-            own = 1e-7 * abs(g[j]) if (backend != "modal" and j == len(u) - 1) else 0.0
+            own = 0.0
+            if backend != "modal" and j == len(u) - 1:
+                _, cosk, _, _ = p._amplitude_peak(u)
+                dG = p._amplitude_row_derivatives(omega)[1]
+                own = 1e-7 * float(np.abs(cosk) @ (np.abs(dG) @ np.abs(u[:-1])))
             assert abs(g[j] - d1) <= abs(d2 - d1) + 8 * eps * A / h + own, (j, g[j], d1, d2)
 
 
