@@ -17,6 +17,8 @@ __all__ = ["SignalsMixin"]
 _COSINES: dict = {}
 _COSINES_KEPT = 16
 _COSINES_SAMPLES = 4096
+#: Ω whose amplitude row derivatives a problem keeps (:meth:`SignalsMixin._amplitude_row_derivatives`)
+_ROW_DERIVATIVES_KEPT = 8
 
 
 class SignalsMixin:
@@ -256,15 +258,127 @@ class SignalsMixin:
                 row[k] -= phi_row[j] * eta[p] * (k * omega) ** 2 / self._pole_w2[p]
         return row
 
+    def _amplitude_row_derivatives(self, omega: float) -> tuple[np.ndarray, np.ndarray]:
+        """(G, G′) of the amplitude DOF with mass at Ω (rad/s): the amplitude row is linear in
+        the pole and cosine unknowns at fixed Ω, row = G·u[:-1] for the scaled unknowns u, so
+        G (H+1, (H+1) n_c + n_p) is its derivative with respect to them and G′ = ∂G/∂u_Ω
+        (u_Ω = Ω/``colscale[-1]``) that of ∂row/∂u_Ω = G′·u[:-1]. Each harmonic k depends
+        on a_k (columns k n_c..(k+1) n_c − 1, :meth:`_amplitude_row`'s coefficients) and
+        on the η_p of harmonic k_p = k alone. Kept for the last :data:`_ROW_DERIVATIVES_KEPT`
+        Ω (read only)."""
+        omega = float(omega)
+        kept = self.__dict__.get("_row_derivatives")
+        if kept is None or kept[0] is not self.cond or kept[1] != self.H:
+            kept = self._row_derivatives = (self.cond, self.H, {})
+        hit = kept[2].get(omega)
+        if hit is not None:
+            return hit
+        i = int(np.searchsorted(self.model.l, self.amplitude_dof))
+        cond = self.cond
+        if getattr(cond, "backend", None) == "modal":
+            R, dR, P, dP = self._row_coefficients_modal(cond, i, omega)
+        else:  # a direct back end: Ω by central differences, step 1e-6 of the scaled Ω (the
+            # solves' round-off and the truncation ~1e-8 of the derivative each)
+            R, P = self._row_coefficients_direct(cond, i, omega)
+            delta = 1e-6 * float(self.colscale[-1])
+            Rp, _ = self._row_coefficients_direct(cond, i, omega + delta)
+            Rm, _ = self._row_coefficients_direct(cond, i, omega - delta)
+            dR, dP = (Rp - Rm) / (2 * delta), np.zeros(self.n_poles)
+        H1, n_c = self.H + 1, self.n_c
+        n_a = H1 * n_c
+        scale = self.colscale
+        G = np.zeros((H1, n_a + self.n_poles))
+        dG = np.zeros_like(G)
+        blocks = G[:, :n_a].reshape(H1, H1, n_c)  # (k, k', c): nonzero for k' = k only
+        dblocks = dG[:, :n_a].reshape(H1, H1, n_c)
+        diag = np.arange(H1)
+        xscale = scale[:n_a].reshape(H1, n_c)
+        blocks[diag, diag] = R * xscale
+        dblocks[diag, diag] = dR * xscale * scale[-1]
+        if self.n_poles:
+            p = np.arange(self.n_poles)
+            G[self._pole_k, n_a + p] = P * self.eta_scale
+            dG[self._pole_k, n_a + p] = dP * self.eta_scale * scale[-1]
+        G.flags.writeable = dG.flags.writeable = False
+        if len(kept[2]) >= _ROW_DERIVATIVES_KEPT:
+            kept[2].clear()
+        kept[2][omega] = (G, dG)
+        return G, dG
+
+    def _row_coefficients_modal(self, cond, i: int, omega: float):
+        """(R, ∂R/∂Ω, P, ∂P/∂Ω) of the modal condensation's amplitude row at Ω:
+        row_k = Σ_c R_kc a_kc + Σ_{p: k_p = k} P_p η_p (:meth:`_amplitude_row_modal`'s
+        terms, x_k = (kΩ)², c_kj = x_k/(ω_j² (ω_j² − x_k)), ∂c_kj/∂x_k = 1/(ω_j² − x_k)²)."""
+        H = self.H
+        pairs = self.pole_set.pairs if self.n_poles else []
+        key = (H, omega, tuple(pairs))
+        last = cond._recovery_factors
+        if last is not None and last[0] == key:
+            x, c = last[1]
+        else:
+            x, c = cond._recovery_coefficients(H, omega, key[2])
+            cond._recovery_factors = ((H, omega, tuple(map(tuple, pairs))), (x, c))
+        cols = np.concatenate([[0], np.arange(1, 2 * H, 2)])  # the cosine column of each harmonic
+        x, c = x[cols], c[cols]
+        k = np.arange(H + 1)
+        dx = 2.0 * k**2 * omega  # ∂x_k/∂Ω
+        # ∂c/∂x = (c ω_j²/x)² where kept (c = 0 where a pole term is left out, and at k = 0)
+        inv = np.divide(c * cond._w2[None, :], x[:, None], out=np.zeros_like(c), where=x[:, None] > 0)
+        dc = inv**2 * dx[:, None]
+        cond._static_recovery()
+        phi_i = cond.phi_j[i]
+        R = cond._Z0[i][None, :] + (c * phi_i) @ cond.b_j
+        dR = (dc * phi_i) @ cond.b_j
+        if not cond.complete:
+            for n in range(1, KRYLOV_BLOCKS):
+                V = cond._V[n][i][None, :]
+                R = R + x[:, None] ** n * V
+                dR = dR + (n * x[:, None] ** (n - 1) * dx[:, None]) * V
+        P = dP = np.zeros(self.n_poles)
+        if self.n_poles:  # −φ_j η_jk (kΩ)²/ω_j², the pole set's recovery
+            phi_row = self.pole_set.phi[i]
+            j = np.array([jj for _, jj in pairs], dtype=np.int64)
+            kp = self._pole_k
+            P = -phi_row[j] * (kp * omega) ** 2 / self._pole_w2
+            dP = -phi_row[j] * 2.0 * kp**2 * omega / self._pole_w2
+        return -R, -dR, P, dP
+
+    def _row_coefficients_direct(self, cond, i: int, omega: float):
+        """(R (H+1, n_c), P (n_p,)) of a direct back end's amplitude row at Ω (the row of
+        each Z_k that :meth:`_amplitude_row` applies to a_k; P_p the pole term of η_p)."""
+        r = int(np.flatnonzero(cond.perm == i)[0])
+        poles = self.pole_set if self.n_poles else None
+        R = np.empty((self.H + 1, self.n_c))
+        R[0] = -cond._Z0[r]
+        for k in range(1, self.H + 1):
+            Z = poles._z_regular(k, omega) if poles is not None else cond._solve(k * omega)
+            R[k] = -Z[r]
+        P = np.zeros(self.n_poles)
+        if poles is not None:
+            for p, (_, j) in enumerate(poles.pairs):
+                P[p] = -poles.phi[r, j]
+        return R, P
+
     def _amplitude_peak(self, u: np.ndarray):
         """(row, cos kτ* (H+1,), amplitude (m), s): the amplitude DOF's cosine coefficients,
         cos kτ at the time τ* of its largest excursion (fine grid, refined by Newton on
         q′(τ) = 0), the amplitude s·q(τ*) and the excursion's sign s."""
-        a, omega = self.unpack(u)
-        row = np.ascontiguousarray(self._amplitude_row(a, omega, self.unpack_eta(u)), dtype=float)
+        if self._amp_in_c:
+            a, omega = self.unpack(u)
+            row = np.ascontiguousarray(a[:, self._amp_index])
+        else:  # the row from the scaled unknowns (:meth:`_amplitude_row_derivatives`)
+            G, _ = self._amplitude_row_derivatives(self._omega_of(u))
+            row = G @ np.asarray(u, dtype=float)[:-1]
         cos_k = np.empty(self.H + 1)
         amplitude, s = _cosine_peak(row, self._amp_sign, cos_k)
         return row, cos_k, amplitude, s
+
+    def _omega_of(self, u: np.ndarray) -> float:
+        """Ω (rad/s) of the scaled unknowns (checked as :meth:`unpack` checks them)."""
+        shape = u.shape if type(u) is np.ndarray else np.shape(u)
+        if shape != (self.n_unknowns,):
+            raise ValueError(f"u must have shape ({self.n_unknowns},), got {shape}")
+        return float(u[-1] * self.colscale[-1])
 
     def amplitude_value(self, u: np.ndarray) -> float:
         """The amplitude (m) of :meth:`amplitude_and_gradient` without the gradient."""
@@ -275,38 +389,19 @@ class SignalsMixin:
 
         The amplitude is the largest value of a smooth periodic function over τ, so its
         derivative is that of the function at the maximiser (envelope theorem), located
-        on the fine grid and refined by Newton on q′(τ) = 0.
+        on the fine grid and refined by Newton on q′(τ) = 0: s cos kτ* applied to the
+        row's derivatives (:meth:`_amplitude_row_derivatives`; Ω: the derivative of the
+        row's coefficients applied to the unknowns).
         """
-        a, omega = self.unpack(u)
-        _, cosk, amplitude, s = self._amplitude_peak(u)
+        row, cosk, amplitude, s = self._amplitude_peak(u)
         grad = np.zeros(self.n_unknowns)
         if self._amp_in_c:
             n_a = (self.H + 1) * self.n_c
-            grad[self._amp_index:n_a:self.n_c] = s * cosk
-        else:  # amplitude DOF with mass: the row is linear in (a, η) at fixed Ω
-            n_a = (self.H + 1) * self.n_c
-            zero_eta = np.zeros(self.n_poles)
-            for c in range(self.n_c):  # harmonic k of the row from a_k = e_c, all k at once
-                e = np.zeros((self.H + 1, self.n_c))
-                e[:, c] = 1.0
-                grad[c:n_a:self.n_c] = s * self._amplitude_row(e, omega, zero_eta) * cosk
-            zero_a = np.zeros((self.H + 1, self.n_c))
-            for group in self._pole_groups:  # η_p moves harmonic k_p of the row only
-                e_eta = np.zeros(self.n_poles)
-                e_eta[group] = 1.0
-                row = self._amplitude_row(zero_a, omega, e_eta)
-                for p in group:
-                    k = self._pole_k[p]
-                    grad[n_a + p] = s * (row[k] * cosk[k])
-            grad[:-1] *= self.colscale[:-1]
-            h = 1e-7  # Ω by central differences (scaled unknown)
-            e = np.zeros(self.n_unknowns)
-            e[-1] = h
-            ap, om_p = self.unpack(u + e)
-            am, om_m = self.unpack(u - e)
-            diff = (self._amplitude_row(ap, om_p, self.unpack_eta(u))
-                    - self._amplitude_row(am, om_m, self.unpack_eta(u)))
-            grad[-1] = s * (diff @ cosk) / (2 * h)
+            grad[self._amp_index:n_a:self.n_c] = s * cosk * self.colscale[self._amp_index:n_a:self.n_c]
             return float(amplitude), grad
-        grad[-1] = 0.0
-        return float(amplitude), grad * self.colscale
+        G, dG = self._amplitude_row_derivatives(self._omega_of(u))
+        v = np.asarray(u, dtype=float)[:-1]
+        sc = s * cosk
+        grad[:-1] = sc @ G
+        grad[-1] = sc @ (dG @ v)
+        return float(amplitude), grad
