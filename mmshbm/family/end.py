@@ -27,17 +27,15 @@ class Attempt:
     Attributes
     ----------
     search : str
-        The search that made it (``"deflated"``; for the staged search the stage:
-        ``"near"``, ``"far"``, ``"filtered"``, ...).
+        The search that made it (``"deflated"``).
     start : str
         Where Newton started (``"extrapolated from the frontier"``, ``"linear mode"``,
-        ...; the staged search names its stage again).
+        ...).
     amplitude : float
         The pinned amplitude (m).
     outcome : str
         ``"landed"`` (an orbit of the family), ``"off the family"`` (converged to an orbit
-        that fails the predicate), ``"rejected"`` (converged, refused by the search's
-        frequency window), ``"known"`` (converged to an orbit already found),
+        that fails the predicate), ``"known"`` (converged to an orbit already found),
         ``"outside"`` (the start lies outside the trust region: nothing solved) or
         ``"failed"`` (Newton did not converge).
     frequency : float
@@ -112,8 +110,8 @@ class FamilyEnd:
     attempts : tuple of Attempt
         Every pinned solve the search made, in order.
     notes : str
-        The search's own account of its stages (the staged search's reasons; "" for the
-        deflated search, whose account is :attr:`attempts`).
+        The search's account where the family does not end (the branch turning back at
+        the frontier, then what was tried); "" where :attr:`attempts` alone tell it.
     """
 
     ended: bool
