@@ -11,11 +11,11 @@ Every orbit u_k found at A_i is *deflated*: Newton then solves F(u) = M(u) G(u) 
 
 which has the same roots as G except the u_k (M → ∞ there), so from the same start Newton
 goes to another orbit or fails. Each start is solved from at most ``max_roots`` times
-(its deflation depth: every orbit found at the target deflated) and stops at its first
-orbit of the family; the target ends once ``max_roots`` orbits are found at it with one
-of the family among them, otherwise after every start (at most starts × ``max_roots``
-solves per target), so orbits off the family found from the first starts do not keep
-the later ones from the family. With d the Newton step of G, the Newton step of F is
+(its deflation depth: the orbits it reached deflated, its own chain) and stops at its
+first orbit of the family; every start runs at every target (at most starts ×
+``max_roots`` solves per target), and no start's orbits are deflated in another's solve,
+so which orbits a target yields does not depend on the order of the starts. With d the
+Newton step of G, the Newton step of F is
 d / (1 − ∇log M·d) (Sherman–Morrison on the rank-one change of the Jacobian), so one
 bordered solve per iteration serves both. At the first target where orbits of the
 family are found (:func:`mmshbm.family.definition.on_family` with the first mode's
@@ -358,25 +358,30 @@ def search_beyond(problem, guard: FamilyGuard, us: list, recs: list, *, options:
     def at(target, candidates):
         """The landing at ``target`` from the starts ``candidates``, or None."""
         found = []  # (u, iterations, history, record, tangent, member) of every orbit found at target
-        settled = []  # (start, orbits found when it failed) at this target
+        seen = []  # the starts solved from at this target
         for name, u0 in candidates:
-            if any(n == len(found) and _same(u0, v) for v, n in settled):
-                continue  # the same start with the same orbits deflated fails the same way
+            if any(_same(u0, v) for v in seen):
+                continue  # the same start goes the same way
+            seen.append(u0)
+            chain = []  # the orbits this start reached, deflated for its next solve
             for _ in range(options.max_roots):  # the start's deflation depth
                 try:
                     u, nit, hist, t = deflated_solve(
-                        problem, u0, target, [f[0] for f in found],
+                        problem, u0, target, chain,
                         tol=newton_tol, max_iter=_NEWTON_FACTOR * max_newton, admissible=admissible)
                 except PinnedFailure as err:
                     outcome = ("outside" if isinstance(err, StartOutside)
                                else "known" if isinstance(err, KnownOrbit) else "failed")
                     tried.append(Attempt("deflated", name, target, outcome))
-                    settled.append((u0, len(found)))
                     break
+                chain.append(u)
                 rec = monitor(problem, u)
                 f = float(rec.get("frequency", math.nan))
                 share = family_value(rec)
                 share = math.nan if share is None else share
+                if any(_same(u, x[0]) for x in found):  # reached from an earlier start too
+                    tried.append(Attempt("deflated", name, target, "known", f, share))
+                    continue
                 member = on_family(rec, options.family_share, band) is not False
                 tried.append(Attempt("deflated", name, target, "landed" if member else "off the family", f,
                                      share))
@@ -385,8 +390,6 @@ def search_beyond(problem, guard: FamilyGuard, us: list, recs: list, *, options:
                           f, share, "family" if member else "not the family")
                 if member:
                     break  # the start has reached the family
-            if len(found) >= options.max_roots and any(x[5] for x in found):
-                break
         family = [x for x in found if x[5]]
         if not family:
             return None

@@ -42,10 +42,9 @@ class FamilyOptions:
         doubling step would otherwise get one or two tries.
     max_roots : int
         The deflated search's depth per start: from one start at most this many
-        deflated solves (each orbit found at the target deflated, so Newton from the
-        same start must go elsewhere), stopping at the first orbit of the family. A
-        target ends once this many orbits are found at it with one of the family among
-        them, otherwise after every start (at most starts × max_roots solves). Default 3.
+        deflated solves (each orbit it reached at the target deflated, so Newton from the
+        same start must go elsewhere), stopping at its first orbit of the family. Every
+        start runs at every target (at most starts × max_roots solves). Default 3.
     band_slack : float
         Relative margin of the first mode's frequency band (the definition's second
         condition, :func:`mmshbm.family.definition.frequency_band`): an orbit of the

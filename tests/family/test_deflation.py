@@ -249,3 +249,27 @@ def test_the_costly_starts_run_at_the_targets_in_turn_only_where_the_others_foun
     search_beyond(problem, guard, us, recs, options=options, amplitude_max=1.7, newton_tol=1e-12,
                   max_newton=10, monitor=lambda p, v: p.monitor(v), starts=costly)
     assert costly.calls == []
+
+
+class _TwoFamilyOrbits(Quartic):
+    """Quartic's roots and a fifth, y = 0.8 (share 0.85): two orbits of the family at every
+    amplitude, y = 0.5 (share 0.7) and y = 0.8."""
+
+    ROOTS = (-0.3, -0.2, -0.1, 0.5, 0.8)
+
+
+@pytest.mark.parametrize("order", [(0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0)])
+def test_the_landing_does_not_depend_on_the_order_of_the_starts(order):
+    """Starts by the three orbits off the family (y = −0.22), by y = 0.5 (0.45) and by
+    y = 0.8 (0.85), in every order: each start deflates only the orbits it reached, every
+    start runs, so the first target yields the same orbits and the landing is the one of
+    larger share, y = 0.8 (to 1e-12, Newton's tolerance on a simple root)."""
+    problem = _TwoFamilyOrbits()
+    options = FamilyOptions()
+    us, recs, guard = _quartic_branch(problem)
+    ys = np.array([-0.22, 0.45, 0.85])[list(order)]
+    u, _, _, rec, _, target, _ = search_beyond(
+        problem, guard, us, recs, options=options, amplitude_max=2.5, newton_tol=1e-12, max_newton=10,
+        monitor=lambda p, v: p.monitor(v), starts=_Starts(*ys))
+    assert target == pytest.approx(1.5 * (1 + options.jump_step), rel=1e-15)
+    assert abs(u[1] - 0.8) < 1e-12 and abs(rec["fundamental_share"] - 0.85) < 1e-12
