@@ -234,16 +234,53 @@ class BranchStarts:
         self.solver = (1e-10, 30, None)
         #: deflated solves per start, for starts that deflate (the search's ``max_roots``)
         self.depth = 3
+        #: (u0, amplitude) of this search's landings of the problem's own (:meth:`landings`)
+        self._landed: list[tuple[np.ndarray, float]] = []
 
     def landings(self, us: list, recs: list, guard: FamilyGuard,
                  amplitude_max: float) -> list[tuple[str, np.ndarray, float]]:
-        """None here: no start that picks its own amplitude."""
+        """The problem's own landing beyond the frontier (``family_landing``, where it
+        offers one: MMS-HBM's resonance passed with its harmonic filtered out, EPMC's
+        path followed on until it is back on the family), from the best origin
+        (:meth:`FamilyGuard.origins`) where it lands between the frontier and the bound:
+        a start that picks its own amplitude. None where the problem offers none."""
+        self._landed = []
+        landing = getattr(self.problem, "family_landing", None)
+        if landing is None:
+            return []
+        i = guard.frontier_index
+        frontier = float(recs[i]["amplitude"])
+        excursion = us[i + 1:]
+        for origin in guard.origins(lambda j: float(recs[j]["amplitude"])):
+            try:
+                u0, target = landing(us[origin], recs[origin], excursion, amplitude_max, frontier)
+            except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as err:
+                log.debug("no landing of the problem's own from %d: %s", origin, err)
+                continue
+            if frontier < target <= amplitude_max:
+                self._landed.append((u0, float(target)))
+                return [("filtered landing", u0, float(target))]
         return []
 
     def origin_starts(self, us: list, recs: list, guard: FamilyGuard, origin: int, amplitude: float,
                       amplitude_max: float) -> list[tuple[str, np.ndarray]]:
-        """The method's starts at ``amplitude`` from the family point ``origin`` (none here)."""
-        return []
+        """The problem's starts at ``amplitude`` from the family point ``origin``, where it
+        offers them: the orbit along its auxiliary branch (``family_predictor``) and the
+        orbit scaled to the target (``scaled_state``: far above the gap a
+        piecewise-linear system is nearly homogeneous)."""
+        p = self.problem
+        A_o = float(recs[origin]["amplitude"])
+        out = []
+        predictor = getattr(p, "family_predictor", None)
+        if predictor is not None:
+            try:
+                out.append(("family predictor", predictor(us[origin], A_o, amplitude, amplitude_max)))
+            except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
+                pass
+        scaled = getattr(p, "scaled_state", None)
+        if scaled is not None and A_o > 0:
+            out.append(("scaled", scaled(us[origin], amplitude / A_o)))
+        return out
 
     def starts(self, us: list, recs: list, guard: FamilyGuard, amplitude: float,
                amplitude_max: float) -> list[tuple[str, np.ndarray]]:

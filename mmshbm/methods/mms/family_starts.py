@@ -31,29 +31,7 @@ class MMSHBMStarts(BranchStarts):
 
     def __init__(self, problem):
         super().__init__(problem)
-        self._landed: list[tuple[np.ndarray, float]] = []  # (u0, amplitude) of this search's landings
         self._homotopies: dict[float, int] = {}  # homotopies run per frontier amplitude
-
-    def landings(self, us: list, recs: list, guard: FamilyGuard,
-                 amplitude_max: float) -> list[tuple[str, np.ndarray, float]]:
-        p = self.problem
-        i = guard.frontier_index
-        frontier = float(recs[i]["amplitude"])
-        excursion = us[i + 1:]
-        self._landed = []
-        self.amplitude_max = amplitude_max
-        out = []
-        for origin in guard.origins(lambda j: float(recs[j]["amplitude"])):
-            try:
-                u0, target = p.family_landing(us[origin], recs[origin], excursion, amplitude_max, frontier)
-            except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as err:
-                log.debug("no filtered landing from %d: %s", origin, err)
-                continue
-            if frontier < target <= amplitude_max:
-                out.append(("filtered landing", u0, float(target)))
-                self._landed.append((u0, float(target)))
-                break  # from the best origin where the filtered branch passes the resonance
-        return out
 
     def before(self, us: list, recs: list, guard: FamilyGuard,
                amplitude: float) -> list[tuple[str, np.ndarray]]:
@@ -152,16 +130,3 @@ class MMSHBMStarts(BranchStarts):
         except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
             return []
         return [("homotopy from the fundamental's family", u)]
-
-    def origin_starts(self, us: list, recs: list, guard: FamilyGuard, origin: int, amplitude: float,
-                      amplitude_max: float) -> list[tuple[str, np.ndarray]]:
-        p = self.problem
-        A_o = float(recs[origin]["amplitude"])
-        out = []
-        try:
-            out.append(("family predictor", p.family_predictor(us[origin], A_o, amplitude, amplitude_max)))
-        except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError):
-            pass
-        if A_o > 0:
-            out.append(("scaled", p.scaled_state(us[origin], amplitude / A_o)))
-        return out
