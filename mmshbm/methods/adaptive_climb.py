@@ -61,10 +61,13 @@ class _Point:
     """One point's solves: ``known`` H -> (scaled unknowns, frequency Hz); ``estimate``
     H -> the estimate at H (from the solve at 2H; NaN where that failed)."""
 
-    def __init__(self, H: int, u: np.ndarray, f: float, amplitude: float):
+    def __init__(self, H: int, u: np.ndarray, f: float, amplitude: float, free: bool = False):
         self.known = {int(H): (np.asarray(u, dtype=float), float(f))}
         self.estimate: dict[int, float] = {}
         self.amplitude = float(amplitude)
+        #: no contact force: the orbit is exact at every H, its harmonics above H are zero, so
+        #: the padded start is the solution whatever failed on the branch's other points
+        self.free = bool(free)
 
 
 class _Solves:
@@ -98,9 +101,9 @@ class _Solves:
                 return None
 
         s = self.ladder.at(H)
-        if pair not in self.ladder.stepped or STEP * H >= H2:  # the point's own start, padded
+        if p.free or pair not in self.ladder.stepped or STEP * H >= H2:  # the point's own start, padded
             u2 = solve(s2, pad(s, u, s2))
-            if u2 is None:
+            if u2 is None and not p.free:
                 self.ladder.stepped.add(pair)
         if u2 is None and before is not None and H in before.known and H2 in before.known:
             u2 = solve(s2, before.known[H2][0])  # the predecessor's solution at H2, this amplitude pinned
@@ -161,7 +164,7 @@ def refine_points_along(base, tol: float, start_harmonics: int, max_harmonics: i
         a = float(amp[i])
         if not (a > 0 and math.isfinite(a) and math.isfinite(freq[i])):
             continue
-        p = _Point(start_harmonics, states[i], freq[i], a)
+        p = _Point(start_harmonics, states[i], freq[i], a, free=not touching[i])
         climbs = bool(on_front[i] and touching[i])
         first = start_harmonics
         if climbs and kept_before > start_harmonics and len(rungs) > 2:

@@ -305,3 +305,25 @@ def test_a_solve_from_the_predecessor_lands_where_the_steps_do():
         checked += 1
     assert checked >= 5
     assert solves < 6 * checked  # the steps alone take 8 -> 12 -> 18 -> 26 -> 32 -> 46 -> 64
+
+
+def test_a_point_without_contact_force_is_solved_from_its_padded_start():
+    """Below grazing the orbit is the linear mode at every H (its harmonics above H are
+    zero): where a pair's padded start failed elsewhere on the branch (``stepped``), such a
+    point still takes one pinned solve from its padded start, to the same frequency as the
+    √2 steps (both to a residual of 1e-10: 1e-10 apart at most), and leaves the pair's
+    memory as it was."""
+    from mmshbm.methods.adaptive_climb import _Point, _Solves
+    from mmshbm.results.point_errors import SolverLadder, error_factor, raise_point
+
+    model = mmshbm.OneDofOscillator(*STIFF).model()
+    b = _quiet(mmshbm.backbone, model, harmonics=8, max_amplitude=2 * model.gap)
+    i = int(np.flatnonzero(b.contact_force_max <= 0)[-1])
+    ladder = SolverLadder(b)
+    ladder.stepped.add((8, 16))
+    solves = _Solves(ladder, error_factor(2.0))
+    p = _Point(8, b.states[i], b.frequency[i], float(b.amplitude[i]), free=True)
+    assert solves.at(p, 16, None) and solves.solves == 1
+    f_steps = float(ladder.at(16).unpack(raise_point(ladder, 8, b.states[i], float(b.amplitude[i]), 16))[1])
+    assert abs(p.known[16][1] * 2 * math.pi / f_steps - 1) <= 1e-10
+    assert ladder.stepped == {(8, 16)}
