@@ -7,7 +7,8 @@ capabilities a problem declares (its step rule, a compiled corrector, the record
 caps the step). MMS-HBM, penalty-HBM and shooting all implement it, so they share this
 driver and its step control. It reads no record by name: what a branch means (the
 family of a nonlinear mode, its jumps over internal resonances) is an event plug-in
-(:mod:`mmshbm.core.events`; :mod:`mmshbm.family.follower` by default).
+(:mod:`mmshbm.core.events`), passed in by the caller: the methods' runs pass the family
+following of :mod:`mmshbm.family.follower` for ``follow="family"``.
 
 Algorithm: tangent predictor u_p = u + ds·t; Newton corrector on [R(u); t·(u − u_p)] = 0
 with the bordered Jacobian [J; tᵀ]; the new tangent solves [J; tᵀ] t' = [0; 1]. Step
@@ -29,8 +30,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..family.follower import default_events
-from .events import BranchEvents, RelocationFailed
+from .events import BranchEvents, NoEvents, RelocationFailed
 from .options import ContinuationOptions, ContinuationProblem, ContinuationResult, ContinuationState
 from .problem import as_problem
 from .special_points import SpecialPoint
@@ -92,8 +92,9 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
         False lets it propagate: continuations nested inside another run's step (a
         jump's backfill, an auxiliary branch) must not swallow the user's Ctrl-C.
     events : BranchEvents, optional
-        The event plug-in (:mod:`mmshbm.core.events`); default the one ``options`` ask
-        for (the family following for ``follow="family"``,
+        The event plug-in (:mod:`mmshbm.core.events`); default none (plain path
+        following, whatever ``options.follow`` says: the family following for
+        ``follow="family"`` is the caller's to pass,
         :func:`mmshbm.family.follower.default_events`).
 
     Returns
@@ -106,7 +107,7 @@ def continue_branch(problem: ContinuationProblem, u0: np.ndarray, t0: np.ndarray
     opt = options or ContinuationOptions()
     if opt.step_control == "auto":
         opt = _with_step_control(opt, problem.step_control)
-    events = default_events(opt, continue_branch) if events is None else events
+    events = NoEvents() if events is None else events
     pts = _Points(resume, opt.ds, on_point, callback, progress, problem.progress_records)
     events.replay(pts.recs, pts.special)
     u = t = None

@@ -9,12 +9,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import _validate as check
-from ..family.options import FamilyOptions
 from .problem import ContinuationProblem
 from .status import Status
 
-__all__ = ["ContinuationOptions", "ContinuationProblem", "ContinuationResult", "ContinuationState",
-           "FamilyOptions"]
+__all__ = ["ContinuationOptions", "ContinuationProblem", "ContinuationResult", "ContinuationState"]
 
 
 @dataclass(frozen=True)
@@ -73,12 +71,14 @@ class ContinuationOptions:
         the bound. E.g. ``{"amplitude": (0, 1e-2), "frequency": (0, 80)}``.
     follow : {"family", "path"}
         ``"family"`` (default): stay on the starting mode's family, jumping over
-        internal-resonance tongues the path follower cannot come back from
-        (:mod:`mmshbm.family.follower`; acts on problems that record the fundamental
-        harmonic's share). ``"path"``: plain path following (to study a tongue).
+        internal-resonance tongues the path follower cannot come back from; ``"path"``:
+        plain path following (to study a tongue). The driver itself only ever follows
+        the path: the family following is an event plug-in that the methods' runs pass
+        to it (:func:`mmshbm.family.follower.default_events`; it acts on problems that
+        record the fundamental harmonic's share).
     family_share, max_excursion, jump_step, max_jumps
-        The family following's options, forwarded to
-        :class:`~mmshbm.family.options.FamilyOptions` (:attr:`family`).
+        The family following's options, read by the plug-in
+        (:meth:`mmshbm.family.options.FamilyOptions.of`); checked here as plain numbers.
     """
 
     ds: float = 0.1
@@ -121,8 +121,12 @@ class ContinuationOptions:
         check.positive("target_residual", self.target_residual)
         if self.follow not in ("family", "path"):
             raise ValueError(f"follow must be 'family' or 'path', got {self.follow!r}")
-        # validated here, kept for :attr:`family` (a frozen object: the fields cannot change)
-        self.__dict__["_memo_family"] = self._family_options()
+        share = check.real_number("family_share", self.family_share)
+        if not 0.0 < share < 1.0:
+            raise ValueError(f"family_share must be in (0, 1), got {self.family_share!r}")
+        check.integer("max_excursion", self.max_excursion, minimum=1)
+        check.positive("jump_step", self.jump_step)
+        check.integer("max_jumps", self.max_jumps, minimum=0)
         angle = check.positive("max_angle", self.max_angle)
         if angle > math.pi:
             raise ValueError(f"max_angle must be <= pi, got {angle}")
@@ -133,18 +137,6 @@ class ContinuationOptions:
                 raise ValueError(f"bounds[{name!r}] must be a pair (lo, hi), got {bound!r}") from None
             if not lo < hi:
                 raise ValueError(f"bounds[{name!r}] must satisfy lo < hi, got {bound!r}")
-
-    def _family_options(self) -> FamilyOptions:
-        return FamilyOptions(family_share=self.family_share, max_excursion=self.max_excursion,
-                             jump_step=self.jump_step, max_jumps=self.max_jumps)
-
-    @property
-    def family(self) -> FamilyOptions | None:
-        """The family following's options (None for ``follow="path"``)."""
-        if self.follow != "family":
-            return None
-        family = self.__dict__.get("_memo_family")
-        return family if family is not None else self._family_options()
 
 
 @dataclass

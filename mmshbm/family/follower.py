@@ -24,7 +24,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..core.events import NoEvents, Relocation, RelocationFailed
-from ..core.options import ContinuationOptions, FamilyOptions
+from ..core.options import ContinuationOptions
 from ..core.pinned import PinnedFailure
 from ..core.special_points import SpecialPoint
 from ..core.status import Status
@@ -33,6 +33,7 @@ from .definition import FAMILY_RECORD, family_value, frequency_band, on_family
 from .deflation import FamilyStarts, search_beyond
 from .end import FamilyEnded
 from .guard import FamilyGuard
+from .options import FamilyOptions
 
 __all__ = ["FamilyFollower", "default_events"]
 
@@ -186,7 +187,7 @@ def _along_path(follow: Callable, problem, us: list, recs: list, guard: FamilyGu
 def default_events(options: ContinuationOptions, follow: Callable):
     """The event plug-in ``options`` ask for: a :class:`FamilyFollower` for
     ``follow="family"``, else :class:`~mmshbm.core.events.NoEvents` (plain path following)."""
-    family = options.family
+    family = FamilyOptions.of(options)
     return NoEvents() if family is None else FamilyFollower(family, options, follow)
 
 

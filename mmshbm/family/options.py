@@ -1,12 +1,14 @@
 """The options of the family following: every threshold of its decisions, in one object.
 
-:class:`FamilyOptions` is built by ``ContinuationOptions(follow="family", ...)``
-(:attr:`mmshbm.core.options.ContinuationOptions.family`). The definition it serves is in
+:class:`FamilyOptions` is built from a run's
+:class:`~mmshbm.core.options.ContinuationOptions` (``follow="family"`` and its family fields) by
+:meth:`FamilyOptions.of`. The definition it serves is in
 docs/resonances.md and :mod:`mmshbm.family.definition`.
 """
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 from .. import _validate as check
@@ -73,3 +75,18 @@ class FamilyOptions:
             raise ValueError(f"target_ratio must be > 1, got {self.target_ratio!r}")
         check.integer("max_roots", self.max_roots, minimum=1)
         check.non_negative("band_slack", self.band_slack)
+
+    @classmethod
+    def of(cls, options) -> FamilyOptions | None:
+        """The family options of a run's :class:`~mmshbm.core.options.ContinuationOptions`
+        (its fields ``family_share``, ``max_excursion``, ``jump_step``, ``max_jumps``; the
+        others at their defaults); None for ``follow="path"``."""
+        if options.follow != "family":
+            return None
+        return _of(options.family_share, options.max_excursion, options.jump_step, options.max_jumps)
+
+
+@functools.lru_cache(maxsize=64)
+def _of(family_share, max_excursion, jump_step, max_jumps) -> FamilyOptions:
+    return FamilyOptions(family_share=family_share, max_excursion=max_excursion, jump_step=jump_step,
+                         max_jumps=max_jumps)

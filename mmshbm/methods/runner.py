@@ -35,6 +35,7 @@ from ..core.checkpoint import _plain as jsonable
 from ..core.continuation import ContinuationOptions, ContinuationResult, continue_branch
 from ..core.special_points import SpecialPoint
 from ..core.status import Status
+from ..family.follower import default_events
 from ..model.model import Model
 
 __all__ = ["CONTINUATION_FIELDS", "Run", "run", "jsonable", "continuation_options", "check_option_names",
@@ -324,7 +325,8 @@ def run(problem, copts: ContinuationOptions, start, *, callback=None, progress=N
             with blas_limit():  # small dense solves: one BLAS thread unless the user chose (mmshbm._threads)
                 u0, t0_ = (None, None) if state else start()
                 res = continue_branch(problem, u0, t0_, copts, callback=callback, progress=progress,
-                                      resume=state, on_point=writer.point if writer is not None else None)
+                                      resume=state, on_point=writer.point if writer is not None else None,
+                                      events=default_events(copts, continue_branch))
         if writer is not None:
             writer.end(res.status)
         elapsed = time.perf_counter() - t0

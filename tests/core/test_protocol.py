@@ -15,10 +15,10 @@ import mmshbm
 from mmshbm.core import problem as protocol
 from mmshbm.core.continuation import ContinuationOptions, continue_branch
 from mmshbm.core.events import BranchEvents, NoEvents, Relocation
-from mmshbm.core.options import FamilyOptions
 from mmshbm.core.special_points import SpecialPoint
 from mmshbm.core.status import Status
 from mmshbm.family.follower import FamilyFollower, default_events
+from mmshbm.family.options import FamilyOptions
 from mmshbm.methods.frequency_response import FORCED_METHODS, make_forced_problem
 from mmshbm.methods.registry import METHODS, make_problem
 
@@ -365,12 +365,12 @@ def test_an_event_plug_in_relocates_the_branch():
 
 def test_the_old_family_fields_are_forwarded():
     opt = ContinuationOptions(family_share=0.6, max_excursion=7, jump_step=0.01, max_jumps=3)
-    assert opt.family == FamilyOptions(family_share=0.6, max_excursion=7, jump_step=0.01, max_jumps=3)
+    assert FamilyOptions.of(opt) == FamilyOptions(family_share=0.6, max_excursion=7, jump_step=0.01, max_jumps=3)
     events = default_events(opt, continue_branch)
     assert isinstance(events, FamilyFollower) and events.family is not None
     assert events.guard.family_share == 0.6 and events.guard.max_excursion == 7
     path = ContinuationOptions(follow="path", family_share=0.6)
-    assert path.family is None and isinstance(default_events(path, continue_branch), NoEvents)
+    assert FamilyOptions.of(path) is None and isinstance(default_events(path, continue_branch), NoEvents)
     with pytest.raises(ValueError, match="family_share must be in"):
         ContinuationOptions(family_share=1.5)
     with pytest.raises(ValueError, match="family_share must be in"):

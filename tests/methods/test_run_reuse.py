@@ -181,20 +181,23 @@ def test_no_resonance_scan_where_the_starting_mode_is_the_only_one_tracked():
     assert any(s.kind == "internal_resonance" for s in bb.special_points)
 
 
-def test_family_options_kept_are_the_validated_ones():
-    """The family following's options built (and validated) with the continuation options are
-    those built afresh from the same fields, for a replaced or copied object too."""
+def test_family_options_of_a_run_are_those_of_its_fields():
+    """The family following's options of a run's continuation options are those built afresh
+    from the same fields (one object per set of values), for a replaced object too; none for
+    plain path following."""
     import dataclasses
 
-    from mmshbm.core.options import ContinuationOptions, FamilyOptions
+    from mmshbm.core.options import ContinuationOptions
+    from mmshbm.family.options import FamilyOptions
 
     opts = ContinuationOptions(family_share=0.4, max_excursion=7, jump_step=0.05, max_jumps=3)
     fresh = FamilyOptions(family_share=0.4, max_excursion=7, jump_step=0.05, max_jumps=3)
-    assert opts.family == fresh and opts.family is opts.family
+    assert FamilyOptions.of(opts) == fresh and FamilyOptions.of(opts) is FamilyOptions.of(opts)
     other = dataclasses.replace(opts, max_jumps=9)
-    assert other.family == FamilyOptions(family_share=0.4, max_excursion=7, jump_step=0.05, max_jumps=9)
-    assert dataclasses.replace(opts, follow="path").family is None
-    assert ContinuationOptions(follow="path").family is None
+    assert FamilyOptions.of(other) == FamilyOptions(family_share=0.4, max_excursion=7, jump_step=0.05,
+                                                    max_jumps=9)
+    assert FamilyOptions.of(dataclasses.replace(opts, follow="path")) is None
+    assert FamilyOptions.of(ContinuationOptions(follow="path")) is None
 
 
 def test_range_check_skipped_only_where_every_mode_is_kept():

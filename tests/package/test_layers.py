@@ -3,7 +3,8 @@ module imports itself back through others.
 
 Layers, bottom to top: the model, the FE builders, the numerical core beside the contact
 laws (core's fused residuals call the laws' kernels, the laws' data use core's
-condensation: one layer, kept acyclic by the cycle test), results, the methods, the
+condensation: one layer, kept acyclic by the cycle test), the family following (an event
+plug-in of the driver that core does not know), results, the methods, the
 analyses, and on top io, plots and the command line. Function-level (lazy)
 imports count as much as module-level ones, and so do imports by name:
 ``importlib.import_module("mmshbm...")`` and ``__import__`` with a constant (or
@@ -35,7 +36,7 @@ LAYERS = {
     "mmshbm.harmonic": 2,  # beside fe: the linear structure per harmonic, uses only the model
     "mmshbm.core": 3,
     "mmshbm.contact": 3,  # beside core: used by core and methods, uses core's condensation
-    "mmshbm.family": 3,  # beside core: its default event plug-in; uses the continuation core only
+    "mmshbm.family": 3.5,  # above core: an event plug-in the methods pass to the driver; below results
     "mmshbm.results": 4,
     "mmshbm.methods": 5,
     "mmshbm.exact": 5,  # the public home of methods.exact

@@ -308,13 +308,14 @@ class PoleWindow:
 
     def run(self, follow="path"):
         from mmshbm.core.continuation import ContinuationOptions, continue_branch
+        from mmshbm.family.follower import default_events
 
         p = self.problem
         # the effort rule's steps (as in mmshbm 0.1): halving then carries the branch over the
         # injected window; the residual rule creeps up to it instead (then a jump passes it)
-        return continue_branch(p, p.linear_point(0.5), p.initial_tangent(),
-                               ContinuationOptions(bounds={"amplitude": (0.0, 10.0)}, follow=follow,
-                                                   step_control="effort"))
+        opt = ContinuationOptions(bounds={"amplitude": (0.0, 10.0)}, follow=follow, step_control="effort")
+        return continue_branch(p, p.linear_point(0.5), p.initial_tangent(), opt,
+                               events=default_events(opt, continue_branch))
 
 
 def test_a_singular_step_is_halved_and_the_branch_goes_on():
