@@ -46,12 +46,12 @@ runners call them directly and never probe a problem for attributes.
     ``family_frequency_ceiling()`` (Hz, the first mode with every contact held: the top
     of the family's frequency band; the limit when not offered),
     ``scaled_state(u, factor)``, ``family_predictor(u_from, A_from, A_to, A_max)``,
-    ``family_landing(u_from, rec_from, excursion, A_max, A_min)``,
+    ``family_landing(u_from, rec_from, excursion, A_max, A_min, family_share=)``,
     ``harmonic_landing(A, A_max, tol=, max_iter=, admissible=, fundamental=) -> (u, share_ref)``
     (None where ``fundamental=True`` names no ladder of its own),
     ``homotopy_landing(A, A_max, tol=, max_iter=, admissible=) -> (u, f_start)`` (the orbit
     reached by a homotopy from another family's orbit of frequency f_start, Hz:
-    :mod:`mmshbm.family.homotopy`), ``leads_fundamental(u) -> bool`` (the starting mode
+    :mod:`mmshbm.core.homotopy`), ``leads_fundamental(u) -> bool`` (the starting mode
     holds the largest share of the fundamental harmonic's kinetic energy among the
     tracked modes), and ``family_starts()``, the object that supplies the starts of the
     deflated search (:class:`mmshbm.family.deflation.FamilyStarts`; MMS-HBM's adds the

@@ -253,7 +253,8 @@ class BranchStarts:
         excursion = us[i + 1:]
         for origin in guard.origins(lambda j: float(recs[j]["amplitude"])):
             try:
-                u0, target = landing(us[origin], recs[origin], excursion, amplitude_max, frontier)
+                u0, target = landing(us[origin], recs[origin], excursion, amplitude_max, frontier,
+                                     family_share=guard.family_share)
             except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as err:
                 log.debug("no landing of the problem's own from %d: %s", origin, err)
                 continue

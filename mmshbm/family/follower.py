@@ -63,7 +63,7 @@ class FamilyFollower:
         self.starts = starts
         self.options = options
         self.follow = follow
-        self.guard = FamilyGuard(family.family_share, family.max_excursion)
+        self.guard = FamilyGuard(family.family_share, family.max_excursion, family)
         self.jumps = 0
         self.amplitude_max = float(dict(options.bounds).get("amplitude", (0.0, math.inf))[1])
 

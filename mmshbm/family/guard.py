@@ -7,30 +7,13 @@ from __future__ import annotations
 import math
 
 from .definition import FAMILY_RECORD, family_value, on_family
+from .options import FamilyOptions
 
 __all__ = ["FAMILY_RECORD", "FamilyGuard", "family_value"]
 
-#: a branch that left the family and comes back onto it this far (relative) below the
-#: frontier is going back down the family: a loop (a passage may dip less than this)
-_LOOP_DROP = 0.05
-
-
-#: an excursion that comes back onto the family above the frontier within this (relative)
-#: of where an earlier one came back goes round a closed loop
-_REENTRY_TOL = 1e-3
-
-
-#: a stretch of the branch above the frontier whose amplitude grows by this factor while
-#: its frequency grows by less than _LOCK_FREQUENCY (relative) is locked onto ω_j/k: a
-#: tongue climbing without folding
-_LOCK_AMPLITUDE = 1.5
-_LOCK_FREQUENCY = 0.005
-
-#: a pending stretch that reaches the amplitude bound having grown by at least this factor
-#: (and less than _LOCK_AMPLITUDE, where the lock test applies) is judged there by the
-#: lock's slope: frequency growth below _LOCK_FREQUENCY per (_LOCK_AMPLITUDE − 1) of
-#: amplitude growth is a locked climb the bound cut short
-_LOCK_AT_BOUND = 1.1
+#: relative round-off of the guard's comparisons of amplitude and frequency (a value equal
+#: to another within it neither rises nor falls)
+_ROUNDOFF = 1e-9
 
 
 class FamilyGuard:
@@ -53,11 +36,16 @@ class FamilyGuard:
         on the family.
     max_excursion : int
         Steps allowed off the family (or on it below the frontier) before a jump.
+    options : FamilyOptions, optional
+        The guard's other rules (``loop_drop``, ``reentry_tol``, ``lock_growth``,
+        ``lock_frequency``, ``lock_at_bound``, ``origin_windows``); their defaults where
+        not given.
     """
 
-    def __init__(self, family_share: float, max_excursion: int):
+    def __init__(self, family_share: float, max_excursion: int, options: FamilyOptions | None = None):
         self.family_share = family_share
         self.max_excursion = max_excursion
+        self.options = FamilyOptions() if options is None else options
         self.frontier = -math.inf  # largest amplitude on the family so far
         self.frontier_frequency = math.nan
         self.frontier_index = -1
@@ -85,8 +73,8 @@ class FamilyGuard:
             # a fold turns the frequency back, or the amplitude with the frequency no
             # longer rising (a tongue's tip); an amplitude that wavers while the frequency
             # keeps rising is the backbone's own S-bend, not a tongue
-            advancing = not frequency < f_last * (1 - 1e-9) and (
-                amplitude >= a_last * (1 - 1e-9) or frequency > f_last * (1 + 1e-9))
+            advancing = not frequency < f_last * (1 - _ROUNDOFF) and (
+                amplitude >= a_last * (1 - _ROUNDOFF) or frequency > f_last * (1 + _ROUNDOFF))
             if advancing and not self._locked(amplitude, frequency):
                 if not on:
                     self.pending.append((index, amplitude, frequency, rec))
@@ -95,7 +83,7 @@ class FamilyGuard:
                 self._confirm()
             else:
                 self._revert()
-        ahead = amplitude >= self.frontier * (1 - 1e-9)
+        ahead = amplitude >= self.frontier * (1 - _ROUNDOFF)
         if on and ahead:
             if self.left and self._reentered(amplitude, frequency):
                 rec["on_family"] = 0.0
@@ -103,7 +91,7 @@ class FamilyGuard:
             self._advance(index, rec, share)
             return None
         if (not on and ahead and self.away == 0 and not self.left and self.frontier_index >= 0
-                and not frequency < self.frontier_frequency * (1 - 1e-9)):
+                and not frequency < self.frontier_frequency * (1 - _ROUNDOFF)):
             self.pending = [(index, amplitude, frequency, rec)]
             rec["on_family"] = 1.0
             return None
@@ -111,7 +99,7 @@ class FamilyGuard:
         self.away += 1
         if not on:
             self.left = True
-        elif self.left and amplitude < self.frontier * (1 - _LOOP_DROP):
+        elif self.left and amplitude < self.frontier * (1 - self.options.loop_drop):
             return "jump"  # back on the family well below the frontier: a loop
         if self.away > self.max_excursion:
             return "jump"
@@ -119,10 +107,11 @@ class FamilyGuard:
 
     def _reentered(self, amplitude: float, frequency: float) -> bool:
         """Whether an excursion comes back onto the family where an earlier one came back
-        (amplitude and frequency within _REENTRY_TOL): the branch goes round a closed loop,
-        each round nudging the frontier by round-off. Registers the re-entry."""
+        (amplitude and frequency within ``reentry_tol``): the branch goes round a closed
+        loop, each round nudging the frontier by round-off. Registers the re-entry."""
+        tol = self.options.reentry_tol
         for a, f in self.reentries:
-            if abs(amplitude - a) <= _REENTRY_TOL * a and abs(frequency - f) <= _REENTRY_TOL * f:
+            if abs(amplitude - a) <= tol * a and abs(frequency - f) <= tol * f:
                 return True
         self.reentries.append((amplitude, frequency))
         return False
@@ -139,22 +128,24 @@ class FamilyGuard:
 
     def _locked(self, amplitude: float, frequency: float) -> bool:
         _, a0, f0, _ = self.pending[0]
-        return amplitude >= _LOCK_AMPLITUDE * a0 and frequency <= f0 * (1 + _LOCK_FREQUENCY)
+        o = self.options
+        return amplitude >= o.lock_growth * a0 and frequency <= f0 * (1 + o.lock_frequency)
 
     def locked_at_bound(self) -> bool:
         """Whether the pending stretch that reached the amplitude bound is a locked climb
-        the bound cut short: grown by at least _LOCK_AT_BOUND but less than
-        _LOCK_AMPLITUDE (where the lock test itself applies), with the frequency rising
-        more slowly than the lock's slope (_LOCK_FREQUENCY per _LOCK_AMPLITUDE − 1 of
+        the bound cut short: grown by at least ``lock_at_bound`` but less than
+        ``lock_growth`` (where the lock test itself applies), with the frequency rising
+        more slowly than the lock's slope (``lock_frequency`` per ``lock_growth`` − 1 of
         amplitude). Such a stretch is marked off the family (as a tongue's climb that
         locks) and the frontier goes back to where it began."""
         if not self.pending:
             return False
         _, a0, f0, _ = self.pending[0]
         _, a1, f1, _ = self.pending[-1]
+        o = self.options
         growth = a1 / a0 - 1.0
-        slope = _LOCK_FREQUENCY / (_LOCK_AMPLITUDE - 1.0)
-        if not (_LOCK_AT_BOUND * a0 <= a1 < _LOCK_AMPLITUDE * a0 and f1 <= f0 * (1.0 + slope * growth)):
+        slope = o.lock_frequency / (o.lock_growth - 1.0)
+        if not (o.lock_at_bound * a0 <= a1 < o.lock_growth * a0 and f1 <= f0 * (1.0 + slope * growth)):
             return False
         self._revert()
         return True
@@ -182,11 +173,13 @@ class FamilyGuard:
 
     def origins(self, amplitudes) -> list[int]:
         """Frontier points to jump from, best first: in each of the amplitude windows
-        [0.8, 1], [0.6, 0.8) and [0.4, 0.6) times the frontier, the point where the
-        starting mode's share is largest (before an internal resonance drew energy from
-        it), then the frontier itself. ``amplitudes`` maps a point index to its amplitude."""
+        between consecutive ``origin_windows`` edges (default [0.8, 1], [0.6, 0.8) and
+        [0.4, 0.6) times the frontier), the point where the starting mode's share is
+        largest (before an internal resonance drew energy from it), then the frontier
+        itself. ``amplitudes`` maps a point index to its amplitude."""
         out = []
-        for lo, hi in ((0.8, 1.0 + 1e-12), (0.6, 0.8), (0.4, 0.6)):
+        edges = (1.0 + 1e-12,) + tuple(self.options.origin_windows)  # the top edge: the frontier itself
+        for hi, lo in zip(edges[:-1], edges[1:], strict=False):
             window = [i for i in self.clean if lo * self.frontier <= amplitudes(i) < hi * self.frontier]
             if window:
                 best = max(window, key=lambda i: (self.shares[i], i))

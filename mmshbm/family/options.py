@@ -53,6 +53,33 @@ class FamilyOptions:
         family has its frequency between the linear mode's and the first mode's with
         every contact held, each widened by this (the truncated Fourier series of a
         contact orbit can lie slightly outside). Default 0.01.
+
+    The guard's rules for the points just beyond the frontier where a higher harmonic
+    holds most of the kinetic energy while the backbone keeps rising (a *pending*
+    stretch, :class:`mmshbm.family.guard.FamilyGuard`), and for branches that come back:
+
+    lock_growth, lock_frequency : float
+        A pending stretch whose amplitude grows by the factor ``lock_growth`` (> 1) while
+        its frequency grows by less than ``lock_frequency`` (relative) is locked onto a
+        tongue ω_j/k (it climbs without folding): it is marked off the family. Defaults
+        1.5 and 0.005.
+    lock_at_bound : float
+        A pending stretch that reaches the amplitude bound having grown by at least this
+        factor (and less than ``lock_growth``) is judged there by the lock's slope
+        (``lock_frequency`` per ``lock_growth`` − 1 of amplitude growth). Default 1.1.
+    loop_drop : float
+        A branch that left the family and comes back onto it this far (relative) below
+        the frontier goes back down the family (a loop): the search beyond the frontier
+        follows. A passage may dip less than this. Default 0.05.
+    reentry_tol : float
+        An excursion that comes back onto the family above the frontier within this
+        (relative, in amplitude and in frequency) of where an earlier one came back goes
+        round a closed loop: the search beyond the frontier follows. Default 1e-3.
+    origin_windows : tuple of float
+        Lower edges (descending, in (0, 1)) of the amplitude windows, relative to the
+        frontier, in each of which the frontier point of largest fundamental share is an
+        origin of the search's starts (below the top window's [edge, 1]). Default
+        (0.8, 0.6, 0.4).
     """
 
     family_share: float = 0.5
@@ -62,6 +89,12 @@ class FamilyOptions:
     target_ratio: float = 1.1
     max_roots: int = 3
     band_slack: float = 0.01
+    lock_growth: float = 1.5
+    lock_frequency: float = 0.005
+    lock_at_bound: float = 1.1
+    loop_drop: float = 0.05
+    reentry_tol: float = 1e-3
+    origin_windows: tuple[float, ...] = (0.8, 0.6, 0.4)
 
     def __post_init__(self):
         share = check.real_number("family_share", self.family_share)
@@ -75,6 +108,21 @@ class FamilyOptions:
             raise ValueError(f"target_ratio must be > 1, got {self.target_ratio!r}")
         check.integer("max_roots", self.max_roots, minimum=1)
         check.non_negative("band_slack", self.band_slack)
+        growth = check.real_number("lock_growth", self.lock_growth)
+        if not growth > 1.0:
+            raise ValueError(f"lock_growth must be > 1, got {self.lock_growth!r}")
+        check.non_negative("lock_frequency", self.lock_frequency)
+        at_bound = check.real_number("lock_at_bound", self.lock_at_bound)
+        if not 1.0 < at_bound <= growth:
+            raise ValueError(f"lock_at_bound must be in (1, lock_growth], got {self.lock_at_bound!r}")
+        drop = check.real_number("loop_drop", self.loop_drop)
+        if not 0.0 < drop < 1.0:
+            raise ValueError(f"loop_drop must be in (0, 1), got {self.loop_drop!r}")
+        check.positive("reentry_tol", self.reentry_tol)
+        edges = tuple(float(e) for e in self.origin_windows)
+        if not edges or not all(0.0 < e < 1.0 for e in edges) or list(edges) != sorted(edges, reverse=True):
+            raise ValueError(f"origin_windows must be descending edges in (0, 1), "
+                             f"got {self.origin_windows!r}")
 
     @classmethod
     def of(cls, options) -> FamilyOptions | None:

@@ -363,9 +363,10 @@ def test_an_event_plug_in_relocates_the_branch():
     assert res.step_size[5] == pytest.approx(0.05)
 
 
-def test_the_old_family_fields_are_forwarded():
+def test_the_family_fields_are_read_by_the_family_follower():
     opt = ContinuationOptions(family_share=0.6, max_excursion=7, jump_step=0.01, max_jumps=3)
-    assert FamilyOptions.of(opt) == FamilyOptions(family_share=0.6, max_excursion=7, jump_step=0.01, max_jumps=3)
+    expected = FamilyOptions(family_share=0.6, max_excursion=7, jump_step=0.01, max_jumps=3)
+    assert FamilyOptions.of(opt) == expected
     events = default_events(opt, continue_branch)
     assert isinstance(events, FamilyFollower) and events.family is not None
     assert events.guard.family_share == 0.6 and events.guard.max_excursion == 7

@@ -1,4 +1,4 @@
-"""The Newton homotopy of the pinned system (:mod:`mmshbm.family.homotopy`) and the jumps
+"""The Newton homotopy of the pinned system (:mod:`mmshbm.core.homotopy`) and the jumps
 that land with it: checked against orbits reached by independent routes (Newton from a
 nearby start, the twice-harmonic branch lowered to H)."""
 
@@ -9,7 +9,7 @@ import pytest
 
 import mmshbm
 from mmshbm.core.pinned import PinnedFailure, solve_at_amplitude
-from mmshbm.family.homotopy import pinned_homotopy
+from mmshbm.core.homotopy import pinned_homotopy
 from mmshbm.methods.mms.landings import _raised
 
 

@@ -269,10 +269,10 @@ class EPMCProblem(OneEvaluation, DampedHBMBase, BackboneProblemBase):
         return best, grad
 
     def family_landing(self, u_from: np.ndarray, rec_from: dict, excursion: list, amplitude_max: float,
-                       amplitude_min: float = 0.0):
+                       amplitude_min: float = 0.0, *, family_share: float):
         """Land on the family beyond an excursion by following the path on: from the
         excursion's last states (``excursion``, scaled unknowns, in order), plain path
-        following until a point on the family (fundamental share >= 0.5) lies above
+        following until a point on the family (fundamental share >= ``family_share``) lies above
         ``amplitude_min`` (the frontier, m). Returns (u, amplitude) of that point for the
         search's pinned solve (:func:`mmshbm.family.deflation.search_beyond`). A damped mode often passes
         a tongue by itself once the branch comes back up; where the path instead closes
@@ -297,7 +297,8 @@ class EPMCProblem(OneEvaluation, DampedHBMBase, BackboneProblemBase):
 
         def watch(u, rec):
             count[0] += 1
-            if rec.get("fundamental_share", 1.0) >= 0.5 and rec["amplitude"] > amplitude_min * (1 + 1e-3):
+            share = rec.get("fundamental_share", 1.0)
+            if share >= family_share and rec["amplitude"] > amplitude_min * (1 + 1e-3):
                 raise _Landed(np.array(u, dtype=float), float(rec["amplitude"]))
             if count[0] > 3 and np.linalg.norm(u - first) < closed:
                 raise _Landed(None, 0.0)  # the loop closed

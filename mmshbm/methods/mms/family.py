@@ -126,14 +126,14 @@ class FamilyMixin(LandingsMixin):
         return self.pack(a, omega + delta[-1] * aux.colscale[-1])
 
     def family_landing(self, u_from: np.ndarray, rec_from: dict, excursion: list, amplitude_max: float,
-                       amplitude_min: float = 0.0):
+                       amplitude_min: float = 0.0, *, family_share: float):
         """Land on the family beyond the internal resonance the branch met after the family
         point ``u_from`` (record ``rec_from``): the resonant pair (harmonic k, mode j) is
         the one whose energy share peaked over the ``excursion`` states; the branch is
         continued with harmonic k filtered out past kΩ = ω_j and released there
         (:func:`mmshbm.methods.mms.filtered.pass_resonance`). Returns (u, amplitude).
         A start of the search beyond a frontier (:mod:`mmshbm.family.deflation`); the
-        landing lies above ``amplitude_min``."""
+        landing lies above ``amplitude_min`` and its fundamental holds ``family_share``."""
         from .filtered import pass_resonance
 
         freqs = self.tracked_frequencies
@@ -149,7 +149,7 @@ class FamilyMixin(LandingsMixin):
             raise ValueError("no internal resonance identified in the excursion")
         j, k = pair
         return pass_resonance(self, u_from, float(rec_from["amplitude"]), k, float(freqs[j]) / k,
-                              amplitude_max, amplitude_min=amplitude_min)
+                              amplitude_max, amplitude_min=amplitude_min, family_share=family_share)
 
     def _modal_basis(self):
         """Open-contact modes tracked for the energy shares: those below (H + 1) times the

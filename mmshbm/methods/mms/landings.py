@@ -93,7 +93,7 @@ class LandingsMixin:
         """The orbit at ``amplitude`` (m) reached from the family of the fundamental
         alone (H = 1, which meets no internal resonance of a higher harmonic): its orbit
         there, raised to H harmonics (the others zero), solved by the Newton homotopy
-        (:func:`mmshbm.family.homotopy.pinned_homotopy`). Where the H-harmonic family
+        (:func:`mmshbm.core.homotopy.pinned_homotopy`). Where the H-harmonic family
         resumes above a fold of the branch below, at a lower frequency (the branch below
         can stiffen past the family's limit, e.g. a light DOF rattling against its stop,
         or fold by its truncation), no predictor taken from the branch below converges
@@ -105,8 +105,8 @@ class LandingsMixin:
         fundamental family that reaches ``amplitude``, PinnedFailure when the homotopy
         or its final solve fails.
         """
+        from ...core.homotopy import pinned_homotopy
         from ...core.pinned import solve_at_amplitude
-        from ...family.homotopy import pinned_homotopy
 
         ref = self._fundamental_branch(amplitude_max)
         if ref is None or not ref[1][0] <= amplitude <= ref[1][-1] * (1 + 1e-9):  # as above

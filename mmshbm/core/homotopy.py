@@ -29,9 +29,9 @@ import math
 import numpy as np
 import scipy.sparse as sp
 
-from ..core.bordered import bordered_solve
-from ..core.pinned import PinnedFailure, StartOutside, amplitude_and_gradient, solve_at_amplitude
-from ..core.problem import as_problem
+from .bordered import bordered_solve
+from .pinned import PinnedFailure, StartOutside, amplitude_and_gradient, solve_at_amplitude
+from .problem import as_problem
 
 __all__ = ["pinned_homotopy"]
 
