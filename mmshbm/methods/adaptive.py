@@ -195,7 +195,7 @@ def _assemble(base, ladder, H, states, freq, err, flags, settings: dict):
                     rec[k][i] = v
     rec["frequency_error"] = err
     rec["harmonics"] = H.astype(np.int64)
-    rec["error_extrapolated"], rec["error_confirmed"] = flags
+    rec["error_extrapolated"], rec["error_confirmed"], rec["error_not_estimated"] = flags
     meta = dict(base.metadata)
     meta["method_options"] = {**dict(meta.get("method_options", {})), "harmonics": H_top}
     meta["method_options"].pop("n_samples", None)
