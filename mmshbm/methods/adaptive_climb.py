@@ -30,7 +30,16 @@ start leaves out. So a point of the family front in contact
   only where both fail do the √2 steps of ``raise_point`` follow.
 
 Points off the front and points without contact force get one estimate at the start H,
-as in :mod:`mmshbm.methods.adaptive`.
+as in :mod:`mmshbm.methods.adaptive`. A point off the front in contact (an excursion into
+an internal-resonance tongue: no part of the backbone's contract, which
+:meth:`~mmshbm.Branch.frequency_at` reads on the front) is solved at 2H from its padded
+start (tried even where the pair failed on the branch: one solve of at most
+``DIRECT_ITERATIONS``), and where that fails from the 2H solution of the excursion's last
+point with an estimate, its amplitude pinned and checked by ``SEED_CHANGE`` as above (a
+start from another point of a tongue otherwise lands on other orbits); it never takes the
+√2 steps, which cost about two pinned solves per step. Where neither converges its
+estimate is NaN and ``records["error_not_estimated"]`` is 1 there. The memory of the
+failed pairs is filled as before, so the front points take the same solves.
 """
 
 from __future__ import annotations
