@@ -9,7 +9,9 @@
    (relative, on the frequency at the point's amplitude);
 3. a point of the family front (:meth:`~mmshbm.Branch.family_front`: the backbone,
    without the excursions into internal-resonance tongues, which keep the start H and
-   their estimate) whose estimate exceeds ``tol`` is *promoted* to the 2H solution (the
+   their estimate at it; where the 2H solve of such a point in contact has no cheap
+   start, :mod:`mmshbm.methods.adaptive_climb`, its estimate is NaN, flagged in
+   ``records["error_not_estimated"]``) whose estimate exceeds ``tol`` is *promoted* to the 2H solution (the
    solve of step 2 is the refined point, seeded by the lower-H one) and estimated again
    at 4H, and so on while the estimate keeps contracting (``patience`` doublings of H in a
    row without a contraction by ``contraction`` stop it: the point does not converge in
@@ -55,10 +57,13 @@ predecessor decided on instead of climbing to it from ``start_harmonics`` (the r
 tried where the estimate predicted there meets ``tol``), and where its zero-padded start
 fails at a higher H the predecessor's solution there is the start.
 
-Cost: the continuation at ``start_harmonics``, and per point in contact about two pinned
-solves (at the rung its predecessor kept and at twice it), one more for each rung it moves
-up or down, and one at 4H where an estimate that met ``tol`` is confirmed; one pinned solve
-at 2H per other point.
+Cost: the continuation at ``start_harmonics``, and per front point in contact about two
+pinned solves (at the rung its predecessor kept and at twice it), one more for each rung it
+moves up or down, and one at 4H where an estimate that met ``tol`` is confirmed; one pinned
+solve at 2H per other point (two at most off the front in contact: the padded start, then
+the excursion's previous point; never the √2 steps of
+:func:`~mmshbm.results.point_errors.raise_point`, which served most of the points off the
+front in contact on random chains and took most of the refinement's time).
 """
 
 from __future__ import annotations
@@ -150,8 +155,10 @@ def backbone_to_tolerance(model, tol: float, *, start_harmonics: int, max_harmon
     -------
     Branch
         With ``records["frequency_error"]``, ``records["harmonics"]``,
-        ``records["error_extrapolated"]``, ``records["error_confirmed"]`` and
-        ``metadata["tolerance"]``.
+        ``records["error_extrapolated"]``, ``records["error_confirmed"]``,
+        ``records["error_not_estimated"]`` (1 at a point off the family front in contact
+        whose 2H solve had no cheap start: its estimate NaN, no part of the tolerance's
+        findings) and ``metadata["tolerance"]``.
     """
     from .._threads import blas_limit
     from .adaptive_climb import refine_points_along
@@ -195,7 +202,7 @@ def _assemble(base, ladder, H, states, freq, err, flags, settings: dict):
                     rec[k][i] = v
     rec["frequency_error"] = err
     rec["harmonics"] = H.astype(np.int64)
-    rec["error_extrapolated"], rec["error_confirmed"] = flags
+    rec["error_extrapolated"], rec["error_confirmed"], rec["error_not_estimated"] = flags
     meta = dict(base.metadata)
     meta["method_options"] = {**dict(meta.get("method_options", {})), "harmonics": H_top}
     meta["method_options"].pop("n_samples", None)

@@ -30,7 +30,16 @@ start leaves out. So a point of the family front in contact
   only where both fail do the √2 steps of ``raise_point`` follow.
 
 Points off the front and points without contact force get one estimate at the start H,
-as in :mod:`mmshbm.methods.adaptive`.
+as in :mod:`mmshbm.methods.adaptive`. A point off the front in contact (an excursion into
+an internal-resonance tongue: no part of the backbone's contract, which
+:meth:`~mmshbm.Branch.frequency_at` reads on the front) is solved at 2H from its padded
+start (tried even where the pair failed on the branch: one solve of at most
+``DIRECT_ITERATIONS``), and where that fails from the 2H solution of the excursion's last
+point with an estimate, its amplitude pinned and checked by ``SEED_CHANGE`` as above (a
+start from another point of a tongue otherwise lands on other orbits); it never takes the
+√2 steps, which cost about two pinned solves per step. Where neither converges its
+estimate is NaN and ``records["error_not_estimated"]`` is 1 there. The memory of the
+failed pairs is filled as before, so the front points take the same solves.
 """
 
 from __future__ import annotations
@@ -61,13 +70,17 @@ class _Point:
     """One point's solves: ``known`` H -> (scaled unknowns, frequency Hz); ``estimate``
     H -> the estimate at H (from the solve at 2H; NaN where that failed)."""
 
-    def __init__(self, H: int, u: np.ndarray, f: float, amplitude: float, free: bool = False):
+    def __init__(self, H: int, u: np.ndarray, f: float, amplitude: float, free: bool = False,
+                 off: bool = False):
         self.known = {int(H): (np.asarray(u, dtype=float), float(f))}
         self.estimate: dict[int, float] = {}
         self.amplitude = float(amplitude)
         #: no contact force: the orbit is exact at every H, its harmonics above H are zero, so
         #: the padded start is the solution whatever failed on the branch's other points
         self.free = bool(free)
+        #: off the family front, in contact: solved from its padded start and its
+        #: predecessor's solution only, never by the √2 steps (module docstring)
+        self.off = bool(off)
 
 
 class _Solves:
@@ -101,8 +114,8 @@ class _Solves:
                 return None
 
         s = self.ladder.at(H)
-        if p.free or pair not in self.ladder.stepped or STEP * H >= H2:  # the point's own start, padded
-            u2 = solve(s2, pad(s, u, s2))
+        if p.free or p.off or pair not in self.ladder.stepped or STEP * H >= H2:
+            u2 = solve(s2, pad(s, u, s2))  # the point's own start, padded
             if u2 is None and not p.free:
                 self.ladder.stepped.add(pair)
         if u2 is None and before is not None and H in before.known and H2 in before.known:
@@ -112,6 +125,8 @@ class _Solves:
                 f2 = float(s2.unpack(u2)[1]) / (2 * math.pi)
                 if abs(f2 - f) > SEED_CHANGE * abs(f2_b - f_b) + 1e-12 * abs(f):
                     u2 = None  # another orbit at this amplitude, not this point refined
+        if u2 is None and p.off:
+            return False  # no cheap solve at H2: the point's estimate is NaN, flagged
         if u2 is None:
             self.solves += 1
             try:
@@ -158,18 +173,24 @@ def refine_points_along(base, tol: float, start_harmonics: int, max_harmonics: i
     while 2 * rungs[-1] <= max_harmonics:
         rungs.append(2 * rungs[-1])
     before: _Point | None = None  # the last front point in contact
+    before_off: _Point | None = None  # the last point in contact of this excursion off the front
+    unestimated = np.zeros(n, dtype=np.int8)  # 1: off the front, in contact, no cheap solve at 2H
     kept_before = start_harmonics  # the rung the predecessor decided on
     most = 0
     for i in range(n):
         a = float(amp[i])
         if not (a > 0 and math.isfinite(a) and math.isfinite(freq[i])):
             continue
-        p = _Point(start_harmonics, states[i], freq[i], a, free=not touching[i])
+        off = bool(touching[i] and not on_front[i])
+        if on_front[i]:
+            before_off = None
+        p = _Point(start_harmonics, states[i], freq[i], a, free=not touching[i], off=off)
         climbs = bool(on_front[i] and touching[i])
         first = start_harmonics
         if climbs and kept_before > start_harmonics and len(rungs) > 2:
             first = max(r for r in rungs[:-1] if r <= kept_before)
-        h, e, flag, conf, out = _climb(p, first, solves, before if climbs else None, tol, max_harmonics,
+        seed_from = before if climbs else before_off if off else None
+        h, e, flag, conf, out = _climb(p, first, solves, seed_from, tol, max_harmonics,
                                        patience, contraction, confirm and climbs, bool(on_front[i]))
         most = max(most, len(p.estimate))
         if h in p.known:
@@ -177,9 +198,14 @@ def refine_points_along(base, tol: float, start_harmonics: int, max_harmonics: i
         H[i], err[i], extrapolated[i] = h, e, flag
         if conf:
             confirmed[i] = 1
+        if off:
+            if math.isfinite(e):
+                before_off = p
+            else:
+                unestimated[i] = 1
         if climbs:  # the rung of its last decision (the one below an extrapolated H); none out of reach
             before, kept_before = p, (start_harmonics if out else h // 2 if flag else h)
-    return ladder, H, states, freq, err, (extrapolated, confirmed), most, solves.solves
+    return ladder, H, states, freq, err, (extrapolated, confirmed, unestimated), most, solves.solves
 
 
 def _predicted_below(e: float, h: int, before: _Point | None, contraction: float) -> float:

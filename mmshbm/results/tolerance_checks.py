@@ -9,6 +9,9 @@ meets it and where not (:func:`mmshbm.results.diagnostics.check_branch` runs it)
     contracting: the orbit does not converge in H at these H). The message names the
     amplitude from which it no longer holds and the estimates reached there; ``first``
     is that point, ``last`` the last such point, ``value`` the largest estimate reached.
+    Points off the front are not counted: the backbone's contract is its front's (its
+    excursions keep the start H, and the estimate of one in contact is NaN where
+    ``records["error_not_estimated"]`` is 1, :mod:`mmshbm.methods.adaptive_climb`).
 
 :func:`tolerance_summary` is the one line a run that met its tolerance reports (the
 command line prints it).
