@@ -19,6 +19,11 @@ __all__ = ["FamilyOptions"]
 class FamilyOptions:
     """Options of the family following (:mod:`mmshbm.family.follower`). Validated on creation.
 
+    The first seven define the search beyond a frontier; the last six are the rules of the
+    guard (:class:`~mmshbm.family.guard.FamilyGuard`) for the points just beyond the
+    frontier where a higher harmonic holds most of the kinetic energy while the backbone
+    keeps rising (a *pending* stretch), and for branches that come back onto the family.
+
     Attributes
     ----------
     family_share : float
@@ -53,11 +58,6 @@ class FamilyOptions:
         family has its frequency between the linear mode's and the first mode's with
         every contact held, each widened by this (the truncated Fourier series of a
         contact orbit can lie slightly outside). Default 0.01.
-
-    The guard's rules for the points just beyond the frontier where a higher harmonic
-    holds most of the kinetic energy while the backbone keeps rising (a *pending*
-    stretch, :class:`mmshbm.family.guard.FamilyGuard`), and for branches that come back:
-
     lock_growth, lock_frequency : float
         A pending stretch whose amplitude grows by the factor ``lock_growth`` (> 1) while
         its frequency grows by less than ``lock_frequency`` (relative) is locked onto a
