@@ -3,7 +3,8 @@ per-point error estimate against the true error.
 
 :func:`compare_tolerance` runs, on one random chain (:func:`validation.corpus_exact.chains`),
 the exact symmetric single-contact orbit at ``amplitude_gaps`` gaps, the fixed-H backbone
-(H = 31) and the backbone with ``tol``, and compares both with the exact frequency. The
+(H = 31, or several fixed H) and the backbone with ``tol``, and compares them with the exact
+frequency. The
 reference counts where the exact orbit is *the mode's*: clean (converged, one contact per
 period, the prescribed excursion) and with the fundamental harmonic's majority of the
 kinetic energy (not an internal resonance's orbit).
@@ -29,10 +30,11 @@ __all__ = ["ToleranceComparison", "compare_tolerance", "report_tolerance", "esti
 
 @dataclasses.dataclass
 class ToleranceComparison:
-    """One chain: the exact frequency, the fixed-H and the tolerance branch's, their
+    """One chain: the exact frequency, the fixed-H and the tolerance branch's (Hz), their
     processor times (s); ``ringing`` q = √(k_node / m_host) / (2π f_exact), how many times
     faster than the orbit the contact rings (its contact time about T / (2q)), and the
-    tolerance run's cap on H."""
+    tolerance run's cap on H. ``fixed``/``fixed_s`` are the run at ``fixed_harmonics``;
+    ``more_fixed`` maps each further fixed H to its (frequency Hz, processor time s)."""
 
     label: str
     reference: bool
@@ -48,10 +50,22 @@ class ToleranceComparison:
     status: str = ""
     ringing: float = math.nan
     max_harmonics: int = 64
+    fixed_harmonics: int = 31
+    more_fixed: dict = dataclasses.field(default_factory=dict)
 
     @property
     def fixed_error(self) -> float:
         return abs(self.fixed / self.exact - 1.0) if self.exact > 0 else math.nan
+
+    def fixed_runs(self) -> dict:
+        """Every fixed-H run: H -> (frequency Hz, processor time s), the first H first."""
+        return {self.fixed_harmonics: (self.fixed, self.fixed_s), **self.more_fixed}
+
+    def error_at(self, harmonics: int) -> float:
+        """The relative frequency error of the fixed-H run at ``harmonics`` (NaN without
+        an exact frequency or that run)."""
+        f = self.fixed_runs().get(harmonics, (math.nan, 0.0))[0]
+        return abs(f / self.exact - 1.0) if self.exact > 0 else math.nan
 
     @property
     def adaptive_error(self) -> float:
@@ -59,10 +73,11 @@ class ToleranceComparison:
 
 
 def compare_tolerance(case, tol: float = 1e-4, amplitude_gaps: float = 1.3,
-                      harmonics: int = 31, options: dict | None = None) -> ToleranceComparison:
+                      harmonics: int | tuple = 31, options: dict | None = None) -> ToleranceComparison:
     """The exact orbit, the fixed-H and the tolerance backbone of ``case`` at
-    ``amplitude_gaps`` gaps (module docstring); ``options``: further keyword arguments of
-    the tolerance run (e.g. ``max_harmonics``)."""
+    ``amplitude_gaps`` gaps (module docstring); ``harmonics``: the fixed H, or several (the
+    first into ``fixed``, the others into ``more_fixed``, run after the tolerance run);
+    ``options``: further keyword arguments of the tolerance run (e.g. ``max_harmonics``)."""
     from mmshbm import exact
     from mmshbm.methods.backbone import backbone
 
@@ -70,6 +85,8 @@ def compare_tolerance(case, tol: float = 1e-4, amplitude_gaps: float = 1.3,
 
     model = case.model()
     A = amplitude_gaps * model.gap
+    first, *others = (harmonics,) if isinstance(harmonics, int) else tuple(harmonics)
+    others = [int(H) for H in dict.fromkeys(others) if H != first]
     try:
         orbit = exact.periodic_orbit(model, A)
         ref = bool(orbit.converged and orbit.n_contacts == 1 and abs(orbit.max_excursion / A - 1) < 1e-6
@@ -79,17 +96,11 @@ def compare_tolerance(case, tol: float = 1e-4, amplitude_gaps: float = 1.3,
         ref, f_exact = False, math.nan
     out = ToleranceComparison(name(case), ref, f_exact, math.nan, 0.0, math.nan, 0.0,
                               ringing=ringing(case, f_exact),
-                              max_harmonics=int((options or {}).get("max_harmonics", 64)))
+                              max_harmonics=int((options or {}).get("max_harmonics", 64)),
+                              fixed_harmonics=int(first))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        t = time.process_time()
-        try:
-            fixed = backbone(model, harmonics=harmonics, max_amplitude=1.2 * A)
-            out.fixed_s = time.process_time() - t
-            out.fixed = float(fixed.frequency_at(A))
-        except Exception as err:  # noqa: BLE001 - reported
-            out.status = f"fixed H: exception {err}"
-            out.fixed_s = time.process_time() - t
+        out.fixed, out.fixed_s, out.status = _fixed_run(model, first, A)
         t = time.process_time()
         try:
             b = backbone(model, tol=tol, max_amplitude=1.2 * A, **(options or {}))
@@ -108,7 +119,25 @@ def compare_tolerance(case, tol: float = 1e-4, amplitude_gaps: float = 1.3,
         except Exception as err:  # noqa: BLE001 - reported
             out.status += f"tol: exception {err}"
             out.adaptive_s = time.process_time() - t
+        for H in others:
+            f, s, status = _fixed_run(model, int(H), A)
+            out.more_fixed[int(H)] = (f, s)
+            out.status += status
     return out
+
+
+def _fixed_run(model, harmonics: int, amplitude: float) -> tuple[float, float, str]:
+    """(frequency_at(amplitude) Hz, processor time s, status) of the fixed-H backbone up to
+    1.2 × ``amplitude`` (m); NaN and the exception in the status where it raised."""
+    from mmshbm.methods.backbone import backbone
+
+    t = time.process_time()
+    try:
+        fixed = backbone(model, harmonics=harmonics, max_amplitude=1.2 * amplitude)
+        s = time.process_time() - t
+        return float(fixed.frequency_at(amplitude)), s, ""
+    except Exception as err:  # noqa: BLE001 - reported
+        return math.nan, time.process_time() - t, f"fixed H = {harmonics}: exception {err}; "
 
 
 def ringing(case, frequency: float) -> float:
@@ -159,8 +188,10 @@ def _concerns(branch, finding, amplitude: float) -> bool:
 
 def report_tolerance(results: list[ToleranceComparison], tol: float, within: float = 1e-3) -> str:
     """The agreement of both runs within ``within`` on the reference cases, their total
-    times, and each miss of the tolerance run with what its branch says there."""
+    processor times (s), and each miss of the tolerance run with what its branch says
+    there; then each further fixed H (``more_fixed``) against the tolerance run."""
     ref = [r for r in results if r.reference]
+    H0 = results[0].fixed_harmonics if results else 31
     n = max(len(ref), 1)
     fixed = sum(r.fixed_error <= within for r in ref)
     adaptive = sum(r.adaptive_error <= within for r in ref)
@@ -168,11 +199,11 @@ def report_tolerance(results: list[ToleranceComparison], tol: float, within: flo
     t_fixed = sum(r.fixed_s for r in ref)
     t_adaptive = sum(r.adaptive_s for r in ref)
     lines = [f"{len(results)} chains, {len(ref)} whose exact single-contact orbit is the mode's",
-             f"within {within:g} of the exact frequency: fixed H = 31 {fixed} ({100 * fixed / n:.1f} %), "
+             f"within {within:g} of the exact frequency: fixed H = {H0} {fixed} ({100 * fixed / n:.1f} %), "
              f"tol = {tol:g} {adaptive} ({100 * adaptive / n:.1f} %) by frequency_at, {points} "
              f"({100 * points / n:.1f} %) by the branch's own point nearest the amplitude against the exact "
              "orbit at its amplitude",
-             f"processor time: fixed H = 31 {t_fixed:.1f} s, tol {t_adaptive:.1f} s "
+             f"processor time: fixed H = {H0} {t_fixed:.1f} s, tol {t_adaptive:.1f} s "
              f"(ratio {t_adaptive / max(t_fixed, 1e-9):.2f})"]
     misses = [r for r in ref if not (r.adaptive_error <= within or r.point_error <= within)]
     told = [r for r in misses if r.findings]
@@ -194,7 +225,8 @@ def report_tolerance(results: list[ToleranceComparison], tol: float, within: flo
         told = sum((r.adaptive_error <= within) or bool(r.findings) for r in sel)
         fx = sum(r.fixed_error <= within for r in sel)
         lines.append(f"{name_}: {len(sel)} chains, tol within {within:g} {ok} ({100 * ok / len(sel):.1f} %), "
-                     f"within or a finding {told} ({100 * told / len(sel):.1f} %), fixed H = 31 within {fx}; "
+                     f"within or a finding {told} ({100 * told / len(sel):.1f} %), "
+                     f"fixed H = {H0} within {fx}; "
                      f"processor time tol / fixed {sum(r.adaptive_s for r in sel):.2f} s / "
                      f"{sum(r.fixed_s for r in sel):.2f} s")
     errs = np.array([r.adaptive_error for r in ref])
@@ -202,7 +234,26 @@ def report_tolerance(results: list[ToleranceComparison], tol: float, within: flo
         lines.append(f"tol errors: median {np.nanmedian(errs):.2e}, 99th percentile "
                      f"{np.nanpercentile(errs, 99):.2e}, "
                      f"share <= tol: {100 * np.mean(errs <= tol):.1f} %")
+    lines += _more_fixed_lines(ref, within)
     return "\n".join(lines)
+
+
+def _more_fixed_lines(ref: list[ToleranceComparison], within: float) -> list[str]:
+    """For each further fixed H of the reference cases ``ref``: its count within
+    ``within``, its processor time (s) and the tolerance run's time over it."""
+    if not ref:
+        return []
+    n = len(ref)
+    t_adaptive = sum(r.adaptive_s for r in ref)
+    adaptive = sum(r.adaptive_error <= within for r in ref)
+    lines = []
+    for H in ref[0].fixed_runs():
+        ok = sum(r.error_at(H) <= within for r in ref)
+        t = sum(r.fixed_runs().get(H, (math.nan, 0.0))[1] for r in ref)
+        lines.append(f"fixed H = {H}: within {within:g} {ok} ({100 * ok / n:.1f} %), processor time "
+                     f"{t:.2f} s; tol within {adaptive} at {t_adaptive:.2f} s (ratio tol / fixed "
+                     f"{t_adaptive / max(t, 1e-9):.2f})")
+    return lines if len(lines) > 1 else []
 
 
 # ---------------------------------------------------------------------- the estimator
@@ -308,6 +359,9 @@ def arguments(p) -> None:
     p.add_argument("--tol", type=common.positive_float, default=1e-4, help="the tolerance asked for")
     p.add_argument("--max-harmonics", type=common.positive_int, default=None,
                    help="the tolerance run's cap on H (default the backbone's, 64)")
+    p.add_argument("--fixed-harmonics", type=common.positive_int, nargs="+", default=[31], metavar="H",
+                   help="the fixed-H runs compared with the tolerance run (default 31); the first "
+                        "fills the fixed_hz / fixed_s columns, the others fixed_hz_H / fixed_s_H")
     p.add_argument("--estimator", action="store_true",
                    help="measure the per-point estimate against the true error instead")
     p.add_argument("--no-beam", action="store_true", help="with --estimator: leave the beam out")
@@ -349,24 +403,30 @@ def main(args) -> int:
         cases = [c for c in cases if c.index in set(args.only)]
     warm_up(cases[0] if cases else None)
     for case in cases:
-        r = compare_tolerance(case, args.tol, options=({} if args.max_harmonics is None
-                                                      else {"max_harmonics": args.max_harmonics}))
+        r = compare_tolerance(case, args.tol, harmonics=tuple(args.fixed_harmonics),
+                              options=({} if args.max_harmonics is None
+                                       else {"max_harmonics": args.max_harmonics}))
         results.append(r)
+        more = "".join(f" H{H} {r.error_at(H):.1e} {s:5.2f} s" for H, (_, s) in r.more_fixed.items())
         print(f"{r.label:<34} {'ref' if r.reference else '   '} fixed {r.fixed_error:.1e} "
               f"{r.fixed_s:6.2f} s  "
               f"tol {r.adaptive_error:.1e} (point {r.point_error:.1e}) {r.adaptive_s:6.2f} s "
               f"H {r.harmonics:3d} "
               f"est {r.estimate:.1e} "
-              f"[{r.findings}]", flush=True)
+              f"[{r.findings}]{more}", flush=True)
     print(report_tolerance(results, args.tol))
     path = out / "accuracy.csv"
+    more = list(results[0].more_fixed) if results else []
     with open(path, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["case", "reference", "exact_hz", "fixed_hz", "fixed_s", "tol_hz", "tol_s", "estimate",
-                    "harmonics", "findings", "status", "point_error", "ringing_q"])
+                    "harmonics", "findings", "status", "point_error", "ringing_q"]
+                   + [c for H in more for c in (f"fixed_hz_{H}", f"fixed_s_{H}")])
         w.writerows([r.label, int(r.reference), repr(r.exact), repr(r.fixed), f"{r.fixed_s:.4f}",
                      repr(r.adaptive), f"{r.adaptive_s:.4f}", repr(r.estimate), r.harmonics, r.findings,
-                     r.status, repr(r.point_error), repr(r.ringing)] for r in results)
+                     r.status, repr(r.point_error), repr(r.ringing)]
+                    + [v for H in more for v in (repr(r.more_fixed[H][0]), f"{r.more_fixed[H][1]:.4f}")]
+                    for r in results)
     common.wrote(path)
     silent = [r for r in results if r.reference and not r.adaptive_error <= 1e-3 and not r.findings]
     return 1 if silent else 0

@@ -47,8 +47,13 @@ def backbone(model: Model, harmonics: int | None = None, method: str = "mmshbm",
         default 64: the largest H of any solve, the estimates' included); ``confirm``
         (option, default True, conservative backbones only) checks an estimate that meets
         ``tol`` on the next pair of H (``records["error_confirmed"]``). The
-        branch carries ``frequency_error`` and ``records["harmonics"]``; where ``tol`` is
-        not met it has a ``"tolerance_not_met"`` finding. Methods "mmshbm" and "penalty"
+        branch carries ``frequency_error`` and ``records["harmonics"]`` (the H of each
+        point), ``records["error_extrapolated"]`` (1 where the estimate was divided by
+        the contraction of H's last doubling: a point out of reach, or at the cap) and
+        ``records["error_not_estimated"]`` (1 at a point off the family front in contact
+        whose 2H solve had no cheap start: its estimate is NaN, no part of the
+        tolerance's findings or counts); where ``tol`` is not met on the family front it
+        has a ``"tolerance_not_met"`` finding. Methods "mmshbm" and "penalty"
         on conservative models, and the damped nonlinear mode ("epmc", on the damping
         ratio too: ``records["damping_error"]``, :mod:`mmshbm.methods.adaptive_damped`);
         without ``checkpoint``/``resume``/``callback``.

@@ -103,17 +103,26 @@ def contact_findings(branch, solver, th: CheckThresholds) -> list[Finding]:
 
 def _against_tolerance(branch, points: np.ndarray) -> str:
     """For a branch computed to a tolerance (``tol``): what the truncation effect at
-    ``points`` costs the frequency there, against the tolerance (empty otherwise)."""
+    ``points`` costs the frequency there, against the tolerance (empty otherwise). Only the
+    points of the family front (:meth:`~mmshbm.Branch.family_front`) are counted, as in
+    :mod:`mmshbm.results.tolerance_checks`: the tolerance is the front's; a point off it
+    keeps the start H and, in contact, may carry a NaN estimate
+    (``records["error_not_estimated"]``)."""
     settings = branch.metadata.get("tolerance")
     err = branch.records.get("frequency_error")
     if not isinstance(settings, dict) or err is None or len(err) != len(branch) or not len(points):
         return ""
     tol = float(settings["tol"])
-    e = np.asarray(err, dtype=float)[points]
+    on = np.intersect1d(np.asarray(points, dtype=int), np.asarray(branch.family_front(), dtype=int))
+    off = len(points) - len(on)
+    aside = f" ({off} off the family front not counted)" if off else ""
+    if not len(on):
+        return f"; against the tolerance {tol:g}: none of these points is on the family front{aside}"
+    e = np.asarray(err, dtype=float)[on]
     met = int(np.sum(e <= tol))
     worst = float(np.max(e[np.isfinite(e)])) if np.isfinite(e).any() else math.nan
     return (f"; against the tolerance {tol:g}: the frequency's estimated error at these points is up to "
-            f"{worst:.2g}, within the tolerance at {met} of {len(points)}")
+            f"{worst:.2g} on the family front, within the tolerance at {met} of the {len(on)} there{aside}")
 
 
 #: n -> τ = 2π·arange(n)/n (read only) of the checks' sample grids

@@ -213,3 +213,30 @@ def test_range_check_skipped_only_where_every_mode_is_kept():
     beam = mmshbm.default_beam().model(21)
     bb = _branch(beam, harmonics=5, max_amplitude=3 * beam.gap)
     assert not bb.solver.cond.complete  # a truncated reduction: checked at every point
+
+
+def test_the_truncation_findings_count_the_tolerance_on_the_family_front():
+    """The penetration and pull findings of a tolerance run say at how many of their points
+    the estimate meets tol on the family front only (as tolerance_not_met does): a point off
+    the front with a NaN estimate (``error_not_estimated``) or a large one is left out of
+    the count and of the largest estimate, and said to be left out."""
+    class Stub:  # what the check reads of a branch: 5 points, the front the first 3
+        metadata = {"tolerance": {"tol": 1e-3}}
+        records = {"frequency_error": np.array([1e-4, 2e-4, 5e-3, np.nan, 2e-1]),
+                   "error_not_estimated": np.array([0, 0, 0, 1, 0])}
+
+        def __len__(self):
+            return 5
+
+        def family_front(self):
+            return np.array([0, 1, 2])
+
+    stub = Stub()
+    text = contact_checks._against_tolerance(stub, np.array([1, 2, 3, 4]))
+    assert text == ("; against the tolerance 0.001: the frequency's estimated error at these points is up to "
+                    "0.005 on the family front, within the tolerance at 1 of the 2 there (2 off the family "
+                    "front not counted)")
+    assert "at 2 of the 2 there" in contact_checks._against_tolerance(stub, np.array([0, 1]))
+    assert "not counted" not in contact_checks._against_tolerance(stub, np.array([0, 1]))
+    assert "none of these points is on the family front (1 off" in \
+        contact_checks._against_tolerance(stub, np.array([3]))
