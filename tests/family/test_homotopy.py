@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import mmshbm
-from mmshbm.core.pinned import PinnedFailure, solve_at_amplitude
 from mmshbm.core.homotopy import pinned_homotopy
+from mmshbm.core.pinned import PinnedFailure, solve_at_amplitude
 from mmshbm.methods.mms.landings import _raised
 
 
