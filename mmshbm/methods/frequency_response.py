@@ -246,8 +246,13 @@ def report_incomplete(response: FrequencyResponse, frequency_range) -> bool:
     n = len(response)
     f0, f1 = frequency_range
     status = Status.parse(response.status)
-    if status.kind == Status.BOUND:
+    if status.kind == Status.BOUND and status.detail == "frequency":
         why = f"it turned back and left the range at {f0:g} Hz"
+    elif status.kind == Status.BOUND:  # a bound of the caller's own (``bounds=``)
+        bounds = dict(response.metadata.get("continuation", {}).get("bounds", {}))
+        lo, hi = bounds.get(status.detail, (None, None))
+        limits = f" [{lo:g}, {hi:g}]" if lo is not None and hi is not None else ""
+        why = f"it reached the bound on {status.detail}{limits}"
     else:
         why = incomplete_reason(status, response.metadata)
     at = f" at {float(response.frequency[-1]):.6g} Hz" if n else ""

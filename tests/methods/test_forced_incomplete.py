@@ -86,3 +86,18 @@ def test_a_backbone_out_of_steps_says_so():
     assert b.status.kind == Status.MAX_STEPS and not b.completed
     assert "incomplete" in [f.kind for f in b.findings]
     assert "incomplete" in [getattr(w.message, "kind", None) for w in caught]
+
+
+def test_a_response_stopped_by_an_amplitude_bound_names_it(osc):
+    """A bound of the caller's own (here on the amplitude, below the resonance peak) ends the
+    response short of its range: the finding names that bound, not a turn out of the range."""
+    f1 = osc.linear_frequencies(1)[0]
+    free, _ = _run(osc, (0.5 * f1, 1.6 * f1))
+    cap = 0.5 * float(np.max(free.amplitude))
+    r, kinds = _run(osc, (0.5 * f1, 1.6 * f1), bounds={"amplitude": (0.0, cap)})
+    assert r.status.kind == Status.BOUND and r.status.detail == "amplitude" and not r.completed
+    assert kinds == ["incomplete"]
+    (finding,) = r.findings
+    assert "reached the bound on amplitude" in finding.message and "turned back" not in finding.message
+    # refined onto the bound (the corrector's tolerance, relative)
+    assert r.amplitude[-1] == pytest.approx(cap, rel=1e-8)
